@@ -1,0 +1,51 @@
+//! The one interface every sectional constitutive law implements.
+//!
+//! A law maps the sectional strains of a Cosserat rod, ordered
+//! `[Γ₁, Γ₂, Γ₃, K₁, K₂, K₃]` (two shear strains, axial strain, two bending curvatures, twist),
+//! to the sectional forces and moments `[F₁, F₂, F₃, M₁, M₂, M₃]` in the material frame, with the
+//! consistent tangent `∂σ/∂ε`. History lives in a flat `f64` slice per integration point whose
+//! length the law states ([`Law::n_state`]); the solver keeps a committed copy and a trial copy, so
+//! an update never mutates the committed state (return mapping from the last converged step).
+
+use nalgebra::{Matrix6, Vector6};
+
+/// Sectional strains `[Γ₁, Γ₂, Γ₃, K₁, K₂, K₃]` (dimensionless, dimensionless, dimensionless, 1/m, 1/m, 1/m).
+pub type Strain6 = Vector6<f64>;
+/// Sectional stress resultants `[F₁, F₂, F₃, M₁, M₂, M₃]` (N, N, N, N m, N m, N m).
+pub type Stress6 = Vector6<f64>;
+/// Consistent tangent `∂σ/∂ε`.
+pub type Tangent6 = Matrix6<f64>;
+
+/// What an update returns: the stress at the trial strain and its consistent tangent.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LawResponse {
+    /// Stress resultants at the end of the step.
+    pub stress: Stress6,
+    /// Consistent (algorithmic) tangent at the end of the step.
+    pub tangent: Tangent6,
+}
+
+/// A sectional constitutive law with internal state.
+///
+/// Implementations must be deterministic and free of side effects; `update` may be called many
+/// times per step from the same `state_old` (Newton iterations) and must give the same answer.
+pub trait Law: Send + Sync + std::fmt::Debug {
+    /// Name for outputs (`linear`, `piecewise_linear`, `elastoplastic`, or an effect name).
+    fn name(&self) -> &str;
+
+    /// Number of internal variables per integration point (0 for elastic laws).
+    fn n_state(&self) -> usize;
+
+    /// Write the virgin (unloaded, undamaged) state into `state` (length `n_state()`).
+    fn init_state(&self, state: &mut [f64]) {
+        state.iter_mut().for_each(|s| *s = 0.0);
+    }
+
+    /// Return mapping: from the committed `state_old` and the strain `eps` at the end of a step of
+    /// duration `dt` seconds (used only by rate-dependent laws), compute stress, consistent tangent
+    /// and the trial state `state_new` (same length as `state_old`).
+    fn update(&self, eps: &Strain6, dt: f64, state_old: &[f64], state_new: &mut [f64]) -> LawResponse;
+
+    /// The elastic (initial) tangent, used by solvers for predictors and by fits for starting values.
+    fn elastic_tangent(&self) -> Tangent6;
+}
