@@ -44,7 +44,13 @@ pub trait Law: Send + Sync + std::fmt::Debug {
     /// Return mapping: from the committed `state_old` and the strain `eps` at the end of a step of
     /// duration `dt` seconds (used only by rate-dependent laws), compute stress, consistent tangent
     /// and the trial state `state_new` (same length as `state_old`).
-    fn update(&self, eps: &Strain6, dt: f64, state_old: &[f64], state_new: &mut [f64]) -> LawResponse;
+    fn update(
+        &self,
+        eps: &Strain6,
+        dt: f64,
+        state_old: &[f64],
+        state_new: &mut [f64],
+    ) -> LawResponse;
 
     /// The elastic (initial) tangent, used by solvers for predictors and by fits for starting values.
     fn elastic_tangent(&self) -> Tangent6;

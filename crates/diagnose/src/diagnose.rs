@@ -1,0 +1,811 @@
+//! The sim-to-real gap diagnosis: calibrate a baseline, say *where* its residual lies, *which*
+//! candidate effect closes the gap on data the fit did not see, and *how far* (SPEC.md, "The
+//! sim-to-real gap diagnosis"; CONTRACT.md, `cablab diagnose`).
+//!
+//! Scoring. Every model is fitted on the training samples (all but the held-out cycle of each
+//! test, by default) and scored on the held-out samples in noise units (residual / σ, σ the
+//! test's noise floor estimated from the data). Models are compared by an information criterion
+//! on the effective sample size of the held-out residuals, IC = n_eff ln(RSS/n) + ln(n_eff) k_eff,
+//! where n_eff = n(1−ρ₁)/(1+ρ₁) accounts for autocorrelated residuals and k_eff counts only the
+//! parameters the data determine: a parameter at a bound, or whose 2σ interval reaches the value
+//! at which its effect vanishes, does not count. That settles nested and degenerate candidates on
+//! principle (a Maxwell branch whose relaxation time runs to its bound is a parallel spring and
+//! costs no more than linear kinematic hardening; an extension whose magnitude fits to zero is
+//! the baseline). The verdict is the simplest model among those within ΔIC ≤ ln(n_eff) + 2 of the
+//! best (fewest effective, then fewest nominal parameters); the others in that set are reported
+//! as equivalent with the experiment that would separate them. `none` when the baseline is in
+//! that set or already fits to the noise floor.
+//! What it does not do: read files or print (the CLI does), or simulate (see `model`).
+
+use crate::calibrate::{self, FitData, FitOptions, Forward};
+use crate::error::DiagError;
+use crate::model::{DiagTest, LawCatalog, ModelForward, ModelSpec, RodSimulator, SegLabel, TEST_LEVEL};
+use crate::params::ParamSpec;
+use crate::stats;
+use cablab_core::{Effect, TestKind};
+use rand::{Rng, SeedableRng};
+use rayon::prelude::*;
+use serde::ser::{SerializeMap, Serializer};
+use serde::Serialize;
+
+/// Which samples the fits do not see.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum HoldoutPolicy {
+    /// The last cycle of every test (the last 30 % of samples of a test without cycles).
+    LastCycle,
+    /// The last fraction of samples of every test.
+    LastFraction(f64),
+    /// Whole tests (indices), e.g. a second specimen length; the fits see the others.
+    Tests(Vec<usize>),
+}
+
+/// The law registry and rod solver the diagnosis works with.
+#[derive(Clone, Copy)]
+pub struct Context<'a> {
+    /// Sectional laws.
+    pub catalog: &'a dyn LawCatalog,
+    /// The rod, for three-point tests.
+    pub rod: Option<&'a dyn RodSimulator>,
+}
+
+/// Settings of calibration and diagnosis.
+#[derive(Debug, Clone)]
+pub struct DiagnoseOptions {
+    /// Baseline law (registry name), default `elastoplastic`.
+    pub baseline: String,
+    /// Candidate effects to try (`None`: every effect that applies to the kind and baseline).
+    pub candidates: Option<Vec<Effect>>,
+    /// Also run the ladder from linear elasticity, one effect at a time.
+    pub ladder: bool,
+    /// What the fits do not see.
+    pub holdout: HoldoutPolicy,
+    /// Starts per fit (the first is data-informed or warm, the rest quasi-random in the bounds).
+    pub starts: usize,
+    /// Seed of the random starts.
+    pub seed: u64,
+    /// Levenberg–Marquardt settings.
+    pub fit: FitOptions,
+    /// Noise floor per test (response units) if known; `None`: estimated from the data.
+    pub noise: Option<Vec<f64>>,
+}
+
+impl Default for DiagnoseOptions {
+    fn default() -> Self {
+        DiagnoseOptions {
+            baseline: "elastoplastic".into(),
+            candidates: None,
+            ladder: false,
+            holdout: HoldoutPolicy::LastCycle,
+            starts: 3,
+            seed: 1,
+            fit: FitOptions::default(),
+            noise: None,
+        }
+    }
+}
+
+/// Parameter name → value, serialised as a JSON object in the model's parameter order.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct ParamMap(pub Vec<(String, f64)>);
+
+impl Serialize for ParamMap {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        let mut m = s.serialize_map(Some(self.0.len()))?;
+        for (k, v) in &self.0 {
+            m.serialize_entry(k, v)?;
+        }
+        m.end()
+    }
+}
+
+/// Like [`ParamMap`] with `null` where a value is unknown.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct OptParamMap(pub Vec<(String, Option<f64>)>);
+
+impl Serialize for OptParamMap {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        let mut m = s.serialize_map(Some(self.0.len()))?;
+        for (k, v) in &self.0 {
+            m.serialize_entry(k, v)?;
+        }
+        m.end()
+    }
+}
+
+/// A calibrated model.
+#[derive(Debug, Clone, Serialize)]
+pub struct Calibration {
+    /// The model (`law+effect…`).
+    pub model: String,
+    /// Fitted parameters (SI).
+    pub params: ParamMap,
+    /// One standard error per parameter (`null`: not identified).
+    pub std_err: OptParamMap,
+    /// Parameters that sit at a bound, with the bound (`lower`/`upper`).
+    pub at_bound: Vec<(String, &'static str)>,
+    /// RMS of (measured − simulated) per test over the fitted samples (response units).
+    pub gap_rms: Vec<f64>,
+    /// χ² of the fit in noise units, and its number of samples.
+    pub chi2: f64,
+    /// Number of fitted samples.
+    pub n_fit: usize,
+    /// Effective sample size of the fitted residuals.
+    pub n_eff: f64,
+    /// Residual evaluations spent.
+    pub evaluations: usize,
+    #[serde(skip)]
+    values: Vec<f64>,
+    #[serde(skip)]
+    specs: Vec<ParamSpec>,
+    #[serde(skip)]
+    std: Vec<Option<f64>>,
+}
+
+impl Calibration {
+    /// Parameter values in the model's order.
+    pub fn values(&self) -> &[f64] {
+        &self.values
+    }
+    /// Value of a named parameter.
+    pub fn get(&self, name: &str) -> Option<f64> {
+        self.params.0.iter().find(|(n, _)| n == name).map(|p| p.1)
+    }
+    /// Standard error of a named parameter.
+    pub fn std_err_of(&self, name: &str) -> Option<f64> {
+        self.std_err.0.iter().find(|(n, _)| n == name).and_then(|p| p.1)
+    }
+    /// Parameters the data determine (see the module doc): not at a bound, finite uncertainty,
+    /// 2σ interval clear of the bounds on the parameter's axis and of the value at which the
+    /// parameter's effect vanishes (0 for parameters whose range includes 0).
+    pub fn effective_params(&self) -> usize {
+        self.specs
+            .iter()
+            .zip(&self.values)
+            .zip(&self.std)
+            .filter(|((s, &p), se)| determined(s, p, **se))
+            .count()
+    }
+}
+
+fn determined(s: &ParamSpec, p: f64, se: Option<f64>) -> bool {
+    if s.at_bound(p, 1e-3) {
+        return false;
+    }
+    let Some(se) = se else { return false };
+    let (lo, hi) = (p - 2.0 * se, p + 2.0 * se);
+    if s.log_scale {
+        // On a log axis the interval must stay clear of the bounds and be narrower than a decade
+        // either way: a parameter known to within an order of magnitude only is not determined.
+        lo > s.lower && hi < s.upper && se < p
+    } else {
+        let neutral_inside = s.lower <= 0.0 && s.upper >= 0.0;
+        lo > s.lower && hi < s.upper && !(neutral_inside && lo <= 0.0 && hi >= 0.0)
+    }
+}
+
+/// Settings of a single calibration.
+#[derive(Debug, Clone)]
+pub struct CalibrateOptions {
+    /// Starts (first: the specs' initial values or `warm`; the rest quasi-random).
+    pub starts: usize,
+    /// Seed of the random starts.
+    pub seed: u64,
+    /// Levenberg–Marquardt settings.
+    pub fit: FitOptions,
+    /// Samples per test the fit sees (`None`: all).
+    pub fit_idx: Option<Vec<Vec<usize>>>,
+    /// Noise floor per test (`None`: estimated).
+    pub noise: Option<Vec<f64>>,
+    /// Warm start: named values to start from (others from the specs).
+    pub warm: Option<ParamMap>,
+}
+
+impl Default for CalibrateOptions {
+    fn default() -> Self {
+        CalibrateOptions { starts: 3, seed: 1, fit: FitOptions::default(), fit_idx: None, noise: None, warm: None }
+    }
+}
+
+/// Noise floor per test: σ of the response noise estimated from the data itself (second
+/// differences of the response; robust to turning points).
+pub fn noise_floor(tests: &[DiagTest]) -> Vec<f64> {
+    tests
+        .iter()
+        .map(|t| {
+            let s = stats::noise_from_second_differences(&t.response).unwrap_or(0.0);
+            // Never below a part in 10⁶ of the range (noise-free synthetic data, quantisation).
+            s.max(1e-6 * t.response_scale())
+        })
+        .collect()
+}
+
+/// Calibrate `model` to `tests` jointly (shared parameters), replaying each measured control
+/// history: bounded Levenberg–Marquardt from several starts, with standard errors.
+pub fn calibrate(ctx: Context, tests: &[DiagTest], model: &ModelSpec, opts: &CalibrateOptions) -> Result<Calibration, DiagError> {
+    for (i, t) in tests.iter().enumerate() {
+        t.validate(i)?;
+    }
+    let fwd = ModelForward::new(tests, model, ctx.catalog, ctx.rod)?;
+    let noise = opts.noise.clone().unwrap_or_else(|| noise_floor(tests));
+    let fit_idx = opts.fit_idx.clone().unwrap_or_else(|| tests.iter().map(|t| (0..t.control.len()).collect()).collect());
+    if fit_idx.iter().map(Vec::len).sum::<usize>() <= fwd.specs().len() {
+        return Err(DiagError::NotEnoughData(format!("{} fitted samples for {} parameters", fit_idx.iter().map(Vec::len).sum::<usize>(), fwd.specs().len())));
+    }
+    let data = FitData {
+        measured: tests.iter().map(|t| t.response.as_slice()).collect(),
+        weight: noise.iter().map(|s| 1.0 / s.max(f64::MIN_POSITIVE)).collect(),
+        fit_idx,
+    };
+    let starts = make_starts(fwd.specs(), opts.warm.as_ref(), opts.starts, opts.seed);
+    let f = calibrate::fit(&fwd, &data, &starts, &opts.fit);
+    let sims = fwd.simulate_all(&f.params)?;
+    let gap_rms = tests
+        .iter()
+        .zip(&sims)
+        .zip(&data.fit_idx)
+        .map(|((t, s), idx)| {
+            let r: Vec<f64> = idx.iter().map(|&i| t.response[i] - s[i]).collect();
+            stats::rms(&r)
+        })
+        .collect();
+    Ok(Calibration {
+        model: model.label(),
+        params: ParamMap(f.names.iter().cloned().zip(f.params.iter().copied()).collect()),
+        std_err: OptParamMap(f.names.iter().cloned().zip(f.std_err.iter().copied()).collect()),
+        at_bound: f.names.iter().zip(&f.at_bound).filter_map(|(n, b)| b.map(|b| (n.clone(), b))).collect(),
+        gap_rms,
+        chi2: f.cost,
+        n_fit: f.n_fit,
+        n_eff: f.n_eff,
+        evaluations: f.evaluations,
+        values: f.params,
+        specs: fwd.specs().to_vec(),
+        std: f.std_err,
+    })
+}
+
+/// Starting points: the warm/initial point, then quasi-random points spread over the bounds.
+fn make_starts(specs: &[ParamSpec], warm: Option<&ParamMap>, n: usize, seed: u64) -> Vec<Vec<f64>> {
+    let first: Vec<f64> = specs
+        .iter()
+        .map(|s| {
+            warm.and_then(|w| w.0.iter().find(|(k, _)| *k == s.name).map(|p| p.1))
+                .unwrap_or(s.initial)
+                .clamp(s.lower, s.upper)
+        })
+        .collect();
+    let mut out = vec![first.clone()];
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+    for k in 1..n.max(1) {
+        // Alternate: a perturbation of the first point (±30 % of each axis) and a point anywhere.
+        let p = specs
+            .iter()
+            .zip(&first)
+            .map(|(s, &p0)| {
+                let u = if k % 2 == 1 {
+                    (s.fraction(p0) + rng.random_range(-0.3..0.3)).clamp(0.02, 0.98)
+                } else {
+                    rng.random_range(0.05..0.95)
+                };
+                s.at_fraction(u)
+            })
+            .collect();
+        out.push(p);
+    }
+    out
+}
+
+/// One entry of the "where" breakdown.
+#[derive(Debug, Clone, Serialize)]
+pub struct Located {
+    /// Where (`test 0 cycle 3 unloading`, `control 75–100 % of range`).
+    #[serde(rename = "where")]
+    pub where_: String,
+    /// Fraction of the squared residual (within its breakdown).
+    pub share: f64,
+    /// Which breakdown: `test`, `cycle_branch` or `control_range`.
+    pub by: &'static str,
+    /// Samples in the group.
+    pub n: usize,
+}
+
+/// The baseline as calibrated.
+#[derive(Debug, Clone, Serialize)]
+pub struct Baseline {
+    /// Law (`elastoplastic`).
+    pub law: String,
+    /// Fitted parameters (training part).
+    pub params: ParamMap,
+    /// Standard errors.
+    pub std_err: OptParamMap,
+    /// RMS gap over all samples / largest |measured response|.
+    pub gap_rel: f64,
+    /// RMS gap over all samples (response units).
+    pub gap: f64,
+    /// RMS gap on the held-out samples / largest |measured response|.
+    pub gap_heldout_rel: f64,
+}
+
+/// One candidate effect as scored on held-out data.
+#[derive(Debug, Clone, Serialize)]
+pub struct EffectScore {
+    /// Vocabulary name.
+    pub effect: Effect,
+    /// The model fitted (`elastoplastic+kinematic_hardening`).
+    pub model: String,
+    /// Baseline held-out RMS gap / largest |measured response|.
+    pub gap_before_rel: f64,
+    /// Held-out RMS gap with the effect / largest |measured response|.
+    pub gap_after_rel: f64,
+    /// Same, absolute (response units).
+    pub gap_before: f64,
+    /// Same, absolute.
+    pub gap_after: f64,
+    /// Held-out gap in noise units (1 = at the noise floor).
+    pub gap_after_noise: f64,
+    /// Fitted parameters of the whole model.
+    pub params: ParamMap,
+    /// Their standard errors.
+    pub std_err: OptParamMap,
+    /// Parameters at a bound.
+    pub at_bound: Vec<(String, &'static str)>,
+    /// Effective parameter count.
+    pub k_eff: usize,
+    /// IC − IC(best).
+    pub delta_ic: f64,
+}
+
+/// A pair of explanations the data cannot tell apart, and the experiment that would.
+#[derive(Debug, Clone, Serialize)]
+pub struct Separation {
+    /// The two effects.
+    pub effects: [Effect; 2],
+    /// What to run to tell them apart.
+    pub experiment: &'static str,
+}
+
+/// The verdict.
+#[derive(Debug, Clone, Serialize)]
+pub struct Verdict {
+    /// The simplest sufficient explanation (`none`: the baseline fits to the noise floor).
+    pub effect: Effect,
+    /// Effects that explain the held-out data as well.
+    pub equivalent: Vec<Effect>,
+    /// Noise floor / largest |measured response|.
+    pub noise_rel: f64,
+    /// Noise floor (response units, RMS over tests).
+    pub noise: f64,
+    /// Effective held-out sample size used for the comparison.
+    pub n_eff: f64,
+    /// Experiments that would separate the verdict from its equivalents.
+    pub separating: Vec<Separation>,
+}
+
+/// One rung of the ladder.
+#[derive(Debug, Clone, Serialize)]
+pub struct Rung {
+    /// Effect added at this rung.
+    pub effect: Effect,
+    /// The model after adding it.
+    pub model: String,
+    /// Held-out gap before / after, relative.
+    pub gap_before_rel: f64,
+    /// Held-out gap after, relative.
+    pub gap_after_rel: f64,
+}
+
+/// The result of `cablab diagnose` (CONTRACT.md keys plus extras).
+#[derive(Debug, Clone, Serialize)]
+pub struct Diagnosis {
+    /// Kind of the tests.
+    pub kind: TestKind,
+    /// The calibrated baseline.
+    pub baseline: Baseline,
+    /// Where the baseline's residual lies, largest share first.
+    pub located: Vec<Located>,
+    /// Candidates, best first.
+    pub effects: Vec<EffectScore>,
+    /// The verdict.
+    pub verdict: Verdict,
+    /// The ladder from linear elasticity (when asked for).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub ladder: Option<Vec<Rung>>,
+    /// Held-out samples and how they were chosen.
+    pub holdout: HoldoutSummary,
+}
+
+/// What was held out.
+#[derive(Debug, Clone, Serialize)]
+pub struct HoldoutSummary {
+    /// The policy.
+    pub policy: HoldoutPolicy,
+    /// Held-out samples over all tests.
+    pub n_heldout: usize,
+    /// Training samples.
+    pub n_train: usize,
+}
+
+/// Split every test's samples into training and held-out indices.
+pub fn split(tests: &[DiagTest], policy: &HoldoutPolicy) -> Result<(Vec<Vec<usize>>, Vec<Vec<usize>>), DiagError> {
+    let mut train = Vec::new();
+    let mut held = Vec::new();
+    for (ti, t) in tests.iter().enumerate() {
+        let n = t.control.len();
+        let (tr, he): (Vec<usize>, Vec<usize>) = match policy {
+            HoldoutPolicy::Tests(ix) => {
+                if ix.contains(&ti) {
+                    (vec![], (0..n).collect())
+                } else {
+                    ((0..n).collect(), vec![])
+                }
+            }
+            HoldoutPolicy::LastFraction(f) => {
+                let cut = ((1.0 - f.clamp(0.05, 0.95)) * n as f64) as usize;
+                ((0..cut).collect(), (cut..n).collect())
+            }
+            HoldoutPolicy::LastCycle => {
+                let labels = t.labels_or_derived();
+                let last = labels.iter().map(|l| l.cycle).max().unwrap_or(0);
+                let first_of_last = labels.iter().position(|l| l.cycle == last).unwrap_or(n);
+                if last >= 1 && first_of_last >= n / 5 && n - first_of_last >= 10 {
+                    ((0..first_of_last).collect(), (first_of_last..n).collect())
+                } else {
+                    let cut = (0.7 * n as f64) as usize;
+                    ((0..cut).collect(), (cut..n).collect())
+                }
+            }
+        };
+        train.push(tr);
+        held.push(he);
+    }
+    let nt: usize = train.iter().map(Vec::len).sum();
+    let nh: usize = held.iter().map(Vec::len).sum();
+    if nt < 20 || nh < 10 {
+        return Err(DiagError::NotEnoughData(format!("{nt} training and {nh} held-out samples")));
+    }
+    Ok((train, held))
+}
+
+/// A model scored on held-out data.
+struct Scored {
+    effect: Effect,
+    model: ModelSpec,
+    cal: Calibration,
+    /// Held-out residuals per test (measured − simulated).
+    held_resid: Vec<Vec<f64>>,
+    /// Residuals on all samples.
+    all_resid: Vec<Vec<f64>>,
+    rss_noise: f64,
+    n_held: usize,
+}
+
+fn score(
+    ctx: Context,
+    tests: &[DiagTest],
+    model: &ModelSpec,
+    effect: Effect,
+    train: &[Vec<usize>],
+    held: &[Vec<usize>],
+    noise: &[f64],
+    warm: Option<&ParamMap>,
+    opts: &DiagnoseOptions,
+) -> Result<Scored, DiagError> {
+    let copts = CalibrateOptions {
+        starts: opts.starts,
+        seed: opts.seed,
+        fit: opts.fit,
+        fit_idx: Some(train.to_vec()),
+        noise: Some(noise.to_vec()),
+        warm: warm.cloned(),
+    };
+    let cal = calibrate(ctx, tests, model, &copts)?;
+    let fwd = ModelForward::new(tests, model, ctx.catalog, ctx.rod)?;
+    let sims = fwd.simulate_all(cal.values())?;
+    let all_resid: Vec<Vec<f64>> =
+        tests.iter().zip(&sims).map(|(t, s)| t.response.iter().zip(s).map(|(m, s)| m - s).collect()).collect();
+    let held_resid: Vec<Vec<f64>> = all_resid.iter().zip(held).map(|(r, idx)| idx.iter().map(|&i| r[i]).collect()).collect();
+    let rss_noise = held_resid.iter().zip(noise).map(|(r, s)| r.iter().map(|v| (v / s).powi(2)).sum::<f64>()).sum();
+    let n_held = held.iter().map(Vec::len).sum();
+    Ok(Scored { effect, model: model.clone(), cal, held_resid, all_resid, rss_noise, n_held })
+}
+
+/// Effects that apply to `kind` on top of `base` (law extensions from the catalog, test-level
+/// effects of the rig), excluding what the model already has.
+pub fn applicable(ctx: Context, kind: TestKind, base: &ModelSpec) -> Vec<Effect> {
+    let mut v: Vec<Effect> = Vec::new();
+    if base.law == "linear" {
+        v.push(Effect::Plasticity);
+    }
+    for e in ctx.catalog.law_effects(kind, &base.law) {
+        if !v.contains(&e) {
+            v.push(e);
+        }
+    }
+    for e in TEST_LEVEL {
+        if e != Effect::SupportFriction || kind == TestKind::ThreePoint {
+            v.push(e);
+        }
+    }
+    v.retain(|e| *e != Effect::None && !base.has(*e));
+    v
+}
+
+/// The experiment that separates two explanations (SPEC: a hold, a second rate, a second length).
+pub fn separating_experiment(a: Effect, b: Effect) -> &'static str {
+    use Effect::*;
+    let has = |e: Effect| a == e || b == e;
+    if has(Viscoelasticity) {
+        "a hold at constant control (relaxation) or the same cycles at a second rate"
+    } else if has(MachineCompliance) {
+        "the same protocol on a second specimen length"
+    } else if has(SensorDrift) {
+        "a hold at zero load (the response must stay at zero)"
+    } else if has(SupportFriction) {
+        "a second support span, or lubricated supports"
+    } else if has(FrictionHysteresis) {
+        "small cycles well inside the elastic range (friction loops open, plasticity does not)"
+    } else if has(PiecewiseElasticity) {
+        "unloading from beyond the threshold (piecewise elasticity retraces its loading path)"
+    } else if has(StiffnessDegradation) && has(KinematicHardening) {
+        "unloading-stiffness measurement after cycles of growing amplitude"
+    } else {
+        "a cycle to a larger amplitude with a reversed loading"
+    }
+}
+
+/// Run the diagnosis on `tests` (one kind; several tests are fitted jointly with shared
+/// parameters, e.g. two specimen lengths).
+pub fn diagnose(ctx: Context, tests: &[DiagTest], opts: &DiagnoseOptions) -> Result<Diagnosis, DiagError> {
+    let first = tests.first().ok_or(DiagError::NoTests)?;
+    let kind = first.kind;
+    for (i, t) in tests.iter().enumerate() {
+        t.validate(i)?;
+        if t.kind != kind {
+            return Err(DiagError::BadTest { test: i, why: format!("kind {} differs from test 0's {kind}", t.kind) });
+        }
+    }
+    let noise = opts.noise.clone().unwrap_or_else(|| noise_floor(tests));
+    if noise.len() != tests.len() {
+        return Err(DiagError::BadTest { test: 0, why: format!("{} noise levels for {} tests", noise.len(), tests.len()) });
+    }
+    let (train, held) = split(tests, &opts.holdout)?;
+    let scale = tests.iter().map(DiagTest::response_scale).fold(0.0f64, f64::max);
+    let n_held: usize = held.iter().map(Vec::len).sum();
+    let n_train: usize = train.iter().map(Vec::len).sum();
+    let noise_rms = (tests.iter().zip(&noise).map(|(t, s)| s * s * t.control.len() as f64).sum::<f64>()
+        / tests.iter().map(|t| t.control.len() as f64).sum::<f64>())
+    .sqrt();
+
+    let base_model = ModelSpec::law(&opts.baseline);
+    let base = score(ctx, tests, &base_model, Effect::None, &train, &held, &noise, None, opts)?;
+    let cands: Vec<Effect> = match &opts.candidates {
+        Some(c) => c.iter().copied().filter(|e| *e != Effect::None && !base_model.has(*e)).collect(),
+        None => applicable(ctx, kind, &base_model),
+    };
+    let (scored, best_k) = compare(ctx, tests, &base, &cands, &train, &held, &noise, opts);
+    let choice = choose(&base, &scored);
+
+    let abs_rms = |r: &[Vec<f64>]| {
+        let n: usize = r.iter().map(Vec::len).sum();
+        (r.iter().flatten().map(|v| v * v).sum::<f64>() / n.max(1) as f64).sqrt()
+    };
+    let gap_before = abs_rms(&base.held_resid);
+    let mut effects: Vec<EffectScore> = scored
+        .iter()
+        .map(|s| {
+            let ga = abs_rms(&s.held_resid);
+            EffectScore {
+                effect: s.effect,
+                model: s.model.label(),
+                gap_before_rel: gap_before / scale,
+                gap_after_rel: ga / scale,
+                gap_before,
+                gap_after: ga,
+                gap_after_noise: (s.rss_noise / s.n_held as f64).sqrt(),
+                params: s.cal.params.clone(),
+                std_err: s.cal.std_err.clone(),
+                at_bound: s.cal.at_bound.clone(),
+                k_eff: s.cal.effective_params(),
+                delta_ic: choice.ic_of(s) - choice.ic_best,
+            }
+        })
+        .collect();
+    effects.sort_by(|a, b| a.delta_ic.total_cmp(&b.delta_ic));
+    let _ = best_k;
+
+    let separating = choice
+        .equivalent
+        .iter()
+        .map(|&e| Separation { effects: [choice.effect, e], experiment: separating_experiment(choice.effect, e) })
+        .collect();
+    let located = locate(tests, &base.all_resid);
+    let all_gap = abs_rms(&base.all_resid);
+    let ladder = if opts.ladder { Some(ladder(ctx, tests, &train, &held, &noise, opts, scale)?) } else { None };
+    Ok(Diagnosis {
+        kind,
+        baseline: Baseline {
+            law: opts.baseline.clone(),
+            params: base.cal.params.clone(),
+            std_err: base.cal.std_err.clone(),
+            gap_rel: all_gap / scale,
+            gap: all_gap,
+            gap_heldout_rel: gap_before / scale,
+        },
+        located,
+        effects,
+        verdict: Verdict {
+            effect: choice.effect,
+            equivalent: choice.equivalent,
+            noise_rel: noise_rms / scale,
+            noise: noise_rms,
+            n_eff: choice.n_eff,
+            separating,
+        },
+        ladder,
+        holdout: HoldoutSummary { policy: opts.holdout.clone(), n_heldout: n_held, n_train },
+    })
+}
+
+/// Fit and score every candidate (in parallel), warm-started from the base model's parameters.
+#[allow(clippy::too_many_arguments)]
+fn compare(
+    ctx: Context,
+    tests: &[DiagTest],
+    base: &Scored,
+    cands: &[Effect],
+    train: &[Vec<usize>],
+    held: &[Vec<usize>],
+    noise: &[f64],
+    opts: &DiagnoseOptions,
+) -> (Vec<Scored>, usize) {
+    let scored: Vec<Scored> = cands
+        .par_iter()
+        .filter_map(|&e| {
+            let m = base.model.with(e);
+            if m == base.model {
+                return None;
+            }
+            score(ctx, tests, &m, e, train, held, noise, Some(&base.cal.params), opts).ok()
+        })
+        .collect();
+    let k = base.cal.effective_params();
+    (scored, k)
+}
+
+/// The outcome of the comparison.
+struct Choice {
+    effect: Effect,
+    equivalent: Vec<Effect>,
+    n_eff: f64,
+    ic_best: f64,
+    n_held: usize,
+}
+
+impl Choice {
+    fn ic_of(&self, s: &Scored) -> f64 {
+        ic(s, self.n_eff, self.n_held)
+    }
+}
+
+fn ic(s: &Scored, n_eff: f64, n_held: usize) -> f64 {
+    n_eff * (s.rss_noise / n_held as f64).max(f64::MIN_POSITIVE).ln() + n_eff.max(2.0).ln() * s.cal.effective_params() as f64
+}
+
+/// Parsimony on the held-out data (module doc).
+fn choose(base: &Scored, scored: &[Scored]) -> Choice {
+    let n_held = base.n_held;
+    // n_eff from the residuals of the best-fitting model: those closest to white noise.
+    let best = scored.iter().chain(std::iter::once(base)).min_by(|a, b| a.rss_noise.total_cmp(&b.rss_noise)).unwrap_or(base);
+    let series: Vec<&[f64]> = best.held_resid.iter().map(Vec::as_slice).collect();
+    let rho = stats::pooled_lag1(&series);
+    let n_eff = stats::effective_sample_size(n_held, rho);
+    let all: Vec<&Scored> = std::iter::once(base).chain(scored.iter()).collect();
+    let ics: Vec<f64> = all.iter().map(|s| ic(s, n_eff, n_held)).collect();
+    let ic_best = ics.iter().copied().fold(f64::INFINITY, f64::min);
+    let tol = n_eff.max(2.0).ln() + 2.0;
+    let g0 = (base.rss_noise / n_held as f64).sqrt();
+    // The set of models indistinguishable from the best.
+    let mut set: Vec<usize> = (0..all.len()).filter(|&i| ics[i] - ic_best <= tol).collect();
+    if g0 <= 1.02 {
+        set = vec![0];
+    }
+    set.sort_by(|&a, &b| {
+        let (sa, sb) = (all[a], all[b]);
+        sa.cal.effective_params()
+            .cmp(&sb.cal.effective_params())
+            .then(sa.cal.values().len().cmp(&sb.cal.values().len()))
+            .then(ics[a].total_cmp(&ics[b]))
+    });
+    let pick = set[0];
+    let effect = all[pick].effect;
+    let equivalent = if effect == Effect::None {
+        vec![]
+    } else {
+        set.iter().skip(1).map(|&i| all[i].effect).filter(|e| *e != Effect::None).collect()
+    };
+    Choice { effect, equivalent, n_eff, ic_best, n_held }
+}
+
+/// Shares of the squared residual by test, by cycle and branch, and by range of the control.
+pub fn locate(tests: &[DiagTest], resid: &[Vec<f64>]) -> Vec<Located> {
+    use std::collections::BTreeMap;
+    let total: f64 = resid.iter().flatten().map(|v| v * v).sum::<f64>().max(f64::MIN_POSITIVE);
+    let mut out = Vec::new();
+    let multi = tests.len() > 1;
+    if multi {
+        for (i, r) in resid.iter().enumerate() {
+            let s: f64 = r.iter().map(|v| v * v).sum();
+            out.push(Located { where_: format!("test {i}"), share: s / total, by: "test", n: r.len() });
+        }
+    }
+    let mut cb: BTreeMap<(usize, usize, crate::model::Branch), (f64, usize)> = BTreeMap::new();
+    let mut cr: BTreeMap<usize, (f64, usize)> = BTreeMap::new();
+    for (ti, (t, r)) in tests.iter().zip(resid).enumerate() {
+        let labels: Vec<SegLabel> = t.labels_or_derived();
+        let umax = t.control.iter().fold(0.0f64, |m, u| m.max(u.abs())).max(f64::MIN_POSITIVE);
+        for (i, v) in r.iter().enumerate() {
+            let e = cb.entry((ti, labels[i].cycle, labels[i].branch)).or_insert((0.0, 0));
+            e.0 += v * v;
+            e.1 += 1;
+            let bin = ((t.control[i].abs() / umax) * 4.0).floor().min(3.0) as usize;
+            let e = cr.entry(bin).or_insert((0.0, 0));
+            e.0 += v * v;
+            e.1 += 1;
+        }
+    }
+    for ((ti, c, b), (s, n)) in cb {
+        let prefix = if multi { format!("test {ti} ") } else { String::new() };
+        out.push(Located { where_: format!("{prefix}cycle {} {}", c + 1, b.as_str()), share: s / total, by: "cycle_branch", n });
+    }
+    for (bin, (s, n)) in cr {
+        out.push(Located {
+            where_: format!("|control| {}–{} % of its range", bin * 25, bin * 25 + 25),
+            share: s / total,
+            by: "control_range",
+            n,
+        });
+    }
+    out.sort_by(|a, b| b.share.total_cmp(&a.share));
+    out
+}
+
+/// The ladder: from linear elasticity, add the best effect (by the same parsimony rule) one at a
+/// time until the held-out gap reaches the noise floor or nothing helps.
+fn ladder(
+    ctx: Context,
+    tests: &[DiagTest],
+    train: &[Vec<usize>],
+    held: &[Vec<usize>],
+    noise: &[f64],
+    opts: &DiagnoseOptions,
+    scale: f64,
+) -> Result<Vec<Rung>, DiagError> {
+    let kind = tests[0].kind;
+    let mut cur = score(ctx, tests, &ModelSpec::law("linear"), Effect::None, train, held, noise, None, opts)?;
+    let mut rungs = Vec::new();
+    let rms_abs = |s: &Scored| {
+        (s.held_resid.iter().flatten().map(|v| v * v).sum::<f64>() / s.n_held.max(1) as f64).sqrt()
+    };
+    for _ in 0..6 {
+        let g = (cur.rss_noise / cur.n_held as f64).sqrt();
+        if g <= 1.1 {
+            break;
+        }
+        let cands = applicable(ctx, kind, &cur.model);
+        let (scored, _) = compare(ctx, tests, &cur, &cands, train, held, noise, opts);
+        let choice = choose(&cur, &scored);
+        if choice.effect == Effect::None {
+            break;
+        }
+        let Some(next) = scored.into_iter().find(|s| s.effect == choice.effect) else { break };
+        rungs.push(Rung {
+            effect: next.effect,
+            model: next.model.label(),
+            gap_before_rel: rms_abs(&cur) / scale,
+            gap_after_rel: rms_abs(&next) / scale,
+        });
+        cur = Scored { effect: Effect::None, ..next };
+    }
+    Ok(rungs)
+}

@@ -1,0 +1,506 @@
+//! What is fitted: measured tests ([`DiagTest`]), models ([`ModelSpec`]: a sectional law, optional
+//! law-level effects, test-level effects) and the forward model that replays a test's measured
+//! control history through a model ([`ModelForward`]).
+//!
+//! Test-level effects are implemented here, on top of whatever the law and rod give:
+//! - `machine_compliance`: the machine reads control = specimen deformation + C·response; each
+//!   sample solves that implicit relation (Newton on the sectional strain with the law's tangent
+//!   for uniformly loaded sections; a fixed point over the history for the rod);
+//! - `sensor_drift`: the response sensor adds d·(t − t₀);
+//! - `support_friction`: the rod's support friction coefficient μ (three-point only).
+//!
+//! What it does not do: fit (see `calibrate`), decide (see `diagnose`), or know law internals
+//! (laws come from a [`LawCatalog`]).
+
+use crate::calibrate::Forward;
+use crate::error::DiagError;
+use crate::params::ParamSpec;
+use cablab_core::{Effect, TestKind};
+use cablab_laws::{Law, Strain6};
+use serde::Serialize;
+
+/// Which branch of a cyclic history a sample belongs to (SPEC: first loading, unloading,
+/// reloading, reversed loading, holds).
+pub use crate::labels::Branch;
+
+/// Cycle and branch of one sample.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+pub struct SegLabel {
+    /// Cycle index, 0-based.
+    pub cycle: usize,
+    /// Branch within the cycle.
+    pub branch: Branch,
+}
+
+/// One measured test, SI, ready for the diagnosis.
+#[derive(Debug, Clone)]
+pub struct DiagTest {
+    /// Kind of test.
+    pub kind: TestKind,
+    /// Free length (three-point: support span), m.
+    pub free_length_m: f64,
+    /// Diameter, m (needed by the rod for three-point tests; informative otherwise).
+    pub diameter_m: Option<f64>,
+    /// Sample times, s (strictly increasing is not required; negative steps count as 0).
+    pub time_s: Vec<f64>,
+    /// Machine control, SI (elongation m, twist rad, deflection m, end rotation rad).
+    pub control: Vec<f64>,
+    /// Measured response, SI (N or N m).
+    pub response: Vec<f64>,
+    /// Cycle/branch label per sample (empty: derived from the control history).
+    pub labels: Vec<SegLabel>,
+    /// Specimen label (tests with the same label share a specimen).
+    pub specimen: Option<String>,
+    /// Rod setup for three-point tests (punch/support radii, elements); `None`: the rod crate's
+    /// defaults for the kind and span.
+    pub rod_setup: Option<cablab_rod::TestSetup>,
+}
+
+impl DiagTest {
+    /// Checks lengths and finiteness; the error names the test and field.
+    pub fn validate(&self, index: usize) -> Result<(), DiagError> {
+        let bad = |why: String| DiagError::BadTest { test: index, why };
+        if self.kind == TestKind::Unknown {
+            return Err(bad("kind is unknown".into()));
+        }
+        if !(self.free_length_m.is_finite() && self.free_length_m > 0.0) {
+            return Err(bad(format!("free_length_m must be > 0, got {}", self.free_length_m)));
+        }
+        let n = self.control.len();
+        if n < 20 {
+            return Err(bad(format!("only {n} samples (need at least 20)")));
+        }
+        if self.response.len() != n || self.time_s.len() != n {
+            return Err(bad(format!(
+                "control has {n} samples, response {}, time_s {}",
+                self.response.len(),
+                self.time_s.len()
+            )));
+        }
+        if !self.labels.is_empty() && self.labels.len() != n {
+            return Err(bad(format!("labels has {} entries for {n} samples", self.labels.len())));
+        }
+        for (name, v) in [("time_s", &self.time_s), ("control", &self.control), ("response", &self.response)] {
+            if let Some(i) = v.iter().position(|x| !x.is_finite()) {
+                return Err(bad(format!("{name}[{i}] is not finite")));
+            }
+        }
+        if self.response.iter().all(|r| *r == 0.0) {
+            return Err(bad("response is identically zero".into()));
+        }
+        Ok(())
+    }
+
+    /// Largest |measured response| (the contract's normaliser of `_rel` gaps).
+    pub fn response_scale(&self) -> f64 {
+        self.response.iter().fold(0.0f64, |m, r| m.max(r.abs()))
+    }
+
+    /// Labels, derived from the control history when none were given.
+    pub fn labels_or_derived(&self) -> Vec<SegLabel> {
+        if self.labels.len() == self.control.len() {
+            self.labels.clone()
+        } else {
+            crate::labels::segment(&self.control)
+        }
+    }
+}
+
+/// A model: a sectional law of the registry, law-level effects layered on it, and test-level
+/// effects of the rig. Written `law+effect+effect` in outputs.
+#[derive(Debug, Clone, PartialEq, Eq, Hash, Serialize)]
+pub struct ModelSpec {
+    /// Registry name of the base law (`linear`, `elastoplastic`, `piecewise_linear`).
+    pub law: String,
+    /// Law-level effects (registry extensions: `kinematic_hardening`, `viscoelasticity`, …).
+    pub law_effects: Vec<Effect>,
+    /// Test-level effects (`machine_compliance`, `sensor_drift`, `support_friction`).
+    pub test_effects: Vec<Effect>,
+}
+
+/// Effects that act on the test rather than on the section's law.
+pub const TEST_LEVEL: [Effect; 3] =
+    [Effect::MachineCompliance, Effect::SensorDrift, Effect::SupportFriction];
+
+impl ModelSpec {
+    /// The bare law.
+    pub fn law(name: &str) -> Self {
+        ModelSpec { law: name.to_string(), law_effects: vec![], test_effects: vec![] }
+    }
+
+    /// The same model with `effect` added (plasticity on a linear law turns it elastoplastic).
+    pub fn with(&self, effect: Effect) -> ModelSpec {
+        let mut m = self.clone();
+        if TEST_LEVEL.contains(&effect) {
+            if !m.test_effects.contains(&effect) {
+                m.test_effects.push(effect);
+            }
+        } else if effect == Effect::Plasticity && m.law == "linear" {
+            m.law = "elastoplastic".into();
+        } else if effect == Effect::PiecewiseElasticity {
+            // Reversible slope change: the piecewise linear elastic law replaces the base law
+            // (a Bowden cable does not yield, it stiffens or softens reversibly).
+            m.law = "piecewise_linear".into();
+        } else if effect != Effect::None && !m.law_effects.contains(&effect) {
+            m.law_effects.push(effect);
+        }
+        m
+    }
+
+    /// Every effect the model has beyond a linear elastic section.
+    pub fn effects(&self) -> Vec<Effect> {
+        let mut v = Vec::new();
+        if self.law == "elastoplastic" {
+            v.push(Effect::Plasticity);
+        }
+        if self.law == "piecewise_linear" {
+            v.push(Effect::PiecewiseElasticity);
+        }
+        v.extend(&self.law_effects);
+        v.extend(&self.test_effects);
+        v
+    }
+
+    /// Whether the model already contains `effect`.
+    pub fn has(&self, effect: Effect) -> bool {
+        self.effects().contains(&effect)
+    }
+
+    /// `law+effect+…` as in outputs.
+    pub fn label(&self) -> String {
+        let mut s = self.law.clone();
+        for e in self.law_effects.iter().chain(&self.test_effects) {
+            s.push('+');
+            s.push_str(e.as_str());
+        }
+        s
+    }
+}
+
+/// What the data say about scales, for starting values and bounds (sectional quantities, SI).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct DataScales {
+    /// Sectional stiffness from the initial slope (EA N, GJ or EI N m²).
+    pub stiffness: f64,
+    /// Largest sectional stress resultant (F N or M N m; three-point: F l₀/4).
+    pub stress_max: f64,
+    /// Largest sectional strain (Γ₃, or curvature/twist 1/m; three-point: 12 w/l₀²).
+    pub strain_max: f64,
+    /// Duration of the longest test, s.
+    pub duration_s: f64,
+    /// Largest sample-to-sample time step, s (the fastest resolvable relaxation is about this).
+    pub dt_min_s: f64,
+}
+
+/// The sectional-law side of the diagnosis: which laws and law-level effects exist for a kind,
+/// their parameters with bounds and starting values, and building a law from values.
+/// [`crate::registry::Registry`] implements it over `cablab-laws`.
+pub trait LawCatalog: Sync {
+    /// Law-level effects that can be layered on `law` for `kind`.
+    fn law_effects(&self, kind: TestKind, law: &str) -> Vec<Effect>;
+    /// Parameters of the model's sectional law (base plus law-level effects), with bounds and
+    /// starting values scaled to the data.
+    fn specs(&self, kind: TestKind, model: &ModelSpec, scales: &DataScales) -> Result<Vec<ParamSpec>, DiagError>;
+    /// Build the sectional law from values in the order of `specs`.
+    fn build(&self, kind: TestKind, model: &ModelSpec, names: &[String], values: &[f64]) -> Result<Box<dyn Law>, DiagError>;
+}
+
+/// The rod side of the diagnosis, for tests that do not load the section uniformly
+/// (three-point bending): replay a control history through the rod with a given law.
+pub trait RodSimulator: Sync {
+    /// Simulate `test`'s control history (specimen deformation, SI) with `law` and support
+    /// friction `mu`, writing the response (N) per sample into `out`.
+    fn simulate(&self, test: &DiagTest, law: &dyn Law, control: &[f64], mu: f64, out: &mut [f64])
+        -> Result<(), String>;
+}
+
+/// Index of the strain/stress component a uniformly loaded test drives, `None` for three-point.
+pub fn uniform_component(kind: TestKind) -> Option<usize> {
+    match kind {
+        TestKind::Tension => Some(2),
+        TestKind::Torsion => Some(5),
+        TestKind::PureBending => Some(3),
+        _ => None,
+    }
+}
+
+/// Data scales of a set of tests (all of one kind).
+pub fn data_scales(tests: &[DiagTest]) -> DataScales {
+    let mut k_sum = 0.0;
+    let mut k_n = 0.0;
+    let (mut smax, mut emax, mut dur, mut dtmin) = (0.0f64, 0.0f64, 0.0f64, f64::INFINITY);
+    for t in tests {
+        let l = t.free_length_m;
+        let (to_stiff, to_stress, to_strain) = match t.kind {
+            TestKind::ThreePoint => (l.powi(3) / 48.0, l / 4.0, 12.0 / (l * l)),
+            _ => (l, 1.0, 1.0 / l),
+        };
+        if let Some(k) = initial_slope(&t.control, &t.response) {
+            k_sum += k * to_stiff;
+            k_n += 1.0;
+        }
+        smax = smax.max(t.response_scale() * to_stress);
+        emax = emax.max(t.control.iter().fold(0.0f64, |m, c| m.max(c.abs())) * to_strain);
+        if let (Some(a), Some(b)) = (t.time_s.first(), t.time_s.last()) {
+            dur = dur.max(b - a);
+        }
+        for w in t.time_s.windows(2) {
+            let dt = w[1] - w[0];
+            if dt > 0.0 {
+                dtmin = dtmin.min(dt);
+            }
+        }
+    }
+    let stiffness = if k_n > 0.0 && k_sum > 0.0 { k_sum / k_n } else { smax / emax.max(f64::MIN_POSITIVE) };
+    DataScales {
+        stiffness,
+        stress_max: smax.max(f64::MIN_POSITIVE),
+        strain_max: emax.max(f64::MIN_POSITIVE),
+        duration_s: dur.max(f64::MIN_POSITIVE),
+        dt_min_s: if dtmin.is_finite() { dtmin } else { 1.0 },
+    }
+}
+
+/// Slope response/control of the first loading, fitted over its lower 30 % (where a cable is
+/// still elastic); `None` if the first loading is too short.
+pub fn initial_slope(control: &[f64], response: &[f64]) -> Option<f64> {
+    // First loading: until |control| stops growing.
+    let mut end = 0;
+    let mut peak = 0.0f64;
+    for (i, c) in control.iter().enumerate() {
+        if c.abs() >= peak {
+            peak = c.abs();
+            end = i;
+        } else if c.abs() < 0.98 * peak {
+            break;
+        }
+    }
+    let (mut sx, mut sy, mut sxx, mut sxy, mut n) = (0.0, 0.0, 0.0, 0.0, 0.0);
+    for i in 0..=end {
+        let x = control[i];
+        if x.abs() <= 0.3 * peak {
+            sx += x;
+            sy += response[i];
+            sxx += x * x;
+            sxy += x * response[i];
+            n += 1.0;
+        }
+    }
+    let det = n * sxx - sx * sx;
+    if n < 5.0 || det <= 0.0 {
+        return None;
+    }
+    let k = (n * sxy - sx * sy) / det;
+    (k.is_finite() && k != 0.0).then_some(k.abs())
+}
+
+/// Parameters of the test-level effects, after the law's (one compliance, drift, friction each).
+pub fn test_effect_specs(effects: &[Effect], tests: &[DiagTest]) -> Vec<ParamSpec> {
+    // Apparent machine stiffness (response per control): series compliance is below 1/k_app.
+    let k_app = tests
+        .iter()
+        .filter_map(|t| initial_slope(&t.control, &t.response))
+        .fold(0.0f64, f64::max);
+    let rmax = tests.iter().map(DiagTest::response_scale).fold(0.0f64, f64::max);
+    let dur = tests
+        .iter()
+        .map(|t| t.time_s.last().copied().unwrap_or(0.0) - t.time_s.first().copied().unwrap_or(0.0))
+        .fold(0.0f64, f64::max)
+        .max(1e-9);
+    effects
+        .iter()
+        .filter_map(|e| match e {
+            Effect::MachineCompliance => {
+                let cmax = if k_app > 0.0 { 0.95 / k_app } else { 1.0 };
+                Some(ParamSpec::linear("compliance", 0.0, cmax, 0.2 * cmax))
+            }
+            Effect::SensorDrift => {
+                let d = 2.0 * rmax.max(f64::MIN_POSITIVE) / dur;
+                Some(ParamSpec::linear("drift_per_s", -d, d, 0.0))
+            }
+            Effect::SupportFriction => Some(ParamSpec::linear("support_friction", 0.0, 0.6, 0.1)),
+            _ => None,
+        })
+        .collect()
+}
+
+/// The forward model of one [`ModelSpec`] over a set of tests: law parameters first (shared by
+/// all tests), then the test-level effect parameters (shared too: one machine, one sensor).
+pub struct ModelForward<'a> {
+    tests: &'a [DiagTest],
+    catalog: &'a dyn LawCatalog,
+    rod: Option<&'a dyn RodSimulator>,
+    model: ModelSpec,
+    specs: Vec<ParamSpec>,
+    names: Vec<String>,
+    n_law: usize,
+    i_compliance: Option<usize>,
+    i_drift: Option<usize>,
+    i_friction: Option<usize>,
+}
+
+impl<'a> ModelForward<'a> {
+    /// Set up `model` over `tests` (all of one kind); bounds and starts scaled to the data.
+    pub fn new(
+        tests: &'a [DiagTest],
+        model: &ModelSpec,
+        catalog: &'a dyn LawCatalog,
+        rod: Option<&'a dyn RodSimulator>,
+    ) -> Result<Self, DiagError> {
+        let kind = tests.first().ok_or(DiagError::NoTests)?.kind;
+        if let Some(i) = tests.iter().position(|t| t.kind != kind) {
+            return Err(DiagError::BadTest { test: i, why: format!("kind {} differs from test 0's {kind}", tests[i].kind) });
+        }
+        if kind == TestKind::ThreePoint && rod.is_none() {
+            return Err(DiagError::Model { model: model.label(), why: "three_point tests need the rod solver".into() });
+        }
+        if model.test_effects.contains(&Effect::SupportFriction) && kind != TestKind::ThreePoint {
+            return Err(DiagError::Model { model: model.label(), why: "support_friction applies to three_point only".into() });
+        }
+        let scales = data_scales(tests);
+        let mut specs = catalog.specs(kind, model, &scales)?;
+        let n_law = specs.len();
+        specs.extend(test_effect_specs(&model.test_effects, tests));
+        let find = |n: &str| specs.iter().position(|s| s.name == n);
+        let (i_compliance, i_drift, i_friction) = (find("compliance"), find("drift_per_s"), find("support_friction"));
+        let names = specs.iter().map(|s| s.name.clone()).collect();
+        Ok(ModelForward { tests, catalog, rod, model: model.clone(), specs, names, n_law, i_compliance, i_drift, i_friction })
+    }
+
+    /// The model.
+    pub fn model(&self) -> &ModelSpec {
+        &self.model
+    }
+
+    /// Simulate every test at `params` (for residual bookkeeping after a fit).
+    pub fn simulate_all(&self, params: &[f64]) -> Result<Vec<Vec<f64>>, DiagError> {
+        (0..self.tests.len())
+            .map(|t| {
+                let mut out = vec![0.0; self.tests[t].control.len()];
+                self.simulate(params, t, &mut out).map_err(|why| DiagError::Simulation {
+                    model: self.model.label(),
+                    test: t,
+                    why,
+                })?;
+                Ok(out)
+            })
+            .collect()
+    }
+}
+
+impl Forward for ModelForward<'_> {
+    fn specs(&self) -> &[ParamSpec] {
+        &self.specs
+    }
+    fn n_tests(&self) -> usize {
+        self.tests.len()
+    }
+    fn n_samples(&self, test: usize) -> usize {
+        self.tests[test].control.len()
+    }
+    fn simulate(&self, p: &[f64], test: usize, out: &mut [f64]) -> Result<(), String> {
+        let t = &self.tests[test];
+        let law = self
+            .catalog
+            .build(t.kind, &self.model, &self.names[..self.n_law], &p[..self.n_law])
+            .map_err(|e| e.to_string())?;
+        let c = self.i_compliance.map_or(0.0, |i| p[i]);
+        match uniform_component(t.kind) {
+            Some(comp) => drive_uniform_compliant(law.as_ref(), comp, t.free_length_m, c, &t.time_s, &t.control, out)?,
+            None => {
+                let rod = self.rod.ok_or("no rod solver")?;
+                let mu = self.i_friction.map_or(0.0, |i| p[i]);
+                if c == 0.0 {
+                    rod.simulate(t, law.as_ref(), &t.control, mu, out)?;
+                } else {
+                    // Fixed point on the specimen deflection w = u − C F over the whole history
+                    // (contracts when C·k_specimen < 1, which the compliance bound ensures).
+                    let mut w = t.control.clone();
+                    for _ in 0..30 {
+                        rod.simulate(t, law.as_ref(), &w, mu, out)?;
+                        let mut change = 0.0f64;
+                        for i in 0..w.len() {
+                            let wn = t.control[i] - c * out[i];
+                            change = change.max((wn - w[i]).abs());
+                            w[i] = wn;
+                        }
+                        if change <= 1e-9 * t.control.iter().fold(1e-12f64, |m, x| m.max(x.abs())) {
+                            break;
+                        }
+                    }
+                }
+            }
+        }
+        if let Some(i) = self.i_drift {
+            let t0 = t.time_s[0];
+            for (o, &ti) in out.iter_mut().zip(&t.time_s) {
+                *o += p[i] * (ti - t0);
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Drive a uniformly loaded section through a machine control history with machine compliance
+/// `c` (control per response unit) in series: per sample, solve l₀ ε + c σ(ε) = u for the
+/// sectional strain ε by Newton with the law's consistent tangent (c = 0: ε = u/l₀ directly).
+/// Writes the response σ (the `comp` stress resultant) into `out`.
+pub fn drive_uniform_compliant(
+    law: &dyn Law,
+    comp: usize,
+    free_length_m: f64,
+    c: f64,
+    time_s: &[f64],
+    control: &[f64],
+    out: &mut [f64],
+) -> Result<(), String> {
+    let n = law.n_state();
+    let mut old = vec![0.0; n];
+    law.init_state(&mut old);
+    let mut new = old.clone();
+    let l0 = free_length_m;
+    let mut eps = Strain6::zeros();
+    let mut t_prev = time_s.first().copied().unwrap_or(0.0);
+    let mut k_prev = law.elastic_tangent()[(comp, comp)];
+    let umax = control.iter().fold(0.0f64, |m, u| m.max(u.abs())).max(f64::MIN_POSITIVE);
+    let mut u_prev = 0.0;
+    for (i, &u) in control.iter().enumerate() {
+        let dt = (time_s[i] - t_prev).max(0.0);
+        let s;
+        if c == 0.0 {
+            eps[comp] = u / l0;
+            s = law.update(&eps, dt, &old, &mut new).stress[comp];
+            k_prev = 0.0;
+        } else {
+            // Predictor with the last tangent, then Newton on g(ε) = l₀ε + cσ(ε) − u.
+            eps[comp] += (u - u_prev) / (l0 + c * k_prev);
+            let mut converged = false;
+            let mut sigma = 0.0;
+            for _ in 0..30 {
+                let r = law.update(&eps, dt, &old, &mut new);
+                sigma = r.stress[comp];
+                let k = r.tangent[(comp, comp)];
+                let g = l0 * eps[comp] + c * sigma - u;
+                let dg = l0 + c * k.max(0.0);
+                k_prev = k.max(0.0);
+                if g.abs() <= 1e-12 * umax {
+                    converged = true;
+                    break;
+                }
+                eps[comp] -= g / dg;
+            }
+            if !converged {
+                return Err(format!("machine compliance: no convergence at sample {i} (control {u})"));
+            }
+            s = sigma;
+        }
+        if !s.is_finite() {
+            return Err(format!("law '{}' gave a non-finite response at sample {i}", law.name()));
+        }
+        out[i] = s;
+        std::mem::swap(&mut old, &mut new);
+        t_prev = time_s[i];
+        u_prev = u;
+    }
+    Ok(())
+}

@@ -1,0 +1,210 @@
+//! The diagnosis' view of the project's law registry (`cablab-laws`) and rod (`cablab-rod`):
+//! which law-level effects exist for a base law, their parameters with bounds and starting values
+//! scaled to the data, building laws from fitted values, and replaying three-point histories.
+//!
+//! The registry's own bounds are admissibility limits (1e-12 … 1e12); a fit needs bounds that
+//! say "plausible for these data", so each parameter gets bounds from its role (stiffness,
+//! strength, hardening, damage, time, threshold) and the data scales. What this module does not
+//! do: implement any law or solver.
+
+use crate::error::DiagError;
+use crate::model::{DataScales, DiagTest, LawCatalog, ModelSpec, RodSimulator};
+use crate::params::ParamSpec;
+use cablab_core::{Effect, TestKind};
+use cablab_laws::Law;
+use std::collections::BTreeMap;
+
+/// The law registry of `cablab-laws` seen as a [`LawCatalog`].
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Registry;
+
+/// The registry name of a model's sectional law (`elastoplastic`, `kinematic_hardening`,
+/// `linear+viscoelasticity`), or why the registry cannot express it.
+pub fn registry_name(model: &ModelSpec) -> Result<String, String> {
+    match model.law_effects.as_slice() {
+        [] => Ok(model.law.clone()),
+        [e] => {
+            let ext = e.as_str();
+            match (model.law.as_str(), e) {
+                ("elastoplastic", _) => Ok(ext.to_string()),
+                (base, Effect::Viscoelasticity | Effect::FrictionHysteresis) => Ok(format!("{base}+{ext}")),
+                (base, _) => Err(format!("the registry has no {base}+{ext}")),
+            }
+        }
+        _ => Err("the registry composes one extension at a time".into()),
+    }
+}
+
+impl LawCatalog for Registry {
+    fn law_effects(&self, kind: TestKind, law: &str) -> Vec<Effect> {
+        let _ = kind;
+        let mut v = match law {
+            "elastoplastic" => vec![
+                Effect::KinematicHardening,
+                Effect::StiffnessDegradation,
+                Effect::Viscoelasticity,
+                Effect::FrictionHysteresis,
+            ],
+            "linear" | "piecewise_linear" => vec![Effect::Viscoelasticity, Effect::FrictionHysteresis],
+            _ => vec![],
+        };
+        if law != "piecewise_linear" {
+            v.push(Effect::PiecewiseElasticity);
+        }
+        v
+    }
+
+    fn specs(&self, kind: TestKind, model: &ModelSpec, sc: &DataScales) -> Result<Vec<ParamSpec>, DiagError> {
+        let name = registry_name(model).map_err(|why| DiagError::Model { model: model.label(), why })?;
+        let specs = cablab_laws::try_param_specs(kind, &name)
+            .map_err(|e| DiagError::Model { model: model.label(), why: e.to_string() })?;
+        Ok(specs.into_iter().filter(|s| s.fitted).map(|s| scaled(&s, sc)).collect())
+    }
+
+    fn build(&self, kind: TestKind, model: &ModelSpec, names: &[String], values: &[f64]) -> Result<Box<dyn Law>, DiagError> {
+        let name = registry_name(model).map_err(|why| DiagError::Model { model: model.label(), why })?;
+        let map: BTreeMap<String, f64> = names.iter().cloned().zip(values.iter().copied()).collect();
+        cablab_laws::build(kind, &name, &map).map_err(|e| DiagError::Model { model: model.label(), why: e.to_string() })
+    }
+}
+
+/// Fit bounds and start of a registry parameter from its role and the data scales.
+fn scaled(s: &cablab_laws::ParamSpec, sc: &DataScales) -> ParamSpec {
+    let k = sc.stiffness;
+    let m = sc.stress_max;
+    let e = sc.strain_max;
+    let n = s.name.as_str();
+    let clamp = |p: ParamSpec| ParamSpec {
+        lower: p.lower.max(s.lower),
+        upper: p.upper.min(s.upper),
+        initial: p.initial.clamp(p.lower.max(s.lower), p.upper.min(s.upper)),
+        ..p
+    };
+    let is_stiff = matches!(n, "EA" | "GJ" | "EI" | "EA1" | "GJ1" | "EI1");
+    let p = if is_stiff {
+        ParamSpec::log(n, k / 30.0, k * 30.0, k)
+    } else if matches!(n, "EA2" | "GJ2" | "EI2") {
+        ParamSpec::log(n, k * 1e-3, k * 30.0, 0.3 * k)
+    } else if matches!(n, "F_y" | "M_y") {
+        ParamSpec::log(n, m * 1e-3, m * 3.0, 0.5 * m)
+    } else if matches!(n, "H" | "HI" | "H_kin" | "HI_kin") {
+        ParamSpec::linear(n, 0.0, 2.0 * k, 0.05 * k)
+    } else if n == "D_inf" {
+        ParamSpec::linear(n, 0.0, 0.95, 0.2)
+    } else if n == "alpha_D" {
+        ParamSpec::log(n, e * 1e-4, e * 100.0, 0.3 * e)
+    } else if n.ends_with("_v1") && n != "tau_v1" {
+        ParamSpec::linear(n, 0.0, 3.0 * k, 0.2 * k)
+    } else if n == "tau_v1" {
+        // From a few sample steps to far beyond the test: at the upper bound a Maxwell branch is
+        // a parallel spring over the whole record.
+        ParamSpec::log(n, (3.0 * sc.dt_min_s).max(1e-6), 1e4 * sc.duration_s, 0.1 * sc.duration_s)
+    } else if matches!(n, "EA_f" | "GJ_f" | "EI_f") {
+        ParamSpec::log(n, k * 1e-4, k * 10.0, 0.3 * k)
+    } else if matches!(n, "F_f" | "M_f") {
+        ParamSpec::linear(n, 0.0, m, 0.1 * m)
+    } else if matches!(n, "K_t" | "Gamma_t") {
+        ParamSpec::log(n, e * 1e-3, e * 2.0, 0.3 * e)
+    } else {
+        let init = s.default.unwrap_or(0.5 * (s.lower + s.upper));
+        ParamSpec::linear(n, s.lower, s.upper, init)
+    };
+    clamp(p)
+}
+
+/// The rod of `cablab-rod` seen as a [`RodSimulator`]: three-point histories are replayed at the
+/// turning points and at most `max_points` samples in between (the rod sub-steps internally), and
+/// the response is interpolated linearly in time to the other samples.
+#[derive(Debug, Clone, Copy)]
+pub struct Rod {
+    /// Most samples replayed through the rod per history.
+    pub max_points: usize,
+}
+
+impl Default for Rod {
+    fn default() -> Self {
+        Rod { max_points: 240 }
+    }
+}
+
+/// Indices kept when replaying a history at most `max_points` samples plus its turning points
+/// (always the first and last sample).
+pub fn decimate(control: &[f64], max_points: usize) -> Vec<usize> {
+    let n = control.len();
+    if n <= max_points.max(2) {
+        return (0..n).collect();
+    }
+    let stride = (n as f64 / max_points as f64).ceil() as usize;
+    let mut keep = vec![false; n];
+    keep[0] = true;
+    keep[n - 1] = true;
+    for i in (0..n).step_by(stride.max(1)) {
+        keep[i] = true;
+    }
+    // Turning points of the control: where the direction of travel changes.
+    let mut dir = 0.0f64;
+    for i in 1..n {
+        let d = (control[i] - control[i - 1]).signum();
+        if d != 0.0 {
+            if dir != 0.0 && d != dir {
+                keep[i - 1] = true;
+            }
+            dir = d;
+        }
+    }
+    (0..n).filter(|&i| keep[i]).collect()
+}
+
+impl RodSimulator for Rod {
+    fn simulate(&self, test: &DiagTest, law: &dyn Law, control: &[f64], mu: f64, out: &mut [f64]) -> Result<(), String> {
+        let mut setup = test.rod_setup.clone().unwrap_or_else(|| cablab_rod::TestSetup::new(test.kind, test.free_length_m));
+        setup.support_friction = mu;
+        let idx = decimate(control, self.max_points);
+        let c: Vec<f64> = idx.iter().map(|&i| control[i]).collect();
+        let t: Vec<f64> = idx.iter().map(|&i| test.time_s[i]).collect();
+        let curve = cablab_rod::simulate_history(&setup, law, &c, &t).map_err(|e| e.to_string())?;
+        // Linear interpolation by sample index between replayed samples.
+        for w in 0..idx.len() {
+            let (a, ra) = (idx[w], curve.response[w]);
+            out[a] = ra;
+            if w + 1 < idx.len() {
+                let (b, rb) = (idx[w + 1], curve.response[w + 1]);
+                for i in a + 1..b {
+                    let f = (i - a) as f64 / (b - a) as f64;
+                    out[i] = ra + f * (rb - ra);
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn registry_names_of_models() {
+        let ep = ModelSpec::law("elastoplastic");
+        assert_eq!(registry_name(&ep.with(Effect::KinematicHardening)).unwrap(), "kinematic_hardening");
+        assert_eq!(registry_name(&ModelSpec::law("linear").with(Effect::Viscoelasticity)).unwrap(), "linear+viscoelasticity");
+        assert_eq!(ModelSpec::law("linear").with(Effect::Plasticity).law, "elastoplastic");
+        assert_eq!(ep.with(Effect::PiecewiseElasticity).law, "piecewise_linear");
+        assert!(registry_name(&ep.with(Effect::KinematicHardening).with(Effect::Viscoelasticity)).is_err());
+        let sc = DataScales { stiffness: 1e5, stress_max: 100.0, strain_max: 2e-3, duration_s: 100.0, dt_min_s: 0.01 };
+        let specs = Registry.specs(TestKind::Tension, &ep, &sc).unwrap();
+        let names: Vec<&str> = specs.iter().map(|s| s.name.as_str()).collect();
+        assert_eq!(names, ["EA", "F_y", "H"]);
+        assert!(specs[0].lower < 1e5 && specs[0].upper > 1e5 && specs[0].log_scale);
+    }
+
+    #[test]
+    fn decimation_keeps_turning_points() {
+        let u: Vec<f64> = (0..1000).map(|i| ((i as f64) * 0.01).sin()).collect();
+        let idx = decimate(&u, 50);
+        assert!(idx.len() <= 60, "{}", idx.len());
+        // sin peaks at i ≈ 157 (x = π/2): kept exactly.
+        assert!(idx.contains(&157), "{idx:?}");
+        assert_eq!(*idx.last().unwrap(), 999);
+    }
+}

@@ -1,0 +1,100 @@
+//! Small statistics the diagnosis needs on residual series: RMS, lag-1 autocorrelation, the
+//! effective sample size of autocorrelated residuals, and a data-driven noise floor fallback.
+//!
+//! Pure functions on slices; no fitting, no I/O.
+
+/// Root mean square of a slice (0 for an empty slice).
+pub fn rms(x: &[f64]) -> f64 {
+    if x.is_empty() {
+        return 0.0;
+    }
+    (x.iter().map(|v| v * v).sum::<f64>() / x.len() as f64).sqrt()
+}
+
+/// Lag-1 autocorrelation of a series about its mean (0 for fewer than 3 values or a flat
+/// series), clamped to [−0.99, 0.99] so that derived sample sizes stay finite.
+pub fn lag1_autocorrelation(x: &[f64]) -> f64 {
+    let n = x.len();
+    if n < 3 {
+        return 0.0;
+    }
+    let mean = x.iter().sum::<f64>() / n as f64;
+    let var: f64 = x.iter().map(|v| (v - mean).powi(2)).sum();
+    if var <= 0.0 {
+        return 0.0;
+    }
+    let cov: f64 = x.windows(2).map(|w| (w[0] - mean) * (w[1] - mean)).sum();
+    (cov / var).clamp(-0.99, 0.99)
+}
+
+/// Effective sample size of `n` autocorrelated residuals with lag-1 autocorrelation `rho1`
+/// (AR(1) approximation): n_eff = n (1 − ρ₁)/(1 + ρ₁), at least 1, at most n.
+pub fn effective_sample_size(n: usize, rho1: f64) -> f64 {
+    let r = rho1.clamp(0.0, 0.99);
+    (n as f64 * (1.0 - r) / (1.0 + r)).clamp(1.0f64.min(n as f64), n as f64)
+}
+
+/// Lag-1 autocorrelation pooled over several contiguous series (each series contributes its own
+/// lag products about its own mean; pairs never straddle two series).
+pub fn pooled_lag1(series: &[&[f64]]) -> f64 {
+    let (mut cov, mut var) = (0.0, 0.0);
+    for x in series {
+        if x.len() < 3 {
+            continue;
+        }
+        let mean = x.iter().sum::<f64>() / x.len() as f64;
+        var += x.iter().map(|v| (v - mean).powi(2)).sum::<f64>();
+        cov += x.windows(2).map(|w| (w[0] - mean) * (w[1] - mean)).sum::<f64>();
+    }
+    if var <= 0.0 {
+        0.0
+    } else {
+        (cov / var).clamp(-0.99, 0.99)
+    }
+}
+
+/// Noise standard deviation of a sampled signal estimated from its second differences:
+/// for white noise σ on a locally linear signal, Var(x[i+1] − 2x[i] + x[i−1]) = 6σ². Uses the
+/// median absolute second difference (robust to turning points and jumps): σ ≈ MAD / (0.6745 √6).
+pub fn noise_from_second_differences(x: &[f64]) -> Option<f64> {
+    if x.len() < 5 {
+        return None;
+    }
+    let mut d: Vec<f64> = x.windows(3).map(|w| (w[2] - 2.0 * w[1] + w[0]).abs()).collect();
+    let mid = d.len() / 2;
+    d.select_nth_unstable_by(mid, |a, b| a.total_cmp(b));
+    Some(d[mid] / (0.674_489_75 * 6f64.sqrt()))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::SeedableRng;
+    use rand_distr::{Distribution, Normal};
+
+    #[test]
+    fn ar1_series_gives_its_autocorrelation_and_sample_size() {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
+        let n = Normal::new(0.0, 1.0).unwrap();
+        let mut x = vec![0.0; 20_000];
+        for i in 1..x.len() {
+            x[i] = 0.8 * x[i - 1] + n.sample(&mut rng);
+        }
+        let r = lag1_autocorrelation(&x);
+        assert!((r - 0.8).abs() < 0.02, "rho1 = {r}");
+        let ne = effective_sample_size(x.len(), r);
+        assert!((ne / (20_000.0 * 0.2 / 1.8) - 1.0).abs() < 0.1, "n_eff = {ne}");
+        assert_eq!(effective_sample_size(100, -0.5), 100.0);
+    }
+
+    #[test]
+    fn noise_floor_from_second_differences_recovers_sigma_on_a_smooth_signal() {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
+        let n = Normal::new(0.0, 0.05).unwrap();
+        let x: Vec<f64> =
+            (0..5000).map(|i| 10.0 * (i as f64 * 0.002).sin() + n.sample(&mut rng)).collect();
+        let s = noise_from_second_differences(&x).unwrap();
+        assert!((s / 0.05 - 1.0).abs() < 0.06, "sigma = {s}");
+        assert!((rms(&[3.0, 4.0]) - (12.5f64).sqrt()).abs() < 1e-12);
+    }
+}

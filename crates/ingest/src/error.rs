@@ -1,0 +1,146 @@
+//! Errors and warnings of the readers.
+//!
+//! Every message names the source (file path or the label given to `read_bytes`) and, where the
+//! problem sits on a line, the 1-based physical line and column. This module does not decide what
+//! is an error; the readers do.
+
+use std::fmt;
+use std::path::PathBuf;
+use thiserror::Error;
+
+/// A reason a file could not be read into a [`crate::TestRecord`].
+#[derive(Debug, Error)]
+pub enum IngestError {
+    /// The file could not be opened or read.
+    #[error("{path}: cannot read file: {source}")]
+    Io {
+        /// The path that was read.
+        path: PathBuf,
+        /// The operating-system error.
+        source: std::io::Error,
+    },
+    /// The input has no bytes (or only a byte-order mark / whitespace).
+    #[error("{file}: the file is empty (expected a machine export with a header and data rows)")]
+    Empty {
+        /// File path or label.
+        file: String,
+    },
+    /// The input is not text.
+    #[error("{file}: byte {offset}: binary data, not a text export ({detail})")]
+    Binary {
+        /// File path or label.
+        file: String,
+        /// 0-based byte offset of the first offending byte.
+        offset: usize,
+        /// What was seen.
+        detail: String,
+    },
+    /// No table of numbers was found.
+    #[error("{file}: no numeric data rows found ({detail})")]
+    NoData {
+        /// File path or label.
+        file: String,
+        /// What was found instead.
+        detail: String,
+    },
+    /// A header row was found but no data rows below it.
+    #[error("{file}:{line}: header row '{header}' is not followed by any numeric data row")]
+    HeaderWithoutData {
+        /// File path or label.
+        file: String,
+        /// 1-based physical line of the header.
+        line: usize,
+        /// The header line, shortened.
+        header: String,
+    },
+    /// A unit that the unit table does not know, on a column the test needs.
+    #[error("{file}:{line}:{column}: unknown unit '{unit}' on column '{name}' (the {role} column); expected one of the units in cablab-ingest's unit table (N, kN, mm, s, deg, N·m, ...)")]
+    UnknownUnit {
+        /// File path or label.
+        file: String,
+        /// 1-based physical line where the unit is written.
+        line: usize,
+        /// 1-based column.
+        column: usize,
+        /// Channel name.
+        name: String,
+        /// The unit as written.
+        unit: String,
+        /// Which role needed it (`time`, `control`, `response`).
+        role: &'static str,
+    },
+    /// `--time/--control/--response` named a column that does not exist.
+    #[error("{file}: {option} '{given}' matches no column; columns are: {available}")]
+    UnknownColumn {
+        /// File path or label.
+        file: String,
+        /// Which option (`--time`, ...).
+        option: &'static str,
+        /// The name given.
+        given: String,
+        /// The channel names, comma separated.
+        available: String,
+    },
+    /// `--block` is out of range.
+    #[error("{file}: block {requested} requested but the file has {available} data block(s)")]
+    BlockOutOfRange {
+        /// File path or label.
+        file: String,
+        /// 1-based block asked for.
+        requested: usize,
+        /// Number of blocks found.
+        available: usize,
+    },
+    /// A malformed structure in a layout with fixed syntax (XML).
+    #[error("{file}:{line}: {detail}")]
+    Malformed {
+        /// File path or label.
+        file: String,
+        /// 1-based physical line.
+        line: usize,
+        /// What was expected.
+        detail: String,
+    },
+    /// Writing the canonical record failed (nothing was left behind).
+    #[error("{path}: cannot write: {detail}")]
+    Write {
+        /// Output path.
+        path: PathBuf,
+        /// What went wrong.
+        detail: String,
+    },
+    /// Building the polars table failed (internal; should not happen).
+    #[error("{file}: building the table failed: {detail}")]
+    Table {
+        /// File path or label.
+        file: String,
+        /// Polars' message.
+        detail: String,
+    },
+}
+
+/// A warning: the file was read, but something in it deserves a look.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct Diagnostic {
+    /// File path or label.
+    pub file: String,
+    /// 1-based physical line, where the issue sits on a line.
+    pub line: Option<usize>,
+    /// 1-based column (cell index), where relevant.
+    pub column: Option<usize>,
+    /// What was found and what was done about it.
+    pub message: String,
+}
+
+impl fmt::Display for Diagnostic {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}", self.file)?;
+        if let Some(l) = self.line {
+            write!(f, ":{l}")?;
+            if let Some(c) = self.column {
+                write!(f, ":{c}")?;
+            }
+        }
+        write!(f, ": warning: {}", self.message)
+    }
+}

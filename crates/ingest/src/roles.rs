@@ -1,0 +1,366 @@
+//! Channel roles, test kind and specimen geometry, recognised from channel names (English,
+//! German, Spanish, Italian, French), units and metadata.
+//!
+//! Pure functions over names, dimensions and key/value strings; no I/O, no numbers from the table.
+
+use crate::units::{lookup, Dimension};
+use cablab_core::{Role, TestKind};
+
+/// What the role finder needs to know about one channel.
+#[derive(Debug, Clone)]
+pub(crate) struct ChannelFacts {
+    pub name: String,
+    pub dimension: Option<Dimension>,
+    pub unit_written: bool,
+}
+
+fn has(name: &str, words: &[&str]) -> bool {
+    words.iter().any(|w| name.contains(w))
+}
+
+const TIME_WORDS: &[&str] = &["time", "zeit", "tiempo", "tempo", "temps", "durée", "duration", "dauer"];
+const NOT_TIME: &[&str] = &["tageszeit", "uhrzeit", "datum", "date", "fecha", "time of day", "timestamp", "zeitstempel"];
+const TIME_PENALTY: &[&str] = &["cycle", "zyklus", "ciclo", "step", "segment", "schritt", "elapsed", "hold", "halte"];
+const FORCE_WORDS: &[&str] = &["force", "load", "kraft", "fuerza", "forza", "carico", "charge", "belastung"];
+const TORQUE_WORDS: &[&str] = &["torque", "moment", "drehmoment", "momento", "couple", "torsionsmoment"];
+const SETPOINT: &[&str] = &["soll", "setpoint", "set point", "command", "cmd", "target", "demand", "consigna", "riferimento"];
+const LENGTH_WORDS: &[&str] = &[
+    "displacement", "extension", "position", "weg", "desplazamiento", "spostamento", "deflection",
+    "durchbiegung", "flecha", "freccia", "stroke", "crosshead", "elongation", "verlängerung",
+    "déplacement", "posizione", "posición", "travel",
+];
+const ANGLE_WORDS: &[&str] = &[
+    "rotation", "angle", "winkel", "drehwinkel", "ángulo", "angulo", "angolo", "twist", "verdrehung",
+    "giro", "rotazione", "rotación", "verdrillung", "torsionswinkel",
+];
+const CURVATURE_WORDS: &[&str] = &["curvature", "krümmung", "curvatura", "courbure"];
+const CONTROL_PENALTY: &[&str] = &["strain", "dehnung", "breite", "width", "deformación", "deformazione", "stress", "spannung"];
+
+/// Best index by score (ties: first), among candidates with a score.
+fn best(scores: impl Iterator<Item = (usize, Option<i32>)>, taken: &[usize]) -> Option<usize> {
+    let mut b: Option<(i32, usize)> = None;
+    for (i, s) in scores {
+        if taken.contains(&i) {
+            continue;
+        }
+        if let Some(s) = s {
+            if b.is_none_or(|(bs, _)| s > bs) {
+                b = Some((s, i));
+            }
+        }
+    }
+    b.map(|(_, i)| i)
+}
+
+fn time_score(c: &ChannelFacts) -> Option<i32> {
+    let n = c.name.to_lowercase();
+    if has(&n, NOT_TIME) {
+        return None;
+    }
+    let dim_ok = c.dimension == Some(Dimension::Time);
+    let word = has(&n, TIME_WORDS) || n == "t";
+    if !(dim_ok || (word && (!c.unit_written || c.dimension.is_none()))) {
+        return None;
+    }
+    let mut s = if dim_ok { 10 } else { 4 };
+    if word {
+        s += 5;
+    }
+    if has(&n, TIME_PENALTY) {
+        s -= 8;
+    }
+    Some(s)
+}
+
+fn response_score(c: &ChannelFacts, torque: bool) -> Option<i32> {
+    let n = c.name.to_lowercase();
+    let (dim, words) = if torque { (Dimension::Torque, TORQUE_WORDS) } else { (Dimension::Force, FORCE_WORDS) };
+    let dim_ok = c.dimension == Some(dim);
+    let word = has(&n, words);
+    if !(dim_ok || (word && c.dimension.is_none())) {
+        return None;
+    }
+    let mut s = if dim_ok { 10 } else { 4 };
+    if word {
+        s += 5;
+    }
+    if has(&n, SETPOINT) || n.contains("peak") || n.contains("max") {
+        s -= 8;
+    }
+    if n.contains("standard") || n.contains("prüf") {
+        s += 2;
+    }
+    Some(s)
+}
+
+fn control_score(c: &ChannelFacts, dim: Dimension) -> Option<i32> {
+    let n = c.name.to_lowercase();
+    let words = match dim {
+        Dimension::Length => LENGTH_WORDS,
+        Dimension::Angle => ANGLE_WORDS,
+        _ => CURVATURE_WORDS,
+    };
+    let dim_ok = c.dimension == Some(dim);
+    let word = has(&n, words);
+    if !(dim_ok || (word && c.dimension.is_none())) {
+        return None;
+    }
+    let mut s = if dim_ok { 10 } else { 4 };
+    if word {
+        s += 5;
+    }
+    if has(&n, SETPOINT) {
+        s -= 8;
+    }
+    if has(&n, CONTROL_PENALTY) {
+        s -= 6;
+    }
+    if n.contains("digital") {
+        s -= 3;
+    }
+    if n.contains("machine") || n.contains("traverse") || n.contains("maschine") {
+        s -= 1;
+    }
+    if n.contains("standardweg") {
+        s += 2;
+    }
+    Some(s)
+}
+
+/// Picks (time, control, response) column indices. `fixed` holds overrides already chosen.
+pub(crate) fn assign_roles(
+    ch: &[ChannelFacts],
+    fixed_time: Option<usize>,
+    fixed_control: Option<usize>,
+    fixed_response: Option<usize>,
+) -> (Option<usize>, Option<usize>, Option<usize>) {
+    let mut taken: Vec<usize> = [fixed_time, fixed_control, fixed_response].into_iter().flatten().collect();
+    let time = fixed_time.or_else(|| best(ch.iter().enumerate().map(|(i, c)| (i, time_score(c))), &taken));
+    if let Some(t) = time {
+        taken.push(t);
+    }
+    let torque_resp = best(ch.iter().enumerate().map(|(i, c)| (i, response_score(c, true))), &taken);
+    let force_resp = best(ch.iter().enumerate().map(|(i, c)| (i, response_score(c, false))), &taken);
+    let ctl = |dim: Dimension, taken: &[usize]| best(ch.iter().enumerate().map(|(i, c)| (i, control_score(c, dim))), taken);
+
+    let response = fixed_response.or(torque_resp.filter(|_| ctl(Dimension::Angle, &taken).or(ctl(Dimension::Curvature, &taken)).is_some()).or(force_resp).or(torque_resp));
+    if let Some(r) = response {
+        if !taken.contains(&r) {
+            taken.push(r);
+        }
+    }
+    let control = fixed_control.or_else(|| {
+        let rdim = response.and_then(|r| ch[r].dimension);
+        let rname = response.map(|r| ch[r].name.to_lowercase()).unwrap_or_default();
+        let torque_like = rdim == Some(Dimension::Torque) || (rdim.is_none() && has(&rname, TORQUE_WORDS));
+        if torque_like {
+            ctl(Dimension::Angle, &taken).or_else(|| ctl(Dimension::Curvature, &taken))
+        } else {
+            ctl(Dimension::Length, &taken)
+        }
+    });
+    (time, control, response)
+}
+
+/// The role of each column from the chosen indices.
+pub(crate) fn roles_of(n: usize, t: Option<usize>, c: Option<usize>, r: Option<usize>) -> Vec<Role> {
+    (0..n)
+        .map(|i| {
+            if Some(i) == t {
+                Role::Time
+            } else if Some(i) == c {
+                Role::Control
+            } else if Some(i) == r {
+                Role::Response
+            } else {
+                Role::Other
+            }
+        })
+        .collect()
+}
+
+/// Test kind from metadata text (keys, values, block titles) where it names exactly one kind.
+pub(crate) fn kind_from_text(texts: &[&str]) -> Option<(TestKind, String)> {
+    let table: &[(TestKind, &[&str])] = &[
+        (TestKind::Tension, &["tension", "tensile", "zugversuch", "zugprüfung", "tracción", "traccion", "trazione", "traction"]),
+        (TestKind::Torsion, &["torsion test", "torsionsversuch", "torsión", "torsione", "torsion"]),
+        (
+            TestKind::ThreePoint,
+            &["three-point", "three point", "3-point", "3 point", "3pb", "dreipunkt", "3-punkt", "tres puntos", "tre punti", "flexion 3 points"],
+        ),
+        (TestKind::PureBending, &["pure bending", "reine biegung", "flexión pura", "flessione pura", "four-point", "four point", "4-point", "vierpunkt"]),
+    ];
+    let mut found: Vec<(TestKind, String)> = Vec::new();
+    for t in texts {
+        let l = t.to_lowercase();
+        for (k, words) in table {
+            if let Some(w) = words.iter().find(|w| l.contains(*w)) {
+                if !found.iter().any(|(f, _)| f == k) {
+                    found.push((*k, format!("metadata mentions '{w}'")));
+                }
+            }
+        }
+    }
+    if found.len() == 1 {
+        found.pop()
+    } else {
+        None
+    }
+}
+
+/// Test kind from the channel dimensions, where they leave no doubt: torque against angle with no
+/// force channel is torsion; moment against curvature is pure bending.
+pub(crate) fn kind_from_channels(dims: &[Option<Dimension>], control: Option<usize>, response: Option<usize>) -> Option<(TestKind, String)> {
+    let rd = response.and_then(|r| dims[r]);
+    let cd = control.and_then(|c| dims[c]);
+    let any_force = dims.contains(&Some(Dimension::Force));
+    match (cd, rd) {
+        (Some(Dimension::Angle), Some(Dimension::Torque)) if !any_force => {
+            Some((TestKind::Torsion, "torque against twist angle, no force channel".into()))
+        }
+        (Some(Dimension::Curvature), Some(Dimension::Torque)) => Some((TestKind::PureBending, "moment against curvature".into())),
+        _ => None,
+    }
+}
+
+fn norm_key(k: &str) -> String {
+    let k = k.to_lowercase();
+    let k = match k.find(['[', '(']) {
+        Some(p) => k[..p].to_string(),
+        None => k,
+    };
+    k.trim().trim_end_matches(':').trim().to_string()
+}
+
+/// Unit written inside a key (`Breite [mm]:`).
+fn key_unit(k: &str) -> Option<String> {
+    let open = k.find(['[', '('])?;
+    let close = k[open..].find([']', ')'])? + open;
+    Some(k[open + 1..close].trim().to_string())
+}
+
+/// A length from a metadata value (`5.003 mm`, `98,5`), in metres; the flag says a unit was assumed.
+fn length_m(key: &str, value: &str) -> Option<(f64, bool)> {
+    let mut parts = value.split_whitespace();
+    let num = parts.next()?;
+    let v: f64 = num.replace(',', ".").parse().ok()?;
+    let unit = parts.next().map(|s| s.to_string()).or_else(|| key_unit(key));
+    match unit {
+        Some(u) => {
+            let info = lookup(&u)?;
+            (info.dimension == Dimension::Length).then_some((v * info.factor, false))
+        }
+        None => Some((v * 1e-3, true)),
+    }
+}
+
+/// Specimen label, diameter and free length (or span) from metadata; warnings for assumed units.
+pub(crate) fn specimen_from_metadata(meta: &[(String, String)]) -> (cablab_core::Specimen, Vec<String>) {
+    let mut sp = cablab_core::Specimen::default();
+    let mut notes = Vec::new();
+    let label_keys = ["specimen name", "specimen id", "specimen label", "specimen", "probenbezeichnung", "probenname", "probe", "probenkennung", "sample id", "sample", "probeta", "provino", "muestra"];
+    let diam_keys = ["gauge diameter", "specimen diameter", "diameter", "durchmesser", "diámetro", "diametro", "d0"];
+    let len_keys: [&[&str]; 3] = [
+        &["free length", "freie länge", "clamp length", "einspannlänge", "versuchslänge", "test length", "support span", "span", "stützweite", "auflagerabstand", "luz", "distanza appoggi"],
+        &["gauge length", "messlänge", "parallel length", "longitud calibrada"],
+        &["length", "länge", "longitud", "lunghezza"],
+    ];
+    let find = |keys: &[&str]| -> Option<(String, String)> {
+        for k in keys {
+            if let Some((key, v)) = meta.iter().find(|(key, v)| !v.trim().is_empty() && norm_key(key).starts_with(k)) {
+                return Some((key.clone(), v.clone()));
+            }
+        }
+        None
+    };
+    if let Some((_, v)) = find(&label_keys) {
+        sp.label = Some(v.trim().to_string());
+    }
+    if let Some((k, v)) = find(&diam_keys) {
+        if let Some((d, assumed)) = length_m(&k, &v) {
+            sp.diameter_m = Some(d);
+            if assumed {
+                notes.push(format!("specimen diameter from '{k}: {v}' has no unit; mm assumed"));
+            }
+        }
+    }
+    for group in len_keys {
+        if let Some((k, v)) = find(group) {
+            if let Some((l, assumed)) = length_m(&k, &v) {
+                sp.free_length_m = Some(l);
+                if assumed {
+                    notes.push(format!("specimen length from '{k}: {v}' has no unit; mm assumed"));
+                }
+                break;
+            }
+        }
+    }
+    (sp, notes)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn facts(cols: &[(&str, &str)]) -> Vec<ChannelFacts> {
+        cols.iter()
+            .map(|(n, u)| ChannelFacts { name: n.to_string(), dimension: lookup(u).map(|i| i.dimension), unit_written: !u.is_empty() })
+            .collect()
+    }
+
+    #[test]
+    fn german_names() {
+        let f = facts(&[("Datum", "d"), ("Laufzeit", "s"), ("Ch 1 Kraft Sollwert", "kN"), ("Ch 1 Kraft", "kN"), ("Ch 1 Weg", "mm"), ("1944 B", "mm")]);
+        assert_eq!(assign_roles(&f, None, None, None), (Some(1), Some(4), Some(3)));
+        let f = facts(&[("Prüfzeit", "s"), ("Standardkraft", "N"), ("Traversenweg absolut", "mm"), ("Standardweg", "mm"), ("Breitenänderung", "mm"), ("Dehnung", "mm")]);
+        assert_eq!(assign_roles(&f, None, None, None), (Some(0), Some(3), Some(1)));
+    }
+
+    #[test]
+    fn spanish_italian_and_no_units() {
+        let f = facts(&[("Tiempo", "Sec"), ("Channel 1 Displacement", "mm"), ("Channel 1 Force", "kgf"), ("Channel 1 Recuento", "cycles")]);
+        assert_eq!(assign_roles(&f, None, None, None), (Some(0), Some(1), Some(2)));
+        let f = facts(&[("Tempo", ""), ("Spostamento", ""), ("Carico", "")]);
+        assert_eq!(assign_roles(&f, None, None, None), (Some(0), Some(1), Some(2)));
+    }
+
+    #[test]
+    fn torsion_pair_preferred_when_torque_and_angle() {
+        let f = facts(&[("Total Time", "s"), ("Position", "mm"), ("Force", "kN"), ("Rotation", "deg"), ("Torque", "N·m"), ("Digital Rotation", "deg")]);
+        assert_eq!(assign_roles(&f, None, None, None), (Some(0), Some(3), Some(4)));
+        let dims: Vec<_> = f.iter().map(|c| c.dimension).collect();
+        assert!(kind_from_channels(&dims, Some(3), Some(4)).is_none(), "axial-torsional is not plain torsion");
+        let f = facts(&[("curvature", "1/m"), ("bending_moment", "N.m")]);
+        let (t, c, r) = assign_roles(&f, None, None, None);
+        assert_eq!((t, c, r), (None, Some(0), Some(1)));
+        let dims: Vec<_> = f.iter().map(|c| c.dimension).collect();
+        assert_eq!(kind_from_channels(&dims, c, r).unwrap().0, TestKind::PureBending);
+    }
+
+    #[test]
+    fn kind_from_metadata_words() {
+        assert_eq!(kind_from_text(&["MTS EM Tension (Extensometer)"]).unwrap().0, TestKind::Tension);
+        assert_eq!(kind_from_text(&["Round Tensile Specimen"]).unwrap().0, TestKind::Tension);
+        assert_eq!(kind_from_text(&["Dreipunkt-Biegeversuch"]).unwrap().0, TestKind::ThreePoint);
+        assert!(kind_from_text(&["Kraftgeregelt 3,9 kN/s"]).is_none());
+        assert!(kind_from_text(&["tension", "torsion"]).is_none());
+    }
+
+    #[test]
+    fn specimen_geometry() {
+        let meta = vec![
+            ("Specimen name".to_string(), "AWA_1_01_Rz".to_string()),
+            ("Gauge diameter".into(), "5.003 mm".into()),
+            ("Gauge length".into(), "25 mm".into()),
+        ];
+        let (s, notes) = specimen_from_metadata(&meta);
+        assert_eq!(s.label.as_deref(), Some("AWA_1_01_Rz"));
+        assert!((s.diameter_m.unwrap() - 5.003e-3).abs() < 1e-15);
+        assert!((s.free_length_m.unwrap() - 0.025).abs() < 1e-15);
+        assert!(notes.is_empty());
+        let meta = vec![("Durchmesser".to_string(), "98,5".to_string()), ("Breite [mm]".into(), "150".into())];
+        let (s, notes) = specimen_from_metadata(&meta);
+        assert!((s.diameter_m.unwrap() - 0.0985).abs() < 1e-12);
+        assert_eq!(notes.len(), 1);
+    }
+}

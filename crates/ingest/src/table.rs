@@ -1,0 +1,693 @@
+//! The delimited-text reader shared by every text layout: finds the separator and decimal mark,
+//! the metadata lines, every data block (names row, optional units row, numeric rows) and fills
+//! one `Vec<f64>` per column (NaN marks a missing cell).
+//!
+//! Layout-specific knowledge enters only through [`Format`]: the MTS 793 locale line fixes the
+//! decimal mark, catman header rows are found by their keys. Units, roles and SI conversion are
+//! not done here (see `record.rs`).
+
+use crate::error::{Diagnostic, IngestError};
+use crate::format::{is_mts_locale_line, mts_locale_decimal, shorten, Format};
+use crate::tokenize::{cell_text_raw, numeric_any, parse_cell, split, Cell, Separator};
+use crate::units::looks_like_unit;
+
+/// One data block as read: raw header cells, raw values (not yet SI).
+#[derive(Debug, Clone, Default)]
+pub(crate) struct RawBlock {
+    pub title: Option<String>,
+    pub names_line: usize,
+    pub units_line: Option<usize>,
+    pub first_data_line: usize,
+    pub last_data_line: usize,
+    pub header_cells: Vec<String>,
+    pub unit_cells: Vec<String>,
+    /// One vector per column, NaN = missing.
+    pub columns: Vec<Vec<f64>>,
+    pub rows: usize,
+    /// Starts of runs of consecutive physical lines: (row index, line number).
+    pub line_runs: Vec<(usize, usize)>,
+}
+
+impl RawBlock {
+    /// Physical line of a 0-based row.
+    pub fn line_of_row(&self, row: usize) -> usize {
+        let i = self.line_runs.partition_point(|&(r, _)| r <= row);
+        match i.checked_sub(1).and_then(|k| self.line_runs.get(k)) {
+            Some(&(r, l)) => l + (row - r),
+            None => self.first_data_line + row,
+        }
+    }
+}
+
+/// Everything the text readers found.
+#[derive(Debug, Default)]
+pub(crate) struct RawTable {
+    pub blocks: Vec<RawBlock>,
+    pub metadata: Vec<(String, String)>,
+    pub warnings: Vec<Diagnostic>,
+    /// Detected separator (None for XML).
+    pub separator: Option<Separator>,
+    /// Decimal mark.
+    pub decimal: u8,
+}
+
+#[derive(Debug, Clone, Copy)]
+struct Pending {
+    line_no: usize,
+    start: usize,
+    end: usize,
+    blank: bool,
+}
+
+#[derive(Default)]
+struct RowStats {
+    short_rows: usize,
+    first_short: Option<usize>,
+    text_cells: usize,
+    first_text: Option<(usize, usize, String)>,
+    missing: usize,
+    first_missing: Option<(usize, usize)>,
+}
+
+struct Engine<'a> {
+    text: &'a [u8],
+    source: &'a str,
+    format: Format,
+    sep: Separator,
+    dec: u8,
+    cells: Vec<(usize, usize)>,
+    pending: Vec<Pending>,
+    out: RawTable,
+    open: Option<(RawBlock, RowStats)>,
+    blank_in_table: bool,
+    orphan_first: Option<usize>,
+    orphans: usize,
+}
+
+/// Reads every block of a delimited text.
+pub(crate) fn read_table(text: &str, format: Format, source: &str) -> Result<RawTable, IngestError> {
+    let bytes = text.as_bytes();
+    let eol = if memchr::memchr(b'\n', &bytes[..bytes.len().min(1 << 16)]).is_none() && bytes.contains(&b'\r') {
+        b'\r'
+    } else {
+        b'\n'
+    };
+    let sample = sample_lines(bytes, eol, 400);
+    let sep = detect_separator(&sample);
+    let mut dec = detect_decimal(&sample, sep);
+    let first_line = sample.first().map(|l| String::from_utf8_lossy(l).into_owned()).unwrap_or_default();
+    if is_mts_locale_line(&first_line) {
+        if let Some(d) = mts_locale_decimal(&first_line) {
+            dec = d;
+        }
+    }
+    let mut eng = Engine {
+        text: bytes,
+        source,
+        format,
+        sep,
+        dec,
+        cells: Vec::with_capacity(64),
+        pending: Vec::new(),
+        out: RawTable { separator: Some(sep), decimal: dec, ..Default::default() },
+        open: None,
+        blank_in_table: false,
+        orphan_first: None,
+        orphans: 0,
+    };
+    eng.run(eol)?;
+    Ok(eng.out)
+}
+
+fn sample_lines(bytes: &[u8], eol: u8, n: usize) -> Vec<&[u8]> {
+    let mut v = Vec::new();
+    let mut pos = 0;
+    while pos < bytes.len() && v.len() < n {
+        let end = memchr::memchr(eol, &bytes[pos..]).map_or(bytes.len(), |p| pos + p);
+        let mut line = &bytes[pos..end];
+        if let [rest @ .., b'\r'] = line {
+            line = rest;
+        }
+        v.push(line);
+        pos = end + 1;
+    }
+    v
+}
+
+fn detect_separator(lines: &[&[u8]]) -> Separator {
+    let mut best = (0usize, Separator::Tab);
+    let mut cells = Vec::new();
+    for sep in [Separator::Tab, Separator::Semicolon, Separator::Comma, Separator::Space] {
+        let mut counts: Vec<(usize, usize)> = Vec::new();
+        for line in lines {
+            split(line, sep, &mut cells);
+            let mut nonempty = 0;
+            let ok = cells.iter().all(|&(a, b)| {
+                let c = &line[a..b.max(a)];
+                let t = c.iter().all(|&x| x == b' ');
+                if t {
+                    return true;
+                }
+                nonempty += 1;
+                numeric_any(c) || parse_cell(c, b'.') == Cell::Missing
+            });
+            if ok && nonempty > 0 {
+                match counts.iter_mut().find(|(k, _)| *k == cells.len()) {
+                    Some(e) => e.1 += 1,
+                    None => counts.push((cells.len(), 1)),
+                }
+            }
+        }
+        if let Some(&(ncells, count)) = counts.iter().max_by_key(|(k, c)| (*c, *k)) {
+            let score = count * if ncells >= 2 { 2 } else { 1 };
+            if score > best.0 {
+                best = (score, sep);
+            }
+        }
+    }
+    if best.0 > 0 {
+        return best.1;
+    }
+    // No numeric line: the most frequent separator character of the first non-empty line.
+    let first = lines.iter().find(|l| !l.iter().all(|&b| b == b' ')).copied().unwrap_or(b"");
+    let count = |b: u8| first.iter().filter(|&&x| x == b).count();
+    let mut c = [(count(b'\t'), Separator::Tab), (count(b';'), Separator::Semicolon), (count(b','), Separator::Comma)];
+    c.sort_by(|a, b| b.0.cmp(&a.0));
+    if c[0].0 > 0 {
+        c[0].1
+    } else {
+        Separator::Space
+    }
+}
+
+fn detect_decimal(lines: &[&[u8]], sep: Separator) -> u8 {
+    let (mut dot, mut comma) = (0usize, 0usize);
+    let mut cells = Vec::new();
+    for line in lines {
+        split(line, sep, &mut cells);
+        for &(a, b) in &cells {
+            let c = &line[a..b.max(a)];
+            if !numeric_any(c) {
+                continue;
+            }
+            let last_dot = c.iter().rposition(|&x| x == b'.');
+            let last_comma = c.iter().rposition(|&x| x == b',');
+            let digits_after = |p: usize| c[p + 1..].iter().take_while(|x| x.is_ascii_digit()).count();
+            match (last_dot, last_comma) {
+                (Some(d), Some(k)) => {
+                    if d > k {
+                        dot += 1
+                    } else {
+                        comma += 1
+                    }
+                }
+                (None, Some(k)) => {
+                    let many = c.iter().filter(|&&x| x == b',').count() > 1;
+                    if !many && digits_after(k) != 3 {
+                        comma += 1;
+                    }
+                }
+                (Some(d), None) => {
+                    let many = c.iter().filter(|&&x| x == b'.').count() > 1;
+                    if !many && digits_after(d) != 3 {
+                        dot += 1;
+                    }
+                }
+                (None, None) => {}
+            }
+        }
+    }
+    if comma > dot {
+        b','
+    } else {
+        b'.'
+    }
+}
+
+impl<'a> Engine<'a> {
+    fn run(&mut self, eol: u8) -> Result<(), IngestError> {
+        let bytes = self.text;
+        let mut pos = 0usize;
+        let mut line_no = 0usize;
+        while pos < bytes.len() {
+            let end = memchr::memchr(eol, &bytes[pos..]).map_or(bytes.len(), |p| pos + p);
+            let mut lend = end;
+            if lend > pos && bytes[lend - 1] == b'\r' {
+                lend -= 1;
+            }
+            line_no += 1;
+            self.line(pos, lend, line_no);
+            pos = end + 1;
+        }
+        self.close_block();
+        self.finish(line_no)
+    }
+
+    fn line(&mut self, start: usize, end: usize, line_no: usize) {
+        let line = &self.text[start..end];
+        let blank = line.iter().all(|&b| b == b' ' || b == b'\t' || b == b'"' || b == b',' || b == b';');
+        if self.open.is_some() {
+            if blank {
+                self.blank_in_table = true;
+                return;
+            }
+            if self.push_row(line, line_no) {
+                return;
+            }
+            self.close_block();
+        }
+        if blank {
+            self.pending.push(Pending { line_no, start, end, blank: true });
+            return;
+        }
+        // Outside a table: does a block start here?
+        split(line, self.sep, &mut self.cells);
+        let mut nums = 0usize;
+        let mut last_nonempty = 0usize;
+        let mut all_numeric = true;
+        for (i, &(a, b)) in self.cells.iter().enumerate() {
+            match parse_cell(&line[a..b.max(a)], self.dec) {
+                Cell::Num(_) => {
+                    nums += 1;
+                    last_nonempty = i;
+                }
+                Cell::Missing => last_nonempty = i,
+                Cell::Empty => {}
+                Cell::Text => {
+                    all_numeric = false;
+                    break;
+                }
+            }
+        }
+        if all_numeric && nums > 0 {
+            let ncells = self.cells.len();
+            if self.start_block(line_no, last_nonempty, ncells) {
+                let ok = self.push_row(line, line_no);
+                debug_assert!(ok);
+                if !ok {
+                    self.close_block();
+                }
+                return;
+            }
+            self.orphans += 1;
+            self.orphan_first.get_or_insert(line_no);
+        }
+        self.pending.push(Pending { line_no, start, end, blank: false });
+    }
+
+    fn cells_of(&mut self, p: Pending) -> Vec<String> {
+        let line = &self.text[p.start..p.end];
+        split(line, self.sep, &mut self.cells);
+        self.cells.iter().map(|&sp| cell_text_raw(line, sp)).collect()
+    }
+
+    /// Looks for the names row (and units row) just above a first data row.
+    fn start_block(&mut self, line_no: usize, last_nonempty: usize, ncells: usize) -> bool {
+        let k = self.pending.len();
+        let (names_idx, units_idx, mut names, mut units) = if self.format == Format::CatmanAscii {
+            match self.catman_header() {
+                Some(h) => h,
+                None => return false,
+            }
+        } else {
+            if k == 0 || self.pending[k - 1].blank {
+                return false;
+            }
+            let last = self.cells_of(self.pending[k - 1]);
+            let is_units = last.iter().any(|c| !c.trim().is_empty())
+                && last.iter().all(|c| looks_like_unit(c))
+                && !last.iter().all(|c| c.trim().is_empty() || numeric_any(c.as_bytes()));
+            let mut found = None;
+            if is_units && k >= 2 && !self.pending[k - 2].blank {
+                let names = self.cells_of(self.pending[k - 2]);
+                if names_ok(&names, last_nonempty) {
+                    found = Some((k - 2, Some(k - 1), names, last.clone()));
+                }
+            }
+            if found.is_none() && names_ok(&last, last_nonempty) {
+                found = Some((k - 1, None, last, Vec::new()));
+            }
+            match found {
+                Some(f) => f,
+                None => return false,
+            }
+        };
+        while names.last().is_some_and(|n| n.trim().is_empty()) && names.len() > last_nonempty + 1 {
+            names.pop();
+        }
+        let ncols = names.len().max(last_nonempty + 1);
+        let _ = ncells;
+        for i in names.len()..ncols {
+            names.push(format!("column {}", i + 1));
+        }
+        units.resize(ncols, String::new());
+        units.truncate(ncols);
+
+        // Metadata and title from the lines above the header.
+        let above: Vec<Pending> = self.pending[..names_idx].to_vec();
+        let last_blank = above.iter().rposition(|p| p.blank);
+        let title_idx = match last_blank {
+            Some(b) if b + 1 < above.len() => Some(b + 1),
+            None if !self.out.blocks.is_empty() => above.iter().position(|p| !p.blank),
+            _ => None,
+        };
+        let title = title_idx.map(|i| {
+            let c = self.cells_of(above[i]);
+            c.iter().map(|s| s.trim()).filter(|s| !s.is_empty()).collect::<Vec<_>>().join(" ")
+        });
+        for p in above.iter().filter(|p| !p.blank) {
+            let cells = self.cells_of(*p);
+            if let Some(kv) = key_value(&cells, &self.text[p.start..p.end]) {
+                self.out.metadata.push(kv);
+            }
+        }
+        let names_line = self.pending[names_idx].line_no;
+        let units_line = units_idx.map(|u| self.pending[u].line_no);
+        self.pending.clear();
+        let block = RawBlock {
+            title,
+            names_line,
+            units_line,
+            first_data_line: line_no,
+            last_data_line: line_no,
+            header_cells: names,
+            unit_cells: units,
+            columns: vec![Vec::new(); ncols],
+            rows: 0,
+            line_runs: vec![(0, line_no)],
+        };
+        self.open = Some((block, RowStats::default()));
+        self.blank_in_table = false;
+        true
+    }
+
+    /// catman: `Channel name` / `Unit` rows (first cell is the key) anywhere above the data.
+    #[allow(clippy::type_complexity)]
+    fn catman_header(&mut self) -> Option<(usize, Option<usize>, Vec<String>, Vec<String>)> {
+        let mut names = None;
+        let mut units = None;
+        for i in 0..self.pending.len() {
+            if self.pending[i].blank {
+                continue;
+            }
+            let c = self.cells_of(self.pending[i]);
+            let key = c.first().map(|s| s.trim_end_matches(':').trim().to_lowercase()).unwrap_or_default();
+            if matches!(key.as_str(), "channel name" | "kanalname" | "channel" | "name") && c.len() > 1 {
+                names = Some((i, c[1..].to_vec()));
+            } else if matches!(key.as_str(), "unit" | "units" | "einheit") && c.len() > 1 {
+                units = Some((i, c[1..].to_vec()));
+            }
+        }
+        let (ni, n) = names?;
+        let (ui, u) = match units {
+            Some((ui, u)) => (Some(ui), u),
+            None => (None, Vec::new()),
+        };
+        // Everything up to the last header row belongs to the header.
+        let last = ui.map_or(ni, |u| u.max(ni));
+        let mut rest: Vec<Pending> = self.pending[..ni].to_vec();
+        // Lines between the names row and the data (T0, dt, ...) are metadata too.
+        for p in &self.pending[ni + 1..] {
+            if Some(p.line_no) != ui.map(|u| self.pending[u].line_no) {
+                rest.push(*p);
+            }
+        }
+        let names_line = self.pending[ni].line_no;
+        let units_line = ui.map(|u| self.pending[u].line_no);
+        let _ = last;
+        // Re-order pending so that the generic code sees: metadata..., names, units.
+        let mut new_pending = rest;
+        let names_p = Pending { line_no: names_line, start: 0, end: 0, blank: false };
+        new_pending.push(names_p);
+        let names_idx = new_pending.len() - 1;
+        let units_idx = units_line.map(|l| {
+            new_pending.push(Pending { line_no: l, start: 0, end: 0, blank: false });
+            new_pending.len() - 1
+        });
+        self.pending = new_pending;
+        Some((names_idx, units_idx, n, u))
+    }
+
+    fn push_row(&mut self, line: &[u8], line_no: usize) -> bool {
+        let Some((block, stats)) = self.open.as_mut() else { return false };
+        split(line, self.sep, &mut self.cells);
+        let ncols = block.columns.len();
+        let (mut num, mut text, mut extra) = (0usize, 0usize, 0usize);
+        let mut first_text = None;
+        let mut missing = 0usize;
+        let mut first_missing = None;
+        for (ci, &(a, b)) in self.cells.iter().enumerate() {
+            let raw = &line[a..b.max(a)];
+            let c = parse_cell(raw, self.dec);
+            if ci >= ncols {
+                if c != Cell::Empty {
+                    extra += 1;
+                }
+                continue;
+            }
+            let col = &mut block.columns[ci];
+            match c {
+                Cell::Num(v) => {
+                    col.push(v);
+                    num += 1;
+                }
+                Cell::Empty => col.push(f64::NAN),
+                Cell::Missing => {
+                    col.push(f64::NAN);
+                    missing += 1;
+                    first_missing.get_or_insert(ci + 1);
+                }
+                Cell::Text => {
+                    col.push(f64::NAN);
+                    text += 1;
+                    if first_text.is_none() {
+                        first_text = Some((ci + 1, String::from_utf8_lossy(raw).trim().to_string()));
+                    }
+                }
+            }
+        }
+        let got = self.cells.len().min(ncols);
+        for col in &mut block.columns[got..] {
+            col.push(f64::NAN);
+        }
+        if num == 0 || text * 2 >= ncols.max(1) && text > 0 || extra > 0 {
+            for col in &mut block.columns {
+                col.pop();
+            }
+            return false;
+        }
+        if self.cells.len() < ncols {
+            stats.short_rows += 1;
+            stats.first_short.get_or_insert(line_no);
+        }
+        if text > 0 {
+            stats.text_cells += text;
+            if stats.first_text.is_none() {
+                let (c, t) = first_text.unwrap_or((0, String::new()));
+                stats.first_text = Some((line_no, c, t));
+            }
+        }
+        if missing > 0 {
+            stats.missing += missing;
+            if stats.first_missing.is_none() {
+                stats.first_missing = Some((line_no, first_missing.unwrap_or(0)));
+            }
+        }
+        let expected = block.last_data_line + 1;
+        if block.rows > 0 && line_no != expected {
+            block.line_runs.push((block.rows, line_no));
+        }
+        block.rows += 1;
+        block.last_data_line = line_no;
+        self.blank_in_table = false;
+        true
+    }
+
+    fn close_block(&mut self) {
+        let Some((block, st)) = self.open.take() else { return };
+        let idx = self.out.blocks.len() + 1;
+        let src = self.source.to_string();
+        if st.short_rows > 0 {
+            self.out.warnings.push(Diagnostic {
+                file: src.clone(),
+                line: st.first_short,
+                column: None,
+                message: format!(
+                    "block {idx}: {} row(s) have fewer cells than the {} columns of the header (truncated lines?); missing cells read as empty",
+                    st.short_rows,
+                    block.columns.len()
+                ),
+            });
+        }
+        if let Some((l, c, t)) = st.first_text {
+            let name = block.header_cells.get(c.saturating_sub(1)).cloned().unwrap_or_default();
+            self.out.warnings.push(Diagnostic {
+                file: src.clone(),
+                line: Some(l),
+                column: Some(c),
+                message: format!(
+                    "block {idx}: text where a number belongs ('{}' in column '{}'); {} such cell(s) read as missing",
+                    shorten(&t, 30),
+                    name,
+                    st.text_cells
+                ),
+            });
+        }
+        if let Some((l, c)) = st.first_missing {
+            self.out.warnings.push(Diagnostic {
+                file: src,
+                line: Some(l),
+                column: Some(c),
+                message: format!("block {idx}: {} cell(s) hold nan/sentinel values; read as missing", st.missing),
+            });
+        }
+        self.out.blocks.push(block);
+    }
+
+    fn finish(&mut self, last_line: usize) -> Result<(), IngestError> {
+        let pending = std::mem::take(&mut self.pending);
+        for p in pending.iter().filter(|p| !p.blank) {
+            let cells = self.cells_of(*p);
+            if let Some(kv) = key_value(&cells, &self.text[p.start..p.end]) {
+                self.out.metadata.push(kv);
+            }
+        }
+        if self.orphans > 0 {
+            self.out.warnings.push(Diagnostic {
+                file: self.source.to_string(),
+                line: self.orphan_first,
+                column: None,
+                message: format!("{} numeric line(s) without a header row above them were ignored", self.orphans),
+            });
+        }
+        if self.out.blocks.is_empty() {
+            if let Some(l) = self.orphan_first {
+                return Err(IngestError::NoData {
+                    file: self.source.to_string(),
+                    detail: format!("numeric rows from line {l} on have no names row directly above them"),
+                });
+            }
+            if let Some(p) = pending.iter().rev().find(|p| !p.blank) {
+                let line = String::from_utf8_lossy(&self.text[p.start..p.end]).into_owned();
+                return Err(IngestError::HeaderWithoutData {
+                    file: self.source.to_string(),
+                    line: p.line_no,
+                    header: shorten(line.trim(), 60),
+                });
+            }
+            return Err(IngestError::NoData {
+                file: self.source.to_string(),
+                detail: format!("{last_line} line(s), none with numbers"),
+            });
+        }
+        Ok(())
+    }
+}
+
+/// A names row: some non-numeric cell, and at least as many cells as the data row fills.
+fn names_ok(cells: &[String], last_nonempty: usize) -> bool {
+    let filled = cells.iter().rposition(|c| !c.trim().is_empty()).map_or(0, |p| p + 1);
+    let has_text = cells.iter().any(|c| !c.trim().is_empty() && !numeric_any(c.as_bytes()));
+    has_text && filled >= 1 && cells.len() > last_nonempty
+}
+
+/// A metadata line as (key, value): `Key:<sep>value<sep>unit`, `Key: value`, or the MTS locale line.
+fn key_value(cells: &[String], raw: &[u8]) -> Option<(String, String)> {
+    let filled: Vec<&str> = cells.iter().map(|s| s.trim()).filter(|s| !s.is_empty()).collect();
+    let raw_s = String::from_utf8_lossy(raw);
+    if is_mts_locale_line(&raw_s) {
+        return Some(("MTS locale".into(), raw_s.trim().trim_start_matches('\u{feff}').to_string()));
+    }
+    match filled.as_slice() {
+        [] => None,
+        [one] => {
+            let one = one.trim_start_matches('\u{feff}');
+            match one.find(':') {
+                Some(p) if p > 0 => Some((one[..p].trim().to_string(), one[p + 1..].trim().to_string())),
+                _ => Some((one.trim().to_string(), String::new())),
+            }
+        }
+        [k, rest @ ..] => {
+            let key = k.trim_start_matches('\u{feff}').trim().trim_end_matches(':').trim().to_string();
+            Some((key, rest.join(" ")))
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn read(text: &str) -> RawTable {
+        read_table(text, Format::Delimited, "t").unwrap()
+    }
+
+    #[test]
+    fn names_units_row_and_metadata() {
+        let t = read("Specimen name:\tA1\nGauge length:\t25\tmm\nTime\tForce\ns\tkN\n0\t1.5\n0.1\t2.5\n");
+        assert_eq!(t.blocks.len(), 1);
+        let b = &t.blocks[0];
+        assert_eq!(b.header_cells, ["Time", "Force"]);
+        assert_eq!(b.unit_cells, ["s", "kN"]);
+        assert_eq!((b.names_line, b.units_line, b.first_data_line, b.last_data_line), (3, Some(4), 5, 6));
+        assert_eq!(b.columns[1], [1.5, 2.5]);
+        assert_eq!(t.metadata, [("Specimen name".to_string(), "A1".to_string()), ("Gauge length".into(), "25 mm".into())]);
+    }
+
+    #[test]
+    fn decimal_comma_semicolon_quoted_crlf_no_final_newline() {
+        let t = read("\"Zeit\";\"Kraft\"\r\n\"sec\";\"kN\"\r\n\"0,5\";\"-7,5E-05\"\r\n\"1,5\";\"1.234,5\"");
+        assert_eq!(t.decimal, b',');
+        assert_eq!(t.separator, Some(Separator::Semicolon));
+        let b = &t.blocks[0];
+        assert_eq!(b.columns[0], [0.5, 1.5]);
+        assert_eq!(b.columns[1], [-7.5e-5, 1234.5]);
+    }
+
+    #[test]
+    fn several_blocks_and_titles() {
+        let t = read("Run A\nx\ty\n1\t2\n3\t4\n\nRun B\nx\ty\n5\t6\n");
+        assert_eq!(t.blocks.len(), 2);
+        assert_eq!(t.blocks[0].rows, 2);
+        assert_eq!(t.blocks[1].rows, 1);
+        assert_eq!(t.blocks[1].title.as_deref(), Some("Run B"));
+        assert_eq!(t.blocks[1].first_data_line, 8);
+    }
+
+    #[test]
+    fn trailing_separator_and_empty_cells() {
+        let t = read("\"a\",\"b\",\n1,,\n2,3,\n");
+        let b = &t.blocks[0];
+        assert_eq!(b.header_cells, ["a", "b"]);
+        assert!(b.columns[1][0].is_nan());
+        assert_eq!(b.columns[1][1], 3.0);
+    }
+
+    #[test]
+    fn text_in_a_number_cell_is_a_warning_with_line_and_column() {
+        let t = read("a\tb\tc\n1\t2\t3\n4\tfoo\t6\n7\t8\t9\n");
+        let b = &t.blocks[0];
+        assert_eq!(b.rows, 3);
+        assert!(b.columns[1][1].is_nan());
+        let w = &t.warnings[0];
+        assert_eq!((w.line, w.column), (Some(3), Some(2)));
+        assert!(w.message.contains("foo"), "{}", w.message);
+    }
+
+    #[test]
+    fn header_without_data_and_no_numbers_are_errors() {
+        let e = read_table("Time,Force\n", Format::Delimited, "f.csv").unwrap_err();
+        assert!(matches!(e, IngestError::HeaderWithoutData { line: 1, .. }), "{e}");
+        let e = read_table("hello\nworld\n", Format::Delimited, "f.csv").unwrap_err();
+        assert!(matches!(e, IngestError::HeaderWithoutData { .. } | IngestError::NoData { .. }), "{e}");
+    }
+
+    #[test]
+    fn blank_line_inside_table_keeps_line_numbers() {
+        let t = read("a,b\n1,2\n\n3,4\n");
+        let b = &t.blocks[0];
+        assert_eq!(b.rows, 2);
+        assert_eq!(b.line_of_row(0), 2);
+        assert_eq!(b.line_of_row(1), 4);
+    }
+}

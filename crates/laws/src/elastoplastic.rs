@@ -1,0 +1,603 @@
+//! Elastoplastic sectional law with return mapping and consistent tangent, chapter eqs. (23)–(32):
+//! additive split ε = ε_el + ε_pl (23), σ = k (ε − ε_pl) (24)/(29), yield function
+//! f = |σ − x| − (σ_y + H α) ≤ 0 (30)/(32) — in bending a circle in the (M₁, M₂) plane —
+//! associative flow ε̇_pl = γ ∂f/∂σ (26), α̇ = γ (31), Kuhn–Tucker conditions (28).
+//!
+//! The same code serves bending (2-vector, eq. (32)) and the tension (F₃, F_y, H) and torsion
+//! (M₃, M_y, HI) analogues (scalar, eq. (30)); each [`PlasticChannel`] is independent (no
+//! coupling between bending, tension and torsion, as in the chapter) and components without yield
+//! data stay linear elastic. Two extensions of the diagnosis live here as options of a channel:
+//! - `kinematic_hardening`: a back stress x with Prager's linear rule ẋ = c ε̇_pl (Bauschinger
+//!   effect), optionally with Armstrong–Frederick dynamic recovery ẋ = c ε̇_pl − b x γ (saturating
+//!   back stress), integrated by backward Euler.
+//! - `stiffness_degradation`: pseudo-damage, the elastic stiffness k(α) = k₀ (1 − D(α)) with the
+//!   saturating D(α) = D_∞ (1 − exp(−α/α_D)); the return mapping solves the resulting scalar
+//!   consistency equation by safeguarded Newton and the tangent is its exact linearisation.
+//!
+//! Rate-independent: `dt` is ignored.
+
+use crate::channel::{eye, Channel};
+use crate::law::{Law, LawResponse, Strain6, Tangent6};
+use crate::linear::SectionStiffness;
+use nalgebra::{Matrix2, Vector2};
+
+/// Saturating pseudo-damage of the elastic stiffness, D(α) = D_∞ (1 − exp(−α/α_D)).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Degradation {
+    /// Asymptotic loss of stiffness D_∞ ∈ [0, 1).
+    pub d_inf: f64,
+    /// Accumulated plastic deformation α_D at which 63 % of D_∞ is reached (1/m in bending and
+    /// torsion, dimensionless in tension); > 0.
+    pub alpha_d: f64,
+}
+
+impl Degradation {
+    /// D(α).
+    #[inline]
+    pub fn damage(&self, alpha: f64) -> f64 {
+        -self.d_inf * (-alpha / self.alpha_d).exp_m1()
+    }
+
+    /// dD/dα.
+    #[inline]
+    pub fn damage_rate(&self, alpha: f64) -> f64 {
+        self.d_inf / self.alpha_d * (-alpha / self.alpha_d).exp()
+    }
+}
+
+/// Yield data of one channel.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PlasticChannel {
+    /// The channel that yields.
+    pub channel: Channel,
+    /// Virgin elastic stiffness k₀: (EI)_B, (EA)_T or (GJ)_T.
+    pub stiffness: f64,
+    /// Initial yield strength σ_y: M_B,y (N m) or F_y (N), ≥ 0.
+    pub yield_strength: f64,
+    /// Linear isotropic hardening modulus H: (HI)_B (N m²) or H (N), ≥ 0.
+    pub iso_hardening: f64,
+    /// Linear kinematic (Prager) hardening modulus c of the back stress, same unit as H, ≥ 0.
+    pub kin_hardening: f64,
+    /// Armstrong–Frederick dynamic recovery b of the back stress, ẋ = c ε̇_pl − b x γ, so that
+    /// |x| saturates at c/b (unit: inverse of the strain unit, m in bending); 0 is Prager's rule.
+    pub kin_recovery: f64,
+    /// Optional pseudo-damage of the elastic stiffness.
+    pub degradation: Option<Degradation>,
+}
+
+/// Internal variables of one plastic channel.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct ChannelState {
+    /// Plastic strain ε_pl (K_pl in bending).
+    pub plastic_strain: Vector2<f64>,
+    /// Back stress x (back moment in bending).
+    pub back_stress: Vector2<f64>,
+    /// Accumulated plastic deformation α (eq. (31)).
+    pub alpha: f64,
+}
+
+impl PlasticChannel {
+    /// Number of state entries: plastic strain and back stress (dim each) and α.
+    pub fn n_state(&self) -> usize {
+        2 * self.channel.dim() + 1
+    }
+
+    /// Elastic stiffness after accumulated plastic deformation α: k₀ (1 − D(α)).
+    #[inline]
+    pub fn stiffness_at(&self, alpha: f64) -> f64 {
+        match &self.degradation {
+            Some(d) => self.stiffness * (1.0 - d.damage(alpha)),
+            None => self.stiffness,
+        }
+    }
+
+    #[inline]
+    fn stiffness_rate(&self, alpha: f64) -> f64 {
+        match &self.degradation {
+            Some(d) => -self.stiffness * d.damage_rate(alpha),
+            None => 0.0,
+        }
+    }
+
+    fn read(&self, s: &[f64]) -> ChannelState {
+        let d = self.channel.dim();
+        ChannelState {
+            plastic_strain: self.channel.read(s, 0),
+            back_stress: self.channel.read(s, d),
+            alpha: s[2 * d],
+        }
+    }
+
+    fn write(&self, st: &ChannelState, s: &mut [f64]) {
+        let d = self.channel.dim();
+        self.channel.write(&st.plastic_strain, s, 0);
+        self.channel.write(&st.back_stress, s, d);
+        s[2 * d] = st.alpha;
+    }
+
+    /// Return mapping of this channel at channel strain `e` from the committed state `old`:
+    /// stress, consistent tangent (2×2, only the channel's dimension used) and new state.
+    pub fn return_map(
+        &self,
+        e: &Vector2<f64>,
+        old: &ChannelState,
+    ) -> (Vector2<f64>, Matrix2<f64>, ChannelState) {
+        let id = eye(self.channel);
+        let e_tr = e - old.plastic_strain;
+        let k_n = self.stiffness_at(old.alpha);
+        let a0 = k_n * e_tr - old.back_stress;
+        let f_tr = a0.norm() - (self.yield_strength + self.iso_hardening * old.alpha);
+        if f_tr <= 0.0 {
+            return (k_n * e_tr, k_n * id, *old);
+        }
+        let c = self.kin_hardening;
+        let b = self.kin_recovery;
+        let h = self.iso_hardening;
+        // Backward Euler: x = (x_n + c Δγ n)/(1 + b Δγ), σ = k(α)(e_tr − Δγ n), so
+        // σ − x = a − β Δγ n with a(Δγ) = k(α) e_tr − x_n/(1 + b Δγ), β = k(α) + c/(1 + b Δγ):
+        // n = a/|a| and φ(Δγ) = |a| − β Δγ − σ_y − H α = 0, α = α_n + Δγ.
+        // Returns φ, φ', n, |a| and ∂a/∂Δγ.
+        let phi = |g: f64| -> (f64, f64, Vector2<f64>, f64, Vector2<f64>) {
+            let alpha = old.alpha + g;
+            let k = self.stiffness_at(alpha);
+            let dk = self.stiffness_rate(alpha);
+            let r = 1.0 / (1.0 + b * g);
+            let a = k * e_tr - r * old.back_stress;
+            let a_g = dk * e_tr + (b * r * r) * old.back_stress;
+            let beta = k + c * r;
+            let beta_g = dk - c * b * r * r;
+            let na = a.norm();
+            let n = if na > 0.0 { a / na } else { a0 / a0.norm() };
+            let val = na - beta * g - self.yield_strength - h * alpha;
+            let der = n.dot(&a_g) - beta - beta_g * g - h;
+            (val, der, n, na, a_g)
+        };
+        let mut g = f_tr / (k_n + c + h);
+        if self.degradation.is_some() || b > 0.0 {
+            // Safeguarded Newton on [0, hi]: φ(0) = f_tr > 0 and, as k(α) ≥ k₀ (1 − D_∞) > 0 and
+            // the kinematic term is ≥ 0, φ(hi) ≤ 0 for hi = (k₀|e_tr| + |x_n|)/(k₀(1 − D_∞) + H).
+            let k_min = self.stiffness_at(f64::INFINITY);
+            let mut lo = 0.0;
+            let mut hi = (self.stiffness * e_tr.norm() + old.back_stress.norm()) / (k_min + h);
+            g = g.clamp(lo, hi);
+            let tol = 1e-14
+                * (self.yield_strength
+                    + h * old.alpha
+                    + self.stiffness * e_tr.norm()
+                    + old.back_stress.norm());
+            for _ in 0..100 {
+                let (v, d, ..) = phi(g);
+                if v.abs() <= tol {
+                    break;
+                }
+                if v > 0.0 {
+                    lo = g;
+                } else {
+                    hi = g;
+                }
+                let mut next = if d < 0.0 { g - v / d } else { f64::NAN };
+                if !(next > lo && next < hi) {
+                    next = 0.5 * (lo + hi);
+                }
+                if next == g || hi - lo <= f64::EPSILON * hi {
+                    break;
+                }
+                g = next;
+            }
+        }
+        let alpha = old.alpha + g;
+        let k = self.stiffness_at(alpha);
+        let dk = self.stiffness_rate(alpha);
+        let (_, dphi, n, na, a_g) = phi(g);
+        let stress = k * (e_tr - g * n);
+        let new = ChannelState {
+            plastic_strain: old.plastic_strain + g * n,
+            back_stress: (old.back_stress + c * g * n) / (1.0 + b * g),
+            alpha,
+        };
+        // Linearisation: dΔγ/dε = −k n / φ', dn/dε = P/|a| · da/dε, da/dε = k I + ∂a/∂Δγ ⊗ dΔγ/dε.
+        let dg = -(k / dphi) * n;
+        let p = id - n * n.transpose();
+        let da = k * id + a_g * dg.transpose();
+        let tangent =
+            k * id + (dk * (e_tr - g * n) - k * n) * dg.transpose() - (k * g / na) * p * da;
+        (stress, tangent, new)
+    }
+}
+
+/// Elastoplastic section: linear elastic in every component, with yield in the listed channels.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Elastoplastic {
+    /// Name reported by [`Law::name`]: `elastoplastic`, `kinematic_hardening` or
+    /// `stiffness_degradation`.
+    pub label: String,
+    /// Stiffnesses of the components without yield data.
+    pub elastic: SectionStiffness,
+    /// Channels with yield data (each channel at most once).
+    pub plastic: Vec<PlasticChannel>,
+}
+
+impl Elastoplastic {
+    /// Elastoplastic in one channel with isotropic hardening only (the chapter's law).
+    pub fn isotropic(
+        elastic: SectionStiffness,
+        channel: Channel,
+        yield_strength: f64,
+        iso_hardening: f64,
+    ) -> Self {
+        Elastoplastic {
+            label: "elastoplastic".into(),
+            elastic,
+            plastic: vec![PlasticChannel {
+                channel,
+                stiffness: elastic.of_channel(channel),
+                yield_strength,
+                iso_hardening,
+                kin_hardening: 0.0,
+                kin_recovery: 0.0,
+                degradation: None,
+            }],
+        }
+    }
+
+    /// Offset of channel `i`'s state in the flat state vector.
+    fn offset(&self, i: usize) -> usize {
+        self.plastic[..i].iter().map(|p| p.n_state()).sum()
+    }
+
+    /// The internal variables of plastic channel `i` (in the order of [`Elastoplastic::plastic`])
+    /// read from a flat state; `None` if there is no such channel or the state is too short.
+    pub fn channel_state(&self, state: &[f64], i: usize) -> Option<ChannelState> {
+        let p = self.plastic.get(i)?;
+        let off = self.offset(i);
+        state.get(off..off + p.n_state()).map(|s| p.read(s))
+    }
+}
+
+impl Law for Elastoplastic {
+    fn name(&self) -> &str {
+        &self.label
+    }
+
+    fn n_state(&self) -> usize {
+        self.plastic.iter().map(|p| p.n_state()).sum()
+    }
+
+    fn update(
+        &self,
+        eps: &Strain6,
+        _dt: f64,
+        state_old: &[f64],
+        state_new: &mut [f64],
+    ) -> LawResponse {
+        let mut tangent = self
+            .elastic
+            .tangent_without(self.plastic.iter().map(|p| p.channel));
+        let mut stress = tangent.diagonal().component_mul(eps);
+        let mut off = 0;
+        for p in &self.plastic {
+            let n = p.n_state();
+            let old = p.read(&state_old[off..off + n]);
+            let (s, c, new) = p.return_map(&p.channel.get(eps), &old);
+            p.write(&new, &mut state_new[off..off + n]);
+            p.channel.add_to(&s, &mut stress);
+            p.channel.add_block(&c, &mut tangent);
+            off += n;
+        }
+        LawResponse { stress, tangent }
+    }
+
+    fn elastic_tangent(&self) -> Tangent6 {
+        let mut t = self
+            .elastic
+            .tangent_without(self.plastic.iter().map(|p| p.channel));
+        for p in &self.plastic {
+            p.channel.add_block(&(p.stiffness * eye(p.channel)), &mut t);
+        }
+        t
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::driver::drive_uniform;
+    use crate::testutil::assert_tangent_fd;
+
+    fn spec_law() -> Elastoplastic {
+        let el = SectionStiffness {
+            ei_nm2: 1.0,
+            ..SectionStiffness::CHAPTER_CABLE
+        };
+        Elastoplastic::isotropic(el, Channel::Bending, 1.0, 0.25)
+    }
+
+    fn bend(k1: f64, k2: f64) -> Strain6 {
+        Strain6::new(0., 0., 0., k1, k2, 0.)
+    }
+
+    fn ramp(from: f64, to: f64, n: usize) -> Vec<f64> {
+        (1..=n)
+            .map(|i| from + (to - from) * i as f64 / n as f64)
+            .collect()
+    }
+
+    /// SPEC: EI = 1, M_y = 1, HI = 0.25, curvature 0 → 3 → −3.
+    #[test]
+    fn spec_pure_bending_cycle() {
+        let law = spec_law();
+        let mut path = vec![0.0];
+        path.extend(ramp(0.0, 3.0, 300));
+        path.extend(ramp(3.0, -3.0, 600));
+        let time: Vec<f64> = (0..path.len()).map(|i| i as f64).collect();
+        let m = drive_uniform(&law, 3, &path, &time);
+        let expected = |i: usize, k: f64| -> f64 {
+            if i <= 300 {
+                if k <= 1.0 {
+                    k
+                } else {
+                    1.0 + 0.2 * (k - 1.0)
+                }
+            } else if k >= 0.2 {
+                k - 1.6
+            } else {
+                -1.4 + 0.2 * (k - 0.2)
+            }
+        };
+        for (i, (&k, &mi)) in path.iter().zip(&m).enumerate() {
+            assert!(
+                (mi - expected(i, k)).abs() < 1e-9,
+                "step {i}: K = {k}, M = {mi}"
+            );
+        }
+        assert!((m[300] - 1.4).abs() < 1e-9);
+        assert!((m[900] + 2.04).abs() < 1e-9);
+
+        // State at K = 3, and the onset of reverse yield at K = 0.2, with single steps.
+        let s0 = vec![0.0; law.n_state()];
+        let mut s1 = s0.clone();
+        let r = law.update(&bend(3.0, 0.0), 0.0, &s0, &mut s1);
+        assert!((r.stress[3] - 1.4).abs() < 1e-12);
+        let st = law.channel_state(&s1, 0).unwrap();
+        assert!((st.plastic_strain[0] - 1.6).abs() < 1e-12);
+        assert!((st.alpha - 1.6).abs() < 1e-12);
+        let mut s2 = s1.clone();
+        law.update(&bend(0.2 + 1e-9, 0.0), 0.0, &s1, &mut s2);
+        assert_eq!(s2, s1, "still elastic just above K = 0.2");
+        let r = law.update(&bend(0.2 - 1e-6, 0.0), 0.0, &s1, &mut s2);
+        assert!(law.channel_state(&s2, 0).unwrap().plastic_strain[0] < 1.6);
+        assert!((r.stress[3] + 1.4 + 0.2 * 1e-6).abs() < 1e-12);
+        // Straight from K = 3 to K = −3 in one step (1-D linear hardening is path independent).
+        let r = law.update(&bend(-3.0, 0.0), 0.0, &s1, &mut s2);
+        assert!((r.stress[3] + 2.04).abs() < 1e-12);
+    }
+
+    /// The same cycle along any direction of the bending plane gives the same magnitudes.
+    #[test]
+    fn bending_yield_is_a_circle() {
+        let law = spec_law();
+        let (c, s) = (0.6_f64, 0.8_f64);
+        let mut s0 = vec![0.0; law.n_state()];
+        let mut s1 = s0.clone();
+        let r = law.update(&bend(3.0 * c, 3.0 * s), 0.0, &s0, &mut s1);
+        assert!((r.stress[3] - 1.4 * c).abs() < 1e-12 && (r.stress[4] - 1.4 * s).abs() < 1e-12);
+        s0.copy_from_slice(&s1);
+        let r = law.update(&bend(-3.0 * c, -3.0 * s), 0.0, &s0, &mut s1);
+        assert!((r.stress[3] + 2.04 * c).abs() < 1e-12 && (r.stress[4] + 2.04 * s).abs() < 1e-12);
+    }
+
+    #[test]
+    fn tangent_matches_finite_difference() {
+        let law = spec_law();
+        let n = law.n_state();
+        let virgin = vec![0.0; n];
+        // Elastic state.
+        assert_tangent_fd(&law, &bend(0.3, -0.4), 0.0, &virgin, 1e-6);
+        // Plastic, first loading, biaxial, with the other components loaded too.
+        let e = Strain6::new(1e-4, -1e-4, 2e-3, 2.0, 1.5, 0.7);
+        assert_tangent_fd(&law, &e, 0.0, &virgin, 1e-6);
+        // Plastic from a prior plastic state in another direction: the moment vector turns.
+        let mut s1 = vec![0.0; n];
+        law.update(&bend(3.0, 0.0), 0.0, &virgin, &mut s1);
+        assert_tangent_fd(&law, &bend(1.0, 3.0), 0.0, &s1, 1e-6);
+        assert_tangent_fd(&law, &bend(-2.5, 0.5), 0.0, &s1, 1e-6);
+        // Elastic unloading from the plastic state.
+        assert_tangent_fd(&law, &bend(2.0, 0.1), 0.0, &s1, 1e-6);
+    }
+
+    fn kinematic(c: f64, h: f64) -> Elastoplastic {
+        let mut law = spec_law();
+        law.label = "kinematic_hardening".into();
+        law.plastic[0].kin_hardening = c;
+        law.plastic[0].iso_hardening = h;
+        law
+    }
+
+    /// Linear kinematic hardening: after loading to M_max the reverse yield starts at
+    /// M_rev = x − (M_y + H α) = M_max − 2 (M_y + H α); with H = 0 that is M_max − 2 M_y.
+    #[test]
+    fn bauschinger_effect_kinematic_hardening() {
+        for (c, h) in [(0.5, 0.0), (0.5, 0.25), (2.0, 0.1)] {
+            let law = kinematic(c, h);
+            let (ei, my) = (1.0, 1.0);
+            let mut s0 = vec![0.0; law.n_state()];
+            let mut s1 = s0.clone();
+            let r = law.update(&bend(3.0, 0.0), 0.0, &s0, &mut s1);
+            let g = (3.0 * ei - my) / (ei + c + h);
+            let m_max = ei * (3.0 - g);
+            assert!((r.stress[3] - m_max).abs() < 1e-12);
+            let st = law.channel_state(&s1, 0).unwrap();
+            assert!((st.back_stress[0] - c * g).abs() < 1e-12);
+            let m_rev = m_max - 2.0 * (my + h * g);
+            let k_rev = g + m_rev / ei;
+            s0.copy_from_slice(&s1);
+            let mut s2 = s1.clone();
+            let r = law.update(&bend(k_rev + 1e-9, 0.0), 0.0, &s0, &mut s2);
+            assert_eq!(s2, s0, "elastic until M_rev = {m_rev}");
+            assert!((r.stress[3] - m_rev).abs() < 1e-8);
+            law.update(&bend(k_rev - 1e-6, 0.0), 0.0, &s0, &mut s2);
+            assert!(law.channel_state(&s2, 0).unwrap().alpha > g);
+            // Reverse plastic slope E (c + H) / (E + c + H).
+            let r1 = law.update(&bend(k_rev - 0.5, 0.0), 0.0, &s0, &mut s2);
+            assert!((r1.stress[3] - (m_rev - 0.5 * ei * (c + h) / (ei + c + h))).abs() < 1e-12);
+            assert_tangent_fd(&law, &bend(k_rev - 0.5, 0.3), 0.0, &s0, 1e-6);
+            assert_tangent_fd(&law, &bend(4.0, 1.0), 0.0, &s0, 1e-6);
+        }
+    }
+
+    /// Armstrong–Frederick: under monotonic loading the back moment follows
+    /// x = (c/b)(1 − exp(−b K_pl)) (backward Euler converges to it), saturating at c/b.
+    #[test]
+    fn armstrong_frederick_back_moment_saturates() {
+        let (c, b) = (2.0, 4.0);
+        let mut law = kinematic(c, 0.0);
+        law.plastic[0].kin_recovery = b;
+        let mut path = vec![0.0];
+        path.extend(ramp(0.0, 5.0, 20000));
+        let time = vec![0.0; path.len()];
+        let m = drive_uniform(&law, 3, &path, &time);
+        let mut s = vec![0.0; law.n_state()];
+        let mut t = s.clone();
+        for &k in &path {
+            law.update(&bend(k, 0.0), 0.0, &s, &mut t);
+            s.copy_from_slice(&t);
+        }
+        let st = law.channel_state(&s, 0).unwrap();
+        let kp = st.plastic_strain[0];
+        let x_exact = c / b * (1.0 - (-b * kp).exp());
+        assert!(
+            (st.back_stress[0] - x_exact).abs() < 1e-4,
+            "{} vs {x_exact}",
+            st.back_stress[0]
+        );
+        assert!(
+            (m[20000] - 1.0 - st.back_stress[0]).abs() < 1e-12,
+            "on the shifted yield circle"
+        );
+        assert!(x_exact > 0.99 * c / b);
+        // Reverse yield at M = x − M_y (Bauschinger with the saturated back moment).
+        let k_rev = kp + (st.back_stress[0] - 1.0);
+        let mut t2 = s.clone();
+        law.update(&bend(k_rev + 1e-9, 0.0), 0.0, &s, &mut t2);
+        assert_eq!(t2, s);
+        assert_tangent_fd(&law, &bend(k_rev - 0.7, 0.4), 0.0, &s, 1e-6);
+        assert_tangent_fd(&law, &bend(6.0, -1.0), 0.0, &s, 1e-6);
+        let virgin = vec![0.0; law.n_state()];
+        assert_tangent_fd(&law, &bend(2.0, 1.0), 0.0, &virgin, 1e-6);
+        law.plastic[0].degradation = Some(Degradation {
+            d_inf: 0.3,
+            alpha_d: 1.0,
+        });
+        assert_tangent_fd(&law, &bend(k_rev - 0.7, 0.4), 0.0, &s, 1e-6);
+    }
+
+    fn degrading(d_inf: f64, alpha_d: f64) -> Elastoplastic {
+        let mut law = spec_law();
+        law.label = "stiffness_degradation".into();
+        law.plastic[0].degradation = Some(Degradation { d_inf, alpha_d });
+        law
+    }
+
+    /// After plastic history α the unloading stiffness is EI (1 − D_∞ (1 − exp(−α/α_D))), and the
+    /// stress is on the yield circle.
+    #[test]
+    fn degradation_lowers_unloading_stiffness() {
+        let (d_inf, alpha_d) = (0.4, 0.8);
+        let law = degrading(d_inf, alpha_d);
+        let mut path = vec![0.0];
+        path.extend(ramp(0.0, 3.0, 300));
+        let time: Vec<f64> = (0..path.len()).map(|i| i as f64).collect();
+        let mut s = vec![0.0; law.n_state()];
+        let mut t = s.clone();
+        let mut m_max = 0.0;
+        for &k in &path {
+            m_max = law.update(&bend(k, 0.0), 0.0, &s, &mut t).stress[3];
+            s.copy_from_slice(&t);
+        }
+        let st = law.channel_state(&s, 0).unwrap();
+        assert!(st.alpha > 1.0);
+        let ei_eff = 1.0 * (1.0 - d_inf * (1.0 - (-st.alpha / alpha_d).exp()));
+        assert!(
+            (m_max - (1.0 + 0.25 * st.alpha)).abs() < 1e-10,
+            "on the yield circle"
+        );
+        assert!((m_max - ei_eff * (3.0 - st.plastic_strain[0])).abs() < 1e-10);
+        // Unloading by 0.5: secant and tangent both ei_eff, state unchanged.
+        let r = law.update(&bend(2.5, 0.0), 0.0, &s, &mut t);
+        assert_eq!(t, s);
+        assert!(((m_max - r.stress[3]) / 0.5 - ei_eff).abs() < 1e-12);
+        assert!((r.tangent[(3, 3)] - ei_eff).abs() < 1e-12);
+        assert!(ei_eff < 0.75, "stiffness fell by {}", 1.0 - ei_eff);
+        // Without degradation the same history unloads with EI = 1.
+        let m = drive_uniform(&spec_law(), 3, &[0.0, 3.0, 2.5], &time[..3]);
+        assert!(((m[1] - m[2]) / 0.5 - 1.0).abs() < 1e-12);
+        // Consistent tangent of the Newton-solved return map, first loading and turning moment.
+        let virgin = vec![0.0; law.n_state()];
+        assert_tangent_fd(&law, &bend(3.0, 1.0), 0.0, &virgin, 1e-6);
+        assert_tangent_fd(&law, &bend(0.5, 3.5), 0.0, &s, 1e-6);
+        assert_tangent_fd(&law, &bend(-4.0, 0.2), 0.0, &s, 1e-6);
+    }
+
+    /// Kinematic hardening and degradation together (not offered by the registry, but supported):
+    /// the back stress makes the return direction depend on Δγ, which the tangent must follow.
+    #[test]
+    fn combined_kinematic_and_degradation_tangent() {
+        let mut law = degrading(0.4, 0.8);
+        law.plastic[0].kin_hardening = 0.5;
+        let virgin = vec![0.0; law.n_state()];
+        let mut s = virgin.clone();
+        law.update(&bend(3.0, 0.0), 0.0, &virgin, &mut s);
+        let st = law.channel_state(&s, 0).unwrap();
+        assert!(st.back_stress[0] > 0.0);
+        let mut t = s.clone();
+        let r = law.update(&bend(0.5, 3.5), 0.0, &s, &mut t);
+        let nt = law.channel_state(&t, 0).unwrap();
+        // Consistency: |M − x| = M_y + HI α on the yield circle after the step.
+        let m = nalgebra::Vector2::new(r.stress[3], r.stress[4]);
+        assert!(((m - nt.back_stress).norm() - (1.0 + 0.25 * nt.alpha)).abs() < 1e-12);
+        assert_tangent_fd(&law, &bend(0.5, 3.5), 0.0, &s, 1e-6);
+        assert_tangent_fd(&law, &bend(-4.0, 1.2), 0.0, &s, 1e-6);
+    }
+
+    /// Tension (F_y, H) and torsion (M_y, HI) analogues, scalar eq. (30).
+    #[test]
+    fn tension_and_torsion_analogues() {
+        let el = SectionStiffness::CHAPTER_CABLE;
+        let ten = Elastoplastic::isotropic(el, Channel::Axial, 54.0, 1e4);
+        let mut s0 = vec![0.0; ten.n_state()];
+        let mut s1 = s0.clone();
+        let eps = 2e-3; // trial force 159.2 N
+        let r = ten.update(&Strain6::new(0., 0., eps, 0.5, 0., 0.), 0.0, &s0, &mut s1);
+        let g = (7.96e4 * eps - 54.0) / (7.96e4 + 1e4);
+        assert!((r.stress[2] - 7.96e4 * (eps - g)).abs() < 1e-9);
+        assert!(
+            (r.stress[3] - 1.37e-3 * 0.5).abs() < 1e-15,
+            "bending stays elastic"
+        );
+        assert!((r.tangent[(2, 2)] - 7.96e4 * 1e4 / (7.96e4 + 1e4)).abs() < 1e-6);
+        assert_tangent_fd(
+            &ten,
+            &Strain6::new(0., 0., eps, 0.5, 0., 0.),
+            0.0,
+            &s0,
+            1e-6,
+        );
+        s0.copy_from_slice(&s1);
+        assert_tangent_fd(
+            &ten,
+            &Strain6::new(0., 0., -2e-3, 0., 0., 0.),
+            0.0,
+            &s0,
+            1e-6,
+        );
+
+        let tor = Elastoplastic::isotropic(el, Channel::Twist, 0.02, 5e-4);
+        let virgin = vec![0.0; tor.n_state()];
+        let mut s = virgin.clone();
+        let k3 = 30.0; // trial 0.0606 N m
+        let r = tor.update(&Strain6::new(0., 0., 0., 0., 0., k3), 0.0, &virgin, &mut s);
+        let g = (2.02e-3 * k3 - 0.02) / (2.02e-3 + 5e-4);
+        assert!((r.stress[5] - (0.02 + 5e-4 * g)).abs() < 1e-12);
+        assert_tangent_fd(&tor, &Strain6::new(0., 0., 0., 0.1, 0., -k3), 0.0, &s, 1e-6);
+    }
+}

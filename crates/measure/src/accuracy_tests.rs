@@ -1,0 +1,371 @@
+//! Accuracy of `analyze` on curves with known truth (issue 4, item 8): a small generator drives
+//! 1-D sectional laws (elastic, piecewise elastic, elastoplastic with isotropic and kinematic
+//! hardening) along a control path and adds seeded Gaussian noise of 0.3% and 1% of the peak
+//! response (and 0.05% of the peak control on the control channel).
+
+use crate::analysis::{analyze, AnalyzeOptions, Behaviour};
+use crate::elastica::ThreePointElastica;
+use crate::sectional::Geometry;
+use cablab_core::TestKind;
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use rand_distr::{Distribution, Normal};
+
+/// 1-D rate-independent law in sectional variables: elastic slope `k`, yield `fy`, isotropic
+/// and kinematic hardening moduli, or a reversible bilinear law (`piecewise`).
+#[derive(Clone)]
+struct Law1D {
+    k: f64,
+    fy: f64,
+    h_iso: f64,
+    h_kin: f64,
+    piecewise: Option<(f64, f64)>, // (threshold x_t, second slope)
+    ep: f64,
+    alpha: f64,
+    back: f64,
+}
+
+impl Law1D {
+    fn elastic(k: f64) -> Self {
+        Law1D { k, fy: f64::INFINITY, h_iso: 0.0, h_kin: 0.0, piecewise: None, ep: 0.0, alpha: 0.0, back: 0.0 }
+    }
+    fn plastic(k: f64, fy: f64, h_iso: f64, h_kin: f64) -> Self {
+        Law1D { fy, h_iso, h_kin, ..Law1D::elastic(k) }
+    }
+    fn bilinear(k1: f64, k2: f64, xt: f64) -> Self {
+        Law1D { piecewise: Some((xt, k2)), ..Law1D::elastic(k1) }
+    }
+    fn eval(&mut self, x: f64) -> f64 {
+        if let Some((xt, k2)) = self.piecewise {
+            let a = x.abs();
+            let m = if a < xt { self.k * a } else { self.k * xt + k2 * (a - xt) };
+            return m * x.signum();
+        }
+        let trial = self.k * (x - self.ep);
+        let xi = trial - self.back;
+        let f = xi.abs() - (self.fy + self.h_iso * self.alpha);
+        if f <= 0.0 {
+            return trial;
+        }
+        let dg = f / (self.k + self.h_iso + self.h_kin);
+        let s = xi.signum();
+        self.ep += dg * s;
+        self.alpha += dg;
+        self.back += self.h_kin * dg * s;
+        self.k * (x - self.ep)
+    }
+}
+
+/// Drives `law` (in sectional x) through the machine-control waypoints, `per_leg` samples per
+/// leg, with `dwell` samples held at every waypoint after the first; `to_x` converts machine
+/// control to sectional control.
+fn drive(path: &[f64], per_leg: usize, dwell: usize, to_x: f64, law: &mut Law1D) -> (Vec<f64>, Vec<f64>) {
+    let (mut c, mut r) = (vec![path[0]], vec![law.eval(path[0] * to_x)]);
+    for w in path.windows(2) {
+        for i in 1..=per_leg {
+            let v = w[0] + (w[1] - w[0]) * i as f64 / per_leg as f64;
+            c.push(v);
+            r.push(law.eval(v * to_x));
+        }
+        for _ in 0..dwell {
+            c.push(w[1]);
+            r.push(law.eval(w[1] * to_x));
+        }
+    }
+    (c, r)
+}
+
+/// Adds noise: `rel` of the peak |response| to the response, 0.05% of the peak |control| to the
+/// control; also prepends 50 samples at rest.
+fn noisy(c: &[f64], r: &[f64], rel: f64, seed: u64) -> (Vec<f64>, Vec<f64>) {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let cmax = c.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    let rmax = r.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    let dc = Normal::new(0.0, 5e-4 * cmax).unwrap();
+    let dr = Normal::new(0.0, rel * rmax).unwrap();
+    let cc: Vec<f64> = std::iter::repeat_n(c[0], 50).chain(c.iter().copied()).collect();
+    let rr: Vec<f64> = std::iter::repeat_n(r[0], 50).chain(r.iter().copied()).collect();
+    (
+        cc.iter().map(|v| v + dc.sample(&mut rng)).collect(),
+        rr.iter().map(|v| v + dr.sample(&mut rng)).collect(),
+    )
+}
+
+const NOISES: [f64; 2] = [0.003, 0.01];
+
+fn rel_err(a: f64, b: f64) -> f64 {
+    (a / b - 1.0).abs()
+}
+
+/// Tension on the chapter's cable: (EA)_T = 7.96e4 N, l₀ = 32 mm, yield at 54 N, linear
+/// isotropic hardening, three cycles between 0 N and 100 N. Stiffness within 1%, yield load
+/// within 5%, first-cycle energy (plastic work l₀(F_y ε_p + H ε_p²/2)) within 5%, class
+/// elastoplastic, later cycles closed (isotropic hardening: elastic reloading).
+#[test]
+fn tension_bilinear_elastoplastic_yield_and_stiffness() {
+    let (ea, fy, h, l0) = (7.96e4, 54.0, 1.5e4, 0.032);
+    let ep_max = (100.0 - fy) / h;
+    let peak = l0 * (100.0 / ea + ep_max);
+    let zero = l0 * ep_max;
+    let path = [0.0, peak, zero, peak, zero, peak, zero];
+    let geom = Geometry { free_length_m: l0, diameter_m: Some(2.8e-3) };
+    let work = l0 * (fy * ep_max + 0.5 * h * ep_max * ep_max);
+    for (s, &rel) in NOISES.iter().enumerate() {
+        for seed in 0..3 {
+            let mut law = Law1D::plastic(ea, fy, h, 0.0);
+            let (c, r) = drive(&path, 2000, 0, 1.0 / l0, &mut law);
+            let (c, r) = noisy(&c, &r, rel, 100 * s as u64 + seed);
+            let a = analyze(TestKind::Tension, &geom, None, &c, &r, &AnalyzeOptions::default()).unwrap();
+            let st = a.stiffness.as_ref().unwrap();
+            assert!(rel_err(st.value, ea) < 0.01, "noise {rel} seed {seed}: EA {} window {:?}", st.value, st.window);
+            assert!(st.ci95[0] < st.value && st.value < st.ci95[1]);
+            assert_eq!(a.behaviour, Behaviour::Elastoplastic, "noise {rel} seed {seed}: {:?}", a.cycles);
+            let y = a.yield_point.as_ref().expect("yield");
+            assert!(rel_err(y.response, fy) < 0.05, "noise {rel} seed {seed}: yield {y:?}");
+            assert!(rel_err(y.control, fy / ea) < 0.05, "noise {rel} seed {seed}: yield {y:?}");
+            assert!(y.control_ci95[0] <= y.control && y.control <= y.control_ci95[1]);
+            assert_eq!(a.cycles.len(), 3);
+            let w1 = a.cycles[0].loop_area.unwrap();
+            assert!(rel_err(w1, work) < 0.05, "noise {rel} seed {seed}: W {w1} vs {work}");
+            let res = a.cycles[0].residual.unwrap();
+            assert!(rel_err(res, ep_max) < 0.05, "residual {res} vs {ep_max}");
+            let unl = a.cycles[0].unloading_stiffness.unwrap();
+            assert!(rel_err(unl, ea) < 0.03, "unloading stiffness {unl}");
+            let e = a.modulus_pa.unwrap();
+            assert!(rel_err(e, 12_900e6) < 0.015, "E_T {e}");
+        }
+    }
+}
+
+/// An elastic cable in tension to 40 N (the chapter's elastic cycles): no yield, linear elastic.
+#[test]
+fn tension_elastic_reports_no_yield() {
+    let (ea, l0) = (7.96e4, 0.032);
+    let peak = l0 * 40.0 / ea;
+    let geom = Geometry { free_length_m: l0, diameter_m: Some(2.8e-3) };
+    for (s, &rel) in NOISES.iter().enumerate() {
+        for seed in 0..4 {
+            let mut law = Law1D::elastic(ea);
+            let (c, r) = drive(&[0.0, peak, 0.0, peak, 0.0], 1500, 0, 1.0 / l0, &mut law);
+            let (c, r) = noisy(&c, &r, rel, 1000 + 100 * s as u64 + seed);
+            let a = analyze(TestKind::Tension, &geom, None, &c, &r, &AnalyzeOptions::default()).unwrap();
+            assert!(a.yield_point.is_none(), "noise {rel} seed {seed}: {:?}", a.yield_point);
+            assert!(a.why.contains_key("yield"));
+            assert_eq!(a.behaviour, Behaviour::LinearElastic, "noise {rel} seed {seed}: {:?}", a.cycles);
+            assert!(rel_err(a.stiffness.as_ref().unwrap().value, ea) < 0.01);
+            assert!(a.cycles.iter().all(|c| c.coincide == Some(true)));
+        }
+    }
+}
+
+/// Bowden cable in pure bending (chapter Table 2): (EI)_B,1 = 1.40, (EI)_B,2 = 0.19 N m²,
+/// K_B,t = 0.18 1/m, l₀ = 320 mm, cycles to 60°. K_t within 10%, class piecewise, no yield.
+#[test]
+fn bowden_piecewise_threshold() {
+    let (ei1, ei2, kt, l0) = (1.40, 0.19, 0.18, 0.32);
+    let th = 60f64.to_radians();
+    let geom = Geometry { free_length_m: l0, diameter_m: Some(7.8e-3) };
+    for (s, &rel) in NOISES.iter().enumerate() {
+        for seed in 0..3 {
+            let mut law = Law1D::bilinear(ei1, ei2, kt);
+            let (c, r) = drive(&[0.0, th, 0.0, th, 0.0], 3000, 0, 1.0 / l0, &mut law);
+            let (c, r) = noisy(&c, &r, rel, 2000 + 100 * s as u64 + seed);
+            let a = analyze(TestKind::PureBending, &geom, None, &c, &r, &AnalyzeOptions::default()).unwrap();
+            assert_eq!(a.behaviour, Behaviour::PiecewiseLinearElastic, "noise {rel} seed {seed}: {:?}", a.cycles);
+            assert!(a.yield_point.is_none());
+            let p = a.piecewise.as_ref().unwrap();
+            assert!(rel_err(p.threshold_control, kt) < 0.10, "noise {rel} seed {seed}: {p:?}");
+            assert!(rel_err(p.stiffness_1, ei1) < 0.05, "{p:?}");
+            assert!(rel_err(p.stiffness_2, ei2) < 0.02, "{p:?}");
+            assert!(rel_err(a.stiffness.as_ref().unwrap().value, ei1) < 0.05);
+        }
+    }
+}
+
+/// CFRP rod in pure bending, ±60° over 410 mm: straight and reversible.
+#[test]
+fn cfrp_linear_elastic_with_reversed_loading() {
+    let (ei, l0) = (0.55, 0.41);
+    let th = 60f64.to_radians();
+    let geom = Geometry { free_length_m: l0, diameter_m: Some(3e-3) };
+    for (s, &rel) in NOISES.iter().enumerate() {
+        let mut law = Law1D::elastic(ei);
+        let (c, r) = drive(&[0.0, th, -th, th, -th, 0.0], 1500, 0, 1.0 / l0, &mut law);
+        let (c, r) = noisy(&c, &r, rel, 3000 + s as u64);
+        let a = analyze(TestKind::PureBending, &geom, None, &c, &r, &AnalyzeOptions::default()).unwrap();
+        assert_eq!(a.behaviour, Behaviour::LinearElastic, "noise {rel}: {:?}", a.cycles);
+        assert!(a.yield_point.is_none());
+        assert!(rel_err(a.stiffness.as_ref().unwrap().value, ei) < 0.01);
+        assert_eq!(a.cycles.len(), 2);
+    }
+}
+
+/// Linear kinematic hardening between ±K_a in pure bending: the stabilised loop is a
+/// parallelogram with elastic sides (slope EI) spanning 2M_y and plastic sides of slope
+/// E_t = EI·H/(EI + H); its area (shoelace of the analytic vertices, times l₀ for the machine
+/// angle) must come back within 5% from cycle 2.
+#[test]
+fn kinematic_loop_area() {
+    let (ei, my, hk, l0) = (1.37e-3, 0.02, 2.0e-4, 0.05);
+    let ka = 80f64.to_radians() / l0;
+    let et = ei * hk / (ei + hk);
+    let mm = my + et * (ka - my / ei);
+    let v = [(-ka, -mm), (-ka + 2.0 * my / ei, -mm + 2.0 * my), (ka, mm), (ka - 2.0 * my / ei, mm - 2.0 * my)];
+    let shoelace: f64 = (0..4).map(|i| v[i].0 * v[(i + 1) % 4].1 - v[(i + 1) % 4].0 * v[i].1).sum::<f64>() / 2.0;
+    let area = shoelace.abs() * l0;
+    let th = ka * l0;
+    let geom = Geometry { free_length_m: l0, diameter_m: Some(2.8e-3) };
+    for (s, &rel) in NOISES.iter().enumerate() {
+        let mut law = Law1D::plastic(ei, my, 0.0, hk);
+        let (c, r) = drive(&[0.0, th, -th, th, -th, th, -th, 0.0], 2000, 0, 1.0 / l0, &mut law);
+        let (c, r) = noisy(&c, &r, rel, 4000 + s as u64);
+        let a = analyze(TestKind::PureBending, &geom, None, &c, &r, &AnalyzeOptions::default()).unwrap();
+        assert_eq!(a.behaviour, Behaviour::Elastoplastic, "noise {rel}");
+        assert_eq!(a.cycles.len(), 3, "{:?}", a.segments);
+        let got = a.cycles[1].loop_area.unwrap();
+        assert!(rel_err(got, area) < 0.05, "noise {rel}: loop {got} vs {area}");
+        assert!(rel_err(a.stiffness.as_ref().unwrap().value, ei) < 0.01);
+        let y = a.yield_point.as_ref().unwrap();
+        assert!(rel_err(y.response, my) < 0.05 && rel_err(y.control, my / ei) < 0.05, "{y:?}");
+        let unl = a.cycles[1].unloading_stiffness.unwrap();
+        assert!(rel_err(unl, ei) < 0.03, "unloading {unl}");
+    }
+}
+
+/// The chapter's Table 1 comes back from logs generated with it (d = 2.8 mm, 1% noise):
+/// (EA)_T, (GJ)_T, (EI)_B (pure bending, and three-point through the exact elastica) and the
+/// moduli 12 900, 1003.7 and 454.4 MPa.
+#[test]
+fn chapter_table1_from_generated_logs() {
+    let d = Some(2.8e-3);
+    let opts = AnalyzeOptions::default();
+    // Tension to 40 N, l0 = 32 mm.
+    let mut law = Law1D::elastic(7.96e4);
+    let (c, r) = drive(&[0.0, 0.032 * 40.0 / 7.96e4, 0.0], 2000, 0, 1.0 / 0.032, &mut law);
+    let (c, r) = noisy(&c, &r, 0.01, 5000);
+    let a = analyze(TestKind::Tension, &Geometry { free_length_m: 0.032, diameter_m: d }, None, &c, &r, &opts).unwrap();
+    assert!(rel_err(a.modulus_pa.unwrap(), 12_900e6) < 0.015);
+    // Torsion to 360° over 33 mm with yield.
+    let mut law = Law1D::plastic(2.02e-3, 0.02, 2e-4, 0.0);
+    let (c, r) = drive(&[0.0, std::f64::consts::TAU, 0.0], 3000, 0, 1.0 / 0.033, &mut law);
+    let (c, r) = noisy(&c, &r, 0.01, 5001);
+    let a = analyze(TestKind::Torsion, &Geometry { free_length_m: 0.033, diameter_m: d }, None, &c, &r, &opts).unwrap();
+    assert!(rel_err(a.stiffness.as_ref().unwrap().value, 2.02e-3) < 0.01);
+    assert!(rel_err(a.modulus_pa.unwrap(), 1003.7e6) < 0.01, "{:?}", a.modulus_pa);
+    // Pure bending to 80° over 50 mm with yield.
+    let mut law = Law1D::plastic(1.37e-3, 0.015, 1e-4, 0.0);
+    let (c, r) = drive(&[0.0, 80f64.to_radians(), 0.0], 3000, 0, 1.0 / 0.05, &mut law);
+    let (c, r) = noisy(&c, &r, 0.01, 5002);
+    let a = analyze(TestKind::PureBending, &Geometry { free_length_m: 0.05, diameter_m: d }, None, &c, &r, &opts).unwrap();
+    assert!(rel_err(a.modulus_pa.unwrap(), 454.4e6) < 0.01, "{:?}", a.modulus_pa);
+    // Three-point, span 56 mm, to w = 2 mm with the exact elastica force.
+    let (ei, l): (f64, f64) = (1.37e-3, 0.056);
+    let tab = ThreePointElastica::new();
+    let w: Vec<f64> = (0..=3000).map(|i| 2e-3 * i as f64 / 3000.0).chain((0..3000).map(|i| 2e-3 * (1.0 - (i + 1) as f64 / 3000.0))).collect();
+    let f: Vec<f64> = w.iter().map(|&w| 48.0 * ei * w / l.powi(3) * tab.force_ratio(w / l).unwrap()).collect();
+    let (c, r) = noisy(&w, &f, 0.01, 5003);
+    let a = analyze(TestKind::ThreePoint, &Geometry { free_length_m: l, diameter_m: d }, None, &c, &r, &opts).unwrap();
+    let ld = a.large_deflection.as_ref().unwrap();
+    assert!(rel_err(ld.corrected_stiffness, ei) < 0.01, "{ld:?}");
+    let small = a.stiffness.as_ref().unwrap().value;
+    assert!(small < ei && rel_err(small, ei) < 0.03, "eq. (3) value {small}");
+    assert!(a.warnings.iter().any(|w| w.contains("small-deflection")), "{:?}", a.warnings);
+}
+
+/// Three-point unloading where the specimen stays bent: the force is zero (the punch has lost
+/// contact) before the punch is back; the contact loss is found where the force vanished.
+#[test]
+fn three_point_contact_loss() {
+    let (k, l) = (400.0, 0.056); // N/m punch stiffness
+    let (wy, wmax) = (1.5e-3, 6e-3);
+    let kp = 0.2 * k;
+    let fmax = k * wy + kp * (wmax - wy);
+    let wr = wmax - fmax / k; // force vanishes here on elastic unloading
+    let n = 3000;
+    let mut c = Vec::new();
+    let mut r = Vec::new();
+    for i in 0..=n {
+        let w = wmax * i as f64 / n as f64;
+        c.push(w);
+        r.push(if w < wy { k * w } else { k * wy + kp * (w - wy) });
+    }
+    for i in 1..=n {
+        let w = wmax * (1.0 - i as f64 / n as f64);
+        c.push(w);
+        r.push((fmax - k * (wmax - w)).max(0.0));
+    }
+    for &rel in &NOISES {
+        let (cn, rn) = noisy(&c, &r, rel, 6000);
+        let a = analyze(TestKind::ThreePoint, &Geometry { free_length_m: l, diameter_m: None }, None, &cn, &rn, &AnalyzeOptions::default())
+            .unwrap();
+        let cl = a.cycles[0].contact_loss_control.expect("contact loss");
+        assert!((cl - wr).abs() < 0.03 * wr, "noise {rel}: contact loss at {cl}, truth {wr}");
+        assert_eq!(a.behaviour, Behaviour::Elastoplastic);
+        assert!(a.why.contains_key("modulus_pa"));
+        assert!(a.modulus_pa.is_none());
+    }
+}
+
+/// Dwell times at every peak and valley with 1% noise make neither extra cycles nor extra
+/// branches, and the stiffness is unchanged.
+#[test]
+fn dwell_plateaus_do_not_split_cycles() {
+    let (ea, l0) = (7.96e4, 0.032);
+    let peak = l0 * 40.0 / ea;
+    let geom = Geometry { free_length_m: l0, diameter_m: None };
+    let mut law = Law1D::elastic(ea);
+    let (c, r) = drive(&[0.0, peak, 0.0, peak, 0.0, peak, 0.0], 1000, 400, 1.0 / l0, &mut law);
+    let (c, r) = noisy(&c, &r, 0.01, 7000);
+    let t: Vec<f64> = (0..c.len()).map(|i| i as f64 * 0.01).collect();
+    let a = analyze(TestKind::Tension, &geom, Some(&t), &c, &r, &AnalyzeOptions::default()).unwrap();
+    assert_eq!(a.cycles.len(), 3, "{:?}", a.segments);
+    let holds = a.segments.iter().filter(|s| s.branch == crate::condition::Branch::Hold).count();
+    assert_eq!(holds, 7, "{:?}", a.segments); // initial rest + 6 dwells
+    assert!(rel_err(a.stiffness.unwrap().value, ea) < 0.01);
+    assert_eq!(a.behaviour, Behaviour::LinearElastic);
+}
+
+/// The JSON object carries the contract keys, with null + why where nothing can be said.
+#[test]
+fn json_has_contract_keys() {
+    let mut law = Law1D::elastic(7.96e4);
+    let (c, r) = drive(&[0.0, 1.6e-5, 0.0], 500, 0, 1.0 / 0.032, &mut law);
+    let a = analyze(TestKind::Tension, &Geometry { free_length_m: 0.032, diameter_m: None }, None, &c, &r, &AnalyzeOptions::default())
+        .unwrap();
+    let v: serde_json::Value = serde_json::to_value(&a).unwrap();
+    for k in ["stiffness", "modulus_pa", "yield", "cycles", "behaviour"] {
+        assert!(v.get(k).is_some(), "missing {k}");
+    }
+    assert_eq!(v["stiffness"]["unit"], "N");
+    assert_eq!(v["stiffness"]["ci95"].as_array().unwrap().len(), 2);
+    assert_eq!(v["stiffness"]["window"].as_array().unwrap().len(), 2);
+    assert!(v["modulus_pa"].is_null() && v["why"]["modulus_pa"].is_string());
+    assert!(v["yield"].is_null() && v["why"]["yield"].is_string());
+    assert_eq!(v["behaviour"], "linear_elastic");
+    for k in ["index", "loop_area", "residual", "unloading_stiffness"] {
+        assert!(v["cycles"][0].get(k).is_some(), "cycle key {k}");
+    }
+}
+
+/// A user window and a machine compliance: the compliance C in series makes the raw slope
+/// 1/(l₀/EA + C); removing it recovers EA.
+#[test]
+fn user_window_and_compliance() {
+    let (ea, l0, comp) = (7.96e4, 0.032, 2e-7);
+    let fmax = 40.0;
+    let n = 2000;
+    let c: Vec<f64> = (0..=n).map(|i| fmax * i as f64 / n as f64).map(|f| f * (l0 / ea + comp)).collect();
+    let r: Vec<f64> = (0..=n).map(|i| fmax * i as f64 / n as f64).collect();
+    let geom = Geometry { free_length_m: l0, diameter_m: None };
+    let raw = analyze(TestKind::Tension, &geom, None, &c, &r, &AnalyzeOptions::default()).unwrap();
+    let expect_raw = 1.0 / (1.0 / ea + comp / l0);
+    assert!(rel_err(raw.stiffness.unwrap().value, expect_raw) < 1e-6);
+    let opts = AnalyzeOptions { compliance_m_per_n: Some(comp), fit_window: Some((1e-4, 3e-4)), ..Default::default() };
+    let a = analyze(TestKind::Tension, &geom, None, &c, &r, &opts).unwrap();
+    let s = a.stiffness.unwrap();
+    assert!(rel_err(s.value, ea) < 1e-6, "{}", s.value);
+    assert_eq!(s.window, [1e-4, 3e-4]);
+    assert!(!s.window_automatic);
+    let bad = AnalyzeOptions { fit_window: Some((1.0, 2.0)), ..Default::default() };
+    assert!(analyze(TestKind::Tension, &geom, None, &c, &r, &bad).is_err());
+}

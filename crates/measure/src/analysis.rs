@@ -1,0 +1,469 @@
+//! `analyze`: one test from curves to the chapter's results (the `cablab analyze --json` object).
+//!
+//! Pipeline: validate → machine-compliance correction → zero offsets → orientation (a test
+//! whose first motion is negative is mirrored for the fits and mirrored back for the report) →
+//! segmentation → elastic window and stiffness on the first loading (eqs. (1)–(5)) → toe and
+//! bend → per-cycle hysteresis → behaviour class → modulus (eqs. (6)–(7)) → three-point
+//! large-deflection check. Rules of the behaviour class (`Behaviour`):
+//! * every cycle's loading and unloading coincide and no residual deformation → reversible:
+//!   `linear_elastic` without a bend in the first loading, `piecewise_linear_elastic` with one;
+//! * a bend, loops that do not close and a significant residual deformation → `elastoplastic`;
+//! * anything else (loops without a bend: friction, viscosity, drift; or no unloading to judge
+//!   reversibility by, while the first loading bends) → `other`.
+//! The yield point is the bend of an `elastoplastic` (or unjudgeable) test; a reversible bend is
+//! reported as the piecewise threshold K_t instead. Pure: numbers in, numbers out.
+
+use crate::condition::{correct_compliance, noise_level, segment, zero_offsets, Branch, Offsets, Segment};
+use crate::elastic::{auto_elastic_range, user_elastic_range, ElasticRange, Hinge};
+use crate::elastica::ThreePointElastica;
+use crate::hysteresis::{cycles, CycleInputs, CycleResult};
+use crate::sectional::{
+    modulus_from_stiffness, sectional, sectional_unit, stiffness_factor, three_point_peak_curvature,
+    three_point_peak_moment, Geometry,
+};
+use crate::stats::linear_fit;
+use crate::MeasureError;
+use cablab_core::TestKind;
+use serde::Serialize;
+use std::collections::BTreeMap;
+
+/// Options of [`analyze`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct AnalyzeOptions {
+    /// Poisson ratio for the torsion modulus, G = E/(2(1+ν)) (eq. (7)); 0.5 by default.
+    pub nu: f64,
+    /// User-set elastic window `(from, to)` in the kind's sectional control (SI: strain, 1/m,
+    /// deflection m); automatic when None.
+    pub fit_window: Option<(f64, f64)>,
+    /// Machine compliance in control units per response unit (m/N for tension and three-point,
+    /// rad/(N m) for torsion and pure bending), removed before anything else.
+    pub compliance_m_per_n: Option<f64>,
+    /// Remove the control and response offsets of the leading samples at rest (default true).
+    pub zero_offsets: bool,
+    /// Relative error of eq. (3) beyond which a three-point deflection counts as large (0.01).
+    pub small_deflection_tolerance: f64,
+}
+
+impl Default for AnalyzeOptions {
+    fn default() -> Self {
+        AnalyzeOptions {
+            nu: 0.5,
+            fit_window: None,
+            compliance_m_per_n: None,
+            zero_offsets: true,
+            small_deflection_tolerance: 0.01,
+        }
+    }
+}
+
+/// Behaviour class of a test (chapter Sect. 2.3/3).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Behaviour {
+    /// Straight and reversible (CFRP rods).
+    LinearElastic,
+    /// Reversible with a slope change at a threshold (Bowden cables, eq. (19)).
+    PiecewiseLinearElastic,
+    /// Yield, hardening, open loops, residual deformation (cables).
+    Elastoplastic,
+    /// None of the above (rate dependence, friction loops, drift, or not enough data).
+    Other,
+}
+
+impl Behaviour {
+    /// Contract spelling.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Behaviour::LinearElastic => "linear_elastic",
+            Behaviour::PiecewiseLinearElastic => "piecewise_linear_elastic",
+            Behaviour::Elastoplastic => "elastoplastic",
+            Behaviour::Other => "other",
+        }
+    }
+}
+
+/// The elastic stiffness of the test.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Stiffness {
+    /// (EA)_T, (GJ)_T or (EI)_B.
+    pub value: f64,
+    /// "N" or "N m^2".
+    pub unit: &'static str,
+    /// 95% interval (Student t on the slope).
+    pub ci95: [f64; 2],
+    /// Fit window `[from, to]` in the sectional control (strain, 1/m, or deflection m).
+    pub window: [f64; 2],
+    /// Unit of the window.
+    pub window_unit: &'static str,
+    /// Whether the window was found automatically.
+    pub window_automatic: bool,
+    /// R² of the fit.
+    pub r2: f64,
+    /// Samples in the window.
+    pub n: usize,
+}
+
+/// The yield point: the bend in the first loading path.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct YieldPoint {
+    /// Sectional control at the bend (strain, 1/m, or deflection m for three-point).
+    pub control: f64,
+    /// Response at the bend (N or N m).
+    pub response: f64,
+    /// 95% interval of `control` (profile likelihood of the bend).
+    pub control_ci95: [f64; 2],
+    /// Range of `response` over that interval.
+    pub response_ci95: [f64; 2],
+    /// Machine control at the bend (m or rad).
+    pub machine_control: f64,
+    /// Three-point only: small-deflection peak curvature 12 w/l₀² at the bend, 1/m.
+    pub peak_curvature: Option<f64>,
+    /// Three-point only: peak moment F l₀/4 at the bend, N m.
+    pub peak_moment: Option<f64>,
+}
+
+/// Reversible bilinear behaviour: threshold and the two stiffnesses (eq. (19)).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Piecewise {
+    /// Threshold in the sectional control (K_t in 1/m for pure bending; deflection for three-point).
+    pub threshold_control: f64,
+    /// 95% interval of the threshold.
+    pub threshold_ci95: [f64; 2],
+    /// Response at the threshold (M_t or F_t).
+    pub threshold_response: f64,
+    /// Stiffness below the threshold ((EI)_B,1), stiffness unit.
+    pub stiffness_1: f64,
+    /// Stiffness above the threshold ((EI)_B,2; apparent, structural, for three-point), stiffness unit.
+    pub stiffness_2: f64,
+    /// Three-point only: small-deflection peak curvature at the threshold, 1/m (an estimate of K_t).
+    pub threshold_peak_curvature: Option<f64>,
+}
+
+/// Three-point large-deflection check.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct LargeDeflection {
+    /// (EI)_B from the same window with the exact elastica on sliding supports, N m².
+    pub corrected_stiffness: f64,
+    /// Largest w/l₀ in the fit window.
+    pub window_w_over_span: f64,
+    /// Largest w/l₀ in the test.
+    pub max_w_over_span: f64,
+    /// w/l₀ beyond which eq. (3) errs by more than the tolerance.
+    pub small_deflection_limit: f64,
+}
+
+/// Toe (slack) region at the start of the first loading.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Toe {
+    /// Sectional control where the slack ends.
+    pub end_control: f64,
+    /// Sectional control where the elastic line crosses zero response (toe offset).
+    pub offset_control: f64,
+}
+
+/// Noise levels (σ) of the conditioned channels.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Noise {
+    /// Machine control σ (m or rad).
+    pub control: f64,
+    /// Response σ (N or N m).
+    pub response: f64,
+}
+
+/// Characterisation of one test; serialises to the contract's `analyze --json` object
+/// (`stiffness`, `modulus_pa`, `yield`, `cycles`, `behaviour`) plus extra keys. Nulls have a
+/// reason in `why` under the same key.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Analysis {
+    /// Test kind.
+    pub kind: TestKind,
+    /// Elastic stiffness, or null.
+    pub stiffness: Option<Stiffness>,
+    /// Young's modulus from the stiffness, Pa, or null (no diameter).
+    pub modulus_pa: Option<f64>,
+    /// Yield point, or null.
+    #[serde(rename = "yield")]
+    pub yield_point: Option<YieldPoint>,
+    /// Per-cycle hysteresis.
+    pub cycles: Vec<CycleResult>,
+    /// Behaviour class.
+    pub behaviour: Behaviour,
+    /// Reversible bilinear threshold and stiffnesses, when the class is piecewise linear elastic.
+    pub piecewise: Option<Piecewise>,
+    /// Three-point large-deflection check.
+    pub large_deflection: Option<LargeDeflection>,
+    /// Toe region, when found.
+    pub toe: Option<Toe>,
+    /// Offsets removed.
+    pub offsets: Option<Offsets>,
+    /// Noise levels.
+    pub noise: Noise,
+    /// Cycles and branches.
+    pub segments: Vec<Segment>,
+    /// Warnings for the user.
+    pub warnings: Vec<String>,
+    /// Reasons for null quantities, keyed by field name.
+    pub why: BTreeMap<String, String>,
+}
+
+fn check_finite(channel: &'static str, v: &[f64]) -> Result<(), MeasureError> {
+    match v.iter().position(|x| !x.is_finite()) {
+        Some(index) => Err(MeasureError::NonFinite { channel, index }),
+        None => Ok(()),
+    }
+}
+
+/// Characterises one test (see module doc). `control` is the machine control in SI (elongation
+/// m, twist rad, deflection m, end rotation rad), `response` the force (N) or moment (N m),
+/// `time_s` the optional time stamps.
+pub fn analyze(
+    kind: TestKind,
+    geom: &Geometry,
+    time_s: Option<&[f64]>,
+    control: &[f64],
+    response: &[f64],
+    opts: &AnalyzeOptions,
+) -> Result<Analysis, MeasureError> {
+    if kind == TestKind::Unknown {
+        return Err(MeasureError::UnknownKind);
+    }
+    geom.validate()?;
+    if !(opts.nu > -1.0 && opts.nu <= 0.5) {
+        return Err(MeasureError::BadPoisson(opts.nu));
+    }
+    if control.len() != response.len() {
+        return Err(MeasureError::LengthMismatch { what: "control and response", left: control.len(), right: response.len() });
+    }
+    if let Some(t) = time_s {
+        if t.len() != control.len() {
+            return Err(MeasureError::LengthMismatch { what: "time and control", left: t.len(), right: control.len() });
+        }
+        check_finite("time", t)?;
+    }
+    check_finite("control", control)?;
+    check_finite("response", response)?;
+    if control.len() < 10 {
+        return Err(MeasureError::TooFewSamples { what: "a test", need: 10, got: control.len() });
+    }
+    let mut warnings = Vec::new();
+    let mut why = BTreeMap::new();
+
+    let mut c = match opts.compliance_m_per_n {
+        Some(k) if k.is_finite() => correct_compliance(control, response, k),
+        Some(k) => return Err(MeasureError::BadCompliance(k)),
+        None => control.to_vec(),
+    };
+    let mut r = response.to_vec();
+    let offsets = opts.zero_offsets.then(|| zero_offsets(&mut c, &mut r));
+    let noise = Noise { control: noise_level(&c), response: noise_level(&r) };
+
+    let segments = segment(time_s, &c)?;
+    // Orientation of the first loading.
+    let first_idx: Vec<usize> = segments
+        .iter()
+        .filter(|s| s.branch == Branch::FirstLoading)
+        .flat_map(|s| s.start..s.end)
+        .collect();
+    if first_idx.len() < 10 {
+        return Err(MeasureError::NoMotion);
+    }
+    let last_first = *first_idx.last().unwrap_or(&0);
+    let sign = if c[last_first] >= c[first_idx[0]] { 1.0 } else { -1.0 };
+    let cm: Vec<f64> = c.iter().map(|v| sign * v).collect();
+    let rm: Vec<f64> = r.iter().map(|v| sign * v).collect();
+    let xs = sectional(kind, geom, &cm);
+    let fx: Vec<f64> = first_idx.iter().map(|&i| xs[i]).collect();
+    let fy: Vec<f64> = first_idx.iter().map(|&i| rm[i]).collect();
+
+    let factor = stiffness_factor(kind, geom);
+    let elastic: Option<ElasticRange> = match opts.fit_window {
+        Some((a, b)) => Some(user_elastic_range(&fx, &fy, sign * a, sign * b)?),
+        None => match auto_elastic_range(&fx, &fy) {
+            Ok(e) => Some(e),
+            Err(e) => {
+                why.insert("stiffness".into(), format!("no elastic range found on the first loading: {e}"));
+                None
+            }
+        },
+    };
+    let stiffness = elastic.as_ref().map(|e| {
+        let w = if sign > 0.0 { e.window } else { [-e.window[1], -e.window[0]] };
+        Stiffness {
+            value: e.fit.slope * factor,
+            unit: kind.stiffness_unit(),
+            ci95: [e.fit.slope_ci95[0] * factor, e.fit.slope_ci95[1] * factor],
+            window: w,
+            window_unit: sectional_unit(kind),
+            window_automatic: e.automatic,
+            r2: e.fit.r2,
+            n: e.fit.n,
+        }
+    });
+    if let Some(s) = &stiffness {
+        if !(s.value > 0.0) {
+            warnings.push(format!("the elastic slope is not positive ({} {})", s.value, s.unit));
+        }
+    }
+
+    let modulus_pa = match (&stiffness, geom.diameter_m) {
+        (Some(s), Some(d)) => modulus_from_stiffness(kind, d, s.value, opts.nu),
+        (None, _) => {
+            why.insert("modulus_pa".into(), "no stiffness".into());
+            None
+        }
+        (_, None) => {
+            why.insert("modulus_pa".into(), "the diameter is not known (give --diameter-mm)".into());
+            None
+        }
+    };
+
+    let per_control = match kind {
+        TestKind::ThreePoint => 1.0,
+        _ => 1.0 / geom.free_length_m,
+    };
+    let cyc = cycles(&CycleInputs {
+        control: &cm,
+        sectional: &xs,
+        response: &rm,
+        segments: &segments,
+        stiffness_factor: factor,
+        three_point: kind == TestKind::ThreePoint,
+        sectional_per_control: per_control,
+    });
+
+    // Behaviour.
+    let bend: Option<Hinge> = elastic.as_ref().and_then(|e| e.bend);
+    let judged: Vec<&CycleResult> = cyc.iter().filter(|c| c.coincide.is_some()).collect();
+    let reversible = !judged.is_empty()
+        && judged.iter().all(|c| c.coincide == Some(true) && c.residual_significant != Some(true));
+    let permanent = cyc.iter().any(|c| c.residual_significant == Some(true));
+    let behaviour = if judged.is_empty() {
+        warnings.push("no unloading to judge reversibility by".into());
+        if bend.is_none() && elastic.is_some() {
+            Behaviour::LinearElastic
+        } else {
+            Behaviour::Other
+        }
+    } else if reversible {
+        if bend.is_some() {
+            Behaviour::PiecewiseLinearElastic
+        } else {
+            Behaviour::LinearElastic
+        }
+    } else if bend.is_some() && permanent {
+        Behaviour::Elastoplastic
+    } else {
+        Behaviour::Other
+    };
+
+    let l0 = geom.free_length_m;
+    let three = kind == TestKind::ThreePoint;
+    let machine_of = |x: f64| if three { x } else { x * l0 };
+    let yield_point = match (bend, behaviour) {
+        (Some(b), Behaviour::Elastoplastic | Behaviour::Other) => {
+            let ci = if sign > 0.0 { b.knee_x_ci95 } else { [-b.knee_x_ci95[1], -b.knee_x_ci95[0]] };
+            let cy = if sign > 0.0 { b.knee_y_ci95 } else { [-b.knee_y_ci95[1], -b.knee_y_ci95[0]] };
+            Some(YieldPoint {
+                control: sign * b.knee_x,
+                response: sign * b.knee_y,
+                control_ci95: ci,
+                response_ci95: cy,
+                machine_control: sign * machine_of(b.knee_x),
+                peak_curvature: three.then(|| sign * three_point_peak_curvature(b.knee_x, l0)),
+                peak_moment: three.then(|| sign * three_point_peak_moment(b.knee_y, l0)),
+            })
+        }
+        (Some(_), _) => {
+            why.insert("yield".into(), "the bend in the first loading is reversible: reported as the piecewise threshold".into());
+            None
+        }
+        (None, _) => {
+            let reason = if elastic.is_some() {
+                "no bend in the first loading path beyond the noise"
+            } else {
+                "no elastic range on the first loading"
+            };
+            why.insert("yield".into(), reason.into());
+            None
+        }
+    };
+    let piecewise = match (bend, behaviour) {
+        (Some(b), Behaviour::PiecewiseLinearElastic) => Some(Piecewise {
+            threshold_control: sign * b.knee_x,
+            threshold_ci95: if sign > 0.0 { b.knee_x_ci95 } else { [-b.knee_x_ci95[1], -b.knee_x_ci95[0]] },
+            threshold_response: sign * b.knee_y,
+            stiffness_1: b.slope_before * factor,
+            stiffness_2: b.slope_after * factor,
+            threshold_peak_curvature: three.then(|| sign * three_point_peak_curvature(b.knee_x, l0)),
+        }),
+        _ => None,
+    };
+    let toe = elastic.as_ref().and_then(|e| {
+        e.toe.map(|t| Toe {
+            end_control: sign * t.knee_x,
+            offset_control: sign * e.fit.x_intercept().unwrap_or(t.knee_x),
+        })
+    });
+
+    let large_deflection = match (three, &elastic) {
+        (true, Some(e)) => {
+            let tab = ThreePointElastica::new();
+            let limit = tab.small_deflection_limit(opts.small_deflection_tolerance);
+            let (a, b) = e.window_idx;
+            let wmax = fx[a..b].iter().fold(0.0f64, |m, v| m.max(v.abs())) / l0;
+            let test_max = xs.iter().fold(0.0f64, |m, v| m.max(v.abs())) / l0;
+            let mut corrected = None;
+            let pts: Option<Vec<f64>> = fx[a..b].iter().map(|w| tab.force_ratio(w / l0).map(|rho| w * rho)).collect();
+            if let Some(xc) = pts {
+                if let Ok(f) = linear_fit(&xc, &fy[a..b]) {
+                    corrected = Some(f.slope * factor);
+                }
+            }
+            if wmax > limit {
+                warnings.push(format!(
+                    "three-point fit window reaches w/l0 = {wmax:.4}, beyond the small-deflection range (w/l0 <= {limit:.4}); use large_deflection.corrected_stiffness"
+                ));
+            }
+            if test_max > limit {
+                warnings.push(format!(
+                    "three-point test reaches w/l0 = {test_max:.4}: beyond w/l0 = {limit:.4} eq. (3) and the peak curvature/moment estimates are not accurate"
+                ));
+            }
+            corrected.map(|cs| LargeDeflection {
+                corrected_stiffness: cs,
+                window_w_over_span: wmax,
+                max_w_over_span: test_max,
+                small_deflection_limit: limit,
+            })
+        }
+        _ => None,
+    };
+    // Report cycles in the original orientation.
+    let cycles_out: Vec<CycleResult> = cyc
+        .into_iter()
+        .map(|mut c| {
+            c.residual = c.residual.map(|v| sign * v);
+            c.contact_loss_control = c.contact_loss_control.map(|v| sign * v);
+            c.peak_control *= sign;
+            c.peak_response *= sign;
+            c
+        })
+        .collect();
+
+    Ok(Analysis {
+        kind,
+        stiffness,
+        modulus_pa,
+        yield_point,
+        cycles: cycles_out,
+        behaviour,
+        piecewise,
+        large_deflection,
+        toe,
+        offsets,
+        noise,
+        segments,
+        warnings,
+        why,
+    })
+}

@@ -1,0 +1,527 @@
+//! Conditioning of a raw curve: noise estimate, zero offsets, machine compliance, turning points
+//! and the segmentation into cycles and branches (the project's one cycle segmenter).
+//!
+//! * Noise: [`noise_level`] is the MAD of the second differences scaled to a Gaussian σ
+//!   (second differences of white noise have variance 6σ²; a smooth, densely sampled curve
+//!   contributes almost nothing, and the few kinks at turning points do not move a median).
+//! * Reversals: [`reversal_threshold`] is the largest excursion that pure noise of that σ is
+//!   expected to make over the record, 2σ√(2 ln N) (the expected range of N Gaussian samples),
+//!   times a safety factor 1.5; a turning point needs the signal to retreat by more than that
+//!   from its running extremum ([`turning_points`], a zig-zag with hysteresis). Noise on a dwell
+//!   plateau therefore never makes a reversal.
+//! * Holds: a hold is a stretch where the control stays within one reversal threshold for at
+//!   least three times as long as the ramp needs to cross that band at its typical rate
+//!   (total travel between turning points over the time spent moving); time stamps are used
+//!   when given, sample indices otherwise.
+//! * Branches: between turning points the control is monotone. Moving away from zero in the
+//!   direction of the first motion it is first loading (the first time) or reloading; moving
+//!   towards zero it is unloading; moving away from zero on the other side it is reversed
+//!   loading (a run that crosses zero is split at the crossing). A new cycle starts at each
+//!   loading run in the first motion's direction after the first.
+//!
+//! What it does not do: fit anything, or decide what a branch means physically.
+
+use crate::stats::median;
+use crate::MeasureError;
+use serde::Serialize;
+
+/// Robust Gaussian noise σ of a signal: MAD of the second differences / (0.6745·√6).
+/// Returns 0 for fewer than 3 samples.
+pub fn noise_level(signal: &[f64]) -> f64 {
+    if signal.len() < 3 {
+        return 0.0;
+    }
+    let d2: Vec<f64> = signal.windows(3).map(|w| w[2] - 2.0 * w[1] + w[0]).collect();
+    let med = median(&d2);
+    let abs_dev: Vec<f64> = d2.iter().map(|d| (d - med).abs()).collect();
+    median(&abs_dev) / (0.674_489_750_196_081_7 * 6f64.sqrt())
+}
+
+/// The smallest retreat that counts as a reversal: 1.5 · 2σ√(2 ln N) with σ = [`noise_level`],
+/// floored at 1e-9 of the signal's range (for noise-free data).
+pub fn reversal_threshold(signal: &[f64]) -> f64 {
+    let n = signal.len().max(2) as f64;
+    let sigma = noise_level(signal);
+    let (lo, hi) = min_max(signal);
+    (1.5 * 2.0 * sigma * (2.0 * n.ln()).sqrt()).max(1e-9 * (hi - lo))
+}
+
+fn min_max(v: &[f64]) -> (f64, f64) {
+    v.iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| (a.min(x), b.max(x)))
+}
+
+/// Whether a turning point is a local maximum or minimum of the control.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Extremum {
+    /// The signal rose to here and then fell.
+    Max,
+    /// The signal fell to here and then rose.
+    Min,
+}
+
+/// A reversal of the control.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+pub struct TurningPoint {
+    /// Sample index of the extremum.
+    pub index: usize,
+    /// Maximum or minimum.
+    pub extremum: Extremum,
+}
+
+/// Turning points of `signal`: extrema from which the signal retreats by more than `threshold`
+/// (use [`reversal_threshold`]). The first and last samples are not turning points.
+pub fn turning_points(signal: &[f64], threshold: f64) -> Vec<TurningPoint> {
+    let mut out = Vec::new();
+    if signal.len() < 3 {
+        return out;
+    }
+    // dir: 0 undetermined, +1 rising (tracking a max), -1 falling (tracking a min).
+    let mut dir = 0i8;
+    let (mut imax, mut imin) = (0usize, 0usize);
+    for (i, &v) in signal.iter().enumerate().skip(1) {
+        match dir {
+            0 => {
+                if v > signal[imax] {
+                    imax = i;
+                }
+                if v < signal[imin] {
+                    imin = i;
+                }
+                if signal[imax] - signal[0] > threshold && signal[imax] - v <= threshold {
+                    dir = 1;
+                    imin = i;
+                } else if signal[0] - signal[imin] > threshold && v - signal[imin] <= threshold {
+                    dir = -1;
+                    imax = i;
+                }
+            }
+            1 => {
+                if v > signal[imax] {
+                    imax = i;
+                } else if signal[imax] - v > threshold {
+                    out.push(TurningPoint { index: imax, extremum: Extremum::Max });
+                    dir = -1;
+                    imin = i;
+                }
+            }
+            _ => {
+                if v < signal[imin] {
+                    imin = i;
+                } else if v - signal[imin] > threshold {
+                    out.push(TurningPoint { index: imin, extremum: Extremum::Min });
+                    dir = 1;
+                    imax = i;
+                }
+            }
+        }
+    }
+    out
+}
+
+/// Branch of a cyclic test.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Branch {
+    /// The first excursion from the unloaded state.
+    FirstLoading,
+    /// Moving back towards zero control.
+    Unloading,
+    /// A later excursion in the first loading's direction.
+    Reloading,
+    /// An excursion on the other side of zero.
+    ReversedLoading,
+    /// The control dwells (within the noise band).
+    Hold,
+}
+
+impl Branch {
+    /// Contract spelling (`first_loading`, ...).
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Branch::FirstLoading => "first_loading",
+            Branch::Unloading => "unloading",
+            Branch::Reloading => "reloading",
+            Branch::ReversedLoading => "reversed_loading",
+            Branch::Hold => "hold",
+        }
+    }
+}
+
+/// A contiguous run of samples `start..end` (half-open) of one branch in one cycle (1-based).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+pub struct Segment {
+    /// Cycle number, from 1.
+    pub cycle: usize,
+    /// Branch kind.
+    pub branch: Branch,
+    /// First sample.
+    pub start: usize,
+    /// One past the last sample.
+    pub end: usize,
+}
+
+/// Per-sample label: cycle and branch.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+pub struct Label {
+    /// Cycle number, from 1.
+    pub cycle: usize,
+    /// Branch kind.
+    pub branch: Branch,
+}
+
+/// Expands segments to one label per sample (`n` samples; samples no segment covers, which
+/// [`segment`] never leaves, get cycle 0 and `Hold`).
+pub fn labels(segments: &[Segment], n: usize) -> Vec<Label> {
+    let mut out = vec![Label { cycle: 0, branch: Branch::Hold }; n];
+    for s in segments {
+        for l in out.iter_mut().take(s.end.min(n)).skip(s.start) {
+            *l = Label { cycle: s.cycle, branch: s.branch };
+        }
+    }
+    out
+}
+
+/// Hold runs (half-open index ranges) of `control` for a band `threshold` (see module doc).
+/// The typical ramp rate is the total travel between turning points over the time not spent in
+/// holds (two passes: the first counts all time, a lower bound of the rate, so it finds only
+/// clear holds; the second uses the time left after them).
+pub fn holds(time_s: Option<&[f64]>, control: &[f64], threshold: f64) -> Vec<(usize, usize)> {
+    let n = control.len();
+    if n < 3 {
+        return Vec::new();
+    }
+    let t = |i: usize| time_s.map_or(i as f64, |t| t[i]);
+    let mut pts: Vec<usize> = vec![0];
+    pts.extend(turning_points(control, threshold).iter().map(|p| p.index));
+    pts.push(n - 1);
+    let travel: f64 = pts.windows(2).map(|w| (control[w[1]] - control[w[0]]).abs()).sum();
+    let total = t(n - 1) - t(0);
+    if !(travel > threshold && total > 0.0) {
+        return vec![(0, n)];
+    }
+    let mut found = Vec::new();
+    for _pass in 0..2 {
+        let held: f64 = found.iter().map(|&(a, b): &(usize, usize)| t(b - 1) - t(a)).sum();
+        let rate = travel / (total - held).max(f64::MIN_POSITIVE);
+        found = hold_runs(control, threshold, 3.0 * threshold / rate, &t);
+    }
+    found
+}
+
+fn hold_runs(control: &[f64], threshold: f64, min_duration: f64, t: &dyn Fn(usize) -> f64) -> Vec<(usize, usize)> {
+    let n = control.len();
+    let mut out = Vec::new();
+    let mut i = 0;
+    while i < n {
+        let (mut lo, mut hi) = (control[i], control[i]);
+        let mut j = i + 1;
+        while j < n {
+            let v = control[j];
+            let (nlo, nhi) = (lo.min(v), hi.max(v));
+            if nhi - nlo > threshold {
+                break;
+            }
+            lo = nlo;
+            hi = nhi;
+            j += 1;
+        }
+        if j - i >= 3 && t(j - 1) - t(i) >= min_duration {
+            out.push((i, j));
+            i = j;
+        } else {
+            i += 1;
+        }
+    }
+    out
+}
+
+/// Segments a test into cycles and branches (see module doc). `time_s` (seconds, same length
+/// as `control`) is used for dwell durations when given. The control should be zeroed (zero =
+/// unloaded state). Every sample belongs to exactly one segment.
+pub fn segment(time_s: Option<&[f64]>, control: &[f64]) -> Result<Vec<Segment>, MeasureError> {
+    let n = control.len();
+    if let Some(t) = time_s {
+        if t.len() != n {
+            return Err(MeasureError::LengthMismatch { what: "time and control", left: t.len(), right: n });
+        }
+    }
+    if n < 3 {
+        return Err(MeasureError::TooFewSamples { what: "segmentation", need: 3, got: n });
+    }
+    let h = reversal_threshold(control);
+    let hold_runs = holds(time_s, control, h);
+    let tps = turning_points(control, h);
+
+    // Monotone runs between turning points: (start, end_exclusive, rising).
+    let mut bounds: Vec<usize> = vec![0];
+    bounds.extend(tps.iter().map(|p| p.index));
+    bounds.push(n - 1);
+    bounds.dedup();
+    let mut runs: Vec<(usize, usize, bool)> = Vec::new();
+    for w in bounds.windows(2) {
+        let (a, b) = (w[0], w[1]);
+        let rising = control[b] >= control[a];
+        let end = if b == n - 1 { n } else { b };
+        if end > a {
+            runs.push((a, end, rising));
+        }
+    }
+    // Primary direction: that of the first run that moves by more than h.
+    let primary = runs
+        .iter()
+        .find(|r| (control[r.1 - 1] - control[r.0]).abs() > h)
+        .map(|r| if r.2 { 1.0 } else { -1.0 })
+        .unwrap_or(1.0);
+
+    // Split runs at zero crossings, and classify.
+    let mut raw: Vec<(usize, usize, Branch)> = Vec::new();
+    let mut seen_loading = false;
+    for &(a, e, rising) in &runs {
+        let dirsign = if rising { 1.0 } else { -1.0 };
+        // Index where the run crosses to the other side of zero (beyond the band h).
+        let start_side = side(control[a], h);
+        let mut pieces: Vec<(usize, usize)> = vec![(a, e)];
+        if let Some(k) = (a..e).find(|&i| {
+            let s = side(control[i], h);
+            s != 0.0 && start_side != 0.0 && s != start_side
+        }) {
+            // Split at the last sample before k that is on the start side or in the band.
+            let cut = (a..k).rev().find(|&i| control[i] * dirsign <= 0.0).map_or(k, |i| i + 1);
+            if cut > a && cut < e {
+                pieces = vec![(a, cut), (cut, e)];
+            }
+        }
+        for (pa, pe) in pieces {
+            // Position relative to zero: use the end of the piece (it moves monotonically).
+            let end_val = control[pe - 1];
+            let away = end_val * dirsign > 0.0 && end_val.abs() >= control[pa].abs();
+            let branch = if !away {
+                Branch::Unloading
+            } else if dirsign == primary {
+                if seen_loading {
+                    Branch::Reloading
+                } else {
+                    Branch::FirstLoading
+                }
+            } else {
+                Branch::ReversedLoading
+            };
+            if branch == Branch::FirstLoading || branch == Branch::Reloading {
+                seen_loading = true;
+            }
+            raw.push((pa, pe, branch));
+        }
+    }
+    // A loading piece that merely continues the first loading (no unloading in between) stays
+    // first loading.
+    let mut first_done = false;
+    for r in raw.iter_mut() {
+        match r.2 {
+            Branch::FirstLoading => {}
+            Branch::Reloading if !first_done => r.2 = Branch::FirstLoading,
+            _ => first_done = true,
+        }
+    }
+
+    // Overlay holds and assign cycles.
+    let mut out: Vec<Segment> = Vec::new();
+    let mut cycle = 1usize;
+    let mut started = false;
+    for (pa, pe, branch) in raw {
+        if branch == Branch::Reloading && started {
+            cycle += 1;
+        }
+        if branch == Branch::FirstLoading || branch == Branch::Reloading {
+            started = true;
+        }
+        let mut i = pa;
+        for &(ha, he) in hold_runs.iter().filter(|&&(ha, he)| he > pa && ha < pe) {
+            let (ha, he) = (ha.max(pa), he.min(pe));
+            if ha > i {
+                push_seg(&mut out, cycle, branch, i, ha);
+            }
+            push_seg(&mut out, cycle, Branch::Hold, ha, he);
+            i = he;
+        }
+        if pe > i {
+            push_seg(&mut out, cycle, branch, i, pe);
+        }
+    }
+    Ok(out)
+}
+
+fn side(v: f64, h: f64) -> f64 {
+    if v > h {
+        1.0
+    } else if v < -h {
+        -1.0
+    } else {
+        0.0
+    }
+}
+
+fn push_seg(out: &mut Vec<Segment>, cycle: usize, branch: Branch, start: usize, end: usize) {
+    if let Some(last) = out.last_mut() {
+        // A hold that spans a cycle boundary (a dwell at a valley) stays in the earlier cycle.
+        if last.branch == branch && last.end == start && (last.cycle == cycle || branch == Branch::Hold) {
+            last.end = end;
+            return;
+        }
+    }
+    out.push(Segment { cycle, branch, start, end });
+}
+
+/// Offsets removed by [`zero_offsets`].
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Offsets {
+    /// Control offset (machine units, SI).
+    pub control: f64,
+    /// Response offset (N or N m).
+    pub response: f64,
+    /// Number of leading samples at rest the offsets were averaged over.
+    pub samples_at_rest: usize,
+}
+
+/// Removes the zero offsets: the mean control and response over the leading samples at rest
+/// (control within one reversal threshold of its first value; at least the first sample).
+pub fn zero_offsets(control: &mut [f64], response: &mut [f64]) -> Offsets {
+    if control.is_empty() {
+        return Offsets { control: 0.0, response: 0.0, samples_at_rest: 0 };
+    }
+    let h = reversal_threshold(control);
+    let c0 = control[0];
+    let k = control.iter().take_while(|&&c| (c - c0).abs() <= h).count().max(1);
+    let oc = control[..k].iter().sum::<f64>() / k as f64;
+    let or = response[..k.min(response.len())].iter().sum::<f64>() / k.min(response.len()).max(1) as f64;
+    control.iter_mut().for_each(|c| *c -= oc);
+    response.iter_mut().for_each(|r| *r -= or);
+    Offsets { control: oc, response: or, samples_at_rest: k }
+}
+
+/// Removes the machine's compliance in series with the specimen: control − C·response
+/// (C in control units per response unit: m/N for tension and three-point, rad/(N m) for
+/// torsion and pure bending).
+pub fn correct_compliance(control: &[f64], response: &[f64], compliance: f64) -> Vec<f64> {
+    control.iter().zip(response).map(|(c, r)| c - compliance * r).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::SeedableRng;
+    use rand_chacha::ChaCha8Rng;
+    use rand_distr::{Distribution, Normal};
+
+    fn noisy(v: &[f64], sigma: f64, seed: u64) -> Vec<f64> {
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        let d = Normal::new(0.0, sigma).unwrap();
+        v.iter().map(|x| x + d.sample(&mut rng)).collect()
+    }
+
+    /// Triangle 0→1→0→1→0 with 200-sample dwells at every peak and valley, 1% noise.
+    fn dwell_triangle(sigma: f64, seed: u64) -> Vec<f64> {
+        let mut v = Vec::new();
+        for _ in 0..2 {
+            v.extend((0..200).map(|i| i as f64 / 200.0));
+            v.extend(std::iter::repeat_n(1.0, 200));
+            v.extend((0..200).map(|i| 1.0 - i as f64 / 200.0));
+            v.extend(std::iter::repeat_n(0.0, 200));
+        }
+        noisy(&v, sigma, seed)
+    }
+
+    #[test]
+    fn noise_level_recovers_sigma_on_a_ramp() {
+        let clean: Vec<f64> = (0..5000).map(|i| (i as f64 * 0.002).sin() * 10.0).collect();
+        let s = noise_level(&noisy(&clean, 0.05, 1));
+        assert!((s / 0.05 - 1.0).abs() < 0.06, "sigma {s}");
+        assert!(noise_level(&clean) < 1e-4);
+    }
+
+    #[test]
+    fn dwell_plateaus_make_no_spurious_turning_points() {
+        for seed in 0..5 {
+            let v = dwell_triangle(0.01, seed);
+            let tps = turning_points(&v, reversal_threshold(&v));
+            let kinds: Vec<Extremum> = tps.iter().map(|t| t.extremum).collect();
+            assert_eq!(kinds, vec![Extremum::Max, Extremum::Min, Extremum::Max], "seed {seed}");
+            // Each extremum lies on its plateau.
+            assert!((200..400).contains(&tps[0].index));
+            assert!((600..800).contains(&tps[1].index) || (0..1).contains(&tps[1].index) || tps[1].index >= 600);
+        }
+    }
+
+    #[test]
+    fn segmentation_of_dwell_cycles() {
+        let v = dwell_triangle(0.01, 7);
+        let segs = segment(None, &v).unwrap();
+        let summary: Vec<(usize, Branch)> = segs.iter().map(|s| (s.cycle, s.branch)).collect();
+        use Branch::*;
+        assert_eq!(
+            summary,
+            vec![
+                (1, FirstLoading),
+                (1, Hold),
+                (1, Unloading),
+                (1, Hold),
+                (2, Reloading),
+                (2, Hold),
+                (2, Unloading),
+                (2, Hold)
+            ],
+            "{segs:?}"
+        );
+        // Hold boundaries near the true ones (200, 400, 600, 800, ...), within the noise band.
+        assert!((segs[1].start as i64 - 200).abs() < 12 && (segs[1].end as i64 - 400).abs() < 12, "{segs:?}");
+        // Contiguous cover of every sample.
+        assert_eq!(segs[0].start, 0);
+        assert_eq!(segs.last().unwrap().end, v.len());
+        for w in segs.windows(2) {
+            assert_eq!(w[0].end, w[1].start);
+        }
+        let l = labels(&segs, v.len());
+        assert_eq!(l[100], Label { cycle: 1, branch: FirstLoading });
+        assert_eq!(l[1000], Label { cycle: 2, branch: Reloading });
+    }
+
+    #[test]
+    fn reversed_loading_is_split_at_zero() {
+        // 0 → 1 → −1 → 1 → 0: first loading, unloading, reversed, unloading, reloading, unloading.
+        let mut v: Vec<f64> = (0..100).map(|i| i as f64 / 100.0).collect();
+        v.extend((0..200).map(|i| 1.0 - i as f64 / 100.0));
+        v.extend((0..200).map(|i| -1.0 + i as f64 / 100.0));
+        v.extend((0..=100).map(|i| 1.0 - i as f64 / 100.0));
+        let segs = segment(None, &v).unwrap();
+        use Branch::*;
+        let summary: Vec<(usize, Branch)> = segs.iter().map(|s| (s.cycle, s.branch)).collect();
+        assert_eq!(
+            summary,
+            vec![
+                (1, FirstLoading),
+                (1, Unloading),
+                (1, ReversedLoading),
+                (1, Unloading),
+                (2, Reloading),
+                (2, Unloading)
+            ],
+            "{segs:?}"
+        );
+        // The reversed loading starts at the zero crossing (sample 200).
+        assert!((segs[2].start as i64 - 200).abs() <= 1, "{segs:?}");
+        assert!((segs[4].start as i64 - 400).abs() <= 1, "{segs:?}");
+    }
+
+    #[test]
+    fn offsets_and_compliance() {
+        let mut c = vec![5.0, 5.0, 5.0, 5.1, 5.2, 5.3];
+        let mut r = vec![0.2, 0.2, 0.2, 1.2, 2.2, 3.2];
+        let o = zero_offsets(&mut c, &mut r);
+        assert_eq!(o.samples_at_rest, 3);
+        assert!((o.control - 5.0).abs() < 1e-12 && (o.response - 0.2).abs() < 1e-12);
+        assert!((c[5] - 0.3).abs() < 1e-12 && (r[5] - 3.0).abs() < 1e-12);
+        let cc = correct_compliance(&[1.0, 2.0], &[10.0, 20.0], 0.01);
+        assert_eq!(cc, vec![0.9, 1.8]);
+    }
+}

@@ -1,0 +1,429 @@
+//! Elastic range, stiffness window, bends: piecewise-linear fits of one loading branch.
+//!
+//! The automatic elastic window on a first loading branch (x = sectional control, increasing;
+//! y = response):
+//! 1. Noise: σ = [`noise_level`] of the residuals of one straight line through the whole branch
+//!    (in time order, so control noise seen through the slope is included).
+//! 2. Breaks: the best fits by 1, 2 and 3 independent straight segments (exhaustive search over
+//!    break positions on a grid of at most 300 candidates, each segment at least 2% of the
+//!    branch and 5 samples; prefix sums make each candidate O(1)). An extra segment is kept only
+//!    if it lowers the SSE by more than σ²·2 ln(K/α), with K candidate positions and α = 10⁻³:
+//!    the Bonferroni bound on the largest χ²₂ improvement pure noise would produce, so a straight
+//!    noisy line yields no break with probability ≥ 1 − α.
+//! 3. Meaning: a first break where the slope rises is the toe (slack) end; the first break where
+//!    the slope falls after the elastic segment is the bend (yield, or the threshold of a
+//!    piecewise elastic law). Each is located by a continuous two-slope ("hinge") fit whose knee
+//!    has a profile-likelihood 95% interval (SSE ≤ SSE_min + 3.84 s²).
+//! 4. Window: from the toe knee's upper bound (or the branch start) to the bend's lower bound
+//!    (or the branch end), then trimmed from either end by blocks of 5% while the block's mean
+//!    residual from the window's line differs from zero by more than 3 standard errors (the
+//!    residual must stay at the noise level), at most half the window.
+//!
+//! What it does not do: decide whether a bend is yield or reversible (that needs the unloading,
+//! see [`crate::hysteresis`]), or convert slopes to stiffnesses (see [`crate::sectional`]).
+
+use crate::condition::noise_level;
+use crate::stats::{linear_fit, Fit};
+use crate::MeasureError;
+use nalgebra::{Matrix3, Vector3};
+use serde::Serialize;
+
+/// False-detection rate of a break in pure noise.
+const BREAK_ALPHA: f64 = 1e-3;
+/// χ²₁ 95% quantile (profile-likelihood interval of a knee).
+const CHI2_1_95: f64 = 3.841_458_820_694_124;
+
+/// Prefix sums for O(1) straight-line SSE over any index range.
+struct Prefix {
+    s: Vec<[f64; 5]>, // x, y, xx, xy, yy
+}
+
+impl Prefix {
+    fn new(x: &[f64], y: &[f64]) -> Self {
+        let mut s = Vec::with_capacity(x.len() + 1);
+        let mut acc = [0.0; 5];
+        s.push(acc);
+        for (&a, &b) in x.iter().zip(y) {
+            acc[0] += a;
+            acc[1] += b;
+            acc[2] += a * a;
+            acc[3] += a * b;
+            acc[4] += b * b;
+            s.push(acc);
+        }
+        Prefix { s }
+    }
+    /// (SSE, slope) of the straight-line fit over `a..b`.
+    fn fit(&self, a: usize, b: usize) -> (f64, f64) {
+        let m = (b - a) as f64;
+        let d: Vec<f64> = (0..5).map(|k| self.s[b][k] - self.s[a][k]).collect();
+        let sxx = d[2] - d[0] * d[0] / m;
+        let sxy = d[3] - d[0] * d[1] / m;
+        let syy = d[4] - d[1] * d[1] / m;
+        if sxx <= 1e-300 {
+            return (syy.max(0.0), 0.0);
+        }
+        ((syy - sxy * sxy / sxx).max(0.0), sxy / sxx)
+    }
+}
+
+/// Best segmentation into independent straight lines (break indices, ascending).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Segmentation {
+    /// Break indices: segment k runs from breaks[k-1] (or 0) to breaks[k] (or n).
+    pub breaks: Vec<usize>,
+    /// Slope of each segment.
+    pub slopes: Vec<f64>,
+    /// Noise σ used for the selection (response units).
+    pub sigma: f64,
+}
+
+/// Segments a branch into 1–3 straight pieces (see module doc, step 2).
+pub fn segment_lines(x: &[f64], y: &[f64], max_segments: usize) -> Segmentation {
+    let n = x.len();
+    let sigma = residual_noise(x, y);
+    let (mx, my) = (mean(x), mean(y));
+    let xs: Vec<f64> = x.iter().map(|v| v - mx).collect();
+    let ys: Vec<f64> = y.iter().map(|v| v - my).collect();
+    let p = Prefix::new(&xs, &ys);
+    let min_len = (n / 50).max(5);
+    let (sse1, s1) = p.fit(0, n);
+    let mut best = Segmentation { breaks: vec![], slopes: vec![s1], sigma };
+    if max_segments < 2 || n < 2 * min_len {
+        return best;
+    }
+    let step = ((n - 2 * min_len) / 300).max(1);
+    let cands: Vec<usize> = (min_len..=n - min_len).step_by(step).collect();
+    let k = cands.len().max(1) as f64;
+    let thr = sigma * sigma * 2.0 * (k / BREAK_ALPHA).ln();
+
+    let mut b2 = (f64::INFINITY, 0usize);
+    for &c in &cands {
+        let sse = p.fit(0, c).0 + p.fit(c, n).0;
+        if sse < b2.0 {
+            b2 = (sse, c);
+        }
+    }
+    if !(sse1 - b2.0 > thr) {
+        return best;
+    }
+    best.breaks = vec![b2.1];
+    best.slopes = vec![p.fit(0, b2.1).1, p.fit(b2.1, n).1];
+    if max_segments < 3 || n < 3 * min_len {
+        return best;
+    }
+    let mut b3 = (f64::INFINITY, 0usize, 0usize);
+    for (i, &c1) in cands.iter().enumerate() {
+        let left = p.fit(0, c1).0;
+        for &c2 in cands[i..].iter().filter(|&&c2| c2 >= c1 + min_len) {
+            let sse = left + p.fit(c1, c2).0 + p.fit(c2, n).0;
+            if sse < b3.0 {
+                b3 = (sse, c1, c2);
+            }
+        }
+    }
+    if b2.0 - b3.0 > thr {
+        best.breaks = vec![b3.1, b3.2];
+        best.slopes = vec![p.fit(0, b3.1).1, p.fit(b3.1, b3.2).1, p.fit(b3.2, n).1];
+    }
+    best
+}
+
+fn mean(v: &[f64]) -> f64 {
+    v.iter().sum::<f64>() / v.len().max(1) as f64
+}
+
+/// Noise σ of y about a straight line through (x, y), taken in sample order.
+pub fn residual_noise(x: &[f64], y: &[f64]) -> f64 {
+    let r = match linear_fit(x, y) {
+        Ok(f) => x.iter().zip(y).map(|(a, b)| b - f.at(*a)).collect::<Vec<f64>>(),
+        Err(_) => y.to_vec(),
+    };
+    let (lo, hi) = y.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| (a.min(v), b.max(v)));
+    noise_level(&r).max(1e-12 * (hi - lo).abs()).max(f64::MIN_POSITIVE)
+}
+
+/// A continuous two-slope fit y = a + b x + c (x − x_k)₊ with its knee.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Hinge {
+    /// Knee position x_k.
+    pub knee_x: f64,
+    /// Fitted y at the knee.
+    pub knee_y: f64,
+    /// Profile-likelihood 95% interval of x_k.
+    pub knee_x_ci95: [f64; 2],
+    /// Range of the fitted knee y over that interval.
+    pub knee_y_ci95: [f64; 2],
+    /// Slope before the knee.
+    pub slope_before: f64,
+    /// Slope after the knee.
+    pub slope_after: f64,
+    /// Samples fitted.
+    pub n: usize,
+}
+
+/// (SSE, a, b, c) of the hinge model with a fixed knee (centred data).
+fn hinge_at(x: &[f64], y: &[f64], xk: f64) -> Option<(f64, f64, f64, f64)> {
+    let mut m = Matrix3::<f64>::zeros();
+    let mut v = Vector3::<f64>::zeros();
+    for (&xi, &yi) in x.iter().zip(y) {
+        let phi = Vector3::new(1.0, xi, (xi - xk).max(0.0));
+        m += phi * phi.transpose();
+        v += phi * yi;
+    }
+    let sol = m.cholesky()?.solve(&v);
+    let sse: f64 = x
+        .iter()
+        .zip(y)
+        .map(|(&xi, &yi)| {
+            let f = sol[0] + sol[1] * xi + sol[2] * (xi - xk).max(0.0);
+            (yi - f).powi(2)
+        })
+        .sum();
+    Some((sse, sol[0], sol[1], sol[2]))
+}
+
+/// Continuous hinge fit of (x, y) with the knee searched in [lo, hi] (x units): a 101-point
+/// grid, then a 101-point grid between the best point's neighbours; interval by profile SSE.
+pub fn hinge_fit(x: &[f64], y: &[f64], lo: f64, hi: f64) -> Option<Hinge> {
+    let n = x.len();
+    if n < 8 || !(hi > lo) {
+        return None;
+    }
+    let (mx, my) = (mean(x), mean(y));
+    let sx = x.iter().map(|v| (v - mx).abs()).fold(0.0, f64::max).max(f64::MIN_POSITIVE);
+    let xs: Vec<f64> = x.iter().map(|v| (v - mx) / sx).collect();
+    let ys: Vec<f64> = y.iter().map(|v| v - my).collect();
+    let to_s = |v: f64| (v - mx) / sx;
+    let mut evals: Vec<(f64, f64, f64)> = Vec::new(); // (xk, sse, yk) in original units
+    let eval = |xk: f64, evals: &mut Vec<(f64, f64, f64)>| -> Option<(f64, f64, f64, f64)> {
+        let r = hinge_at(&xs, &ys, to_s(xk))?;
+        let yk = r.1 + r.2 * to_s(xk) + my;
+        evals.push((xk, r.0, yk));
+        Some(r)
+    };
+    let g = 100;
+    let mut best = (f64::INFINITY, lo);
+    for i in 0..=g {
+        let xk = lo + (hi - lo) * i as f64 / g as f64;
+        if let Some(r) = eval(xk, &mut evals) {
+            if r.0 < best.0 {
+                best = (r.0, xk);
+            }
+        }
+    }
+    let dx = (hi - lo) / g as f64;
+    let (flo, fhi) = ((best.1 - dx).max(lo), (best.1 + dx).min(hi));
+    for i in 0..=g {
+        let xk = flo + (fhi - flo) * i as f64 / g as f64;
+        if let Some(r) = eval(xk, &mut evals) {
+            if r.0 < best.0 {
+                best = (r.0, xk);
+            }
+        }
+    }
+    let (sse, a, b, c) = hinge_at(&xs, &ys, to_s(best.1))?;
+    let s2 = sse / (n as f64 - 4.0).max(1.0);
+    let accept = sse + CHI2_1_95 * s2;
+    let ok: Vec<&(f64, f64, f64)> = evals.iter().filter(|e| e.1 <= accept).collect();
+    let ci_x = ok.iter().fold([f64::INFINITY, f64::NEG_INFINITY], |acc, e| [acc[0].min(e.0), acc[1].max(e.0)]);
+    let ci_y = ok.iter().fold([f64::INFINITY, f64::NEG_INFINITY], |acc, e| [acc[0].min(e.2), acc[1].max(e.2)]);
+    Some(Hinge {
+        knee_x: best.1,
+        knee_y: a + b * to_s(best.1) + my,
+        knee_x_ci95: ci_x,
+        knee_y_ci95: ci_y,
+        slope_before: b / sx,
+        slope_after: (b + c) / sx,
+        n,
+    })
+}
+
+/// The elastic analysis of a first loading branch.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ElasticRange {
+    /// Window as half-open sample range into the branch arrays.
+    pub window_idx: (usize, usize),
+    /// Window in x units `[from, to]`.
+    pub window: [f64; 2],
+    /// Straight-line fit in the window (slope in response per x unit).
+    pub fit: Fit,
+    /// Toe (slack) end, when the branch starts softer.
+    pub toe: Option<Hinge>,
+    /// The bend where the slope falls after the elastic range.
+    pub bend: Option<Hinge>,
+    /// Noise σ of the response about the branch.
+    pub sigma: f64,
+    /// Whether the window was chosen automatically.
+    pub automatic: bool,
+}
+
+/// Index range of the samples of `x` whose value lies in `[lo, hi]`, as the first in and
+/// one past the last in.
+fn index_range(x: &[f64], lo: f64, hi: f64) -> (usize, usize) {
+    let a = x.iter().position(|&v| v >= lo).unwrap_or(x.len());
+    let b = x.iter().rposition(|&v| v <= hi).map_or(a, |i| i + 1);
+    (a, b.max(a))
+}
+
+fn x_span(x: &[f64], a: usize, b: usize) -> (f64, f64) {
+    x[a..b].iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(p, q), &v| (p.min(v), q.max(v)))
+}
+
+/// Locates toe and bend on a loading branch (x increasing) without fitting a window.
+pub fn find_toe_and_bend(x: &[f64], y: &[f64]) -> (Option<Hinge>, Option<Hinge>, f64) {
+    let n = x.len();
+    let seg = segment_lines(x, y, 3);
+    let mut bounds = vec![0];
+    bounds.extend(seg.breaks.iter().copied());
+    bounds.push(n);
+    let nseg = seg.slopes.len();
+    let mut elastic = 0;
+    let mut toe = None;
+    if nseg >= 2 && seg.slopes[1] > seg.slopes[0] {
+        elastic = 1;
+        let (lo, _) = x_span(x, bounds[0] + (bounds[1] - bounds[0]) / 2, bounds[1]);
+        let (_, hi) = x_span(x, bounds[1], bounds[1] + (bounds[2] - bounds[1]) / 2);
+        toe = hinge_fit(&x[..bounds[2]], &y[..bounds[2]], lo, hi);
+    }
+    let mut bend = None;
+    if nseg > elastic + 1 && seg.slopes[elastic + 1] < seg.slopes[elastic] {
+        let (a, m, b) = (bounds[elastic], bounds[elastic + 1], bounds[elastic + 2]);
+        let (lo, _) = x_span(x, a + (m - a) / 2, m);
+        let (_, hi) = x_span(x, m, m + (b - m) / 2);
+        bend = hinge_fit(&x[a..b], &y[a..b], lo, hi);
+    }
+    (toe, bend, seg.sigma)
+}
+
+/// Automatic elastic window and fit on a first loading branch (see module doc).
+pub fn auto_elastic_range(x: &[f64], y: &[f64]) -> Result<ElasticRange, MeasureError> {
+    let n = x.len();
+    if n < 10 {
+        return Err(MeasureError::TooFewSamples { what: "the first loading branch", need: 10, got: n });
+    }
+    let (toe, bend, sigma) = find_toe_and_bend(x, y);
+    let lo = toe.map_or(f64::NEG_INFINITY, |t| t.knee_x_ci95[1]);
+    let hi = bend.map_or(f64::INFINITY, |b| b.knee_x_ci95[0]);
+    let (mut a, mut b) = index_range(x, lo, hi);
+    if b - a < 5 {
+        // The knees' intervals overlap: fall back to the span between the knees themselves.
+        let lo = toe.map_or(f64::NEG_INFINITY, |t| t.knee_x);
+        let hi = bend.map_or(f64::INFINITY, |b| b.knee_x);
+        (a, b) = index_range(x, lo, hi);
+    }
+    if b - a < 3 {
+        return Err(MeasureError::NoElasticRange);
+    }
+    let (a, b) = trim_window(x, y, a, b)?;
+    let fit = linear_fit(&x[a..b], &y[a..b])?;
+    let (w0, w1) = x_span(x, a, b);
+    Ok(ElasticRange { window_idx: (a, b), window: [w0, w1], fit, toe, bend, sigma, automatic: true })
+}
+
+/// Elastic fit in a user-set window `[from, to]` of x; toe and bend are still located.
+pub fn user_elastic_range(x: &[f64], y: &[f64], from: f64, to: f64) -> Result<ElasticRange, MeasureError> {
+    let (lo, hi) = (from.min(to), from.max(to));
+    let (a, b) = index_range(x, lo, hi);
+    let idx: Vec<usize> = (a..b).filter(|&i| x[i] >= lo && x[i] <= hi).collect();
+    if idx.len() < 3 {
+        return Err(MeasureError::WindowTooSmall { from, to, n: idx.len() });
+    }
+    let xs: Vec<f64> = idx.iter().map(|&i| x[i]).collect();
+    let ys: Vec<f64> = idx.iter().map(|&i| y[i]).collect();
+    let fit = linear_fit(&xs, &ys)?;
+    let (toe, bend, sigma) = if x.len() >= 10 { find_toe_and_bend(x, y) } else { (None, None, 0.0) };
+    Ok(ElasticRange { window_idx: (a, b), window: [lo, hi], fit, toe, bend, sigma, automatic: false })
+}
+
+/// Trims the window `a..b` by blocks while an end block's mean residual is beyond 3 standard
+/// errors (at most half the window).
+fn trim_window(x: &[f64], y: &[f64], mut a: usize, mut b: usize) -> Result<(usize, usize), MeasureError> {
+    let n0 = b - a;
+    let block = (n0 / 20).max(5);
+    while b - a >= 3 * block && (b - a) * 2 > n0 {
+        let fit = linear_fit(&x[a..b], &y[a..b])?;
+        let se = 3.0 * fit.residual_sd / (block as f64).sqrt();
+        let mean_res = |p: usize, q: usize| (p..q).map(|i| y[i] - fit.at(x[i])).sum::<f64>() / (q - p) as f64;
+        let (top, bottom) = (mean_res(b - block, b), mean_res(a, a + block));
+        if top.abs() > se && top.abs() >= bottom.abs() {
+            b -= block;
+        } else if bottom.abs() > se {
+            a += block;
+        } else {
+            break;
+        }
+    }
+    Ok((a, b))
+}
+
+/// Initial straight part of a branch that starts at a turning point (unloading, reloading):
+/// the first of at most two segments (module doc, step 2), trimmed like the elastic window.
+pub fn initial_slope(x: &[f64], y: &[f64]) -> Option<Fit> {
+    let n = x.len();
+    if n < 5 {
+        return None;
+    }
+    let seg = segment_lines(x, y, 2);
+    let end = seg.breaks.first().copied().unwrap_or(n);
+    let (a, b) = trim_window(x, y, 0, end).ok()?;
+    linear_fit(&x[a..b], &y[a..b]).ok()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::SeedableRng;
+    use rand_chacha::ChaCha8Rng;
+    use rand_distr::{Distribution, Normal};
+
+    fn bilinear(x: f64, k1: f64, k2: f64, xk: f64) -> f64 {
+        if x < xk {
+            k1 * x
+        } else {
+            k1 * xk + k2 * (x - xk)
+        }
+    }
+
+    #[test]
+    fn hinge_recovers_a_sharp_knee() {
+        let x: Vec<f64> = (0..400).map(|i| i as f64 / 400.0).collect();
+        let mut rng = ChaCha8Rng::seed_from_u64(3);
+        let d = Normal::new(0.0, 0.005).unwrap();
+        let y: Vec<f64> = x.iter().map(|&v| bilinear(v, 2.0, 0.3, 0.37) + d.sample(&mut rng)).collect();
+        let h = hinge_fit(&x, &y, 0.1, 0.9).unwrap();
+        assert!((h.knee_x - 0.37).abs() < 0.005, "{h:?}");
+        assert!(h.knee_x_ci95[0] <= h.knee_x && h.knee_x <= h.knee_x_ci95[1]);
+        assert!(h.knee_x_ci95[0] > 0.35 && h.knee_x_ci95[1] < 0.39, "{h:?}");
+        assert!((h.slope_before - 2.0).abs() < 0.02 && (h.slope_after - 0.3).abs() < 0.02);
+    }
+
+    #[test]
+    fn no_break_on_a_noisy_line_and_toe_plus_bend_found() {
+        let x: Vec<f64> = (0..600).map(|i| i as f64 / 600.0).collect();
+        for seed in 0..10 {
+            let mut rng = ChaCha8Rng::seed_from_u64(seed);
+            let d = Normal::new(0.0, 0.01).unwrap();
+            let y: Vec<f64> = x.iter().map(|&v| 1.5 * v + d.sample(&mut rng)).collect();
+            let s = segment_lines(&x, &y, 3);
+            assert!(s.breaks.is_empty(), "seed {seed}: {s:?}");
+        }
+        // Slack up to 0.1, elastic 5 up to 0.5, then slope 1.
+        let mut rng = ChaCha8Rng::seed_from_u64(11);
+        let d = Normal::new(0.0, 0.01).unwrap();
+        let y: Vec<f64> = x
+            .iter()
+            .map(|&v| {
+                let e = (v - 0.1).max(0.0);
+                bilinear(e, 5.0, 1.0, 0.4) + d.sample(&mut rng)
+            })
+            .collect();
+        let r = auto_elastic_range(&x, &y).unwrap();
+        let toe = r.toe.expect("toe");
+        let bend = r.bend.expect("bend");
+        assert!((toe.knee_x - 0.1).abs() < 0.01, "{toe:?}");
+        assert!((bend.knee_x - 0.5).abs() < 0.01, "{bend:?}");
+        assert!((r.fit.slope / 5.0 - 1.0).abs() < 0.01, "{:?}", r.fit);
+        assert!(r.window[0] >= 0.1 && r.window[1] <= 0.5, "{:?}", r.window);
+    }
+}

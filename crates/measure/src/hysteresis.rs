@@ -1,0 +1,229 @@
+//! Per-cycle hysteresis: loop area (energy), residual deformation at zero load, unloading and
+//! reloading stiffness, whether loading and unloading coincide, three-point contact loss.
+//!
+//! Works on zeroed curves whose first motion is positive (the caller mirrors a test that starts
+//! in the negative direction: the products below are unchanged by that). Loop area is
+//! ∮ response d(control) over all samples of the cycle in the *machine* control, so it is an
+//! energy in J (N·m for force × elongation, N m·rad for moment × angle); on a closed loop it is the
+//! dissipated energy, on the first cycle it also holds the work of the first plastic loading.
+//! Coincidence compares the areas under the loading and the unloading branch over their common
+//! control range (integrals of the linear interpolants), with the noise-implied standard
+//! deviation σ·X·√(1/n_l + 1/n_u) and a 4σ criterion. It does not fit laws or classify.
+
+use crate::condition::{noise_level, Branch, Segment};
+use crate::elastic::{initial_slope, residual_noise};
+use crate::stats::{linear_fit, normal_quantile};
+use serde::Serialize;
+use std::collections::BTreeMap;
+
+/// Hysteresis numbers of one cycle. Nulls come with a reason in `why`.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct CycleResult {
+    /// Cycle number (from 1, as in the segmentation).
+    pub index: usize,
+    /// ∮ response d(machine control) over the cycle, J.
+    pub loop_area: Option<f64>,
+    /// Sectional control (strain, 1/m, or deflection m for three-point) where the response
+    /// reaches zero on the cycle's unloading (for three-point: where the punch loses contact).
+    pub residual: Option<f64>,
+    /// Whether `residual` differs from zero beyond the noise.
+    pub residual_significant: Option<bool>,
+    /// Initial unloading slope converted to the kind's stiffness unit (N or N m²).
+    pub unloading_stiffness: Option<f64>,
+    /// Initial reloading slope converted to the kind's stiffness unit (N or N m²).
+    pub reloading_stiffness: Option<f64>,
+    /// Whether loading and unloading paths coincide within the noise.
+    pub coincide: Option<bool>,
+    /// Area between the cycle's loading and unloading branch over their common range, J.
+    pub branch_gap_area: Option<f64>,
+    /// Three-point only: machine control (deflection, m) at which the punch lost contact on
+    /// unloading (force at zero while the punch was still travelling back); null otherwise.
+    pub contact_loss_control: Option<f64>,
+    /// Largest machine control and response of the cycle.
+    pub peak_control: f64,
+    /// Response at the peak control.
+    pub peak_response: f64,
+    /// Reasons for nulls, keyed by field name.
+    pub why: BTreeMap<String, String>,
+}
+
+/// Inputs shared by all cycles.
+pub struct CycleInputs<'a> {
+    /// Machine control, zeroed, first motion positive.
+    pub control: &'a [f64],
+    /// Sectional control (same orientation).
+    pub sectional: &'a [f64],
+    /// Response, zeroed, same orientation.
+    pub response: &'a [f64],
+    /// Segmentation of the test.
+    pub segments: &'a [Segment],
+    /// Stiffness = factor · slope of response over sectional control.
+    pub stiffness_factor: f64,
+    /// Whether this is a three-point test (contact loss).
+    pub three_point: bool,
+    /// Sectional control per machine control (1/l₀, or 1 for three-point).
+    pub sectional_per_control: f64,
+}
+
+fn collect(segs: &[Segment], cycle: usize, branch: Branch) -> Vec<usize> {
+    segs.iter()
+        .filter(|s| s.cycle == cycle && s.branch == branch)
+        .flat_map(|s| s.start..s.end)
+        .collect()
+}
+
+/// First contiguous run of a branch in a cycle, extended by one sample back (the turning point).
+fn first_run(segs: &[Segment], cycle: usize, branch: Branch) -> Option<(usize, usize)> {
+    segs.iter()
+        .find(|s| s.cycle == cycle && s.branch == branch)
+        .map(|s| (s.start.saturating_sub(1), s.end))
+}
+
+/// ∫ y dx of the linear interpolant of (x, y) (sorted by x here) from lo to hi.
+fn integrate(points: &mut [(f64, f64)], lo: f64, hi: f64) -> f64 {
+    points.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let interp = |x: f64, p: &[(f64, f64)]| -> f64 {
+        let i = p.partition_point(|q| q.0 < x).clamp(1, p.len() - 1);
+        let (a, b) = (p[i - 1], p[i]);
+        if b.0 == a.0 {
+            return 0.5 * (a.1 + b.1);
+        }
+        a.1 + (b.1 - a.1) * (x - a.0) / (b.0 - a.0)
+    };
+    let mut xs: Vec<f64> = vec![lo];
+    xs.extend(points.iter().map(|p| p.0).filter(|&x| x > lo && x < hi));
+    xs.push(hi);
+    let p: &[(f64, f64)] = points;
+    xs.windows(2).map(|w| 0.5 * (interp(w[0], p) + interp(w[1], p)) * (w[1] - w[0])).sum()
+}
+
+/// Hysteresis results for every cycle of the segmentation.
+pub fn cycles(inp: &CycleInputs) -> Vec<CycleResult> {
+    let n = inp.control.len();
+    let ncycles = inp.segments.iter().map(|s| s.cycle).max().unwrap_or(0);
+    let z = normal_quantile(1.0 - 1e-3 / 2.0);
+    let mut out = Vec::new();
+    for c in 1..=ncycles {
+        let idx: Vec<usize> = inp.segments.iter().filter(|s| s.cycle == c).flat_map(|s| s.start..s.end).collect();
+        if idx.is_empty() {
+            continue;
+        }
+        let (first, last) = (idx[0], *idx.last().unwrap_or(&idx[0]));
+        let mut why = BTreeMap::new();
+        // Loop area over the cycle, including the step to the next cycle's first sample.
+        let stop = (last + 1).min(n - 1);
+        let area: f64 = (first..stop)
+            .map(|i| 0.5 * (inp.response[i] + inp.response[i + 1]) * (inp.control[i + 1] - inp.control[i]))
+            .sum();
+        let (ipk, _) = idx
+            .iter()
+            .map(|&i| (i, inp.control[i]))
+            .fold((first, f64::NEG_INFINITY), |acc, (i, v)| if v > acc.1 { (i, v) } else { acc });
+        let loading_branch = if c == 1 { Branch::FirstLoading } else { Branch::Reloading };
+        let load = collect(inp.segments, c, loading_branch);
+        let unload_run = first_run(inp.segments, c, Branch::Unloading);
+        let mut r = CycleResult {
+            index: c,
+            loop_area: Some(area),
+            residual: None,
+            residual_significant: None,
+            unloading_stiffness: None,
+            reloading_stiffness: None,
+            coincide: None,
+            branch_gap_area: None,
+            contact_loss_control: None,
+            peak_control: inp.control[ipk],
+            peak_response: inp.response[ipk],
+            why: BTreeMap::new(),
+        };
+        if let Some((ua, ub)) = unload_run {
+            let ux = &inp.sectional[ua..ub];
+            let uy = &inp.response[ua..ub];
+            // Unloading stiffness: initial straight part, while the response is still positive.
+            let pos_end = uy.iter().position(|&v| v <= 0.0).unwrap_or(uy.len());
+            let fit = initial_slope(&ux[..pos_end], &uy[..pos_end]);
+            match fit {
+                Some(f) => r.unloading_stiffness = Some(f.slope * inp.stiffness_factor),
+                None => {
+                    why.insert("unloading_stiffness".into(), "too few unloading samples above zero response".into());
+                }
+            }
+            let sigma = residual_noise(ux, uy);
+            // Residual: where the response reaches zero (three-point: leaves the noise band).
+            // Located by a straight line through the unloading samples near zero response,
+            // from where the response falls below hi = max(4zσ, 0.2·peak) to where it leaves
+            // the band on the other side, so a single noisy sample does not decide it.
+            let band = if inp.three_point { z * sigma } else { 0.0 };
+            let cross = (1..uy.len()).find(|&i| uy[i] <= band && uy[i - 1] > band);
+            match cross {
+                Some(i) => {
+                    let (x0, x1, y0, y1) = (ux[i - 1], ux[i], uy[i - 1], uy[i]);
+                    let mut xr = if y1 != y0 { x0 + (band - y0) * (x1 - x0) / (y1 - y0) } else { x1 };
+                    let peak_y = uy.iter().fold(0.0f64, |m, v| m.max(*v));
+                    let hi = (4.0 * z * sigma).max(0.2 * peak_y);
+                    let i1 = uy.iter().position(|&v| v < hi).unwrap_or(i);
+                    let i2 = if inp.three_point {
+                        i
+                    } else {
+                        (i..uy.len()).find(|&k| uy[k] < -hi).unwrap_or(uy.len())
+                    };
+                    if i2 > i1 + 5 {
+                        if let Ok(f) = linear_fit(&ux[i1..i2], &uy[i1..i2]) {
+                            if f.slope > 0.0 {
+                                if let Some(x) = f.x_intercept() {
+                                    xr = x;
+                                }
+                            }
+                        }
+                    }
+            // Coincidence of loading and unloading.
+            if load.len() >= 5 && ub - ua >= 5 {
+                let mut lp: Vec<(f64, f64)> = load.iter().map(|&i| (inp.control[i], inp.response[i])).collect();
+                let mut up: Vec<(f64, f64)> = (ua..ub).map(|i| (inp.control[i], inp.response[i])).collect();
+                let (l_lo, l_hi) = span(&lp);
+                let (u_lo, u_hi) = span(&up);
+                let (lo, hi) = (l_lo.max(u_lo), l_hi.min(u_hi));
+                let n_l = lp.iter().filter(|p| p.0 >= lo && p.0 <= hi).count();
+                let n_u = up.iter().filter(|p| p.0 >= lo && p.0 <= hi).count();
+                if hi > lo && n_l >= 5 && n_u >= 5 {
+                    let gap = integrate(&mut lp, lo, hi) - integrate(&mut up, lo, hi);
+                    let lx: Vec<f64> = load.iter().map(|&i| inp.control[i]).collect();
+                    let ly: Vec<f64> = load.iter().map(|&i| inp.response[i]).collect();
+                    let s_l = residual_noise(&lx, &ly);
+                    let s_u = residual_noise(&inp.control[ua..ub], &inp.response[ua..ub]);
+                    let x = hi - lo;
+                    let sd = x * (s_l * s_l / n_l as f64 + s_u * s_u / n_u as f64).sqrt();
+                    r.branch_gap_area = Some(gap);
+                    r.coincide = Some(gap.abs() <= 4.0 * sd);
+                } else {
+                    why.insert("coincide".into(), "loading and unloading share no control range".into());
+                }
+            } else {
+                why.insert("coincide".into(), "too few loading or unloading samples in this cycle".into());
+            }
+        } else {
+            for k in ["residual", "unloading_stiffness", "coincide"] {
+                why.insert(k.into(), "this cycle has no unloading branch".into());
+            }
+        }
+        if c > 1 {
+            match first_run(inp.segments, c, Branch::Reloading)
+                .and_then(|(a, b)| initial_slope(&inp.sectional[a..b], &inp.response[a..b]))
+            {
+                Some(f) => r.reloading_stiffness = Some(f.slope * inp.stiffness_factor),
+                None => {
+                    why.insert("reloading_stiffness".into(), "no usable reloading branch in this cycle".into());
+                }
+            }
+        } else {
+            why.insert("reloading_stiffness".into(), "the first cycle has no reloading".into());
+        }
+        r.why = why;
+        out.push(r);
+    }
+    out
+}
+
+fn span(p: &[(f64, f64)]) -> (f64, f64) {
+    p.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), q| (a.min(q.0), b.max(q.0)))
+}

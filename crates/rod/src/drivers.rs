@@ -1,0 +1,436 @@
+//! The four tests as the machine runs them, driven through a control path or a measured history.
+//!
+//! - `tension` and `torsion` (clamped ends, homogeneous straight rod): the state is uniform
+//!   along the rod, Γ₃ = Δl/l₀ or K₃ = θ/l₀ with every other strain held at zero by the clamps, so
+//!   the sectional law evaluated once per step *is* the rod solution (exact, not an approximation).
+//! - `pure_bending` (one end rotated, both ends free to slide, no shear force): the rod is solved
+//!   by [`simulate_path`] (node 0 clamped to remove rigid motion, end rotation prescribed at the
+//!   other end, its position free: no force) — its answer is a uniform-curvature arc K = θ/l₀. For
+//!   a homogeneous rod that is again a uniform state, so [`simulate_history`] (the calibration's
+//!   hot loop) evaluates the law directly at K₁ = θ/l₀, Γ₃ = 0 (exact for laws without
+//!   bending–axial coupling; the tests check both routes agree).
+//! - `three_point`: half model (symmetry at mid-span: x = 0, θ = 0), rod of span/2 plus an
+//!   overhang resting on a rigid support cylinder it slides over (bilateral normal penalty, optional
+//!   regularised Coulomb friction), pushed by a rigid point or cylindrical punch that can only push
+//!   (contact opens on unloading). Control: punch deflection w; response: total punch force.
+//!   Penalty stiffness k = `penalty_factor`·EI/span³ (default 10⁷: deflection error ≈ 2.4·10⁻⁶ w).
+//!
+//! Does not: read files, choose laws or parameters (the caller builds the law).
+
+use crate::planar::{PlanarRod, Punch, SolverOptions, Support};
+use crate::RodError;
+use cablab_core::TestKind;
+use cablab_laws::{Law, Strain6};
+use nalgebra::{Vector2, Vector3};
+use serde::Serialize;
+
+/// Geometry and numerical options of one simulated test.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TestSetup {
+    /// Which test.
+    pub kind: TestKind,
+    /// Free length between clamps, or the support span for `three_point`, m.
+    pub free_length_m: f64,
+    /// Elements along the rod (pure bending: the whole rod; three-point: the half model,
+    /// mid-span to the rod end including the overhang).
+    pub elements: usize,
+    /// Punch radius, m (0 = point punch).
+    pub punch_radius_m: f64,
+    /// Support radius, m (0 = point supports).
+    pub support_radius_m: f64,
+    /// Coulomb friction coefficient at the supports (0 = frictionless).
+    pub support_friction: f64,
+    /// Rod (cable) radius, m: offsets the contact surfaces from the centreline (0 = centreline contact).
+    pub rod_radius_m: f64,
+    /// Rod length beyond each support (three-point), m; None = 0.15 × span.
+    pub overhang_m: Option<f64>,
+    /// Contact penalty stiffness in units of EI/span³.
+    pub penalty_factor: f64,
+    /// Largest control increment the rod solver takes internally (sub-steps between samples); None = automatic.
+    pub max_substep: Option<f64>,
+    /// Control rate (control units per second) used to give path steps a time; None = 1 s per step.
+    pub control_rate_per_s: Option<f64>,
+    /// Record curvature and moment per element at every step (three-point and pure bending).
+    pub record_span: bool,
+    /// Newton controls.
+    pub solver: SolverOptions,
+}
+
+impl TestSetup {
+    /// Defaults: 40 elements, point punch and supports, frictionless, centreline contact,
+    /// overhang 0.15 × span, penalty 10⁷ EI/span³, automatic sub-steps, no span records.
+    pub fn new(kind: TestKind, free_length_m: f64) -> Self {
+        TestSetup {
+            kind,
+            free_length_m,
+            elements: 40,
+            punch_radius_m: 0.0,
+            support_radius_m: 0.0,
+            support_friction: 0.0,
+            rod_radius_m: 0.0,
+            overhang_m: None,
+            penalty_factor: 1e7,
+            max_substep: None,
+            control_rate_per_s: None,
+            record_span: false,
+            solver: SolverOptions::default(),
+        }
+    }
+
+    fn validate(&self) -> Result<(), RodError> {
+        let bad = |what: &str, v: f64| RodError::InvalidSetup(format!("{what} must be finite and ≥ 0, got {v}"));
+        if !(self.free_length_m.is_finite() && self.free_length_m > 0.0) {
+            return Err(RodError::InvalidSetup(format!(
+                "free length / span must be positive, got {} m",
+                self.free_length_m
+            )));
+        }
+        for (name, v) in [
+            ("punch radius", self.punch_radius_m),
+            ("support radius", self.support_radius_m),
+            ("support friction", self.support_friction),
+            ("rod radius", self.rod_radius_m),
+            ("overhang", self.overhang_m.unwrap_or(0.0)),
+        ] {
+            if !(v.is_finite() && v >= 0.0) {
+                return Err(bad(name, v));
+            }
+        }
+        if !(self.penalty_factor.is_finite() && self.penalty_factor > 0.0) {
+            return Err(RodError::InvalidSetup(format!("penalty factor must be positive, got {}", self.penalty_factor)));
+        }
+        if let Some(m) = self.max_substep {
+            if !(m.is_finite() && m > 0.0) {
+                return Err(RodError::InvalidSetup(format!("max sub-step must be positive, got {m}")));
+            }
+        }
+        if self.kind == TestKind::Unknown {
+            return Err(RodError::UnsupportedKind(self.kind));
+        }
+        Ok(())
+    }
+}
+
+/// A simulated test: control and response per computed step (SI), plus what the diagnosis needs.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct SimCurve {
+    /// The test kind.
+    pub kind: TestKind,
+    /// Control value per step: elongation m, twist rad, punch deflection m or end rotation rad.
+    pub control: Vec<f64>,
+    /// Response per step: axial force N, torque N m, punch force N or end moment N m.
+    pub response: Vec<f64>,
+    /// Time of each step, s.
+    pub time_s: Vec<f64>,
+    /// Three-point: whether the punch touches the rod at each step (empty for other kinds).
+    pub punch_contact: Vec<bool>,
+    /// Arc length of each element midpoint (three-point: from mid-span), m; empty unless `record_span`.
+    pub span_s_m: Vec<f64>,
+    /// Bending curvature K₁ per element at each step, 1/m; empty unless `record_span`.
+    pub span_curvature_per_m: Vec<Vec<f64>>,
+    /// Bending moment M₁ per element at each step, N m; empty unless `record_span`.
+    pub span_moment_nm: Vec<Vec<f64>>,
+    /// Newton iterations spent in total (0 for direct sectional evaluation).
+    pub newton_iterations: usize,
+}
+
+impl SimCurve {
+    fn new(kind: TestKind) -> Self {
+        SimCurve {
+            kind,
+            control: Vec::new(),
+            response: Vec::new(),
+            time_s: Vec::new(),
+            punch_contact: Vec::new(),
+            span_s_m: Vec::new(),
+            span_curvature_per_m: Vec::new(),
+            span_moment_nm: Vec::new(),
+            newton_iterations: 0,
+        }
+    }
+}
+
+/// Law-driven state machine behind both entry points.
+enum Driver<'a> {
+    /// Direct sectional evaluation of a uniform state; `index` picks the strain/stress component.
+    Uniform { law: &'a dyn Law, index: usize, length_m: f64, state: Vec<f64>, trial: Vec<f64> },
+    /// The rod solver.
+    Rod { rod: Box<PlanarRod<'a>>, kind: TestKind, current: f64, max_substep: f64 },
+}
+
+impl<'a> Driver<'a> {
+    fn uniform(setup: &TestSetup, law: &'a dyn Law) -> Self {
+        // Tension Γ₃, torsion K₃, bending K₁ (as in the planar rod).
+        let index = cablab_laws::loaded_component(setup.kind);
+        let mut state = vec![0.0; law.n_state()];
+        law.init_state(&mut state);
+        Driver::Uniform { law, index, length_m: setup.free_length_m, trial: state.clone(), state }
+    }
+
+    fn rod(setup: &TestSetup, law: &'a dyn Law, max_substep: Option<f64>) -> Result<Self, RodError> {
+        let l = setup.free_length_m;
+        let ei = law.elastic_tangent()[(3, 3)];
+        match setup.kind {
+            TestKind::PureBending => {
+                let mut rod = PlanarRod::straight(law, l, setup.elements)?;
+                rod.options = setup.solver;
+                rod.prescribed[0] = [Some(0.0); 3];
+                let n = rod.nodes() - 1;
+                rod.prescribed[n][2] = Some(0.0);
+                Ok(Driver::Rod {
+                    rod: Box::new(rod),
+                    kind: setup.kind,
+                    current: 0.0,
+                    max_substep: max_substep.or(setup.max_substep).unwrap_or(0.05),
+
+                })
+            }
+            TestKind::ThreePoint => {
+                let half = 0.5 * l;
+                let overhang = setup.overhang_m.unwrap_or(0.15 * l);
+                let mut rod = PlanarRod::straight(law, half + overhang, setup.elements)?;
+                rod.options = setup.solver;
+                rod.prescribed[0] = [Some(0.0), None, Some(0.0)];
+                let k = setup.penalty_factor * ei / (l * l * l);
+                let r_sup = setup.support_radius_m + setup.rod_radius_m;
+                let mut sup = Support::new(Vector2::new(half, -r_sup), r_sup, k, setup.support_friction, half);
+                sup.k_tangent = k;
+                rod.supports.push(sup);
+                rod.punch = Some(Punch::new(0.0, setup.punch_radius_m + setup.rod_radius_m, k));
+                Ok(Driver::Rod {
+                    rod: Box::new(rod),
+                    kind: setup.kind,
+                    current: 0.0,
+                    max_substep: max_substep.or(setup.max_substep).unwrap_or(0.005 * l),
+
+                })
+            }
+            other => Err(RodError::UnsupportedKind(other)),
+        }
+    }
+
+    fn apply_control(rod: &mut PlanarRod<'_>, kind: TestKind, c: f64) {
+        match kind {
+            TestKind::PureBending => {
+                let n = rod.nodes() - 1;
+                rod.prescribed[n][2] = Some(c);
+            }
+            _ => {
+                if let Some(p) = rod.punch.as_mut() {
+                    p.tip_y_m = -c;
+                }
+            }
+        }
+    }
+
+    /// Move the control to `target` over `dt` seconds; returns the response.
+    fn step_to(&mut self, target: f64, dt: f64, step: usize, iterations: &mut usize) -> Result<f64, RodError> {
+        match self {
+            Driver::Uniform { law, index, length_m, state, trial } => {
+                let mut eps = Strain6::zeros();
+                eps[*index] = target / *length_m;
+                let r = law.update(&eps, dt, state, trial);
+                state.copy_from_slice(trial);
+                let v = r.stress[*index];
+                if !v.is_finite() {
+                    return Err(RodError::NotConverged {
+                        step,
+                        iterations: 0,
+                        residual: f64::NAN,
+                        reason: format!("law '{}' returned a non-finite stress", law.name()),
+                    });
+                }
+                Ok(v)
+            }
+            Driver::Rod { rod, kind, current, max_substep, .. } => {
+                let from = *current;
+                let total = target - from;
+                let n_sub = ((total.abs() / *max_substep).ceil() as usize).max(1);
+                let mut h = total / n_sub as f64;
+                let mut c = from;
+                let mut cuts = 0;
+                let max_cuts = rod.options.max_bisections;
+                let tiny = 1e-12 * total.abs().max(*max_substep);
+                loop {
+                    let remaining = target - c;
+                    let last = remaining.abs() <= h.abs() + tiny;
+                    let next = if last { target } else { c + h };
+                    let saved = rod.q.clone();
+                    Self::apply_control(rod, *kind, next);
+                    let frac = if total != 0.0 { (next - c) / total } else { 1.0 };
+                    match rod.solve(dt * frac, step) {
+                        Ok(it) => {
+                            *iterations += it;
+                            rod.commit();
+                            c = next;
+                            if last {
+                                break;
+                            }
+                        }
+                        Err(e) => {
+                            rod.q = saved;
+                            Self::apply_control(rod, *kind, c);
+                            cuts += 1;
+                            if cuts > max_cuts || total == 0.0 {
+                                return Err(e);
+                            }
+                            h *= 0.5;
+                        }
+                    }
+                }
+                *current = target;
+                Ok(Self::response(rod, *kind))
+            }
+        }
+    }
+
+    fn response(rod: &PlanarRod<'_>, kind: TestKind) -> f64 {
+        match kind {
+            TestKind::PureBending => rod.residual(rod.nodes() - 1)[2],
+            _ => 2.0 * rod.punch.as_ref().map_or(0.0, |p| p.force_n),
+        }
+    }
+
+    fn record(&self, curve: &mut SimCurve, record_span: bool) {
+        let Driver::Rod { rod, kind, .. } = self else { return };
+        if *kind == TestKind::ThreePoint {
+            curve.punch_contact.push(rod.punch.as_ref().is_some_and(|p| p.in_contact()));
+        }
+        if record_span {
+            if curve.span_s_m.is_empty() {
+                curve.span_s_m = (0..rod.l0.len()).map(|e| rod.s_ref[e] + 0.5 * rod.l0[e]).collect();
+            }
+            curve.span_curvature_per_m.push(rod.strain.iter().map(|s| s[2]).collect());
+            curve.span_moment_nm.push(rod.stress.iter().map(|s| s[2]).collect());
+        }
+    }
+}
+
+fn check_values(name: &str, v: &[f64]) -> Result<(), RodError> {
+    if v.is_empty() {
+        return Err(RodError::InvalidInput(format!("{name} is empty")));
+    }
+    if let Some(i) = v.iter().position(|x| !x.is_finite()) {
+        return Err(RodError::InvalidInput(format!("{name}[{i}] is not a finite number ({})", v[i])));
+    }
+    Ok(())
+}
+
+/// Simulate a test driving its control variable piecewise linearly through `path` (SI: elongation
+/// m, twist rad, punch deflection m, end rotation rad), starting unloaded at control 0.
+///
+/// Steps: each segment is cut into equal steps of at most `max_increment` (default: 1/100 of the
+/// largest |path value|, and for three-point at most 0.5 % of the span). One output entry per
+/// step; when `path[0]` is 0 the first entry is the unloaded start. Tension and torsion use the
+/// exact uniform sectional state; pure bending and three-point bending run the rod.
+pub fn simulate_path(
+    setup: &TestSetup,
+    law: &dyn Law,
+    path: &[f64],
+    max_increment: Option<f64>,
+) -> Result<SimCurve, RodError> {
+    setup.validate()?;
+    check_values("path", path)?;
+    let scale = path.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    let mut inc = max_increment.unwrap_or(if scale > 0.0 { scale / 100.0 } else { 1.0 });
+    if setup.kind == TestKind::ThreePoint && max_increment.is_none() {
+        inc = inc.min(0.005 * setup.free_length_m);
+    }
+    if !(inc.is_finite() && inc > 0.0) {
+        return Err(RodError::InvalidInput(format!("max increment must be positive, got {inc}")));
+    }
+    let mut driver = match setup.kind {
+        TestKind::Tension | TestKind::Torsion => Driver::uniform(setup, law),
+        _ => Driver::rod(setup, law, Some(inc))?,
+    };
+    let mut curve = SimCurve::new(setup.kind);
+    let mut c = 0.0;
+    let mut t = 0.0;
+    let mut step = 0usize;
+    let mut iterations = 0usize;
+    let dt_for = |dc: f64| setup.control_rate_per_s.map_or(1.0, |r| dc.abs() / r);
+    if path[0] == 0.0 {
+        let r = driver.step_to(0.0, 0.0, step, &mut iterations)?;
+        curve.control.push(0.0);
+        curve.response.push(r);
+        curve.time_s.push(0.0);
+        driver.record(&mut curve, setup.record_span);
+        step += 1;
+    }
+    for &target in path {
+        let seg = target - c;
+        let n = ((seg.abs() / inc).ceil() as usize).max(if seg == 0.0 { 0 } else { 1 });
+        let start = c;
+        for k in 1..=n {
+            let next = if k == n { target } else { start + seg * k as f64 / n as f64 };
+            let dt = dt_for(next - c);
+            let r = driver.step_to(next, dt, step, &mut iterations)?;
+            t += dt;
+            c = next;
+            curve.control.push(next);
+            curve.response.push(r);
+            curve.time_s.push(t);
+            driver.record(&mut curve, setup.record_span);
+            step += 1;
+        }
+    }
+    curve.newton_iterations = iterations;
+    Ok(curve)
+}
+
+/// Replay a measured control history sample by sample (`control[i]` reached at `time_s[i]`),
+/// starting unloaded at control 0 (the approach to `control[0]` takes no time). One output entry
+/// per sample. Tension, torsion and pure bending: direct sectional evaluation of the uniform state
+/// (exact for a homogeneous rod; this is the calibration's hot loop). Three-point: the rod, with
+/// internal sub-steps of at most `setup.max_substep` (default 0.5 % of the span).
+pub fn simulate_history(
+    setup: &TestSetup,
+    law: &dyn Law,
+    control: &[f64],
+    time_s: &[f64],
+) -> Result<SimCurve, RodError> {
+    setup.validate()?;
+    check_values("control", control)?;
+    check_values("time_s", time_s)?;
+    if control.len() != time_s.len() {
+        return Err(RodError::InvalidInput(format!(
+            "control has {} samples but time_s has {}",
+            control.len(),
+            time_s.len()
+        )));
+    }
+    let mut driver = match setup.kind {
+        TestKind::ThreePoint => Driver::rod(setup, law, None)?,
+        _ => Driver::uniform(setup, law),
+    };
+    let mut curve = SimCurve::new(setup.kind);
+    curve.control.reserve(control.len());
+    curve.response.reserve(control.len());
+    let mut iterations = 0usize;
+    for (i, (&c, &t)) in control.iter().zip(time_s).enumerate() {
+        let dt = if i == 0 { 0.0 } else { (t - time_s[i - 1]).max(0.0) };
+        let r = driver.step_to(c, dt, i, &mut iterations)?;
+        curve.control.push(c);
+        curve.response.push(r);
+        curve.time_s.push(t);
+        driver.record(&mut curve, setup.record_span);
+    }
+    curve.newton_iterations = iterations;
+    Ok(curve)
+}
+
+/// Node positions (x m, y m, θ rad) of the deformed rod after replaying `path` in a rod-driven test
+/// (pure bending or three-point); used to inspect the deformed shape (e.g. the pure-bending arc).
+pub fn deformed_shape(setup: &TestSetup, law: &dyn Law, path: &[f64]) -> Result<Vec<Vector3<f64>>, RodError> {
+    setup.validate()?;
+    check_values("path", path)?;
+    let mut driver = Driver::rod(setup, law, setup.max_substep)?;
+    let mut iterations = 0;
+    for (i, &c) in path.iter().enumerate() {
+        driver.step_to(c, 1.0, i, &mut iterations)?;
+    }
+    match driver {
+        Driver::Rod { rod, .. } => Ok(rod.q.clone()),
+        Driver::Uniform { .. } => Err(RodError::UnsupportedKind(setup.kind)),
+    }
+}

@@ -1,0 +1,198 @@
+//! What a real rig does to the truth before it reaches the file: slack travel, machine
+//! compliance in series, sensor drift, offsets, Gaussian noise and quantisation. Deterministic
+//! under a seed (ChaCha8). Pure: numbers in, numbers out; no formatting (see [`crate::layout`]).
+
+use cablab_core::TestKind;
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use rand_distr::StandardNormal;
+
+use crate::spec::Artefacts;
+
+/// The noise-free record as the machine sees it, and the measured record it writes.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Record {
+    /// Logger time, s (sample grid, starting at 0; includes the slack travel).
+    pub time_s: Vec<f64>,
+    /// Specimen control (the truth model's input), SI.
+    pub control_specimen: Vec<f64>,
+    /// Noise-free machine control: specimen control + slack + compliance · response, SI.
+    pub control_machine: Vec<f64>,
+    /// Noise-free response (the truth), SI.
+    pub response: Vec<f64>,
+    /// Measured control (machine control + offset + noise, quantised), SI.
+    pub control_measured: Vec<f64>,
+    /// Measured response (truth + drift + offset + noise, quantised), SI.
+    pub response_measured: Vec<f64>,
+    /// Cycle counter per row.
+    pub cycle: Vec<f64>,
+    /// Load-cell full scale used for the noise and the ADC step, SI.
+    pub response_full_scale: f64,
+    /// ADC step of the response, SI (0: none).
+    pub response_quantum: f64,
+    /// Encoder step of the control, SI (0: none).
+    pub control_quantum: f64,
+}
+
+/// The smallest value of the 1·2·5 series at or above `x` (> 0).
+pub fn nice_ceil(x: f64) -> f64 {
+    if !(x.is_finite() && x > 0.0) {
+        return 1.0;
+    }
+    let e = x.log10().floor();
+    let base = 10f64.powf(e);
+    for m in [1.0, 2.0, 5.0, 10.0] {
+        if m * base >= x * (1.0 - 1e-12) {
+            return m * base;
+        }
+    }
+    10.0 * base
+}
+
+fn quantise(v: f64, q: f64) -> f64 {
+    if q > 0.0 {
+        (v / q).round() * q
+    } else {
+        v
+    }
+}
+
+/// Applies `a` to the sampled truth. `first_rate` is the speed of the slack travel (control units
+/// per second), `dt_s` the sample step, `seed` the noise seed.
+#[allow(clippy::too_many_arguments)]
+pub fn apply(
+    kind: TestKind,
+    a: &Artefacts,
+    time_s: &[f64],
+    control: &[f64],
+    response: &[f64],
+    cycle: &[f64],
+    first_rate: f64,
+    dt_s: f64,
+    seed: u64,
+) -> Record {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    // Slack: the machine first travels `slack` at the first rate while the specimen is unloaded.
+    let n_slack = if a.slack > 0.0 && first_rate > 0.0 {
+        (a.slack / first_rate / dt_s).ceil() as usize
+    } else {
+        0
+    };
+    let mut rec = Record {
+        time_s: Vec::with_capacity(n_slack + time_s.len()),
+        control_specimen: Vec::new(),
+        control_machine: Vec::new(),
+        response: Vec::new(),
+        control_measured: Vec::new(),
+        response_measured: Vec::new(),
+        cycle: Vec::new(),
+        response_full_scale: 0.0,
+        response_quantum: 0.0,
+        control_quantum: 0.0,
+    };
+    for i in 0..n_slack {
+        let t = i as f64 * dt_s;
+        rec.time_s.push(t);
+        rec.control_specimen.push(0.0);
+        rec.control_machine.push((first_rate * t).min(a.slack));
+        rec.response.push(0.0);
+        rec.cycle.push(0.0);
+    }
+    let t_shift = n_slack as f64 * dt_s;
+    for i in 0..time_s.len() {
+        rec.time_s.push(time_s[i] + t_shift);
+        rec.control_specimen.push(control[i]);
+        rec.control_machine.push(control[i] + a.slack + a.machine_compliance * response[i]);
+        rec.response.push(response[i]);
+        rec.cycle.push(cycle.get(i).copied().unwrap_or(0.0));
+    }
+    let r_max = rec.response.iter().fold(0.0f64, |m, r| m.max(r.abs()));
+    let fs = a.response_full_scale.unwrap_or_else(|| nice_ceil(1.25 * r_max.max(1e-12)));
+    let q_r = if a.adc_bits > 0 { 2.0 * fs / 2f64.powi(a.adc_bits as i32) } else { 0.0 };
+    let q_c = a.control_quantum.unwrap_or(match kind {
+        TestKind::Torsion | TestKind::PureBending => 1e-3_f64.to_radians(),
+        _ => 1e-7,
+    });
+    let c_max = rec.control_machine.iter().fold(0.0f64, |m, c| m.max(c.abs()));
+    let sd_r = a.noise_rel * fs;
+    let sd_c = a.control_noise_rel * c_max;
+    for i in 0..rec.time_s.len() {
+        let t = rec.time_s[i];
+        let nr: f64 = rng.sample(StandardNormal);
+        let nc: f64 = rng.sample(StandardNormal);
+        let r = rec.response[i] + a.drift_per_s * t + a.response_offset + sd_r * nr;
+        let c = rec.control_machine[i] + a.control_offset + sd_c * nc;
+        rec.response_measured.push(quantise(r, q_r));
+        rec.control_measured.push(quantise(c, q_c));
+    }
+    rec.response_full_scale = fs;
+    rec.response_quantum = q_r;
+    rec.control_quantum = q_c;
+    rec
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn nice_ceil_follows_the_125_series() {
+        assert_eq!(nice_ceil(1.25 * 100.0), 200.0);
+        assert_eq!(nice_ceil(0.9), 1.0);
+        assert_eq!(nice_ceil(3.0), 5.0);
+        assert_eq!(nice_ceil(50.0), 50.0);
+        assert!((nice_ceil(0.012) - 0.02).abs() < 1e-15);
+    }
+
+    #[test]
+    fn compliance_slack_drift_and_offset_are_exact_without_noise() {
+        let a = Artefacts {
+            noise_rel: 0.0,
+            adc_bits: 0,
+            control_quantum: Some(0.0),
+            machine_compliance: 1e-6,
+            slack: 0.2e-3,
+            drift_per_s: 0.01,
+            response_offset: 0.5,
+            ..Artefacts::default()
+        };
+        let t = [0.0, 0.1, 0.2];
+        let c = [0.0, 1e-5, 2e-5];
+        let r = [0.0, 10.0, 20.0];
+        // Slack 0.2 mm at 1 mm/s = 0.2 s = 2 samples of 0.1 s.
+        let rec = apply(TestKind::Tension, &a, &t, &c, &r, &[0.0; 3], 1e-3, 0.1, 1);
+        assert_eq!(rec.time_s.len(), 5);
+        assert_eq!(rec.response_measured[0], 0.5);
+        assert!((rec.control_machine[1] - 1e-4).abs() < 1e-15);
+        assert!((rec.time_s[4] - 0.4).abs() < 1e-12);
+        assert!((rec.control_machine[4] - (2e-5 + 0.2e-3 + 20.0e-6)).abs() < 1e-15);
+        assert!((rec.response_measured[4] - (20.0 + 0.01 * 0.4 + 0.5)).abs() < 1e-12);
+    }
+
+    #[test]
+    fn noise_has_the_requested_level_and_is_seeded() {
+        let n = 20_000;
+        let t: Vec<f64> = (0..n).map(|i| i as f64 * 0.01).collect();
+        let c = vec![0.0; n];
+        let mut r = vec![0.0; n];
+        r[0] = 80.0; // full scale → 100 N
+        let a = Artefacts { noise_rel: 1e-3, adc_bits: 0, ..Artefacts::default() };
+        let rec = apply(TestKind::Tension, &a, &t, &c, &r, &[], 1e-3, 0.01, 7);
+        assert_eq!(rec.response_full_scale, 100.0);
+        let noise: Vec<f64> = rec.response_measured[1..].to_vec();
+        let sd = (noise.iter().map(|x| x * x).sum::<f64>() / noise.len() as f64).sqrt();
+        assert!((sd / 0.1 - 1.0).abs() < 0.03, "sd {sd}");
+        let again = apply(TestKind::Tension, &a, &t, &c, &r, &[], 1e-3, 0.01, 7);
+        assert_eq!(rec, again);
+        let other = apply(TestKind::Tension, &a, &t, &c, &r, &[], 1e-3, 0.01, 8);
+        assert_ne!(rec.response_measured, other.response_measured);
+    }
+
+    #[test]
+    fn quantisation_snaps_to_the_adc_step() {
+        let a = Artefacts { noise_rel: 0.0, adc_bits: 8, response_full_scale: Some(128.0), ..Artefacts::default() };
+        let rec = apply(TestKind::Tension, &a, &[0.0], &[0.0], &[3.3], &[], 1e-3, 0.1, 0);
+        assert_eq!(rec.response_quantum, 1.0);
+        assert_eq!(rec.response_measured[0], 3.0);
+    }
+}

@@ -1,0 +1,350 @@
+//! What a synthetic test is: the specimen, the truth law, the protocol the machine runs, the
+//! artefacts the rig adds and the file layout it writes. Plain serde data, so a TOML recipe can
+//! list specs; validation lives here too. No physics, no I/O.
+
+use std::collections::BTreeMap;
+
+use cablab_core::{Specimen, TestKind};
+use serde::{Deserialize, Serialize};
+
+use crate::error::{invalid, SynthError};
+
+/// One synthetic test: everything [`crate::generate`] needs, SI throughout.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SynthSpec {
+    /// The kind of test the virtual machine runs.
+    pub kind: TestKind,
+    /// Specimen label, diameter and free length (support span for `three_point`), SI.
+    pub specimen: Specimen,
+    /// Baseline law name in the laws registry (`linear`, `piecewise_linear`, `elastoplastic`, …).
+    pub law: String,
+    /// Parameters of the baseline law, registry names, SI (e.g. `EA`, `F_y`, `H`).
+    #[serde(default)]
+    pub params: BTreeMap<String, f64>,
+    /// Optional extension law layered on the baseline (an effect name of the law registry).
+    #[serde(default)]
+    pub extension: Option<Extension>,
+    /// Test-level effects that are not sectional laws (support friction of the three-point rig).
+    #[serde(default)]
+    pub rig: Rig,
+    /// What the machine does.
+    pub protocol: Protocol,
+    /// What the rig adds to the truth before it is written.
+    #[serde(default)]
+    pub artefacts: Artefacts,
+    /// The export layout.
+    pub layout: Layout,
+    /// Seed of the artefact noise (ChaCha8): same spec and seed, same bytes.
+    #[serde(default)]
+    pub seed: u64,
+    /// Sampling rate of the logger, Hz.
+    pub sample_rate_hz: f64,
+    /// Output file name stem (without extension); defaults to the specimen label.
+    #[serde(default)]
+    pub file_stem: Option<String>,
+    /// Specimen number within its series (Bluehill writes it as the first header cell); default 1.
+    #[serde(default)]
+    pub specimen_number: Option<u32>,
+}
+
+/// An extension law (an effect of the diagnosis vocabulary) with its own parameters.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Extension {
+    /// Registry name of the extension (`kinematic_hardening`, `viscoelasticity`, …).
+    pub name: String,
+    /// Its parameters, registry names, SI.
+    #[serde(default)]
+    pub params: BTreeMap<String, f64>,
+}
+
+/// Test-level options of the simulated rig that belong to the rod model, not to the law.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Rig {
+    /// Coulomb friction coefficient where the rod slides over the three-point supports
+    /// (`support_friction` effect); 0 = frictionless.
+    #[serde(default)]
+    pub support_friction: f64,
+    /// Punch and support radius of the three-point rig, m (`None`: the rod crate's default).
+    #[serde(default)]
+    pub roller_radius_m: Option<f64>,
+}
+
+/// The machine program: steps run one after another from the unloaded state (control 0, t = 0).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Protocol {
+    /// The steps, in order.
+    pub steps: Vec<Step>,
+}
+
+/// One step of a protocol. Control values are the kind's control variable in SI (elongation m,
+/// twist angle rad, punch deflection m, end rotation rad); response values are force N or
+/// moment N m; rates are control units per second.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "step", rename_all = "snake_case", deny_unknown_fields)]
+pub enum Step {
+    /// Ramp the control linearly to `to` at `rate`.
+    Ramp {
+        /// Target control value.
+        to: f64,
+        /// Speed, control units per second (> 0).
+        rate: f64,
+    },
+    /// Hold the control for `duration_s`.
+    Hold {
+        /// Duration, s.
+        duration_s: f64,
+    },
+    /// `count` control-limited cycles: ramp to `upper`, dwell, ramp to `lower`, dwell.
+    Cycles {
+        /// Lower turning point (control).
+        lower: f64,
+        /// Upper turning point (control).
+        upper: f64,
+        /// Speed, control units per second.
+        rate: f64,
+        /// Number of cycles.
+        count: u32,
+        /// Dwell at each turning point, s.
+        #[serde(default)]
+        dwell_s: f64,
+    },
+    /// Ramp the control at `rate` (signed by the direction needed) until the response reaches
+    /// `response`; event detection on the simulated response. Gives up at `max_control`.
+    RampToResponse {
+        /// Response limit (N or N m).
+        response: f64,
+        /// Speed, control units per second.
+        rate: f64,
+        /// Control bound (absolute value) beyond which the search fails.
+        max_control: f64,
+    },
+    /// `count` response-limited cycles, as labs run tension: load until the response reaches
+    /// `upper`, dwell, unload until it falls to `lower` (a small preload), dwell.
+    ResponseCycles {
+        /// Lower response limit (the preload).
+        lower: f64,
+        /// Upper response limit.
+        upper: f64,
+        /// Speed, control units per second.
+        rate: f64,
+        /// Number of cycles.
+        count: u32,
+        /// Dwell at each turning point, s.
+        #[serde(default)]
+        dwell_s: f64,
+        /// Control bound (absolute value) beyond which the search fails.
+        max_control: f64,
+    },
+}
+
+/// What a real rig adds to the truth. Control and response values in SI.
+///
+/// Order of application (see [`crate::artefacts`]): slack travel and machine compliance change the
+/// control the machine reads; then drift, offset, noise and quantisation on each channel.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct Artefacts {
+    /// Standard deviation of Gaussian response noise, as a fraction of the load-cell full scale.
+    pub noise_rel: f64,
+    /// Standard deviation of Gaussian control noise, as a fraction of the largest |control|.
+    pub control_noise_rel: f64,
+    /// Load-cell full scale, SI; `None`: 1·2·5 series value at or above 1.25 × max |response|.
+    pub response_full_scale: Option<f64>,
+    /// Resolution of the response ADC in bits over ±full scale; 0 = no quantisation.
+    pub adc_bits: u32,
+    /// Control encoder step, SI; `None`: 0.1 µm (length) or 0.001° (angle).
+    pub control_quantum: Option<f64>,
+    /// Constant offset added to the response, SI (an untared load cell).
+    pub response_offset: f64,
+    /// Constant offset added to the control, SI.
+    pub control_offset: f64,
+    /// Linear drift of the response sensor, SI per second (`sensor_drift` effect).
+    pub drift_per_s: f64,
+    /// Machine compliance in series with the specimen, control unit per response unit
+    /// (m/N for tension and three-point, rad/(N m) for torsion and pure bending): the machine
+    /// reads control = specimen control + C·response (`machine_compliance` effect).
+    pub machine_compliance: f64,
+    /// Slack taken up before the specimen carries load, control units: the log starts with the
+    /// machine travelling this far at the first step's rate while the response reads zero.
+    pub slack: f64,
+}
+
+impl Default for Artefacts {
+    /// Realistic defaults of a well-kept rig: 0.05 % FS response noise, 16-bit ADC, encoder
+    /// quantisation, no offset, no drift, no compliance, no slack.
+    fn default() -> Self {
+        Artefacts {
+            noise_rel: 5e-4,
+            control_noise_rel: 0.0,
+            response_full_scale: None,
+            adc_bits: 16,
+            control_quantum: None,
+            response_offset: 0.0,
+            control_offset: 0.0,
+            drift_per_s: 0.0,
+            machine_compliance: 0.0,
+            slack: 0.0,
+        }
+    }
+}
+
+/// The export layouts the virtual lab writes (the readers in `cablab-ingest` support them).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Layout {
+    /// ZwickRoell testXpert II text export: Latin-1, tab, decimal comma, quoted metadata lines,
+    /// quoted names and units rows. Extension `.TXT`.
+    TestXpert,
+    /// Instron Bluehill CSV: UTF-8, specimen number as first header cell, units row in
+    /// parentheses, every value quoted, decimal point. Extension `.csv`.
+    BluehillCsv,
+    /// MTS 793 MPT `.dat`: Latin-1, German locale line, operator block, one `Datenerfassung`
+    /// block with names and units rows, tab, decimal comma. Extension `.dat`.
+    Mts793Dat,
+}
+
+impl Layout {
+    /// File extension the program writes.
+    pub fn extension(self) -> &'static str {
+        match self {
+            Layout::TestXpert => "TXT",
+            Layout::BluehillCsv => "csv",
+            Layout::Mts793Dat => "dat",
+        }
+    }
+}
+
+impl SynthSpec {
+    /// Checks every field the generator relies on; the error names the field.
+    pub fn validate(&self) -> Result<(), SynthError> {
+        if self.kind == TestKind::Unknown {
+            return Err(invalid("kind", "must be tension, torsion, three_point or pure_bending"));
+        }
+        let len = self.specimen.free_length_m.ok_or_else(|| {
+            invalid("specimen.free_length_m", "missing (free length, or support span for three_point)")
+        })?;
+        if !(len.is_finite() && len > 0.0) {
+            return Err(invalid("specimen.free_length_m", format!("must be > 0, got {len}")));
+        }
+        if let Some(d) = self.specimen.diameter_m {
+            if !(d.is_finite() && d > 0.0) {
+                return Err(invalid("specimen.diameter_m", format!("must be > 0, got {d}")));
+            }
+        }
+        if !(self.sample_rate_hz.is_finite() && self.sample_rate_hz > 0.0) {
+            return Err(invalid("sample_rate_hz", format!("must be > 0, got {}", self.sample_rate_hz)));
+        }
+        if self.protocol.steps.is_empty() {
+            return Err(invalid("protocol.steps", "empty protocol"));
+        }
+        for (i, s) in self.protocol.steps.iter().enumerate() {
+            let f = |name: &str| format!("protocol.steps[{i}].{name}");
+            let pos = |name: &str, v: f64| {
+                if v.is_finite() && v > 0.0 {
+                    Ok(())
+                } else {
+                    Err(invalid(f(name), format!("must be > 0, got {v}")))
+                }
+            };
+            let nonneg = |name: &str, v: f64| {
+                if v.is_finite() && v >= 0.0 {
+                    Ok(())
+                } else {
+                    Err(invalid(f(name), format!("must be >= 0, got {v}")))
+                }
+            };
+            match s {
+                Step::Ramp { to, rate } => {
+                    pos("rate", *rate)?;
+                    if !to.is_finite() {
+                        return Err(invalid(f("to"), "must be finite"));
+                    }
+                }
+                Step::Hold { duration_s } => nonneg("duration_s", *duration_s)?,
+                Step::Cycles { lower, upper, rate, count, dwell_s } => {
+                    pos("rate", *rate)?;
+                    nonneg("dwell_s", *dwell_s)?;
+                    if !(lower.is_finite() && upper.is_finite() && upper > lower) {
+                        return Err(invalid(f("upper"), format!("must exceed lower ({lower}), got {upper}")));
+                    }
+                    if *count == 0 {
+                        return Err(invalid(f("count"), "must be >= 1"));
+                    }
+                }
+                Step::RampToResponse { response, rate, max_control } => {
+                    pos("rate", *rate)?;
+                    pos("max_control", *max_control)?;
+                    if !response.is_finite() {
+                        return Err(invalid(f("response"), "must be finite"));
+                    }
+                }
+                Step::ResponseCycles { lower, upper, rate, count, dwell_s, max_control } => {
+                    pos("rate", *rate)?;
+                    pos("max_control", *max_control)?;
+                    nonneg("dwell_s", *dwell_s)?;
+                    if !(lower.is_finite() && upper.is_finite() && upper > lower) {
+                        return Err(invalid(f("upper"), format!("must exceed lower ({lower}), got {upper}")));
+                    }
+                    if *count == 0 {
+                        return Err(invalid(f("count"), "must be >= 1"));
+                    }
+                }
+            }
+        }
+        let a = &self.artefacts;
+        for (name, v) in [
+            ("artefacts.noise_rel", a.noise_rel),
+            ("artefacts.control_noise_rel", a.control_noise_rel),
+            ("artefacts.machine_compliance", a.machine_compliance),
+            ("artefacts.slack", a.slack),
+        ] {
+            if !(v.is_finite() && v >= 0.0) {
+                return Err(invalid(name, format!("must be >= 0, got {v}")));
+            }
+        }
+        if let Some(fs) = a.response_full_scale {
+            if !(fs.is_finite() && fs > 0.0) {
+                return Err(invalid("artefacts.response_full_scale", format!("must be > 0, got {fs}")));
+            }
+        }
+        if let Some(q) = a.control_quantum {
+            if !(q.is_finite() && q >= 0.0) {
+                return Err(invalid("artefacts.control_quantum", format!("must be >= 0, got {q}")));
+            }
+        }
+        if a.adc_bits > 32 {
+            return Err(invalid("artefacts.adc_bits", format!("at most 32, got {}", a.adc_bits)));
+        }
+        for (name, v) in [
+            ("artefacts.response_offset", a.response_offset),
+            ("artefacts.control_offset", a.control_offset),
+            ("artefacts.drift_per_s", a.drift_per_s),
+        ] {
+            if !v.is_finite() {
+                return Err(invalid(name, "must be finite"));
+            }
+        }
+        if !(self.rig.support_friction.is_finite() && self.rig.support_friction >= 0.0) {
+            return Err(invalid("rig.support_friction", "must be >= 0"));
+        }
+        Ok(())
+    }
+
+    /// The output file name: stem (or label, or kind) plus the layout's extension.
+    pub fn file_name(&self) -> String {
+        let stem = self
+            .file_stem
+            .clone()
+            .or_else(|| self.specimen.label.clone())
+            .unwrap_or_else(|| self.kind.as_str().to_string());
+        let safe: String = stem
+            .chars()
+            .map(|c| if c.is_ascii_alphanumeric() || "-_.".contains(c) { c } else { '_' })
+            .collect();
+        format!("{safe}.{}", self.layout.extension())
+    }
+}

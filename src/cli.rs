@@ -1,0 +1,282 @@
+//! The command line: argument definitions and dispatch. Thin by design — each subcommand parses
+//! its arguments into typed options and hands them to a function in [`crate::commands`].
+//!
+//! Exit codes: 0 success; 1 the work ran but something failed (a campaign with a failing test, a
+//! `verify` that found differences); 2 bad input or usage (unreadable file, unknown option value).
+
+use clap::{Args, Parser, Subcommand};
+use std::path::PathBuf;
+
+/// Evaluate mechanical test campaigns on cables and other slender specimens: read machine
+/// exports, characterise stiffness, yield and hysteresis, calibrate Cosserat-rod laws, simulate
+/// the tests and diagnose where and why the simulation misses the measurement.
+#[derive(Debug, Parser)]
+#[command(name = "cablab", version, propagate_version = true, max_term_width = 100)]
+pub struct Cli {
+    /// What to do.
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+/// The subcommands.
+#[derive(Debug, Subcommand)]
+pub enum Command {
+    /// Run a whole campaign (default: the bundled demo, pipelines/demo.toml) and write its report
+    /// folder under reports/.
+    Run(RunArgs),
+    /// Show what the reader finds in a raw export: layout, encoding, blocks, channels, metadata.
+    Inspect(InspectArgs),
+    /// Convert a raw export to the canonical record (SI units) as Parquet or CSV.
+    Convert(ConvertArgs),
+    /// Characterise one test: stiffness with 95% CI, modulus, yield point, cycles, behaviour.
+    Analyze(AnalyzeArgs),
+    /// Simulate one test in the geometrically exact rod model along a control path.
+    Simulate(SimulateArgs),
+    /// Diagnose the sim-to-real gap of one or more tests of one kind.
+    Diagnose(DiagnoseArgs),
+    /// Generate realistic raw test logs from a truth model (the virtual lab).
+    Synth(SynthArgs),
+    /// Rerun a campaign from its manifest and report any output that differs.
+    Verify(VerifyArgs),
+    /// Measure speed: ingest throughput, rod solver, diagnosis, campaign scale, blind check.
+    Bench(BenchArgs),
+}
+
+/// How to read a raw file (all optional: the reader detects layout and channels itself).
+#[derive(Debug, Clone, Args, Default)]
+pub struct ReaderArgs {
+    /// Force the file layout instead of detecting it (mts793_dat, mts_testsuite_csv,
+    /// mts_testsuite_xml, bluehill_csv, wavematrix_csv, testxpert_ascii, nexygen_text,
+    /// catman_ascii, delimited).
+    #[arg(long, value_name = "LAYOUT")]
+    pub format: Option<String>,
+    /// Use this data block (1-based) when the file holds several.
+    #[arg(long, value_name = "N")]
+    pub block: Option<usize>,
+    /// Name of the time column (overrides detection).
+    #[arg(long, value_name = "COLUMN")]
+    pub time: Option<String>,
+    /// Name of the control column: what the machine drives (displacement, angle).
+    #[arg(long, value_name = "COLUMN")]
+    pub control: Option<String>,
+    /// Name of the response column: what the machine measures (force, torque, moment).
+    #[arg(long, value_name = "COLUMN")]
+    pub response: Option<String>,
+}
+
+/// `cablab run`.
+#[derive(Debug, Args)]
+pub struct RunArgs {
+    /// Campaign definition (TOML). Default: pipelines/demo.toml.
+    pub pipeline: Option<PathBuf>,
+    /// Worker threads (default: all cores).
+    #[arg(long, short = 'j', value_name = "N")]
+    pub jobs: Option<usize>,
+    /// Ignore the stage cache and recompute everything.
+    #[arg(long)]
+    pub no_cache: bool,
+    /// No progress bars (also when stderr is not a terminal).
+    #[arg(long, short = 'q')]
+    pub quiet: bool,
+    /// Skip the gap diagnosis (characterisation, calibration and reports only).
+    #[arg(long)]
+    pub no_diagnosis: bool,
+}
+
+/// `cablab inspect`.
+#[derive(Debug, Args)]
+pub struct InspectArgs {
+    /// The raw export to inspect.
+    pub file: PathBuf,
+    /// Print JSON (the keys of the scripted contract) instead of a readable summary.
+    #[arg(long)]
+    pub json: bool,
+    /// Set the test kind when the file does not say (tension, torsion, three-point, pure-bending).
+    #[arg(long, value_name = "KIND")]
+    pub kind: Option<String>,
+    #[command(flatten)]
+    pub reader: ReaderArgs,
+}
+
+/// `cablab convert`.
+#[derive(Debug, Args)]
+pub struct ConvertArgs {
+    /// The raw export to convert.
+    pub file: PathBuf,
+    /// Output file: .parquet or .csv (written atomically).
+    #[arg(long, short = 'o', value_name = "OUT")]
+    pub output: PathBuf,
+    /// Set the test kind when the file does not say.
+    #[arg(long, value_name = "KIND")]
+    pub kind: Option<String>,
+    #[command(flatten)]
+    pub reader: ReaderArgs,
+}
+
+/// `cablab analyze`.
+#[derive(Debug, Args)]
+pub struct AnalyzeArgs {
+    /// The raw export of one test.
+    pub file: PathBuf,
+    /// Test kind: tension, torsion, three-point or pure-bending.
+    #[arg(long, value_name = "KIND")]
+    pub kind: String,
+    /// Free length between the clamps, or the support span for three-point bending, in mm
+    /// (default: from the file's metadata).
+    #[arg(long, value_name = "MM")]
+    pub length_mm: Option<f64>,
+    /// Specimen diameter in mm, for Young's modulus (default: from the file's metadata).
+    #[arg(long, value_name = "MM")]
+    pub diameter_mm: Option<f64>,
+    /// Elastic fit window in the kind's sectional control variable (strain, twist 1/m,
+    /// deflection m or curvature 1/m), as FROM,TO. Default: found automatically.
+    #[arg(long, value_name = "FROM,TO", value_delimiter = ',', num_args = 2)]
+    pub fit_window: Option<Vec<f64>>,
+    /// Machine compliance to subtract from the control channel, in SI (m/N or rad/(N m)).
+    #[arg(long, value_name = "C")]
+    pub compliance: Option<f64>,
+    /// Poisson ratio used for the torsion modulus (G = E / (2 (1 + nu))).
+    #[arg(long, default_value_t = 0.5, value_name = "NU")]
+    pub nu: f64,
+    /// Print JSON (the keys of the scripted contract).
+    #[arg(long)]
+    pub json: bool,
+    #[command(flatten)]
+    pub reader: ReaderArgs,
+}
+
+/// `cablab simulate`.
+#[derive(Debug, Args)]
+pub struct SimulateArgs {
+    /// Test kind: tension, torsion, three-point or pure-bending.
+    #[arg(long, value_name = "KIND")]
+    pub kind: String,
+    /// Free length, or the support span for three-point bending, in mm.
+    #[arg(long, value_name = "MM")]
+    pub length_mm: f64,
+    /// Constitutive law: linear, piecewise_linear, elastoplastic, or an extension
+    /// (kinematic_hardening, stiffness_degradation, viscoelasticity, friction_hysteresis).
+    #[arg(long, value_name = "LAW")]
+    pub law: String,
+    /// A law parameter in SI, e.g. EI=1.37e-3 (repeat for each).
+    #[arg(long = "param", value_name = "NAME=VALUE")]
+    pub params: Vec<String>,
+    /// Control path in SI (elongation m, twist rad, deflection m, end rotation rad), driven
+    /// piecewise linearly from the unloaded state, e.g. 0,0.002,0.
+    #[arg(long, value_name = "V0,V1,...", value_delimiter = ',', allow_hyphen_values = true)]
+    pub path: Vec<f64>,
+    /// Largest control increment per step (SI); default: chosen for accuracy.
+    #[arg(long, value_name = "DV")]
+    pub max_increment: Option<f64>,
+    /// Rod elements (three-point bending).
+    #[arg(long, default_value_t = 40, value_name = "N")]
+    pub elements: usize,
+    /// Punch radius in mm (three-point; 0 = a point punch).
+    #[arg(long, default_value_t = 0.0, value_name = "MM")]
+    pub punch_radius_mm: f64,
+    /// Support radius in mm (three-point; 0 = point supports).
+    #[arg(long, default_value_t = 0.0, value_name = "MM")]
+    pub support_radius_mm: f64,
+    /// Coulomb friction coefficient at the supports (three-point).
+    #[arg(long, default_value_t = 0.0, value_name = "MU")]
+    pub support_friction: f64,
+    /// Print JSON with `control` and `response` arrays.
+    #[arg(long)]
+    pub json: bool,
+    /// Write the simulated curve to a .csv, .parquet or .json file.
+    #[arg(long, short = 'o', value_name = "OUT")]
+    pub output: Option<PathBuf>,
+}
+
+/// `cablab diagnose`.
+#[derive(Debug, Args)]
+pub struct DiagnoseArgs {
+    /// Raw exports of tests of one kind (several: a joint diagnosis).
+    #[arg(required = true)]
+    pub files: Vec<PathBuf>,
+    /// Test kind: tension, torsion, three-point or pure-bending.
+    #[arg(long, value_name = "KIND")]
+    pub kind: String,
+    /// Free length or span in mm (default: from each file's metadata).
+    #[arg(long, value_name = "MM")]
+    pub length_mm: Option<f64>,
+    /// Diameter in mm (default: from the metadata; only used for reporting moduli).
+    #[arg(long, value_name = "MM")]
+    pub diameter_mm: Option<f64>,
+    /// Baseline law the candidates are added to.
+    #[arg(long, default_value = "elastoplastic", value_name = "LAW")]
+    pub baseline: String,
+    /// Only try these effects (comma-separated vocabulary names).
+    #[arg(long, value_name = "EFFECTS", value_delimiter = ',')]
+    pub candidates: Option<Vec<String>>,
+    /// Also climb the ladder: from linear elasticity, add one effect at a time until the
+    /// held-out gap reaches the noise floor.
+    #[arg(long)]
+    pub ladder: bool,
+    /// Print JSON (the keys of the scripted contract).
+    #[arg(long)]
+    pub json: bool,
+    #[command(flatten)]
+    pub reader: ReaderArgs,
+}
+
+/// `cablab synth`.
+#[derive(Debug, Args)]
+pub struct SynthArgs {
+    /// A recipe (TOML) listing many logs, e.g. pipelines/demo_recipe.toml.
+    #[arg(long, value_name = "RECIPE")]
+    pub recipe: Option<PathBuf>,
+    /// One log from a spec file (TOML, one SynthSpec).
+    #[arg(long, value_name = "SPEC", conflicts_with = "recipe")]
+    pub spec: Option<PathBuf>,
+    /// Output folder (recipe) or file (spec).
+    #[arg(long, short = 'o', value_name = "OUT")]
+    pub out: PathBuf,
+}
+
+/// `cablab verify`.
+#[derive(Debug, Args)]
+pub struct VerifyArgs {
+    /// The manifest.json of a campaign report folder.
+    pub manifest: PathBuf,
+    /// Worker threads for the rerun.
+    #[arg(long, short = 'j', value_name = "N")]
+    pub jobs: Option<usize>,
+}
+
+/// `cablab bench`.
+#[derive(Debug, Args)]
+pub struct BenchArgs {
+    /// What to measure.
+    #[command(subcommand)]
+    pub what: BenchWhat,
+}
+
+/// The benchmarks.
+#[derive(Debug, Subcommand)]
+pub enum BenchWhat {
+    /// Campaign scale: generate N tests of S samples and run them end to end (no diagnosis).
+    Scale {
+        /// Number of tests.
+        #[arg(long, default_value_t = 1000)]
+        tests: usize,
+        /// Samples per test.
+        #[arg(long, default_value_t = 20000)]
+        samples: usize,
+        /// Worker threads.
+        #[arg(long, short = 'j')]
+        jobs: Option<usize>,
+        /// Keep the generated campaign in this folder (default: a temporary one).
+        #[arg(long)]
+        keep: Option<PathBuf>,
+    },
+    /// The blind check of the diagnosis: withheld effects × noise × seeds × layouts + null cases.
+    Blind {
+        /// Seeds per cell of the matrix.
+        #[arg(long, default_value_t = 3)]
+        seeds: u64,
+        /// Write the report (Markdown) here as well as to stdout.
+        #[arg(long, short = 'o')]
+        output: Option<PathBuf>,
+    },
+}
