@@ -5,7 +5,11 @@
 //! [`cablab_rod`] → [`cablab_diagnose`] → [`cablab_report`], with [`pipeline`] orchestrating.
 //! See ARCHITECTURE.md for the code map and the invariants.
 
+pub mod bridge;
+pub mod cli;
+pub mod commands;
 pub mod output;
+pub mod text;
 pub mod pipeline;
 
 pub use cablab_core as core;

@@ -1,1 +1,6 @@
-//! todo
+//! `cablab diagnose` (being wired).
+use super::{CliError, CmdResult};
+/// Run.
+pub fn run(_a: crate::cli::DiagnoseArgs) -> CmdResult {
+    Err(CliError::failed(anyhow::anyhow!("not wired yet")))
+}

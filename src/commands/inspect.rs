@@ -1,1 +1,68 @@
-//! todo
+//! `cablab inspect`: what the reader found in a raw export (CONTRACT.md).
+
+use super::{parse_kind, print_json, CliError, CmdResult};
+use crate::cli::InspectArgs;
+use std::process::ExitCode;
+
+/// Run `cablab inspect`.
+pub fn run(a: InspectArgs) -> CmdResult {
+    let kind = a.kind.as_deref().map(parse_kind).transpose()?;
+    let opts = crate::bridge::read_options(&a.reader, kind).map_err(CliError::input)?;
+    let rec = cablab_ingest::read_path(&a.file, &opts).map_err(CliError::input)?;
+    for w in &rec.warnings {
+        eprintln!("cablab: warning: {w}");
+    }
+    let report = rec.inspect();
+    if a.json {
+        return print_json(&report).map(|_| ExitCode::SUCCESS);
+    }
+    let p = &rec.provenance;
+    println!("file      {}", p.path);
+    println!("sha256    {}", p.sha256);
+    println!("layout    {}  ({})", p.format.as_str(), p.reason);
+    println!("encoding  {}   separator {}   decimal {}", p.encoding, p.separator, p.decimal);
+    println!("kind      {}  ({})", rec.kind, rec.kind_reason);
+    let sp = &rec.specimen;
+    println!(
+        "specimen  {}   diameter {}   length/span {}",
+        sp.label.as_deref().unwrap_or("-"),
+        sp.diameter_m.map_or("-".into(), |d| format!("{:.4} mm", d * 1e3)),
+        sp.free_length_m.map_or("-".into(), |l| format!("{:.4} mm", l * 1e3)),
+    );
+    if rec.blocks.len() > 1 {
+        println!("blocks    {} (using block {}; choose with --block N)", rec.blocks.len(), rec.main_block);
+        for b in &rec.blocks {
+            println!(
+                "  #{:<2} lines {:>6}-{:<6} {:>7} rows  {}",
+                b.index,
+                b.first_data_line,
+                b.last_data_line,
+                b.rows,
+                b.title.as_deref().unwrap_or("")
+            );
+        }
+    }
+    println!("rows      {}", report.rows);
+    println!();
+    println!("{:<28} {:<10} {:<6} {:<9} {:>13} {:>13}", "channel", "unit", "SI", "role", "min (SI)", "max (SI)");
+    for c in &report.channels {
+        let f = |v: Option<f64>| v.map_or("-".to_string(), |x| format!("{x:.6e}"));
+        println!(
+            "{:<28} {:<10} {:<6} {:<9} {:>13} {:>13}",
+            c.name,
+            c.unit,
+            c.si_unit,
+            c.role.as_str(),
+            f(c.min),
+            f(c.max)
+        );
+    }
+    if !rec.metadata.is_empty() {
+        println!();
+        println!("metadata");
+        for (k, v) in &rec.metadata {
+            println!("  {k}: {v}");
+        }
+    }
+    Ok(ExitCode::SUCCESS)
+}

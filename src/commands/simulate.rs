@@ -82,7 +82,7 @@ pub fn run(a: SimulateArgs) -> CmdResult {
                 write_atomic(path, s.as_bytes()).map_err(CliError::failed)?;
             }
             "parquet" => {
-                let df = polars::prelude::DataFrame::new(vec![
+                let df = polars::prelude::DataFrame::new(curve.control.len(), vec![
                     polars::prelude::Column::new("control".into(), &curve.control),
                     polars::prelude::Column::new("response".into(), &curve.response),
                 ])

@@ -34,6 +34,18 @@ fn main() {
         eprintln!("case not generated: {e}");
     }
     let registry = Registry;
+    if let Some(pat) = get("--show") {
+        // Print the full diagnosis of the cases whose name contains the pattern.
+        let rod = Rod::default();
+        let ctx = Context { catalog: &registry, rod: Some(&rod) };
+        for c in cases.iter().filter(|c| c.name.contains(&pat)) {
+            match cablab_diagnose::diagnose(ctx, &c.tests, &DiagnoseOptions::default()) {
+                Ok(d) => println!("{}\n{}", c.name, serde_json::to_string_pretty(&d).unwrap_or_default()),
+                Err(e) => println!("{}: {e}", c.name),
+            }
+        }
+        return;
+    }
     let rod = Rod::default();
     let ctx = Context { catalog: &registry, rod: Some(&rod) };
     let report = run_matrix(ctx, &cases, &DiagnoseOptions::default());

@@ -86,7 +86,10 @@ pub struct Fit {
     pub rho1: f64,
     /// Effective number of independent fitted samples.
     pub n_eff: f64,
-    /// Starts run, and residual evaluations spent over all starts.
+    /// Directions of parameter space the data determine (eigenvalues of the Fisher information
+    /// on the unit axes of the free parameters whose σ is below 2 % of the range).
+    pub k_eff: usize,
+    /// Starts run.
     pub starts: usize,
     /// Residual evaluations over all starts.
     pub evaluations: usize,
@@ -234,38 +237,57 @@ fn finish(
     let at_bound: Vec<Option<&'static str>> =
         specs.iter().zip(&params).map(|(s, &p)| s.which_bound(p, 1e-3)).collect();
     let mut std_err = vec![None; k];
+    let mut k_eff = 0usize;
     if let (Some(r0), true) = (&r0, n > k) {
-        // Jacobian in physical units, steps relative to the value (inward at a bound).
+        // Jacobian on the unit axes u_j ∈ [0, 1] of each parameter's bounds (log or linear), so
+        // that "determined" means the same for every parameter: known to within 2 % of its range.
         let cols: Vec<Option<DVector<f64>>> = (0..k)
             .into_par_iter()
             .map(|j| {
                 let s = &specs[j];
-                let mut h = 1e-6 * params[j].abs().max((s.upper - s.lower).abs() * 1e-6);
-                if params[j] + h > s.upper {
-                    h = -h;
-                }
+                let u0 = s.fraction(params[j]);
+                let h = if u0 + 1e-6 > 1.0 { -1e-6 } else { 1e-6 };
                 let mut p = params.clone();
-                p[j] += h;
+                p[j] = s.at_fraction(u0 + h);
+                let dp = p[j] - params[j];
+                if dp == 0.0 {
+                    return Some(DVector::zeros(r0.len()));
+                }
                 residuals(fwd, data, &p).map(|r| (r - r0) / h)
             })
             .collect();
         if cols.iter().all(Option::is_some) {
-            let j = DMatrix::from_columns(&cols.into_iter().flatten().collect::<Vec<_>>());
-            let jtj = j.transpose() * &j;
-            // Scale to unit diagonal before inverting so that the SVD threshold is meaningful.
-            let d: Vec<f64> = (0..k).map(|i| jtj[(i, i)].sqrt()).collect();
-            let s2 = cost / (n - k) as f64 * (1.0 + rho1.max(0.0)) / (1.0 - rho1.max(0.0));
-            if d.iter().all(|&v| v > 0.0 && v.is_finite()) {
-                let scaled = DMatrix::from_fn(k, k, |a, b| jtj[(a, b)] / (d[a] * d[b]));
-                let svd = scaled.svd(true, true);
-                let smax = svd.singular_values.max();
-                let ok = svd.singular_values.iter().all(|&sv| sv > 1e-12 * smax);
-                if let (true, Ok(inv)) = (ok, svd.pseudo_inverse(1e-12 * smax)) {
-                    for i in 0..k {
-                        let v = inv[(i, i)] * s2 / (d[i] * d[i]);
-                        if v.is_finite() && v >= 0.0 {
-                            std_err[i] = Some(v.sqrt());
-                        }
+            let ju = DMatrix::from_columns(&cols.into_iter().flatten().collect::<Vec<_>>());
+            let infl = (1.0 + rho1.max(0.0)) / (1.0 - rho1.max(0.0));
+            let s2 = cost / (n - k) as f64 * infl;
+            // Free parameters: not at a bound.
+            let free: Vec<usize> = (0..k).filter(|&j| at_bound[j].is_none()).collect();
+            if !free.is_empty() {
+                let jf = DMatrix::from_fn(ju.nrows(), free.len(), |r, c| ju[(r, free[c])]);
+                let a = jf.transpose() * &jf;
+                let eig = a.symmetric_eigen();
+                let threshold = s2 / (0.02f64 * 0.02);
+                let det: Vec<usize> = (0..free.len()).filter(|&i| eig.eigenvalues[i] > threshold).collect();
+                k_eff = det.len();
+                for (c, &j) in free.iter().enumerate() {
+                    // Weight of parameter j in the undetermined directions.
+                    let undetermined: f64 = (0..free.len())
+                        .filter(|i| !det.contains(i))
+                        .map(|i| eig.eigenvectors[(c, i)].powi(2))
+                        .sum();
+                    if undetermined > 0.1 {
+                        continue;
+                    }
+                    let var_u: f64 = det.iter().map(|&i| eig.eigenvectors[(c, i)].powi(2) / eig.eigenvalues[i]).sum::<f64>() * s2;
+                    // Back to physical units: dp/du at the optimum.
+                    let sp = &specs[j];
+                    let u0 = sp.fraction(params[j]);
+                    let du = 1e-6;
+                    let (a0, b0) = (sp.at_fraction((u0 - du).max(0.0)), sp.at_fraction((u0 + du).min(1.0)));
+                    let dpdu = (b0 - a0) / ((u0 + du).min(1.0) - (u0 - du).max(0.0));
+                    let se = var_u.sqrt() * dpdu.abs();
+                    if se.is_finite() {
+                        std_err[j] = Some(se);
                     }
                 }
             }
@@ -280,6 +302,7 @@ fn finish(
         n_fit: n,
         rho1,
         n_eff,
+        k_eff,
         starts,
         evaluations,
     }

@@ -77,7 +77,7 @@ impl Default for DiagnoseOptions {
             candidates: None,
             ladder: false,
             holdout: HoldoutPolicy::LastCycle,
-            starts: 3,
+            starts: 4,
             seed: 1,
             fit: FitOptions::default(),
             noise: None,
@@ -140,6 +140,8 @@ pub struct Calibration {
     specs: Vec<ParamSpec>,
     #[serde(skip)]
     std: Vec<Option<f64>>,
+    /// Directions of parameter space the data determine.
+    pub k_eff: usize,
 }
 
 impl Calibration {
@@ -155,32 +157,25 @@ impl Calibration {
     pub fn std_err_of(&self, name: &str) -> Option<f64> {
         self.std_err.0.iter().find(|(n, _)| n == name).and_then(|p| p.1)
     }
-    /// Parameters the data determine (see the module doc): not at a bound, finite uncertainty,
-    /// 2σ interval clear of the bounds on the parameter's axis and of the value at which the
-    /// parameter's effect vanishes (0 for parameters whose range includes 0).
+    /// Effective number of parameters (see the module doc): the directions of parameter space
+    /// the data determine (free parameters only: one at a bound does not count), less the
+    /// parameters whose 2σ interval contains the value at which their effect vanishes (0, for
+    /// linear-axis parameters whose range includes or starts at 0).
     pub fn effective_params(&self) -> usize {
-        self.specs
+        let neutral = self
+            .specs
             .iter()
             .zip(&self.values)
             .zip(&self.std)
-            .filter(|((s, &p), se)| determined(s, p, **se))
-            .count()
-    }
-}
-
-fn determined(s: &ParamSpec, p: f64, se: Option<f64>) -> bool {
-    if s.at_bound(p, 1e-3) {
-        return false;
-    }
-    let Some(se) = se else { return false };
-    let (lo, hi) = (p - 2.0 * se, p + 2.0 * se);
-    if s.log_scale {
-        // On a log axis the interval must stay clear of the bounds and be narrower than a decade
-        // either way: a parameter known to within an order of magnitude only is not determined.
-        lo > s.lower && hi < s.upper && se < p
-    } else {
-        let neutral_inside = s.lower <= 0.0 && s.upper >= 0.0;
-        lo > s.lower && hi < s.upper && !(neutral_inside && lo <= 0.0 && hi >= 0.0)
+            .filter(|((s, &p), se)| {
+                !s.log_scale
+                    && s.lower <= 0.0
+                    && s.upper >= 0.0
+                    && !s.at_bound(p, 1e-3)
+                    && se.is_some_and(|se| p.abs() <= 2.0 * se)
+            })
+            .count();
+        self.k_eff.saturating_sub(neutral)
     }
 }
 
@@ -262,23 +257,31 @@ pub fn calibrate(ctx: Context, tests: &[DiagTest], model: &ModelSpec, opts: &Cal
         values: f.params,
         specs: fwd.specs().to_vec(),
         std: f.std_err,
+        k_eff: f.k_eff,
     })
 }
 
-/// Starting points: the warm/initial point, then quasi-random points spread over the bounds.
+/// Starting points: the warm point (if any, else the data-informed initial values), the
+/// data-informed initial values, then alternately perturbations of the first point (±30 % of each
+/// axis) and points anywhere in the bounds. Every start keeps 2 % off the bounds, where the
+/// sine map of the bounds has no gradient and a fit would stay stuck.
 fn make_starts(specs: &[ParamSpec], warm: Option<&ParamMap>, n: usize, seed: u64) -> Vec<Vec<f64>> {
+    let inside = |s: &ParamSpec, p: f64| s.at_fraction(s.fraction(p).clamp(0.02, 0.98));
+    let initial: Vec<f64> = specs.iter().map(|s| inside(s, s.initial)).collect();
     let first: Vec<f64> = specs
         .iter()
-        .map(|s| {
-            warm.and_then(|w| w.0.iter().find(|(k, _)| *k == s.name).map(|p| p.1))
-                .unwrap_or(s.initial)
-                .clamp(s.lower, s.upper)
+        .zip(&initial)
+        .map(|(s, &p0)| {
+            warm.and_then(|w| w.0.iter().find(|(k, _)| *k == s.name).map(|p| inside(s, p.1))).unwrap_or(p0)
         })
         .collect();
     let mut out = vec![first.clone()];
+    if first != initial {
+        out.push(initial);
+    }
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
-    for k in 1..n.max(1) {
-        // Alternate: a perturbation of the first point (±30 % of each axis) and a point anywhere.
+    let mut k = 1;
+    while out.len() < n.max(1) {
         let p = specs
             .iter()
             .zip(&first)
@@ -292,6 +295,7 @@ fn make_starts(specs: &[ParamSpec], warm: Option<&ParamMap>, n: usize, seed: u64
             })
             .collect();
         out.push(p);
+        k += 1;
     }
     out
 }
@@ -578,7 +582,9 @@ pub fn diagnose(ctx: Context, tests: &[DiagTest], opts: &DiagnoseOptions) -> Res
     .sqrt();
 
     let base_model = ModelSpec::law(&opts.baseline);
-    let base = score(ctx, tests, &base_model, Effect::None, &train, &held, &noise, None, opts)?;
+    // The baseline anchors every comparison: give it more starts.
+    let base_opts = DiagnoseOptions { starts: opts.starts + 2, ..opts.clone() };
+    let base = score(ctx, tests, &base_model, Effect::None, &train, &held, &noise, None, &base_opts)?;
     let cands: Vec<Effect> = match &opts.candidates {
         Some(c) => c.iter().copied().filter(|e| *e != Effect::None && !base_model.has(*e)).collect(),
         None => applicable(ctx, kind, &base_model),
@@ -673,6 +679,11 @@ fn compare(
     (scored, k)
 }
 
+/// A held-out gap (RMS in noise units) at or below this "fits to the noise floor": the
+/// systematic part is below half the noise (√(1.1² − 1) ≈ 0.46), which is about what an
+/// unmodelled encoder quantisation or the uncertainty of the noise estimate leaves.
+pub const NOISE_FLOOR_FIT: f64 = 1.1;
+
 /// The outcome of the comparison.
 struct Choice {
     effect: Effect,
@@ -707,7 +718,7 @@ fn choose(base: &Scored, scored: &[Scored]) -> Choice {
     let g0 = (base.rss_noise / n_held as f64).sqrt();
     // The set of models indistinguishable from the best.
     let mut set: Vec<usize> = (0..all.len()).filter(|&i| ics[i] - ic_best <= tol).collect();
-    if g0 <= 1.02 {
+    if g0 <= NOISE_FLOOR_FIT {
         set = vec![0];
     }
     set.sort_by(|&a, &b| {
@@ -789,7 +800,7 @@ fn ladder(
     };
     for _ in 0..6 {
         let g = (cur.rss_noise / cur.n_held as f64).sqrt();
-        if g <= 1.1 {
+        if g <= NOISE_FLOOR_FIT {
             break;
         }
         let cands = applicable(ctx, kind, &cur.model);

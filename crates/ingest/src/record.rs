@@ -238,7 +238,7 @@ pub(crate) fn build(mut raw: RawTable, opts: &ReadOptions, provenance: Provenanc
                 "{} data blocks ({}); reading block {main_block}{} (choose another with --block)",
                 blocks.len(),
                 blocks.iter().map(|b| format!("{}: {} rows", b.index, b.rows)).collect::<Vec<_>>().join(", "),
-                if opts.block.is_some() { "" } else { ", the longest" }
+                if opts.block.is_some() { "" } else { ", the longest (ties: the first)" }
             ),
         });
     }

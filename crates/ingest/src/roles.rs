@@ -267,7 +267,11 @@ pub(crate) fn specimen_from_metadata(meta: &[(String, String)]) -> (cablab_core:
     ];
     let find = |keys: &[&str]| -> Option<(String, String)> {
         for k in keys {
-            if let Some((key, v)) = meta.iter().find(|(key, v)| !v.trim().is_empty() && norm_key(key).starts_with(k)) {
+            let matches = |key: &str| {
+                let nk = norm_key(key);
+                nk == *k || nk.starts_with(&format!("{k} "))
+            };
+            if let Some((key, v)) = meta.iter().find(|(key, v)| !v.trim().is_empty() && matches(key)) {
                 return Some((key.clone(), v.clone()));
             }
         }

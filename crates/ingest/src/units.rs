@@ -223,7 +223,13 @@ pub fn split_name_unit(cell: &str) -> (String, String) {
             if let Some(pos) = c.rfind(open) {
                 let inner = c[pos + open.len_utf8()..c.len() - close.len_utf8()].trim();
                 let name = c[..pos].trim();
-                if !name.is_empty() && lookup(inner).is_some() {
+                // A known unit, or something shaped like one (short, no spaces): an unknown
+                // unit must still be reported as a unit, not swallowed into the name.
+                let unit_shaped = !inner.is_empty()
+                    && inner.chars().count() <= 10
+                    && !inner.contains(char::is_whitespace)
+                    && inner.chars().any(|ch| ch.is_alphabetic() || ch == '%' || ch == '°');
+                if !name.is_empty() && (lookup(inner).is_some() || unit_shaped) {
                     return (name.to_string(), inner.to_string());
                 }
             }
@@ -323,6 +329,7 @@ mod tests {
             ("Total Cycle Count(Linear Waveform)".into(), "".into())
         );
         assert_eq!(split_name_unit("_Time "), ("_Time".into(), "".into()));
+        assert_eq!(split_name_unit("Force (furlong)"), ("Force".into(), "furlong".into()));
         assert_eq!(split_name_unit("Ch 1 Weg"), ("Ch 1 Weg".into(), "".into()));
     }
 

@@ -54,9 +54,9 @@ mod tests {
     use cablab_core::TestKind;
     use std::collections::BTreeMap;
 
-    /// 5,000 samples of every registered law (bending, friction with 10 elements) stay fast.
+    /// 5,000 samples of every registered law (bending, friction with 10 elements) stay finite.
     #[test]
-    fn five_thousand_samples_are_fast() {
+    fn five_thousand_samples_of_every_law_are_finite() {
         let p = |kv: &[(&str, f64)]| {
             kv.iter()
                 .map(|(k, v)| (k.to_string(), *v))
@@ -87,19 +87,10 @@ mod tests {
         let t: Vec<f64> = (0..n).map(|i| 0.01 * i as f64).collect();
         for (name, params) in cases {
             let law = build(TestKind::PureBending, name, &params).unwrap();
-            // Best of 20 calls: robust against other jobs on the machine.
-            let mut per_call = f64::INFINITY;
             let mut m = Vec::new();
-            for _ in 0..20 {
-                let start = std::time::Instant::now();
-                drive_uniform_into(law.as_ref(), 3, &k, &t, &mut m);
-                per_call = per_call.min(start.elapsed().as_secs_f64());
-            }
-            eprintln!("{name}: {:.0} µs per 5,000 samples", per_call * 1e6);
+            drive_uniform_into(law.as_ref(), 3, &k, &t, &mut m);
             assert_eq!(m.len(), n);
-            assert!(m.iter().all(|x| x.is_finite()));
-            // Generous bound for a loaded 2-core CI machine; measured values are in the report.
-            assert!(per_call < 5e-3, "{name}: {per_call} s per 5,000 samples");
+            assert!(m.iter().all(|x| x.is_finite()), "{name}");
         }
     }
 

@@ -10,16 +10,19 @@
 //! * a bend, loops that do not close and a significant residual deformation → `elastoplastic`;
 //! * anything else (loops without a bend: friction, viscosity, drift; or no unloading to judge
 //!   reversibility by, while the first loading bends) → `other`.
+//!
 //! The yield point is the bend of an `elastoplastic` (or unjudgeable) test; a reversible bend is
 //! reported as the piecewise threshold K_t instead. Pure: numbers in, numbers out.
 
-use crate::condition::{correct_compliance, noise_level, segment, zero_offsets, Branch, Offsets, Segment};
+use crate::condition::{
+    correct_compliance, noise_level, segment, zero_offsets, Branch, Offsets, Segment,
+};
 use crate::elastic::{auto_elastic_range, user_elastic_range, ElasticRange, Hinge};
 use crate::elastica::ThreePointElastica;
 use crate::hysteresis::{cycles, CycleInputs, CycleResult};
 use crate::sectional::{
-    modulus_from_stiffness, sectional, sectional_unit, stiffness_factor, three_point_peak_curvature,
-    three_point_peak_moment, Geometry,
+    modulus_from_stiffness, sectional, sectional_unit, stiffness_factor,
+    three_point_peak_curvature, three_point_peak_moment, Geometry,
 };
 use crate::stats::linear_fit;
 use crate::MeasureError;
@@ -161,6 +164,23 @@ pub struct Toe {
     pub offset_control: f64,
 }
 
+/// Response change during a hold (relaxation or creep of the response at fixed control).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct HoldRelaxation {
+    /// Cycle of the hold.
+    pub cycle: usize,
+    /// First sample of the hold.
+    pub start: usize,
+    /// One past the last sample.
+    pub end: usize,
+    /// Mean machine control during the hold (original sign).
+    pub control: f64,
+    /// Mean response over the last tenth of the hold minus that over the first tenth.
+    pub response_change: f64,
+    /// Whether the change exceeds 3.29 standard errors of the two means (α = 10⁻³).
+    pub significant: bool,
+}
+
 /// Noise levels (σ) of the conditioned channels.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct Noise {
@@ -171,8 +191,9 @@ pub struct Noise {
 }
 
 /// Characterisation of one test; serialises to the contract's `analyze --json` object
-/// (`stiffness`, `modulus_pa`, `yield`, `cycles`, `behaviour`) plus extra keys. Nulls have a
-/// reason in `why` under the same key.
+/// (`stiffness`, `modulus_pa`, `yield`, `cycles`, `behaviour`) plus extra keys. Every null
+/// quantity has its reason in `why_by_key` under the quantity's key, and `why` is the same
+/// reasons as one string ("yield: ...; modulus_pa: ..."), null when nothing is missing.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Analysis {
     /// Test kind.
@@ -200,10 +221,24 @@ pub struct Analysis {
     pub noise: Noise,
     /// Cycles and branches.
     pub segments: Vec<Segment>,
+    /// Response change in every hold after the initial rest (relaxation: rate dependence).
+    pub holds: Vec<HoldRelaxation>,
     /// Warnings for the user.
     pub warnings: Vec<String>,
+    /// All reasons for null quantities as one string ("key: reason; ..."), or null.
+    pub why: Option<String>,
     /// Reasons for null quantities, keyed by field name.
-    pub why: BTreeMap<String, String>,
+    pub why_by_key: BTreeMap<String, String>,
+}
+
+/// Joins per-key reasons into one "key: reason; key: reason" string (None when empty).
+pub(crate) fn join_why(map: &BTreeMap<String, String>) -> Option<String> {
+    (!map.is_empty()).then(|| {
+        map.iter()
+            .map(|(k, v)| format!("{k}: {v}"))
+            .collect::<Vec<_>>()
+            .join("; ")
+    })
 }
 
 fn check_finite(channel: &'static str, v: &[f64]) -> Result<(), MeasureError> {
@@ -232,18 +267,30 @@ pub fn analyze(
         return Err(MeasureError::BadPoisson(opts.nu));
     }
     if control.len() != response.len() {
-        return Err(MeasureError::LengthMismatch { what: "control and response", left: control.len(), right: response.len() });
+        return Err(MeasureError::LengthMismatch {
+            what: "control and response",
+            left: control.len(),
+            right: response.len(),
+        });
     }
     if let Some(t) = time_s {
         if t.len() != control.len() {
-            return Err(MeasureError::LengthMismatch { what: "time and control", left: t.len(), right: control.len() });
+            return Err(MeasureError::LengthMismatch {
+                what: "time and control",
+                left: t.len(),
+                right: control.len(),
+            });
         }
         check_finite("time", t)?;
     }
     check_finite("control", control)?;
     check_finite("response", response)?;
     if control.len() < 10 {
-        return Err(MeasureError::TooFewSamples { what: "a test", need: 10, got: control.len() });
+        return Err(MeasureError::TooFewSamples {
+            what: "a test",
+            need: 10,
+            got: control.len(),
+        });
     }
     let mut warnings = Vec::new();
     let mut why = BTreeMap::new();
@@ -255,7 +302,10 @@ pub fn analyze(
     };
     let mut r = response.to_vec();
     let offsets = opts.zero_offsets.then(|| zero_offsets(&mut c, &mut r));
-    let noise = Noise { control: noise_level(&c), response: noise_level(&r) };
+    let noise = Noise {
+        control: noise_level(&c),
+        response: noise_level(&r),
+    };
 
     let segments = segment(time_s, &c)?;
     // Orientation of the first loading.
@@ -268,7 +318,11 @@ pub fn analyze(
         return Err(MeasureError::NoMotion);
     }
     let last_first = *first_idx.last().unwrap_or(&0);
-    let sign = if c[last_first] >= c[first_idx[0]] { 1.0 } else { -1.0 };
+    let sign = if c[last_first] >= c[first_idx[0]] {
+        1.0
+    } else {
+        -1.0
+    };
     let cm: Vec<f64> = c.iter().map(|v| sign * v).collect();
     let rm: Vec<f64> = r.iter().map(|v| sign * v).collect();
     let xs = sectional(kind, geom, &cm);
@@ -281,13 +335,20 @@ pub fn analyze(
         None => match auto_elastic_range(&fx, &fy) {
             Ok(e) => Some(e),
             Err(e) => {
-                why.insert("stiffness".into(), format!("no elastic range found on the first loading: {e}"));
+                why.insert(
+                    "stiffness".into(),
+                    format!("no elastic range found on the first loading: {e}"),
+                );
                 None
             }
         },
     };
     let stiffness = elastic.as_ref().map(|e| {
-        let w = if sign > 0.0 { e.window } else { [-e.window[1], -e.window[0]] };
+        let w = if sign > 0.0 {
+            e.window
+        } else {
+            [-e.window[1], -e.window[0]]
+        };
         Stiffness {
             value: e.fit.slope * factor,
             unit: kind.stiffness_unit(),
@@ -300,8 +361,11 @@ pub fn analyze(
         }
     });
     if let Some(s) = &stiffness {
-        if !(s.value > 0.0) {
-            warnings.push(format!("the elastic slope is not positive ({} {})", s.value, s.unit));
+        if s.value.is_nan() || s.value <= 0.0 {
+            warnings.push(format!(
+                "the elastic slope is not positive ({} {})",
+                s.value, s.unit
+            ));
         }
     }
 
@@ -312,7 +376,10 @@ pub fn analyze(
             None
         }
         (_, None) => {
-            why.insert("modulus_pa".into(), "the diameter is not known (give --diameter-mm)".into());
+            why.insert(
+                "modulus_pa".into(),
+                "the diameter is not known (give --diameter-mm)".into(),
+            );
             None
         }
     };
@@ -335,7 +402,9 @@ pub fn analyze(
     let bend: Option<Hinge> = elastic.as_ref().and_then(|e| e.bend);
     let judged: Vec<&CycleResult> = cyc.iter().filter(|c| c.coincide.is_some()).collect();
     let reversible = !judged.is_empty()
-        && judged.iter().all(|c| c.coincide == Some(true) && c.residual_significant != Some(true));
+        && judged
+            .iter()
+            .all(|c| c.coincide == Some(true) && c.residual_significant != Some(true));
     let permanent = cyc.iter().any(|c| c.residual_significant == Some(true));
     let behaviour = if judged.is_empty() {
         warnings.push("no unloading to judge reversibility by".into());
@@ -361,8 +430,16 @@ pub fn analyze(
     let machine_of = |x: f64| if three { x } else { x * l0 };
     let yield_point = match (bend, behaviour) {
         (Some(b), Behaviour::Elastoplastic | Behaviour::Other) => {
-            let ci = if sign > 0.0 { b.knee_x_ci95 } else { [-b.knee_x_ci95[1], -b.knee_x_ci95[0]] };
-            let cy = if sign > 0.0 { b.knee_y_ci95 } else { [-b.knee_y_ci95[1], -b.knee_y_ci95[0]] };
+            let ci = if sign > 0.0 {
+                b.knee_x_ci95
+            } else {
+                [-b.knee_x_ci95[1], -b.knee_x_ci95[0]]
+            };
+            let cy = if sign > 0.0 {
+                b.knee_y_ci95
+            } else {
+                [-b.knee_y_ci95[1], -b.knee_y_ci95[0]]
+            };
             Some(YieldPoint {
                 control: sign * b.knee_x,
                 response: sign * b.knee_y,
@@ -374,7 +451,11 @@ pub fn analyze(
             })
         }
         (Some(_), _) => {
-            why.insert("yield".into(), "the bend in the first loading is reversible: reported as the piecewise threshold".into());
+            why.insert(
+                "yield".into(),
+                "the bend in the first loading is reversible: reported as the piecewise threshold"
+                    .into(),
+            );
             None
         }
         (None, _) => {
@@ -390,11 +471,16 @@ pub fn analyze(
     let piecewise = match (bend, behaviour) {
         (Some(b), Behaviour::PiecewiseLinearElastic) => Some(Piecewise {
             threshold_control: sign * b.knee_x,
-            threshold_ci95: if sign > 0.0 { b.knee_x_ci95 } else { [-b.knee_x_ci95[1], -b.knee_x_ci95[0]] },
+            threshold_ci95: if sign > 0.0 {
+                b.knee_x_ci95
+            } else {
+                [-b.knee_x_ci95[1], -b.knee_x_ci95[0]]
+            },
             threshold_response: sign * b.knee_y,
             stiffness_1: b.slope_before * factor,
             stiffness_2: b.slope_after * factor,
-            threshold_peak_curvature: three.then(|| sign * three_point_peak_curvature(b.knee_x, l0)),
+            threshold_peak_curvature: three
+                .then(|| sign * three_point_peak_curvature(b.knee_x, l0)),
         }),
         _ => None,
     };
@@ -413,7 +499,10 @@ pub fn analyze(
             let wmax = fx[a..b].iter().fold(0.0f64, |m, v| m.max(v.abs())) / l0;
             let test_max = xs.iter().fold(0.0f64, |m, v| m.max(v.abs())) / l0;
             let mut corrected = None;
-            let pts: Option<Vec<f64>> = fx[a..b].iter().map(|w| tab.force_ratio(w / l0).map(|rho| w * rho)).collect();
+            let pts: Option<Vec<f64>> = fx[a..b]
+                .iter()
+                .map(|w| tab.force_ratio(w / l0).map(|rho| w * rho))
+                .collect();
             if let Some(xc) = pts {
                 if let Ok(f) = linear_fit(&xc, &fy[a..b]) {
                     corrected = Some(f.slope * factor);
@@ -426,8 +515,17 @@ pub fn analyze(
             }
             if test_max > limit {
                 warnings.push(format!(
-                    "three-point test reaches w/l0 = {test_max:.4}: beyond w/l0 = {limit:.4} eq. (3) and the peak curvature/moment estimates are not accurate"
+                    "three-point test reaches w/l0 = {test_max:.4}, beyond the small-deflection range (w/l0 <= {limit:.4}): there eq. (3) and the peak curvature/moment estimates are not accurate"
                 ));
+            }
+            if corrected.is_none() {
+                why.insert(
+                    "large_deflection".into(),
+                    format!(
+                        "the fit window goes beyond the elastica's range (w/l0 <= {:.3})",
+                        tab.max_w_over_span()
+                    ),
+                );
             }
             corrected.map(|cs| LargeDeflection {
                 corrected_stiffness: cs,
@@ -438,6 +536,10 @@ pub fn analyze(
         }
         _ => None,
     };
+    let holds = hold_relaxation(&segments, &c, &r);
+    if holds.iter().any(|h| h.significant) {
+        warnings.push("the response relaxes during holds: the material is rate dependent (viscous); rate-independent results are approximate".into());
+    }
     // Report cycles in the original orientation.
     let cycles_out: Vec<CycleResult> = cyc
         .into_iter()
@@ -463,7 +565,33 @@ pub fn analyze(
         offsets,
         noise,
         segments,
+        holds,
         warnings,
-        why,
+        why: join_why(&why),
+        why_by_key: why,
     })
+}
+
+/// Response change over each hold that is not the initial rest (see [`HoldRelaxation`]).
+fn hold_relaxation(segments: &[Segment], control: &[f64], response: &[f64]) -> Vec<HoldRelaxation> {
+    let z = crate::stats::normal_quantile(1.0 - 1e-3 / 2.0);
+    segments
+        .iter()
+        .filter(|s| s.branch == Branch::Hold && s.start > 0 && s.end - s.start >= 20)
+        .map(|s| {
+            let y = &response[s.start..s.end];
+            let b = (y.len() / 10).max(3);
+            let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len() as f64;
+            let change = mean(&y[y.len() - b..]) - mean(&y[..b]);
+            let sigma = noise_level(y);
+            HoldRelaxation {
+                cycle: s.cycle,
+                start: s.start,
+                end: s.end,
+                control: mean(&control[s.start..s.end]),
+                response_change: change,
+                significant: change.abs() > z * sigma * (2.0 / b as f64).sqrt(),
+            }
+        })
+        .collect()
 }

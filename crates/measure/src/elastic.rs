@@ -18,6 +18,9 @@
 //!    (or the branch end), then trimmed from either end by blocks of 5% while the block's mean
 //!    residual from the window's line differs from zero by more than 3 standard errors (the
 //!    residual must stay at the noise level), at most half the window.
+//! 5. Straightness: while a quadratic term over the window is significant against the measured
+//!    noise (|z| > 3.29, α = 10⁻³), the window loses a tenth at its curved end (top if concave,
+//!    bottom if convex), down to a fifth of its length: a rounded knee does not bend the line.
 //!
 //! What it does not do: decide whether a bend is yield or reversible (that needs the unloading,
 //! see [`crate::hysteresis`]), or convert slopes to stiffnesses (see [`crate::sectional`]).
@@ -88,7 +91,11 @@ pub fn segment_lines(x: &[f64], y: &[f64], max_segments: usize) -> Segmentation 
     let p = Prefix::new(&xs, &ys);
     let min_len = (n / 50).max(5);
     let (sse1, s1) = p.fit(0, n);
-    let mut best = Segmentation { breaks: vec![], slopes: vec![s1], sigma };
+    let mut best = Segmentation {
+        breaks: vec![],
+        slopes: vec![s1],
+        sigma,
+    };
     if max_segments < 2 || n < 2 * min_len {
         return best;
     }
@@ -104,7 +111,7 @@ pub fn segment_lines(x: &[f64], y: &[f64], max_segments: usize) -> Segmentation 
             b2 = (sse, c);
         }
     }
-    if !(sse1 - b2.0 > thr) {
+    if sse1 - b2.0 <= thr || b2.0.is_nan() {
         return best;
     }
     best.breaks = vec![b2.1];
@@ -133,14 +140,27 @@ fn mean(v: &[f64]) -> f64 {
     v.iter().sum::<f64>() / v.len().max(1) as f64
 }
 
-/// Noise σ of y about a straight line through (x, y), taken in sample order.
+/// Noise σ of y about a straight line through (x, y), taken in sample order (floored at 1e-5
+/// of the range of y).
 pub fn residual_noise(x: &[f64], y: &[f64]) -> f64 {
     let r = match linear_fit(x, y) {
-        Ok(f) => x.iter().zip(y).map(|(a, b)| b - f.at(*a)).collect::<Vec<f64>>(),
+        Ok(f) => x
+            .iter()
+            .zip(y)
+            .map(|(a, b)| b - f.at(*a))
+            .collect::<Vec<f64>>(),
         Err(_) => y.to_vec(),
     };
-    let (lo, hi) = y.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| (a.min(v), b.max(v)));
-    noise_level(&r).max(1e-12 * (hi - lo).abs()).max(f64::MIN_POSITIVE)
+    let (lo, hi) = y
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
+            (a.min(v), b.max(v))
+        });
+    // Floor: 1e-5 of the range (a 17-bit converter's resolution). It keeps noise-free curves
+    // from turning the prefix sums' rounding (~1e-16·Σy²) into "significant" breaks.
+    noise_level(&r)
+        .max(1e-5 * (hi - lo).abs())
+        .max(f64::MIN_POSITIVE)
 }
 
 /// A continuous two-slope fit y = a + b x + c (x − x_k)₊ with its knee.
@@ -187,11 +207,15 @@ fn hinge_at(x: &[f64], y: &[f64], xk: f64) -> Option<(f64, f64, f64, f64)> {
 /// grid, then a 101-point grid between the best point's neighbours; interval by profile SSE.
 pub fn hinge_fit(x: &[f64], y: &[f64], lo: f64, hi: f64) -> Option<Hinge> {
     let n = x.len();
-    if n < 8 || !(hi > lo) {
+    if n < 8 || hi.is_nan() || lo.is_nan() || hi <= lo {
         return None;
     }
     let (mx, my) = (mean(x), mean(y));
-    let sx = x.iter().map(|v| (v - mx).abs()).fold(0.0, f64::max).max(f64::MIN_POSITIVE);
+    let sx = x
+        .iter()
+        .map(|v| (v - mx).abs())
+        .fold(0.0, f64::max)
+        .max(f64::MIN_POSITIVE);
     let xs: Vec<f64> = x.iter().map(|v| (v - mx) / sx).collect();
     let ys: Vec<f64> = y.iter().map(|v| v - my).collect();
     let to_s = |v: f64| (v - mx) / sx;
@@ -226,8 +250,16 @@ pub fn hinge_fit(x: &[f64], y: &[f64], lo: f64, hi: f64) -> Option<Hinge> {
     let s2 = sse / (n as f64 - 4.0).max(1.0);
     let accept = sse + CHI2_1_95 * s2;
     let ok: Vec<&(f64, f64, f64)> = evals.iter().filter(|e| e.1 <= accept).collect();
-    let ci_x = ok.iter().fold([f64::INFINITY, f64::NEG_INFINITY], |acc, e| [acc[0].min(e.0), acc[1].max(e.0)]);
-    let ci_y = ok.iter().fold([f64::INFINITY, f64::NEG_INFINITY], |acc, e| [acc[0].min(e.2), acc[1].max(e.2)]);
+    let ci_x = ok
+        .iter()
+        .fold([f64::INFINITY, f64::NEG_INFINITY], |acc, e| {
+            [acc[0].min(e.0), acc[1].max(e.0)]
+        });
+    let ci_y = ok
+        .iter()
+        .fold([f64::INFINITY, f64::NEG_INFINITY], |acc, e| {
+            [acc[0].min(e.2), acc[1].max(e.2)]
+        });
     Some(Hinge {
         knee_x: best.1,
         knee_y: a + b * to_s(best.1) + my,
@@ -267,7 +299,11 @@ fn index_range(x: &[f64], lo: f64, hi: f64) -> (usize, usize) {
 }
 
 fn x_span(x: &[f64], a: usize, b: usize) -> (f64, f64) {
-    x[a..b].iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(p, q), &v| (p.min(v), q.max(v)))
+    x[a..b]
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(p, q), &v| {
+            (p.min(v), q.max(v))
+        })
 }
 
 /// Locates toe and bend on a loading branch (x increasing) without fitting a window.
@@ -300,7 +336,11 @@ pub fn find_toe_and_bend(x: &[f64], y: &[f64]) -> (Option<Hinge>, Option<Hinge>,
 pub fn auto_elastic_range(x: &[f64], y: &[f64]) -> Result<ElasticRange, MeasureError> {
     let n = x.len();
     if n < 10 {
-        return Err(MeasureError::TooFewSamples { what: "the first loading branch", need: 10, got: n });
+        return Err(MeasureError::TooFewSamples {
+            what: "the first loading branch",
+            need: 10,
+            got: n,
+        });
     }
     let (toe, bend, sigma) = find_toe_and_bend(x, y);
     let lo = toe.map_or(f64::NEG_INFINITY, |t| t.knee_x_ci95[1]);
@@ -316,35 +356,71 @@ pub fn auto_elastic_range(x: &[f64], y: &[f64]) -> Result<ElasticRange, MeasureE
         return Err(MeasureError::NoElasticRange);
     }
     let (a, b) = trim_window(x, y, a, b)?;
+    let (a, b) = straighten(x, y, a, b, sigma);
     let fit = linear_fit(&x[a..b], &y[a..b])?;
     let (w0, w1) = x_span(x, a, b);
-    Ok(ElasticRange { window_idx: (a, b), window: [w0, w1], fit, toe, bend, sigma, automatic: true })
+    Ok(ElasticRange {
+        window_idx: (a, b),
+        window: [w0, w1],
+        fit,
+        toe,
+        bend,
+        sigma,
+        automatic: true,
+    })
 }
 
 /// Elastic fit in a user-set window `[from, to]` of x; toe and bend are still located.
-pub fn user_elastic_range(x: &[f64], y: &[f64], from: f64, to: f64) -> Result<ElasticRange, MeasureError> {
+pub fn user_elastic_range(
+    x: &[f64],
+    y: &[f64],
+    from: f64,
+    to: f64,
+) -> Result<ElasticRange, MeasureError> {
     let (lo, hi) = (from.min(to), from.max(to));
     let (a, b) = index_range(x, lo, hi);
     let idx: Vec<usize> = (a..b).filter(|&i| x[i] >= lo && x[i] <= hi).collect();
     if idx.len() < 3 {
-        return Err(MeasureError::WindowTooSmall { from, to, n: idx.len() });
+        return Err(MeasureError::WindowTooSmall {
+            from,
+            to,
+            n: idx.len(),
+        });
     }
     let xs: Vec<f64> = idx.iter().map(|&i| x[i]).collect();
     let ys: Vec<f64> = idx.iter().map(|&i| y[i]).collect();
     let fit = linear_fit(&xs, &ys)?;
-    let (toe, bend, sigma) = if x.len() >= 10 { find_toe_and_bend(x, y) } else { (None, None, 0.0) };
-    Ok(ElasticRange { window_idx: (a, b), window: [lo, hi], fit, toe, bend, sigma, automatic: false })
+    let (toe, bend, sigma) = if x.len() >= 10 {
+        find_toe_and_bend(x, y)
+    } else {
+        (None, None, 0.0)
+    };
+    Ok(ElasticRange {
+        window_idx: (a, b),
+        window: [lo, hi],
+        fit,
+        toe,
+        bend,
+        sigma,
+        automatic: false,
+    })
 }
 
 /// Trims the window `a..b` by blocks while an end block's mean residual is beyond 3 standard
 /// errors (at most half the window).
-fn trim_window(x: &[f64], y: &[f64], mut a: usize, mut b: usize) -> Result<(usize, usize), MeasureError> {
+fn trim_window(
+    x: &[f64],
+    y: &[f64],
+    mut a: usize,
+    mut b: usize,
+) -> Result<(usize, usize), MeasureError> {
     let n0 = b - a;
     let block = (n0 / 20).max(5);
     while b - a >= 3 * block && (b - a) * 2 > n0 {
         let fit = linear_fit(&x[a..b], &y[a..b])?;
         let se = 3.0 * fit.residual_sd / (block as f64).sqrt();
-        let mean_res = |p: usize, q: usize| (p..q).map(|i| y[i] - fit.at(x[i])).sum::<f64>() / (q - p) as f64;
+        let mean_res =
+            |p: usize, q: usize| (p..q).map(|i| y[i] - fit.at(x[i])).sum::<f64>() / (q - p) as f64;
         let (top, bottom) = (mean_res(b - block, b), mean_res(a, a + block));
         if top.abs() > se && top.abs() >= bottom.abs() {
             b -= block;
@@ -355,6 +431,57 @@ fn trim_window(x: &[f64], y: &[f64], mut a: usize, mut b: usize) -> Result<(usiz
         }
     }
     Ok((a, b))
+}
+
+/// Quadratic coefficient of y = c0 + c1 x + c2 x² over `a..b` and its z-score for a known
+/// noise σ (x centred and scaled for conditioning).
+fn curvature_z(x: &[f64], y: &[f64], a: usize, b: usize, sigma: f64) -> Option<f64> {
+    let xs = &x[a..b];
+    let m = mean(xs);
+    let sc = xs.iter().map(|v| (v - m).abs()).fold(0.0, f64::max);
+    if sc <= 0.0 {
+        return None;
+    }
+    let mut mat = Matrix3::<f64>::zeros();
+    let mut v = Vector3::<f64>::zeros();
+    for (&xi, &yi) in xs.iter().zip(&y[a..b]) {
+        let u = (xi - m) / sc;
+        let phi = Vector3::new(1.0, u, u * u);
+        mat += phi * phi.transpose();
+        v += phi * yi;
+    }
+    let inv = mat.try_inverse()?;
+    let c = inv * v;
+    let se = sigma * inv[(2, 2)].max(0.0).sqrt();
+    (se > 0.0).then(|| c[2] / se)
+}
+
+/// Shrinks the window while its curvature is significant (|z| of the quadratic term above
+/// 3.29, α = 10⁻³, with the measured noise σ): a concave window loses its top tenth (the bend is
+/// near), a convex one its bottom tenth (a gradual toe), down to a fifth of the window or 10
+/// samples. So a rounded knee does not bend the elastic line.
+fn straighten(x: &[f64], y: &[f64], mut a: usize, mut b: usize, sigma: f64) -> (usize, usize) {
+    let z_crit = crate::stats::normal_quantile(1.0 - 1e-3 / 2.0);
+    let n0 = b - a;
+    let min_len = (n0 / 5).max(10);
+    while b - a > min_len {
+        let Some(z) = curvature_z(x, y, a, b, sigma) else {
+            break;
+        };
+        if z.abs() <= z_crit {
+            break;
+        }
+        let cut = ((b - a) / 10).max(1).min(b - a - min_len);
+        if cut == 0 {
+            break;
+        }
+        if z < 0.0 {
+            b -= cut;
+        } else {
+            a += cut;
+        }
+    }
+    (a, b)
 }
 
 /// Initial straight part of a branch that starts at a turning point (unloading, reloading):
@@ -390,7 +517,10 @@ mod tests {
         let x: Vec<f64> = (0..400).map(|i| i as f64 / 400.0).collect();
         let mut rng = ChaCha8Rng::seed_from_u64(3);
         let d = Normal::new(0.0, 0.005).unwrap();
-        let y: Vec<f64> = x.iter().map(|&v| bilinear(v, 2.0, 0.3, 0.37) + d.sample(&mut rng)).collect();
+        let y: Vec<f64> = x
+            .iter()
+            .map(|&v| bilinear(v, 2.0, 0.3, 0.37) + d.sample(&mut rng))
+            .collect();
         let h = hinge_fit(&x, &y, 0.1, 0.9).unwrap();
         assert!((h.knee_x - 0.37).abs() < 0.005, "{h:?}");
         assert!(h.knee_x_ci95[0] <= h.knee_x && h.knee_x <= h.knee_x_ci95[1]);

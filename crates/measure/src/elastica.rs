@@ -36,7 +36,11 @@ pub fn elastica_point(support_angle_rad: f64) -> ElasticaPoint {
         let v = i as f64 * h;
         let u = v * v;
         // 2v/√(sin v²) → 2 as v → 0.
-        let jac = if v == 0.0 { 2.0 } else { 2.0 * v / u.sin().sqrt() };
+        let jac = if v == 0.0 {
+            2.0
+        } else {
+            2.0 * v / u.sin().sqrt()
+        };
         let wgt = if i == 0 || i == m {
             1.0
         } else if i % 2 == 1 {
@@ -72,7 +76,11 @@ impl ThreePointElastica {
     /// Tabulates the branch on which both w/l₀ and the force still increase with θ_L
     /// (beyond it the rod slips through the supports).
     pub fn new() -> Self {
-        let mut table = vec![ElasticaPoint { support_angle_rad: 0.0, w_over_span: 0.0, force_ratio: 1.0 }];
+        let mut table = vec![ElasticaPoint {
+            support_angle_rad: 0.0,
+            w_over_span: 0.0,
+            force_ratio: 1.0,
+        }];
         let n = 600;
         let mut last_force = 0.0;
         for i in 1..n {
@@ -137,7 +145,11 @@ mod tests {
     fn small_deflection_limit_is_linear_beam() {
         let p = elastica_point(1e-4);
         assert!((p.force_ratio - 1.0).abs() < 1e-6, "{}", p.force_ratio);
-        assert!((p.w_over_span / (1e-4 / 3.0) - 1.0).abs() < 1e-4, "{}", p.w_over_span);
+        assert!(
+            (p.w_over_span / (1e-4 / 3.0) - 1.0).abs() < 1e-4,
+            "{}",
+            p.w_over_span
+        );
     }
 
     #[test]

@@ -16,7 +16,8 @@ use crate::stats::{linear_fit, normal_quantile};
 use serde::Serialize;
 use std::collections::BTreeMap;
 
-/// Hysteresis numbers of one cycle. Nulls come with a reason in `why`.
+/// Hysteresis numbers of one cycle. Nulls come with a reason in `why` (one string) and
+/// `why_by_key`.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct CycleResult {
     /// Cycle number (from 1, as in the segmentation).
@@ -43,8 +44,10 @@ pub struct CycleResult {
     pub peak_control: f64,
     /// Response at the peak control.
     pub peak_response: f64,
+    /// All reasons for nulls as one string ("key: reason; ..."), or null.
+    pub why: Option<String>,
     /// Reasons for nulls, keyed by field name.
-    pub why: BTreeMap<String, String>,
+    pub why_by_key: BTreeMap<String, String>,
 }
 
 /// Inputs shared by all cycles.
@@ -94,7 +97,9 @@ fn integrate(points: &mut [(f64, f64)], lo: f64, hi: f64) -> f64 {
     xs.extend(points.iter().map(|p| p.0).filter(|&x| x > lo && x < hi));
     xs.push(hi);
     let p: &[(f64, f64)] = points;
-    xs.windows(2).map(|w| 0.5 * (interp(w[0], p) + interp(w[1], p)) * (w[1] - w[0])).sum()
+    xs.windows(2)
+        .map(|w| 0.5 * (interp(w[0], p) + interp(w[1], p)) * (w[1] - w[0]))
+        .sum()
 }
 
 /// Hysteresis results for every cycle of the segmentation.
@@ -104,7 +109,12 @@ pub fn cycles(inp: &CycleInputs) -> Vec<CycleResult> {
     let z = normal_quantile(1.0 - 1e-3 / 2.0);
     let mut out = Vec::new();
     for c in 1..=ncycles {
-        let idx: Vec<usize> = inp.segments.iter().filter(|s| s.cycle == c).flat_map(|s| s.start..s.end).collect();
+        let idx: Vec<usize> = inp
+            .segments
+            .iter()
+            .filter(|s| s.cycle == c)
+            .flat_map(|s| s.start..s.end)
+            .collect();
         if idx.is_empty() {
             continue;
         }
@@ -113,13 +123,20 @@ pub fn cycles(inp: &CycleInputs) -> Vec<CycleResult> {
         // Loop area over the cycle, including the step to the next cycle's first sample.
         let stop = (last + 1).min(n - 1);
         let area: f64 = (first..stop)
-            .map(|i| 0.5 * (inp.response[i] + inp.response[i + 1]) * (inp.control[i + 1] - inp.control[i]))
+            .map(|i| {
+                0.5 * (inp.response[i] + inp.response[i + 1])
+                    * (inp.control[i + 1] - inp.control[i])
+            })
             .sum();
-        let (ipk, _) = idx
-            .iter()
-            .map(|&i| (i, inp.control[i]))
-            .fold((first, f64::NEG_INFINITY), |acc, (i, v)| if v > acc.1 { (i, v) } else { acc });
-        let loading_branch = if c == 1 { Branch::FirstLoading } else { Branch::Reloading };
+        let (ipk, _) = idx.iter().map(|&i| (i, inp.control[i])).fold(
+            (first, f64::NEG_INFINITY),
+            |acc, (i, v)| if v > acc.1 { (i, v) } else { acc },
+        );
+        let loading_branch = if c == 1 {
+            Branch::FirstLoading
+        } else {
+            Branch::Reloading
+        };
         let load = collect(inp.segments, c, loading_branch);
         let unload_run = first_run(inp.segments, c, Branch::Unloading);
         let mut r = CycleResult {
@@ -134,7 +151,8 @@ pub fn cycles(inp: &CycleInputs) -> Vec<CycleResult> {
             contact_loss_control: None,
             peak_control: inp.control[ipk],
             peak_response: inp.response[ipk],
-            why: BTreeMap::new(),
+            why: None,
+            why_by_key: BTreeMap::new(),
         };
         if let Some((ua, ub)) = unload_run {
             let ux = &inp.sectional[ua..ub];
@@ -145,7 +163,10 @@ pub fn cycles(inp: &CycleInputs) -> Vec<CycleResult> {
             match fit {
                 Some(f) => r.unloading_stiffness = Some(f.slope * inp.stiffness_factor),
                 None => {
-                    why.insert("unloading_stiffness".into(), "too few unloading samples above zero response".into());
+                    why.insert(
+                        "unloading_stiffness".into(),
+                        "too few unloading samples above zero response".into(),
+                    );
                 }
             }
             let sigma = residual_noise(ux, uy);
@@ -158,7 +179,11 @@ pub fn cycles(inp: &CycleInputs) -> Vec<CycleResult> {
             match cross {
                 Some(i) => {
                     let (x0, x1, y0, y1) = (ux[i - 1], ux[i], uy[i - 1], uy[i]);
-                    let mut xr = if y1 != y0 { x0 + (band - y0) * (x1 - x0) / (y1 - y0) } else { x1 };
+                    let mut xr = if y1 != y0 {
+                        x0 + (band - y0) * (x1 - x0) / (y1 - y0)
+                    } else {
+                        x1
+                    };
                     let peak_y = uy.iter().fold(0.0f64, |m, v| m.max(*v));
                     let hi = (4.0 * z * sigma).max(0.2 * peak_y);
                     let i1 = uy.iter().position(|&v| v < hi).unwrap_or(i);
@@ -176,10 +201,37 @@ pub fn cycles(inp: &CycleInputs) -> Vec<CycleResult> {
                             }
                         }
                     }
+                    r.residual = Some(xr);
+                    let slope = fit.map(|f| f.slope.abs()).unwrap_or(0.0);
+                    if slope > 0.0 {
+                        let sx = noise_level(ux);
+                        let tol = z * std::f64::consts::SQRT_2 * (sigma / slope + sx);
+                        r.residual_significant = Some(xr.abs() > tol);
+                    }
+                    if inp.three_point {
+                        let travel = xr - ux[ux.len() - 1];
+                        let still = uy[i..].iter().all(|&v| v.abs() <= 2.0 * z * sigma);
+                        if still && travel > z * sigma / slope.max(f64::MIN_POSITIVE) {
+                            r.contact_loss_control = Some(xr / inp.sectional_per_control);
+                        }
+                    }
+                }
+                None => {
+                    why.insert(
+                        "residual".into(),
+                        "the response does not reach zero on this cycle's unloading".into(),
+                    );
+                }
+            }
             // Coincidence of loading and unloading.
             if load.len() >= 5 && ub - ua >= 5 {
-                let mut lp: Vec<(f64, f64)> = load.iter().map(|&i| (inp.control[i], inp.response[i])).collect();
-                let mut up: Vec<(f64, f64)> = (ua..ub).map(|i| (inp.control[i], inp.response[i])).collect();
+                let mut lp: Vec<(f64, f64)> = load
+                    .iter()
+                    .map(|&i| (inp.control[i], inp.response[i]))
+                    .collect();
+                let mut up: Vec<(f64, f64)> = (ua..ub)
+                    .map(|i| (inp.control[i], inp.response[i]))
+                    .collect();
                 let (l_lo, l_hi) = span(&lp);
                 let (u_lo, u_hi) = span(&up);
                 let (lo, hi) = (l_lo.max(u_lo), l_hi.min(u_hi));
@@ -196,10 +248,16 @@ pub fn cycles(inp: &CycleInputs) -> Vec<CycleResult> {
                     r.branch_gap_area = Some(gap);
                     r.coincide = Some(gap.abs() <= 4.0 * sd);
                 } else {
-                    why.insert("coincide".into(), "loading and unloading share no control range".into());
+                    why.insert(
+                        "coincide".into(),
+                        "loading and unloading share no control range".into(),
+                    );
                 }
             } else {
-                why.insert("coincide".into(), "too few loading or unloading samples in this cycle".into());
+                why.insert(
+                    "coincide".into(),
+                    "too few loading or unloading samples in this cycle".into(),
+                );
             }
         } else {
             for k in ["residual", "unloading_stiffness", "coincide"] {
@@ -212,18 +270,28 @@ pub fn cycles(inp: &CycleInputs) -> Vec<CycleResult> {
             {
                 Some(f) => r.reloading_stiffness = Some(f.slope * inp.stiffness_factor),
                 None => {
-                    why.insert("reloading_stiffness".into(), "no usable reloading branch in this cycle".into());
+                    why.insert(
+                        "reloading_stiffness".into(),
+                        "no usable reloading branch in this cycle".into(),
+                    );
                 }
             }
         } else {
-            why.insert("reloading_stiffness".into(), "the first cycle has no reloading".into());
+            why.insert(
+                "reloading_stiffness".into(),
+                "the first cycle has no reloading".into(),
+            );
         }
-        r.why = why;
+        r.why = crate::analysis::join_why(&why);
+        r.why_by_key = why;
         out.push(r);
     }
     out
 }
 
 fn span(p: &[(f64, f64)]) -> (f64, f64) {
-    p.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), q| (a.min(q.0), b.max(q.0)))
+    p.iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), q| {
+            (a.min(q.0), b.max(q.0))
+        })
 }

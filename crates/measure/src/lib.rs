@@ -13,6 +13,8 @@
 //! segmentation) · [`elastic`] (elastic window, toe, bend) · [`hysteresis`] (per cycle) ·
 //! [`analysis`] (one test) · [`table`] (campaign statistics and renderings).
 
+#![warn(missing_docs)]
+
 pub mod analysis;
 pub mod condition;
 pub mod elastic;
@@ -23,21 +25,24 @@ pub mod stats;
 pub mod table;
 
 pub use analysis::{
-    analyze, Analysis, AnalyzeOptions, Behaviour, LargeDeflection, Noise, Piecewise, Stiffness, Toe, YieldPoint,
+    analyze, Analysis, AnalyzeOptions, Behaviour, HoldRelaxation, LargeDeflection, Noise,
+    Piecewise, Stiffness, Toe, YieldPoint,
 };
 pub use condition::{
-    correct_compliance, labels, noise_level, reversal_threshold, segment, turning_points, zero_offsets, Branch,
-    Extremum, Label, Offsets, Segment, TurningPoint,
+    correct_compliance, labels, noise_level, reversal_threshold, segment, turning_points,
+    zero_offsets, Branch, Extremum, Label, Offsets, Segment, TurningPoint,
 };
 pub use elastic::{auto_elastic_range, hinge_fit, user_elastic_range, ElasticRange, Hinge};
 pub use elastica::ThreePointElastica;
 pub use hysteresis::CycleResult;
 pub use sectional::{
-    deg_to_rad, modulus_from_stiffness, sectional, sectional_unit, stiffness_from_slope, three_point_peak_curvature,
-    three_point_peak_moment, Geometry,
+    deg_to_rad, modulus_from_stiffness, sectional, sectional_unit, stiffness_from_slope,
+    three_point_peak_curvature, three_point_peak_moment, Geometry,
 };
 pub use stats::{linear_fit, normal_quantile, student_t_quantile, Fit};
-pub use table::{campaign_table, render_csv, render_json, render_latex, render_markdown, GroupStats, TableRow};
+pub use table::{
+    campaign_table, render_csv, render_json, render_latex, render_markdown, GroupStats, TableRow,
+};
 
 /// Everything that can go wrong while measuring, with a message that says what and where.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]

@@ -80,7 +80,12 @@ pub fn stiffness_from_slope(kind: TestKind, geom: &Geometry, slope: f64) -> f64 
 
 /// Young's modulus from a sectional stiffness for a circular isotropic section (eqs. (6), (7)):
 /// E_T = (EA)_T/A, E_tor = 2(1+ν)(GJ)_T/J (= 3 (GJ)_T/J for ν = 0.5), E_B = (EI)_B/I.
-pub fn modulus_from_stiffness(kind: TestKind, diameter_m: f64, stiffness: f64, nu: f64) -> Option<f64> {
+pub fn modulus_from_stiffness(
+    kind: TestKind,
+    diameter_m: f64,
+    stiffness: f64,
+    nu: f64,
+) -> Option<f64> {
     CircularSection::from_diameter(diameter_m).modulus_from_stiffness(kind, stiffness, nu)
 }
 
@@ -121,22 +126,40 @@ mod tests {
 
     #[test]
     fn sectional_controls_per_kind() {
-        let g = Geometry { free_length_m: 0.05, diameter_m: None };
+        let g = Geometry {
+            free_length_m: 0.05,
+            diameter_m: None,
+        };
         let theta = deg_to_rad(80.0);
         // Pure bending: 80° over 50 mm → K_B = 27.925 1/m.
-        assert_relative_eq!(sectional(TestKind::PureBending, &g, &[theta])[0], 27.925_268, max_relative = 1e-6);
+        assert_relative_eq!(
+            sectional(TestKind::PureBending, &g, &[theta])[0],
+            27.925_268,
+            max_relative = 1e-6
+        );
         assert_relative_eq!(sectional(TestKind::Tension, &g, &[1e-4])[0], 2e-3);
-        assert_relative_eq!(sectional(TestKind::Torsion, &g, &[std::f64::consts::TAU])[0], 125.663_706, max_relative = 1e-8);
+        assert_relative_eq!(
+            sectional(TestKind::Torsion, &g, &[std::f64::consts::TAU])[0],
+            125.663_706,
+            max_relative = 1e-8
+        );
         assert_relative_eq!(sectional(TestKind::ThreePoint, &g, &[2e-3])[0], 2e-3);
     }
 
     /// Eq. (3) round trip: F = 48 EI w / l³ with EI = 1.37e-3 N m², l = 56 mm.
     #[test]
     fn three_point_slope_to_ei() {
-        let g = Geometry { free_length_m: 0.056, diameter_m: None };
+        let g = Geometry {
+            free_length_m: 0.056,
+            diameter_m: None,
+        };
         let ei = 1.37e-3;
         let slope = 48.0 * ei / 0.056f64.powi(3);
-        assert_relative_eq!(stiffness_from_slope(TestKind::ThreePoint, &g, slope), ei, max_relative = 1e-12);
+        assert_relative_eq!(
+            stiffness_from_slope(TestKind::ThreePoint, &g, slope),
+            ei,
+            max_relative = 1e-12
+        );
         // Peak curvature/moment consistency: M = EI κ at mid-span.
         let w = 1e-3;
         let f = slope * w;
@@ -149,9 +172,29 @@ mod tests {
 
     #[test]
     fn bad_geometry_is_rejected() {
-        assert!(Geometry { free_length_m: 0.0, diameter_m: None }.validate().is_err());
-        assert!(Geometry { free_length_m: f64::NAN, diameter_m: None }.validate().is_err());
-        assert!(Geometry { free_length_m: 0.03, diameter_m: Some(-1.0) }.validate().is_err());
-        assert!(Geometry { free_length_m: 0.03, diameter_m: Some(2.8e-3) }.validate().is_ok());
+        assert!(Geometry {
+            free_length_m: 0.0,
+            diameter_m: None
+        }
+        .validate()
+        .is_err());
+        assert!(Geometry {
+            free_length_m: f64::NAN,
+            diameter_m: None
+        }
+        .validate()
+        .is_err());
+        assert!(Geometry {
+            free_length_m: 0.03,
+            diameter_m: Some(-1.0)
+        }
+        .validate()
+        .is_err());
+        assert!(Geometry {
+            free_length_m: 0.03,
+            diameter_m: Some(2.8e-3)
+        }
+        .validate()
+        .is_ok());
     }
 }

@@ -52,10 +52,17 @@ pub fn linear_fit(x: &[f64], y: &[f64]) -> Result<Fit, MeasureError> {
     }
     let n = x.len();
     if n < 3 {
-        return Err(MeasureError::TooFewSamples { what: "a linear fit", need: 3, got: n });
+        return Err(MeasureError::TooFewSamples {
+            what: "a linear fit",
+            need: 3,
+            got: n,
+        });
     }
     if let Some(i) = x.iter().chain(y.iter()).position(|v| !v.is_finite()) {
-        return Err(MeasureError::NonFinite { channel: "linear fit input", index: i % n });
+        return Err(MeasureError::NonFinite {
+            channel: "linear fit input",
+            index: i % n,
+        });
     }
     let nf = n as f64;
     let mx = x.iter().sum::<f64>() / nf;
@@ -303,13 +310,37 @@ mod tests {
     #[test]
     fn t_quantiles_match_tables() {
         // Standard tables: t_{0.975} for 1, 2, 10, 30 dof.
-        assert_relative_eq!(student_t_quantile(0.975, 1.0), 12.706_204_736, max_relative = 1e-8);
-        assert_relative_eq!(student_t_quantile(0.975, 2.0), 4.302_652_730, max_relative = 1e-8);
-        assert_relative_eq!(student_t_quantile(0.975, 10.0), 2.228_138_852, max_relative = 1e-8);
-        assert_relative_eq!(student_t_quantile(0.975, 30.0), 2.042_272_456, max_relative = 1e-8);
-        assert_relative_eq!(student_t_quantile(0.025, 10.0), -2.228_138_852, max_relative = 1e-8);
+        assert_relative_eq!(
+            student_t_quantile(0.975, 1.0),
+            12.706_204_736,
+            max_relative = 1e-8
+        );
+        assert_relative_eq!(
+            student_t_quantile(0.975, 2.0),
+            4.302_652_730,
+            max_relative = 1e-8
+        );
+        assert_relative_eq!(
+            student_t_quantile(0.975, 10.0),
+            2.228_138_852,
+            max_relative = 1e-8
+        );
+        assert_relative_eq!(
+            student_t_quantile(0.975, 30.0),
+            2.042_272_456,
+            max_relative = 1e-8
+        );
+        assert_relative_eq!(
+            student_t_quantile(0.025, 10.0),
+            -2.228_138_852,
+            max_relative = 1e-8
+        );
         // Large dof tends to the normal quantile.
-        assert_relative_eq!(student_t_quantile(0.975, 1e7), 1.959_963_985, max_relative = 1e-6);
+        assert_relative_eq!(
+            student_t_quantile(0.975, 1e7),
+            1.959_963_985,
+            max_relative = 1e-6
+        );
     }
 
     #[test]
@@ -348,7 +379,10 @@ mod tests {
 
     #[test]
     fn degenerate_inputs_are_errors() {
-        assert!(matches!(linear_fit(&[1.0, 1.0, 1.0], &[1.0, 2.0, 3.0]), Err(MeasureError::DegenerateFit)));
+        assert!(matches!(
+            linear_fit(&[1.0, 1.0, 1.0], &[1.0, 2.0, 3.0]),
+            Err(MeasureError::DegenerateFit)
+        ));
         assert!(linear_fit(&[1.0, 2.0], &[1.0, 2.0]).is_err());
         assert!(linear_fit(&[1.0, 2.0, 3.0], &[1.0, f64::NAN, 3.0]).is_err());
         assert!(linear_fit(&[1.0, 2.0, 3.0], &[1.0, 3.0]).is_err());

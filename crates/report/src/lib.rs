@@ -11,7 +11,7 @@
 //! Modules: [`curve`] (per-test curve with fit, yield, loops, simulated and residual panel),
 //! [`gap`] (where / which / how far views of the sim-to-real gap, residual along the span),
 //! [`campaign`] (stiffness scatter per specimen type, Table 1 and Table 2 style tables),
-//! [`html`] (the report document), [`style`] (sizes, greyscale-safe palette), [`text`]
+//! [`html`] (the report document), [`words`] (the diagnosis in plain words), [`style`] (sizes, greyscale-safe palette), [`text`]
 //! (escaping and number formatting).
 
 #![warn(missing_docs)]
@@ -23,6 +23,7 @@ pub mod gap;
 pub mod html;
 pub mod style;
 pub mod text;
+pub mod words;
 
 pub use campaign::{
     campaign_stiffness_svg, mean_sd, parameter_table, stiffness_axis_label, stiffness_table,
@@ -34,6 +35,7 @@ pub use gap::{
 };
 pub use html::{render_html, ReportDoc, Table, TestSection};
 pub use text::escape_html;
+pub use words::{diagnosis_words, DiagnosisSummary};
 
 /// What can go wrong while drawing a plot.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]

@@ -7,7 +7,8 @@
 use cablab_core::TestKind;
 use cablab_laws::{build, Law, LinearElastic, SectionStiffness};
 use cablab_rod::scenarios::cantilever_tip_load;
-use cablab_rod::{simulate_history, TestSetup};
+use cablab_rod::{simulate_history, Rod3d, TestSetup};
+use nalgebra::Vector3;
 use std::collections::BTreeMap;
 
 fn main() {
@@ -16,8 +17,10 @@ fn main() {
 
 /// The chapter's cable in three-point bending (span 56 mm), elastoplastic with isotropic hardening.
 fn cable_law() -> Box<dyn Law> {
-    let p: BTreeMap<String, f64> =
-        [("EI", 1.37e-3), ("M_y", 4e-3), ("HI", 1e-4)].iter().map(|(k, v)| (k.to_string(), *v)).collect();
+    let p: BTreeMap<String, f64> = [("EI", 1.37e-3), ("M_y", 4e-3), ("HI", 1e-4)]
+        .iter()
+        .map(|(k, v)| (k.to_string(), *v))
+        .collect();
     build(TestKind::ThreePoint, "elastoplastic", &p).expect("law")
 }
 
@@ -42,7 +45,9 @@ fn three_point_cyclic_1000_steps(bencher: divan::Bencher, elements: usize) {
     let (c, t) = history(1000);
     let mut setup = TestSetup::new(TestKind::ThreePoint, 0.056);
     setup.elements = elements;
-    bencher.bench(|| simulate_history(&setup, law.as_ref(), divan::black_box(&c), &t).expect("converges"));
+    bencher.bench(|| {
+        simulate_history(&setup, law.as_ref(), divan::black_box(&c), &t).expect("converges")
+    });
 }
 
 /// Static cantilever, α = PL²/EI = 10 (the hardest row of the table), 100 elements, 10 Newton
@@ -54,5 +59,30 @@ fn cantilever_alpha10_100_elements(bencher: divan::Bencher) {
     s.ea_n = 1e7;
     s.ga_n = 1e7;
     let law = LinearElastic::new(s);
-    bencher.bench(|| cantilever_tip_load(&law, 1.0, 100, divan::black_box(10.0), 10).expect("converges"));
+    bencher.bench(|| {
+        cantilever_tip_load(&law, 1.0, 100, divan::black_box(10.0), 10).expect("converges")
+    });
+}
+
+/// The same cantilever (α = 10, 100 elements, 10 load steps) through the 3D rod (quaternions,
+/// 6×6 blocks, difference-quotient strain Jacobians).
+#[divan::bench(sample_count = 10)]
+fn cantilever_alpha10_100_elements_3d(bencher: divan::Bencher) {
+    let mut s = SectionStiffness::CHAPTER_CABLE;
+    s.ei_nm2 = 1.0;
+    s.gj_nm2 = 1.0;
+    s.ea_n = 1e7;
+    s.ga_n = 1e7;
+    let law = LinearElastic::new(s);
+    bencher.bench(|| {
+        let mut rod = Rod3d::straight(&law, 1.0, 100).expect("rod");
+        rod.fixed[0] = [true; 6];
+        let tip = rod.nodes() - 1;
+        for k in 1..=10 {
+            rod.force[tip] = Vector3::new(-divan::black_box(10.0) * k as f64 / 10.0, 0.0, 0.0);
+            rod.solve(0.0, k).expect("converges");
+            rod.commit();
+        }
+        rod.x[tip]
+    });
 }

@@ -1,24 +1,27 @@
-//! Block-tridiagonal linear solve with 3×3 blocks (block Thomas algorithm).
+//! Block-tridiagonal linear solve with D×D blocks (block Thomas algorithm).
 //!
-//! The planar rod couples only neighbouring nodes (3 unknowns each), so its tangent is block
-//! tridiagonal. nalgebra has no banded solver; the block elimination below uses nalgebra's 3×3 LU
-//! for every block, costs O(n) and is what makes 1,000 load steps on 100 elements cheap.
+//! A rod couples only neighbouring nodes (3 unknowns each in the plane, 6 in space), so its
+//! tangent is block tridiagonal. nalgebra has no banded solver; the block elimination below uses
+//! nalgebra's fixed-size LU for every block, costs O(n) and is what makes 1,000 load steps on 100 elements cheap.
 //! No pivoting between blocks: the rod tangents are block-diagonally dominant enough in practice
 //! (clamped/prescribed rows are identity rows); a singular pivot block is reported, not hidden.
 //! Does not: store the factorisation, handle other sparsity patterns.
 
-use nalgebra::{Matrix3, Vector3};
+use nalgebra::{Const, DimMin, SMatrix, SVector, ToTypenum};
 
 /// Solve `A x = b` for a block-tridiagonal `A` given by its diagonal blocks `diag[i]`, upper blocks
 /// `upper[i] = A(i, i+1)` and lower blocks `lower[i] = A(i+1, i)`. `rhs` is overwritten with the
 /// solution. Returns the index of the first singular pivot block as an error.
-pub(crate) fn solve_block_tridiagonal(
-    diag: &[Matrix3<f64>],
-    upper: &[Matrix3<f64>],
-    lower: &[Matrix3<f64>],
-    rhs: &mut [Vector3<f64>],
-    work: &mut Vec<Matrix3<f64>>,
-) -> Result<(), usize> {
+pub(crate) fn solve_block_tridiagonal<const D: usize>(
+    diag: &[SMatrix<f64, D, D>],
+    upper: &[SMatrix<f64, D, D>],
+    lower: &[SMatrix<f64, D, D>],
+    rhs: &mut [SVector<f64, D>],
+    work: &mut Vec<SMatrix<f64, D, D>>,
+) -> Result<(), usize>
+where
+    Const<D>: ToTypenum + DimMin<Const<D>, Output = Const<D>>,
+{
     let n = diag.len();
     debug_assert_eq!(rhs.len(), n);
     debug_assert!(upper.len() + 1 >= n && lower.len() + 1 >= n);
@@ -57,7 +60,7 @@ pub(crate) fn solve_block_tridiagonal(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use nalgebra::DMatrix;
+    use nalgebra::{DMatrix, Matrix3, Vector3};
 
     /// The block solve agrees with a dense LU solve of the same (non-symmetric) system.
     #[test]
@@ -69,7 +72,9 @@ mod tests {
         let mut rhs = Vec::new();
         let mut seed = 1u64;
         let mut rnd = || {
-            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
             ((seed >> 33) as f64) / (1u64 << 31) as f64 - 0.5
         };
         for i in 0..n {
@@ -110,6 +115,9 @@ mod tests {
         let lower = vec![Matrix3::zeros()];
         let mut rhs = vec![Vector3::new(1.0, 2.0, 3.0), Vector3::new(1.0, 0.0, 0.0)];
         let mut work = Vec::new();
-        assert_eq!(solve_block_tridiagonal(&diag, &upper, &lower, &mut rhs, &mut work), Err(1));
+        assert_eq!(
+            solve_block_tridiagonal(&diag, &upper, &lower, &mut rhs, &mut work),
+            Err(1)
+        );
     }
 }

@@ -78,7 +78,9 @@ impl TestSetup {
     }
 
     fn validate(&self) -> Result<(), RodError> {
-        let bad = |what: &str, v: f64| RodError::InvalidSetup(format!("{what} must be finite and ≥ 0, got {v}"));
+        let bad = |what: &str, v: f64| {
+            RodError::InvalidSetup(format!("{what} must be finite and ≥ 0, got {v}"))
+        };
         if !(self.free_length_m.is_finite() && self.free_length_m > 0.0) {
             return Err(RodError::InvalidSetup(format!(
                 "free length / span must be positive, got {} m",
@@ -97,11 +99,16 @@ impl TestSetup {
             }
         }
         if !(self.penalty_factor.is_finite() && self.penalty_factor > 0.0) {
-            return Err(RodError::InvalidSetup(format!("penalty factor must be positive, got {}", self.penalty_factor)));
+            return Err(RodError::InvalidSetup(format!(
+                "penalty factor must be positive, got {}",
+                self.penalty_factor
+            )));
         }
         if let Some(m) = self.max_substep {
             if !(m.is_finite() && m > 0.0) {
-                return Err(RodError::InvalidSetup(format!("max sub-step must be positive, got {m}")));
+                return Err(RodError::InvalidSetup(format!(
+                    "max sub-step must be positive, got {m}"
+                )));
             }
         }
         if self.kind == TestKind::Unknown {
@@ -153,9 +160,20 @@ impl SimCurve {
 /// Law-driven state machine behind both entry points.
 enum Driver<'a> {
     /// Direct sectional evaluation of a uniform state; `index` picks the strain/stress component.
-    Uniform { law: &'a dyn Law, index: usize, length_m: f64, state: Vec<f64>, trial: Vec<f64> },
+    Uniform {
+        law: &'a dyn Law,
+        index: usize,
+        length_m: f64,
+        state: Vec<f64>,
+        trial: Vec<f64>,
+    },
     /// The rod solver.
-    Rod { rod: Box<PlanarRod<'a>>, kind: TestKind, current: f64, max_substep: f64 },
+    Rod {
+        rod: Box<PlanarRod<'a>>,
+        kind: TestKind,
+        current: f64,
+        max_substep: f64,
+    },
 }
 
 impl<'a> Driver<'a> {
@@ -164,10 +182,20 @@ impl<'a> Driver<'a> {
         let index = cablab_laws::loaded_component(setup.kind);
         let mut state = vec![0.0; law.n_state()];
         law.init_state(&mut state);
-        Driver::Uniform { law, index, length_m: setup.free_length_m, trial: state.clone(), state }
+        Driver::Uniform {
+            law,
+            index,
+            length_m: setup.free_length_m,
+            trial: state.clone(),
+            state,
+        }
     }
 
-    fn rod(setup: &TestSetup, law: &'a dyn Law, max_substep: Option<f64>) -> Result<Self, RodError> {
+    fn rod(
+        setup: &TestSetup,
+        law: &'a dyn Law,
+        max_substep: Option<f64>,
+    ) -> Result<Self, RodError> {
         let l = setup.free_length_m;
         let ei = law.elastic_tangent()[(3, 3)];
         match setup.kind {
@@ -182,7 +210,6 @@ impl<'a> Driver<'a> {
                     kind: setup.kind,
                     current: 0.0,
                     max_substep: max_substep.or(setup.max_substep).unwrap_or(0.05),
-
                 })
             }
             TestKind::ThreePoint => {
@@ -193,16 +220,25 @@ impl<'a> Driver<'a> {
                 rod.prescribed[0] = [Some(0.0), None, Some(0.0)];
                 let k = setup.penalty_factor * ei / (l * l * l);
                 let r_sup = setup.support_radius_m + setup.rod_radius_m;
-                let mut sup = Support::new(Vector2::new(half, -r_sup), r_sup, k, setup.support_friction, half);
+                let mut sup = Support::new(
+                    Vector2::new(half, -r_sup),
+                    r_sup,
+                    k,
+                    setup.support_friction,
+                    half,
+                );
                 sup.k_tangent = k;
                 rod.supports.push(sup);
-                rod.punch = Some(Punch::new(0.0, setup.punch_radius_m + setup.rod_radius_m, k));
+                rod.punch = Some(Punch::new(
+                    0.0,
+                    setup.punch_radius_m + setup.rod_radius_m,
+                    k,
+                ));
                 Ok(Driver::Rod {
                     rod: Box::new(rod),
                     kind: setup.kind,
                     current: 0.0,
                     max_substep: max_substep.or(setup.max_substep).unwrap_or(0.005 * l),
-
                 })
             }
             other => Err(RodError::UnsupportedKind(other)),
@@ -224,9 +260,21 @@ impl<'a> Driver<'a> {
     }
 
     /// Move the control to `target` over `dt` seconds; returns the response.
-    fn step_to(&mut self, target: f64, dt: f64, step: usize, iterations: &mut usize) -> Result<f64, RodError> {
+    fn step_to(
+        &mut self,
+        target: f64,
+        dt: f64,
+        step: usize,
+        iterations: &mut usize,
+    ) -> Result<f64, RodError> {
         match self {
-            Driver::Uniform { law, index, length_m, state, trial } => {
+            Driver::Uniform {
+                law,
+                index,
+                length_m,
+                state,
+                trial,
+            } => {
                 let mut eps = Strain6::zeros();
                 eps[*index] = target / *length_m;
                 let r = law.update(&eps, dt, state, trial);
@@ -242,7 +290,13 @@ impl<'a> Driver<'a> {
                 }
                 Ok(v)
             }
-            Driver::Rod { rod, kind, current, max_substep, .. } => {
+            Driver::Rod {
+                rod,
+                kind,
+                current,
+                max_substep,
+                ..
+            } => {
                 let from = *current;
                 let total = target - from;
                 let n_sub = ((total.abs() / *max_substep).ceil() as usize).max(1);
@@ -257,7 +311,11 @@ impl<'a> Driver<'a> {
                     let next = if last { target } else { c + h };
                     let saved = rod.q.clone();
                     Self::apply_control(rod, *kind, next);
-                    let frac = if total != 0.0 { (next - c) / total } else { 1.0 };
+                    let frac = if total != 0.0 {
+                        (next - c) / total
+                    } else {
+                        1.0
+                    };
                     match rod.solve(dt * frac, step) {
                         Ok(it) => {
                             *iterations += it;
@@ -292,16 +350,26 @@ impl<'a> Driver<'a> {
     }
 
     fn record(&self, curve: &mut SimCurve, record_span: bool) {
-        let Driver::Rod { rod, kind, .. } = self else { return };
+        let Driver::Rod { rod, kind, .. } = self else {
+            return;
+        };
         if *kind == TestKind::ThreePoint {
-            curve.punch_contact.push(rod.punch.as_ref().is_some_and(|p| p.in_contact()));
+            curve
+                .punch_contact
+                .push(rod.punch.as_ref().is_some_and(|p| p.in_contact()));
         }
         if record_span {
             if curve.span_s_m.is_empty() {
-                curve.span_s_m = (0..rod.l0.len()).map(|e| rod.s_ref[e] + 0.5 * rod.l0[e]).collect();
+                curve.span_s_m = (0..rod.l0.len())
+                    .map(|e| rod.s_ref[e] + 0.5 * rod.l0[e])
+                    .collect();
             }
-            curve.span_curvature_per_m.push(rod.strain.iter().map(|s| s[2]).collect());
-            curve.span_moment_nm.push(rod.stress.iter().map(|s| s[2]).collect());
+            curve
+                .span_curvature_per_m
+                .push(rod.strain.iter().map(|s| s[2]).collect());
+            curve
+                .span_moment_nm
+                .push(rod.stress.iter().map(|s| s[2]).collect());
         }
     }
 }
@@ -311,7 +379,10 @@ fn check_values(name: &str, v: &[f64]) -> Result<(), RodError> {
         return Err(RodError::InvalidInput(format!("{name} is empty")));
     }
     if let Some(i) = v.iter().position(|x| !x.is_finite()) {
-        return Err(RodError::InvalidInput(format!("{name}[{i}] is not a finite number ({})", v[i])));
+        return Err(RodError::InvalidInput(format!(
+            "{name}[{i}] is not a finite number ({})",
+            v[i]
+        )));
     }
     Ok(())
 }
@@ -337,7 +408,9 @@ pub fn simulate_path(
         inc = inc.min(0.005 * setup.free_length_m);
     }
     if !(inc.is_finite() && inc > 0.0) {
-        return Err(RodError::InvalidInput(format!("max increment must be positive, got {inc}")));
+        return Err(RodError::InvalidInput(format!(
+            "max increment must be positive, got {inc}"
+        )));
     }
     let mut driver = match setup.kind {
         TestKind::Tension | TestKind::Torsion => Driver::uniform(setup, law),
@@ -362,7 +435,11 @@ pub fn simulate_path(
         let n = ((seg.abs() / inc).ceil() as usize).max(if seg == 0.0 { 0 } else { 1 });
         let start = c;
         for k in 1..=n {
-            let next = if k == n { target } else { start + seg * k as f64 / n as f64 };
+            let next = if k == n {
+                target
+            } else {
+                start + seg * k as f64 / n as f64
+            };
             let dt = dt_for(next - c);
             let r = driver.step_to(next, dt, step, &mut iterations)?;
             t += dt;
@@ -408,7 +485,11 @@ pub fn simulate_history(
     curve.response.reserve(control.len());
     let mut iterations = 0usize;
     for (i, (&c, &t)) in control.iter().zip(time_s).enumerate() {
-        let dt = if i == 0 { 0.0 } else { (t - time_s[i - 1]).max(0.0) };
+        let dt = if i == 0 {
+            0.0
+        } else {
+            (t - time_s[i - 1]).max(0.0)
+        };
         let r = driver.step_to(c, dt, i, &mut iterations)?;
         curve.control.push(c);
         curve.response.push(r);
@@ -421,7 +502,11 @@ pub fn simulate_history(
 
 /// Node positions (x m, y m, θ rad) of the deformed rod after replaying `path` in a rod-driven test
 /// (pure bending or three-point); used to inspect the deformed shape (e.g. the pure-bending arc).
-pub fn deformed_shape(setup: &TestSetup, law: &dyn Law, path: &[f64]) -> Result<Vec<Vector3<f64>>, RodError> {
+pub fn deformed_shape(
+    setup: &TestSetup,
+    law: &dyn Law,
+    path: &[f64],
+) -> Result<Vec<Vector3<f64>>, RodError> {
     setup.validate()?;
     check_values("path", path)?;
     let mut driver = Driver::rod(setup, law, setup.max_substep)?;

@@ -5,6 +5,9 @@
 //!   Newton with line search and step bisection, internal law variables per integration point.
 //! - [`drivers`]: the tests as run — tension, torsion, pure bending, three-point bending —
 //!   replaying a control path ([`simulate_path`]) or a measured history ([`simulate_history`]).
+//! - [`rod3d`]: the same rod in space (positions + unit quaternions, rotation-vector
+//!   increments), the reference that the planar reduction and the uniform-state shortcuts are
+//!   checked against (cantilever table, a bent-and-twisted helix, clamped torsion and tension).
 //! - [`scenarios`]: the classical verification problems (cantilever with a dead tip load, Euler
 //!   elastica) as functions, used by the tests and the benchmark.
 //!
@@ -14,6 +17,7 @@
 
 pub mod drivers;
 pub mod planar;
+pub mod rod3d;
 pub mod scenarios;
 
 mod blocktri;
@@ -22,8 +26,9 @@ mod test_laws;
 #[cfg(test)]
 mod verification;
 
-pub use drivers::{simulate_history, simulate_path, SimCurve, TestSetup};
+pub use drivers::{deformed_shape, simulate_history, simulate_path, SimCurve, TestSetup};
 pub use planar::{PlanarRod, Punch, SolverOptions, Support};
+pub use rod3d::Rod3d;
 
 use thiserror::Error;
 

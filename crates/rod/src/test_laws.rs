@@ -11,7 +11,9 @@ pub(crate) struct Linear {
 
 impl Linear {
     pub(crate) fn new(ea: f64, ga: f64, ei: f64) -> Self {
-        Linear { c: Tangent6::from_diagonal(&Strain6::new(ga, ga, ea, ei, ei, ei)) }
+        Linear {
+            c: Tangent6::from_diagonal(&Strain6::new(ga, ga, ea, ei, ei, ei)),
+        }
     }
 }
 
@@ -23,7 +25,10 @@ impl Law for Linear {
         0
     }
     fn update(&self, eps: &Strain6, _dt: f64, _old: &[f64], _new: &mut [f64]) -> LawResponse {
-        LawResponse { stress: self.c * eps, tangent: self.c }
+        LawResponse {
+            stress: self.c * eps,
+            tangent: self.c,
+        }
     }
     fn elastic_tangent(&self) -> Tangent6 {
         self.c

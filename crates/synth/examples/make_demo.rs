@@ -8,8 +8,14 @@ use std::process::ExitCode;
 fn main() -> ExitCode {
     let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..");
     let mut args = std::env::args().skip(1);
-    let recipe = args.next().map(PathBuf::from).unwrap_or_else(|| root.join("pipelines/demo_recipe.toml"));
-    let out = args.next().map(PathBuf::from).unwrap_or_else(|| root.join("raw_data"));
+    let recipe = args
+        .next()
+        .map(PathBuf::from)
+        .unwrap_or_else(|| root.join("pipelines/demo_recipe.toml"));
+    let out = args
+        .next()
+        .map(PathBuf::from)
+        .unwrap_or_else(|| root.join("raw_data"));
     let text = match std::fs::read_to_string(&recipe) {
         Ok(t) => t,
         Err(e) => {
@@ -21,9 +27,21 @@ fn main() -> ExitCode {
         Ok(files) => {
             let total: usize = files.iter().map(|f| f.bytes).sum();
             for f in &files {
-                println!("{:40} {:>13} {:>12} {:>6} rows {:>8} bytes", f.file, f.kind.as_str(), format!("{:?}", f.layout), f.rows, f.bytes);
+                println!(
+                    "{:40} {:>13} {:>12} {:>6} rows {:>8} bytes",
+                    f.file,
+                    f.kind.as_str(),
+                    format!("{:?}", f.layout),
+                    f.rows,
+                    f.bytes
+                );
             }
-            println!("{} files, {} bytes in {}", files.len(), total, out.display());
+            println!(
+                "{} files, {} bytes in {}",
+                files.len(),
+                total,
+                out.display()
+            );
             ExitCode::SUCCESS
         }
         Err(e) => {

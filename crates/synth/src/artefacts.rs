@@ -102,18 +102,28 @@ pub fn apply(
     for i in 0..time_s.len() {
         rec.time_s.push(time_s[i] + t_shift);
         rec.control_specimen.push(control[i]);
-        rec.control_machine.push(control[i] + a.slack + a.machine_compliance * response[i]);
+        rec.control_machine
+            .push(control[i] + a.slack + a.machine_compliance * response[i]);
         rec.response.push(response[i]);
         rec.cycle.push(cycle.get(i).copied().unwrap_or(0.0));
     }
     let r_max = rec.response.iter().fold(0.0f64, |m, r| m.max(r.abs()));
-    let fs = a.response_full_scale.unwrap_or_else(|| nice_ceil(1.25 * r_max.max(1e-12)));
-    let q_r = if a.adc_bits > 0 { 2.0 * fs / 2f64.powi(a.adc_bits as i32) } else { 0.0 };
+    let fs = a
+        .response_full_scale
+        .unwrap_or_else(|| nice_ceil(1.25 * r_max.max(1e-12)));
+    let q_r = match a.response_quantum {
+        Some(q) => q,
+        None if a.adc_bits > 0 => 2.0 * fs / 2f64.powi(a.adc_bits as i32),
+        None => 0.0,
+    };
     let q_c = a.control_quantum.unwrap_or(match kind {
         TestKind::Torsion | TestKind::PureBending => 1e-3_f64.to_radians(),
         _ => 1e-7,
     });
-    let c_max = rec.control_machine.iter().fold(0.0f64, |m, c| m.max(c.abs()));
+    let c_max = rec
+        .control_machine
+        .iter()
+        .fold(0.0f64, |m, c| m.max(c.abs()));
     let sd_r = a.noise_rel * fs;
     let sd_c = a.control_noise_rel * c_max;
     for i in 0..rec.time_s.len() {
@@ -176,7 +186,11 @@ mod tests {
         let c = vec![0.0; n];
         let mut r = vec![0.0; n];
         r[0] = 80.0; // full scale → 100 N
-        let a = Artefacts { noise_rel: 1e-3, adc_bits: 0, ..Artefacts::default() };
+        let a = Artefacts {
+            noise_rel: 1e-3,
+            adc_bits: 0,
+            ..Artefacts::default()
+        };
         let rec = apply(TestKind::Tension, &a, &t, &c, &r, &[], 1e-3, 0.01, 7);
         assert_eq!(rec.response_full_scale, 100.0);
         let noise: Vec<f64> = rec.response_measured[1..].to_vec();
@@ -190,9 +204,41 @@ mod tests {
 
     #[test]
     fn quantisation_snaps_to_the_adc_step() {
-        let a = Artefacts { noise_rel: 0.0, adc_bits: 8, response_full_scale: Some(128.0), ..Artefacts::default() };
-        let rec = apply(TestKind::Tension, &a, &[0.0], &[0.0], &[3.3], &[], 1e-3, 0.1, 0);
+        let a = Artefacts {
+            noise_rel: 0.0,
+            adc_bits: 8,
+            response_full_scale: Some(128.0),
+            ..Artefacts::default()
+        };
+        let rec = apply(
+            TestKind::Tension,
+            &a,
+            &[0.0],
+            &[0.0],
+            &[3.3],
+            &[],
+            1e-3,
+            0.1,
+            0,
+        );
         assert_eq!(rec.response_quantum, 1.0);
         assert_eq!(rec.response_measured[0], 3.0);
+        let a = Artefacts {
+            noise_rel: 0.0,
+            response_quantum: Some(0.25),
+            ..a
+        };
+        let rec = apply(
+            TestKind::Tension,
+            &a,
+            &[0.0],
+            &[0.0],
+            &[3.3],
+            &[],
+            1e-3,
+            0.1,
+            0,
+        );
+        assert_eq!(rec.response_measured[0], 3.25);
     }
 }

@@ -44,5 +44,8 @@ pub enum SynthError {
 
 /// Shorthand for an [`SynthError::InvalidSpec`].
 pub(crate) fn invalid(field: impl Into<String>, why: impl Into<String>) -> SynthError {
-    SynthError::InvalidSpec { field: field.into(), why: why.into() }
+    SynthError::InvalidSpec {
+        field: field.into(),
+        why: why.into(),
+    }
 }

@@ -76,7 +76,7 @@ fn kind_de(kind: TestKind) -> &'static str {
         TestKind::Tension => "Zugversuch",
         TestKind::Torsion => "Torsionsversuch",
         TestKind::ThreePoint => "Dreipunktbiegeversuch",
-        TestKind::PureBending => "Reiner Biegeversuch",
+        TestKind::PureBending => "Reine Biegung",
         TestKind::Unknown => "unbekannt",
     }
 }
@@ -138,7 +138,11 @@ fn names(layout: Layout, kind: TestKind) -> Names {
         },
         Layout::Mts793Dat => Names {
             time: ("Laufzeit", "s", 1.0),
-            control: if is_angle(kind) { ("Ch 2 Drehwinkel", "°", DEG) } else { ("Ch 1 Weg", "mm", 1e-3) },
+            control: if is_angle(kind) {
+                ("Ch 2 Drehwinkel", "°", DEG)
+            } else {
+                ("Ch 1 Weg", "mm", 1e-3)
+            },
             response: match kind {
                 TestKind::Tension | TestKind::ThreePoint => ("Ch 1 Kraft", "N", 1.0),
                 TestKind::Torsion => ("Ch 2 Drehmoment", "N·m", 1.0),
@@ -169,21 +173,35 @@ pub fn table(spec: &SynthSpec, rec: &Record) -> Table {
         decimals: decimals_for(step_si / f),
         role: role.to_string(),
     };
-    let c_max = rec.control_measured.iter().fold(0.0f64, |m, c| m.max(c.abs())).max(1e-12);
-    let c_step = if rec.control_quantum > 0.0 { rec.control_quantum } else { c_max * 1e-6 };
-    let r_step = if rec.response_quantum > 0.0 { rec.response_quantum } else { rec.response_full_scale * 1e-6 };
+    let c_max = rec
+        .control_measured
+        .iter()
+        .fold(0.0f64, |m, c| m.max(c.abs()))
+        .max(1e-12);
+    let c_step = if rec.control_quantum > 0.0 {
+        rec.control_quantum
+    } else {
+        c_max * 1e-6
+    };
+    let r_step = if rec.response_quantum > 0.0 {
+        rec.response_quantum
+    } else {
+        rec.response_full_scale * 1e-6
+    };
     let mut time = ch(n.time, dt, "time");
     time.decimals = time.decimals.max(3);
     let control = ch(n.control, c_step, "control");
     let response = ch(n.response, r_step, "response");
-    let to_unit = |v: &[f64], c: &WrittenChannel| v.iter().map(|x| x / c.si_per_unit).collect::<Vec<_>>();
+    let to_unit =
+        |v: &[f64], c: &WrittenChannel| v.iter().map(|x| x / c.si_per_unit).collect::<Vec<_>>();
     let tv = to_unit(&rec.time_s, &time);
     let cv = to_unit(&rec.control_measured, &control);
     let rv = to_unit(&rec.response_measured, &response);
     match spec.layout {
-        Layout::TestXpert | Layout::Mts793Dat => {
-            Table { channels: vec![time, response, control], columns: vec![tv, rv, cv] }
-        }
+        Layout::TestXpert | Layout::Mts793Dat => Table {
+            channels: vec![time, response, control],
+            columns: vec![tv, rv, cv],
+        },
         Layout::BluehillCsv => {
             let cyc = WrittenChannel {
                 name: "Cycle count".into(),
@@ -212,12 +230,19 @@ fn date_of(seed: u64) -> (String, String, f64) {
     let mdays = [31, 28, 31, 30, 31, 30, 31, 31, 30, 31, 30, 31];
     let before: u32 = mdays[..(month - 1) as usize].iter().sum();
     let serial = 43466.0 + (before + day - 1) as f64 + secs as f64 / 86400.0;
-    (format!("{day:02}.{month:02}.{year}"), format!("{h:02}:{m:02}:{s:02}"), serial)
+    (
+        format!("{day:02}.{month:02}.{year}"),
+        format!("{h:02}:{m:02}:{s:02}"),
+        serial,
+    )
 }
 
 /// The provenance note every layout carries: the file is synthetic, with its kind and seed.
 fn note(spec: &SynthSpec) -> String {
-    format!("synthetic (cablab-synth), kind={}, law={}, seed={}", spec.kind, spec.law, spec.seed)
+    format!(
+        "synthetic (cablab-synth), kind={}, law={}, seed={}",
+        spec.kind, spec.law, spec.seed
+    )
 }
 
 fn rows(t: &Table, sep: &str, comma: bool, quote: bool, lead: Option<&str>) -> String {
@@ -257,18 +282,36 @@ fn test_xpert(spec: &SynthSpec, rec: &Record, t: &Table) -> String {
     s += &q("Prüfinstitut", "cablab virtual lab");
     s += &q("Projektnummer", &spec.seed.to_string());
     s += &q("Projektname", "cablab demo campaign");
-    s += &format!("\"Datum/Uhrzeit\"\t{}\t\"\"\n", fmt_meta((serial * 1e4).round() / 1e4, true));
+    s += &format!(
+        "\"Datum/Uhrzeit\"\t{}\t\"\"\n",
+        fmt_meta((serial * 1e4).round() / 1e4, true)
+    );
     s += &q("Maschinendaten", "cablab-synth virtual machine");
     s += &q(
-        "Kraftaufnehmer",
-        &format!("{} {}", fmt_meta(rec.response_full_scale / t.channels[1].si_per_unit, true), t.channels[1].unit),
+        if is_angle(spec.kind) {
+            "Drehmomentaufnehmer"
+        } else {
+            "Kraftaufnehmer"
+        },
+        &format!(
+            "{} {}",
+            fmt_meta(rec.response_full_scale / t.channels[1].si_per_unit, true),
+            t.channels[1].unit
+        ),
     );
-    s += &q("Wegaufnehmer", if is_angle(spec.kind) { "Drehwinkelgeber" } else { "Traverse" });
+    s += &q(
+        "Wegaufnehmer",
+        if is_angle(spec.kind) {
+            "Drehwinkelgeber"
+        } else {
+            "Traverse"
+        },
+    );
     s += &q("Prüfart", kind_de(spec.kind));
     s += &q("Prüfer", "cablab");
     s += &q("Probenkennung", &label);
     if let Some(d) = spec.specimen.diameter_m {
-        s += &num("Probendurchmesser", d * 1e3, "mm");
+        s += &num("Durchmesser", d * 1e3, "mm");
     }
     if let Some(l) = spec.specimen.free_length_m {
         s += &num("Versuchslänge", l * 1e3, "mm");
@@ -279,8 +322,16 @@ fn test_xpert(spec: &SynthSpec, rec: &Record, t: &Table) -> String {
     s += &num("Messrate", spec.sample_rate_hz, "Hz");
     s += &num("Temperatur", 23.0, "°C");
     s += &q("Bemerkung", &note(spec));
-    let names: Vec<String> = t.channels.iter().map(|c| format!("\"{}\"", c.name)).collect();
-    let units: Vec<String> = t.channels.iter().map(|c| format!("\"{}\"", c.unit)).collect();
+    let names: Vec<String> = t
+        .channels
+        .iter()
+        .map(|c| format!("\"{}\"", c.name))
+        .collect();
+    let units: Vec<String> = t
+        .channels
+        .iter()
+        .map(|c| format!("\"{}\"", c.unit))
+        .collect();
     s += &names.join("\t");
     s.push('\n');
     s += &units.join("\t");
@@ -301,10 +352,17 @@ fn bluehill(spec: &SynthSpec, t: &Table, specimen_no: u32) -> String {
         s += &format!("\"Diameter\",\"{}\",\"mm\"\n", fmt_meta(d * 1e3, false));
     }
     if let Some(l) = spec.specimen.free_length_m {
-        let key = if spec.kind == TestKind::ThreePoint { "Span" } else { "Length" };
+        let key = if spec.kind == TestKind::ThreePoint {
+            "Span"
+        } else {
+            "Length"
+        };
         s += &format!("\"{key}\",\"{}\",\"mm\"\n", fmt_meta(l * 1e3, false));
     }
-    s += &format!("\"Data rate\",\"{}\",\"Hz\"\n", fmt_meta(spec.sample_rate_hz, false));
+    s += &format!(
+        "\"Data rate\",\"{}\",\"Hz\"\n",
+        fmt_meta(spec.sample_rate_hz, false)
+    );
     s += &format!("\"Note\",\"{}\"\n", note(spec));
     s.push('\n');
     s += &specimen_no.to_string();
@@ -334,7 +392,10 @@ fn mts793(spec: &SynthSpec, rec: &Record, t: &Table) -> String {
     let t_end = rec.time_s.last().copied().unwrap_or(0.0);
     let mut s = String::new();
     s += "MTS793|MPT|DEU|1|2|,|.|:|49|1|1|A\n\n";
-    s += &format!("Bediener Information\t\t\t\t\t\tZeit:\t{}\ts\t{date} {time}\n", fmt_meta(0.0, true));
+    s += &format!(
+        "Bediener Information\t\t\t\t\t\tZeit:\t{}\ts\t{date} {time}\n",
+        fmt_meta(0.0, true)
+    );
     s += &format!("Datum : \t{date}\n");
     s += "Prüfer : \tcablab\n";
     s += &format!("Probenbezeichnung :  \t{label}\n");
@@ -347,7 +408,10 @@ fn mts793(spec: &SynthSpec, rec: &Record, t: &Table) -> String {
         s += &format!("Länge :\t{}\n", fmt_meta(l * 1e3, true));
     }
     s += "Bediener Information Ende\n\n";
-    s += &format!("Datenerfassung\t\t\t\t\t\tZeit:\t{}\ts\t{date} {time}\n", fmt_num(t_end, 5, true));
+    s += &format!(
+        "Datenerfassung\t\t\t\t\t\tZeit:\t{}\ts\t{date} {time}\n",
+        fmt_num(t_end, 5, true)
+    );
     let names: Vec<&str> = t.channels.iter().map(|c| c.name.as_str()).collect();
     let units: Vec<&str> = t.channels.iter().map(|c| c.unit.as_str()).collect();
     s += &names.join("\t");

@@ -24,13 +24,17 @@ pub mod truth;
 #[cfg(test)]
 mod roundtrip_tests;
 
+#[cfg(test)]
+mod demo_tests;
+
 use std::collections::BTreeMap;
 
 use serde::{Deserialize, Serialize};
 
 pub use error::SynthError;
 pub use layout::WrittenChannel;
-pub use recipe::{expand_recipe, run_recipe, Recipe, RecipeEntry};
+pub use recipe::{expand_recipe, parse_recipe, run_recipe, Recipe, RecipeEntry, WrittenFile};
+pub use registry::{build_law, registry_law, RodTruth};
 pub use spec::{Artefacts, Extension, Layout, Protocol, Rig, Step, SynthSpec};
 pub use truth::{build_truth, SectionalTruth, Truth};
 
@@ -104,9 +108,16 @@ pub fn generate_with_truth(spec: &SynthSpec, truth: &dyn Truth) -> Result<SynthO
             path.control.len()
         )));
     }
-    let keep: Vec<usize> = (0..path.time_s.len()).filter(|&i| path.on_grid[i]).collect();
+    let keep: Vec<usize> = (0..path.time_s.len())
+        .filter(|&i| path.on_grid[i])
+        .collect();
     let pick = |v: &[f64]| keep.iter().map(|&i| v[i]).collect::<Vec<f64>>();
-    let (t, c, r, cyc) = (pick(&path.time_s), pick(&path.control), pick(&response), pick(&path.cycle));
+    let (t, c, r, cyc) = (
+        pick(&path.time_s),
+        pick(&path.control),
+        pick(&response),
+        pick(&path.cycle),
+    );
     let first_rate = spec
         .protocol
         .steps
@@ -119,7 +130,17 @@ pub fn generate_with_truth(spec: &SynthSpec, truth: &dyn Truth) -> Result<SynthO
             Step::Hold { .. } => None,
         })
         .unwrap_or(0.0);
-    let rec = artefacts::apply(spec.kind, &spec.artefacts, &t, &c, &r, &cyc, first_rate, dt, spec.seed);
+    let rec = artefacts::apply(
+        spec.kind,
+        &spec.artefacts,
+        &t,
+        &c,
+        &r,
+        &cyc,
+        first_rate,
+        dt,
+        spec.seed,
+    );
     let (bytes, channels) = layout::render(spec, &rec, spec.specimen_number.unwrap_or(1));
     Ok(SynthOutput {
         bytes,

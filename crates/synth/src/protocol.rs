@@ -26,7 +26,12 @@ pub struct Path {
 
 impl Path {
     fn start() -> Self {
-        Path { time_s: vec![0.0], control: vec![0.0], on_grid: vec![true], cycle: vec![0.0] }
+        Path {
+            time_s: vec![0.0],
+            control: vec![0.0],
+            on_grid: vec![true],
+            cycle: vec![0.0],
+        }
     }
     fn t_end(&self) -> f64 {
         *self.time_s.last().unwrap_or(&0.0)
@@ -83,7 +88,13 @@ pub fn expand(protocol: &Protocol, dt_s: f64, truth: &dyn Truth) -> Result<Path,
                 let c = p.c_end();
                 p.segment_to(p.t_end() + duration_s, c, dt_s, cycle);
             }
-            Step::Cycles { lower, upper, rate, count, dwell_s } => {
+            Step::Cycles {
+                lower,
+                upper,
+                rate,
+                count,
+                dwell_s,
+            } => {
                 for _ in 0..count {
                     for target in [upper, lower] {
                         let t1 = p.t_end() + (target - p.c_end()).abs() / rate;
@@ -95,10 +106,21 @@ pub fn expand(protocol: &Protocol, dt_s: f64, truth: &dyn Truth) -> Result<Path,
                     }
                 }
             }
-            Step::RampToResponse { response, rate, max_control } => {
+            Step::RampToResponse {
+                response,
+                rate,
+                max_control,
+            } => {
                 ramp_to_response(&mut p, truth, i, response, rate, max_control, dt_s, cycle)?;
             }
-            Step::ResponseCycles { lower, upper, rate, count, dwell_s, max_control } => {
+            Step::ResponseCycles {
+                lower,
+                upper,
+                rate,
+                count,
+                dwell_s,
+                max_control,
+            } => {
                 for _ in 0..count {
                     for target in [upper, lower] {
                         ramp_to_response(&mut p, truth, i, target, rate, max_control, dt_s, cycle)?;
@@ -143,7 +165,12 @@ fn ramp_to_response(
     let bound = dir * max_control;
     let span_total = (bound - c0).abs();
     if span_total <= 0.0 {
-        return Err(SynthError::LimitNotReached { step, limit, bound: max_control, last: r_now });
+        return Err(SynthError::LimitNotReached {
+            step,
+            limit,
+            bound: max_control,
+            last: r_now,
+        });
     }
     let mut extent = (span_total / 64.0).max(rate * dt_s);
     loop {
@@ -162,14 +189,20 @@ fn ramp_to_response(
             let mut c_star = ca;
             let mut side = 0i8;
             for _ in 0..40 {
-                if (rb - ra).abs() < f64::MIN_POSITIVE || (cb - ca).abs() <= 1e-15 * cb.abs().max(1e-12) {
+                if (rb - ra).abs() < f64::MIN_POSITIVE
+                    || (cb - ca).abs() <= 1e-15 * cb.abs().max(1e-12)
+                {
                     break;
                 }
-                let c_try = (ca + (limit - ra) * (cb - ca) / (rb - ra)).clamp(ca.min(cb), ca.max(cb));
+                let c_try =
+                    (ca + (limit - ra) * (cb - ca) / (rb - ra)).clamp(ca.min(cb), ca.max(cb));
                 let t_try = t0 + (c_try - c0).abs() / rate;
                 let mut trial = p.clone();
                 trial.segment_to(t_try, c_try, dt_s, cycle);
-                let rs = *truth.respond(&trial.control, &trial.time_s)?.last().unwrap_or(&0.0);
+                let rs = *truth
+                    .respond(&trial.control, &trial.time_s)?
+                    .last()
+                    .unwrap_or(&0.0);
                 if crossed(rs) {
                     cb = c_try;
                     rb = rs;
@@ -198,7 +231,12 @@ fn ramp_to_response(
         if extent >= span_total {
             let last = *r.last().unwrap_or(&0.0);
             p.truncate(n0);
-            return Err(SynthError::LimitNotReached { step, limit, bound: max_control, last });
+            return Err(SynthError::LimitNotReached {
+                step,
+                limit,
+                bound: max_control,
+                last,
+            });
         }
         extent *= 2.0;
     }
@@ -219,7 +257,13 @@ mod tests {
     #[test]
     fn control_cycles_hit_turning_points_and_grid() {
         let prot = Protocol {
-            steps: vec![Step::Cycles { lower: 0.0, upper: 1.0, rate: 0.3, count: 2, dwell_s: 0.5 }],
+            steps: vec![Step::Cycles {
+                lower: 0.0,
+                upper: 1.0,
+                rate: 0.3,
+                count: 2,
+                dwell_s: 0.5,
+            }],
         };
         let p = expand(&prot, 0.1, &Spring(1.0)).unwrap();
         // 2 cycles: each 1/0.3 s up, 0.5 s dwell, down, dwell.
@@ -227,7 +271,11 @@ mod tests {
         assert!((p.time_s.last().unwrap() - t_total).abs() < 1e-12);
         assert_eq!(p.control.iter().cloned().fold(f64::MIN, f64::max), 1.0);
         // Turning point 1/0.3 = 3.333 s is off-grid and present.
-        let i = p.time_s.iter().position(|&t| (t - 1.0 / 0.3).abs() < 1e-12).unwrap();
+        let i = p
+            .time_s
+            .iter()
+            .position(|&t| (t - 1.0 / 0.3).abs() < 1e-12)
+            .unwrap();
         assert!(!p.on_grid[i]);
         assert_eq!(p.control[i], 1.0);
         // Grid points are multiples of dt and increasing.
@@ -268,9 +316,16 @@ mod tests {
     #[test]
     fn unreachable_limit_is_an_error() {
         let prot = Protocol {
-            steps: vec![Step::RampToResponse { response: 1e6, rate: 1e-3, max_control: 0.01 }],
+            steps: vec![Step::RampToResponse {
+                response: 1e6,
+                rate: 1e-3,
+                max_control: 0.01,
+            }],
         };
         let e = expand(&prot, 0.1, &Spring(10.0)).unwrap_err();
-        assert!(matches!(e, SynthError::LimitNotReached { step: 0, .. }), "{e}");
+        assert!(
+            matches!(e, SynthError::LimitNotReached { step: 0, .. }),
+            "{e}"
+        );
     }
 }

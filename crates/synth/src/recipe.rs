@@ -36,6 +36,10 @@ pub struct Recipe {
 pub struct RecipeEntry {
     /// Series name; files are named `<name>_<k>.<ext>` (k from 1).
     pub name: String,
+    /// Sub-folder of the output folder the series is written to (e.g. the specimen type
+    /// `cable`); one plain name, no path separators. `None`: the output folder itself.
+    #[serde(default)]
+    pub folder: Option<String>,
     /// Number of specimens (≥ 1).
     pub count: u32,
     /// Label prefix; specimen labels are `<label>-<k>`.
@@ -88,18 +92,42 @@ pub fn expand_recipe(recipe: &Recipe) -> Result<Vec<SynthSpec>, SynthError> {
     let mut out = Vec::new();
     for (ei, e) in recipe.series.iter().enumerate() {
         let field = |f: &str| format!("series[{ei}] ({}).{f}", e.name);
+        if let Some(f) = &e.folder {
+            if f.is_empty()
+                || !f
+                    .chars()
+                    .all(|c| c.is_ascii_alphanumeric() || c == '-' || c == '_')
+            {
+                return Err(SynthError::Recipe(format!(
+                    "{}: '{f}' must be one plain folder name (letters, digits, - and _)",
+                    field("folder")
+                )));
+            }
+        }
         if e.count == 0 {
-            return Err(SynthError::Recipe(format!("{}: must be >= 1", field("count"))));
+            return Err(SynthError::Recipe(format!(
+                "{}: must be >= 1",
+                field("count")
+            )));
         }
         if e.layouts.is_empty() {
-            return Err(SynthError::Recipe(format!("{}: list at least one layout", field("layouts"))));
+            return Err(SynthError::Recipe(format!(
+                "{}: list at least one layout",
+                field("layouts")
+            )));
         }
         for (p, s) in &e.scatter {
             if !e.params.contains_key(p) {
-                return Err(SynthError::Recipe(format!("{}: '{p}' is not among the params", field("scatter"))));
+                return Err(SynthError::Recipe(format!(
+                    "{}: '{p}' is not among the params",
+                    field("scatter")
+                )));
             }
             if !(s.is_finite() && *s >= 0.0 && *s < 0.3) {
-                return Err(SynthError::Recipe(format!("{}: {p} = {s} must be in [0, 0.3)", field("scatter"))));
+                return Err(SynthError::Recipe(format!(
+                    "{}: {p} = {s} must be in [0, 0.3)",
+                    field("scatter")
+                )));
             }
         }
         let series_seed = mix(recipe.seed ^ mix(ei as u64 + 1));
@@ -108,9 +136,18 @@ pub fn expand_recipe(recipe: &Recipe) -> Result<Vec<SynthSpec>, SynthError> {
         let n = e.count as usize;
         let mut factors: BTreeMap<&str, Vec<f64>> = BTreeMap::new();
         for (p, s) in &e.scatter {
-            let z: Vec<f64> = (0..n).map(|_| rng.sample::<f64, _>(StandardNormal)).collect();
-            let mean = if n > 1 { z.iter().sum::<f64>() / n as f64 } else { 0.0 };
-            factors.insert(p.as_str(), z.iter().map(|zk| 1.0 + s * (zk - mean)).collect());
+            let z: Vec<f64> = (0..n)
+                .map(|_| rng.sample::<f64, _>(StandardNormal))
+                .collect();
+            let mean = if n > 1 {
+                z.iter().sum::<f64>() / n as f64
+            } else {
+                0.0
+            };
+            factors.insert(
+                p.as_str(),
+                z.iter().map(|zk| 1.0 + s * (zk - mean)).collect(),
+            );
         }
         for k in 0..n {
             let mut params = e.params.clone();
@@ -135,10 +172,14 @@ pub fn expand_recipe(recipe: &Recipe) -> Result<Vec<SynthSpec>, SynthError> {
                 layout: e.layouts[k % e.layouts.len()],
                 seed: mix(series_seed ^ mix(k as u64 + 1)),
                 sample_rate_hz: e.sample_rate_hz,
-                file_stem: Some(format!("{}_{}", e.name, k + 1)),
+                file_stem: Some(match &e.folder {
+                    Some(f) => format!("{f}/{}_{}", e.name, k + 1),
+                    None => format!("{}_{}", e.name, k + 1),
+                }),
                 specimen_number: Some(k as u32 + 1),
             };
-            spec.validate().map_err(|err| SynthError::Recipe(format!("{}: {err}", field("spec"))))?;
+            spec.validate()
+                .map_err(|err| SynthError::Recipe(format!("{}: {err}", field("spec"))))?;
             out.push(spec);
         }
     }
@@ -188,6 +229,9 @@ pub fn run_recipe(recipe_toml: &str, out_dir: &Path) -> Result<Vec<WrittenFile>,
     let mut written = Vec::new();
     for (s, o) in specs.iter().zip(&outputs) {
         let path = out_dir.join(&o.file_name);
+        if let Some(parent) = path.parent() {
+            std::fs::create_dir_all(parent).map_err(|e| io(parent, e))?;
+        }
         write_atomic(&path, &o.bytes)?;
         written.push(WrittenFile {
             file: o.file_name.clone(),
@@ -208,7 +252,7 @@ pub fn run_recipe(recipe_toml: &str, out_dir: &Path) -> Result<Vec<WrittenFile>,
         file: &'a [WrittenFile],
     }
     let truth = TruthFile {
-        note: "Synthetic campaign written by cablab-synth from pipelines/demo_recipe.toml; \
+        note: "Synthetic campaign written by cablab-synth from a recipe (see pipelines/); \
                params are the truth behind each file (SI).",
         file: &written,
     };
@@ -218,11 +262,17 @@ pub fn run_recipe(recipe_toml: &str, out_dir: &Path) -> Result<Vec<WrittenFile>,
 }
 
 fn io(p: &Path, source: std::io::Error) -> SynthError {
-    SynthError::Io { path: p.display().to_string(), source }
+    SynthError::Io {
+        path: p.display().to_string(),
+        source,
+    }
 }
 
 fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), SynthError> {
-    let mut name = path.file_name().map(|n| n.to_os_string()).unwrap_or_default();
+    let mut name = path
+        .file_name()
+        .map(|n| n.to_os_string())
+        .unwrap_or_default();
     name.push(".partial");
     let tmp: PathBuf = path.with_file_name(name);
     std::fs::write(&tmp, bytes).map_err(|e| io(&tmp, e))?;
@@ -244,20 +294,37 @@ mod tests {
         assert!(specs.len() >= 30);
         for e in &r.series {
             assert!(e.count >= 3, "{}", e.name);
-            let mine: Vec<&SynthSpec> =
-                specs.iter().filter(|s| s.file_stem.as_deref().unwrap().starts_with(&format!("{}_", e.name))).collect();
+            let stem = match &e.folder {
+                Some(f) => format!("{f}/{}_", e.name),
+                None => format!("{}_", e.name),
+            };
+            let mine: Vec<&SynthSpec> = specs
+                .iter()
+                .filter(|s| s.file_stem.as_deref().unwrap().starts_with(&stem))
+                .collect();
             assert_eq!(mine.len(), e.count as usize);
             for (p, sd) in &e.scatter {
                 let v: Vec<f64> = mine.iter().map(|s| s.params[p] / e.params[p]).collect();
                 let mean = v.iter().sum::<f64>() / v.len() as f64;
                 assert!((mean - 1.0).abs() < 1e-12, "{} {p} mean {mean}", e.name);
-                assert!(v.iter().any(|x| (x - 1.0).abs() > 1e-4), "{} {p} has no scatter", e.name);
-                assert!(v.iter().all(|x| (x - 1.0).abs() < 4.0 * sd), "{} {p}", e.name);
+                assert!(
+                    v.iter().any(|x| (x - 1.0).abs() > 1e-4),
+                    "{} {p} has no scatter",
+                    e.name
+                );
+                assert!(
+                    v.iter().all(|x| (x - 1.0).abs() < 4.0 * sd),
+                    "{} {p}",
+                    e.name
+                );
             }
         }
         for kind in TestKind::ALL {
-            let layouts: std::collections::BTreeSet<_> =
-                specs.iter().filter(|s| s.kind == kind).map(|s| s.layout.extension()).collect();
+            let layouts: std::collections::BTreeSet<_> = specs
+                .iter()
+                .filter(|s| s.kind == kind)
+                .map(|s| s.layout.extension())
+                .collect();
             assert_eq!(layouts.len(), 3, "{kind}");
         }
         // Deterministic: same recipe, same specs; another seed, other scatter.
@@ -272,8 +339,14 @@ mod tests {
         let mut r = parse_recipe(DEMO).unwrap();
         r.series[1].scatter.insert("nope".into(), 0.01);
         let e = expand_recipe(&r).unwrap_err().to_string();
-        assert!(e.contains("series[1] (cable_tension_100N).scatter") && e.contains("nope"), "{e}");
-        let bad = DEMO.replace("count = 5, dwell_s = 1.0, max_control = 1.0e-3", "count = 5, dwel = 1.0, max_control = 1.0e-3");
+        assert!(
+            e.contains("series[1] (tension_100N).scatter") && e.contains("nope"),
+            "{e}"
+        );
+        let bad = DEMO.replace(
+            "count = 5, dwell_s = 1.0, max_control = 1.0e-3",
+            "count = 5, dwel = 1.0, max_control = 1.0e-3",
+        );
         let e = parse_recipe(&bad).unwrap_err().to_string();
         assert!(e.contains("dwel"), "{e}");
     }
@@ -300,8 +373,10 @@ protocol = { steps = [ { step = "cycles", lower = 0.0, upper = 1.0e-5, rate = 1.
         let dir = tempfile::tempdir().unwrap();
         let files = run_recipe(text, dir.path()).unwrap();
         assert_eq!(files.len(), 2);
-        let mut names: Vec<String> =
-            std::fs::read_dir(dir.path()).unwrap().map(|e| e.unwrap().file_name().into_string().unwrap()).collect();
+        let mut names: Vec<String> = std::fs::read_dir(dir.path())
+            .unwrap()
+            .map(|e| e.unwrap().file_name().into_string().unwrap())
+            .collect();
         names.sort();
         assert_eq!(names, vec!["TRUTH.toml", "t_1.dat", "t_2.csv"]);
         let first = std::fs::read(dir.path().join("t_1.dat")).unwrap();

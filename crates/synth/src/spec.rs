@@ -81,8 +81,10 @@ pub struct Protocol {
 }
 
 /// One step of a protocol. Control values are the kind's control variable in SI (elongation m,
-/// twist angle rad, punch deflection m, end rotation rad); response values are force N or
-/// moment N m; rates are control units per second.
+/// twist angle rad, punch deflection m, end rotation rad) *at the specimen*; response values are
+/// force N or moment N m; rates are control units per second. With machine compliance the
+/// machine's own reading runs ahead of the specimen by C·response (see [`Artefacts`]), as a
+/// crosshead does when the frame and grips stretch.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "step", rename_all = "snake_case", deny_unknown_fields)]
 pub enum Step {
@@ -156,6 +158,8 @@ pub struct Artefacts {
     pub response_full_scale: Option<f64>,
     /// Resolution of the response ADC in bits over ±full scale; 0 = no quantisation.
     pub adc_bits: u32,
+    /// Explicit response quantisation step, SI; overrides `adc_bits` when given.
+    pub response_quantum: Option<f64>,
     /// Control encoder step, SI; `None`: 0.1 µm (length) or 0.001° (angle).
     pub control_quantum: Option<f64>,
     /// Constant offset added to the response, SI (an untared load cell).
@@ -182,6 +186,7 @@ impl Default for Artefacts {
             control_noise_rel: 0.0,
             response_full_scale: None,
             adc_bits: 16,
+            response_quantum: None,
             control_quantum: None,
             response_offset: 0.0,
             control_offset: 0.0,
@@ -222,21 +227,36 @@ impl SynthSpec {
     /// Checks every field the generator relies on; the error names the field.
     pub fn validate(&self) -> Result<(), SynthError> {
         if self.kind == TestKind::Unknown {
-            return Err(invalid("kind", "must be tension, torsion, three_point or pure_bending"));
+            return Err(invalid(
+                "kind",
+                "must be tension, torsion, three_point or pure_bending",
+            ));
         }
         let len = self.specimen.free_length_m.ok_or_else(|| {
-            invalid("specimen.free_length_m", "missing (free length, or support span for three_point)")
+            invalid(
+                "specimen.free_length_m",
+                "missing (free length, or support span for three_point)",
+            )
         })?;
         if !(len.is_finite() && len > 0.0) {
-            return Err(invalid("specimen.free_length_m", format!("must be > 0, got {len}")));
+            return Err(invalid(
+                "specimen.free_length_m",
+                format!("must be > 0, got {len}"),
+            ));
         }
         if let Some(d) = self.specimen.diameter_m {
             if !(d.is_finite() && d > 0.0) {
-                return Err(invalid("specimen.diameter_m", format!("must be > 0, got {d}")));
+                return Err(invalid(
+                    "specimen.diameter_m",
+                    format!("must be > 0, got {d}"),
+                ));
             }
         }
         if !(self.sample_rate_hz.is_finite() && self.sample_rate_hz > 0.0) {
-            return Err(invalid("sample_rate_hz", format!("must be > 0, got {}", self.sample_rate_hz)));
+            return Err(invalid(
+                "sample_rate_hz",
+                format!("must be > 0, got {}", self.sample_rate_hz),
+            ));
         }
         if self.protocol.steps.is_empty() {
             return Err(invalid("protocol.steps", "empty protocol"));
@@ -265,29 +285,52 @@ impl SynthSpec {
                     }
                 }
                 Step::Hold { duration_s } => nonneg("duration_s", *duration_s)?,
-                Step::Cycles { lower, upper, rate, count, dwell_s } => {
+                Step::Cycles {
+                    lower,
+                    upper,
+                    rate,
+                    count,
+                    dwell_s,
+                } => {
                     pos("rate", *rate)?;
                     nonneg("dwell_s", *dwell_s)?;
                     if !(lower.is_finite() && upper.is_finite() && upper > lower) {
-                        return Err(invalid(f("upper"), format!("must exceed lower ({lower}), got {upper}")));
+                        return Err(invalid(
+                            f("upper"),
+                            format!("must exceed lower ({lower}), got {upper}"),
+                        ));
                     }
                     if *count == 0 {
                         return Err(invalid(f("count"), "must be >= 1"));
                     }
                 }
-                Step::RampToResponse { response, rate, max_control } => {
+                Step::RampToResponse {
+                    response,
+                    rate,
+                    max_control,
+                } => {
                     pos("rate", *rate)?;
                     pos("max_control", *max_control)?;
                     if !response.is_finite() {
                         return Err(invalid(f("response"), "must be finite"));
                     }
                 }
-                Step::ResponseCycles { lower, upper, rate, count, dwell_s, max_control } => {
+                Step::ResponseCycles {
+                    lower,
+                    upper,
+                    rate,
+                    count,
+                    dwell_s,
+                    max_control,
+                } => {
                     pos("rate", *rate)?;
                     pos("max_control", *max_control)?;
                     nonneg("dwell_s", *dwell_s)?;
                     if !(lower.is_finite() && upper.is_finite() && upper > lower) {
-                        return Err(invalid(f("upper"), format!("must exceed lower ({lower}), got {upper}")));
+                        return Err(invalid(
+                            f("upper"),
+                            format!("must exceed lower ({lower}), got {upper}"),
+                        ));
                     }
                     if *count == 0 {
                         return Err(invalid(f("count"), "must be >= 1"));
@@ -308,16 +351,25 @@ impl SynthSpec {
         }
         if let Some(fs) = a.response_full_scale {
             if !(fs.is_finite() && fs > 0.0) {
-                return Err(invalid("artefacts.response_full_scale", format!("must be > 0, got {fs}")));
+                return Err(invalid(
+                    "artefacts.response_full_scale",
+                    format!("must be > 0, got {fs}"),
+                ));
             }
         }
         if let Some(q) = a.control_quantum {
             if !(q.is_finite() && q >= 0.0) {
-                return Err(invalid("artefacts.control_quantum", format!("must be >= 0, got {q}")));
+                return Err(invalid(
+                    "artefacts.control_quantum",
+                    format!("must be >= 0, got {q}"),
+                ));
             }
         }
         if a.adc_bits > 32 {
-            return Err(invalid("artefacts.adc_bits", format!("at most 32, got {}", a.adc_bits)));
+            return Err(invalid(
+                "artefacts.adc_bits",
+                format!("at most 32, got {}", a.adc_bits),
+            ));
         }
         for (name, v) in [
             ("artefacts.response_offset", a.response_offset),
@@ -334,17 +386,114 @@ impl SynthSpec {
         Ok(())
     }
 
-    /// The output file name: stem (or label, or kind) plus the layout's extension.
+    /// The output file name: stem (or label, or kind) plus the layout's extension. Characters
+    /// other than ASCII letters, digits, `-`, `_`, `.` become `_`, except one `/` separating a
+    /// folder from the name (recipes write series into sub-folders).
     pub fn file_name(&self) -> String {
         let stem = self
             .file_stem
             .clone()
             .or_else(|| self.specimen.label.clone())
             .unwrap_or_else(|| self.kind.as_str().to_string());
-        let safe: String = stem
-            .chars()
-            .map(|c| if c.is_ascii_alphanumeric() || "-_.".contains(c) { c } else { '_' })
-            .collect();
+        let clean = |s: &str| -> String {
+            s.chars()
+                .map(|c| {
+                    if c.is_ascii_alphanumeric() || "-_.".contains(c) {
+                        c
+                    } else {
+                        '_'
+                    }
+                })
+                .collect()
+        };
+        let safe = match stem.split_once('/') {
+            Some((dir, name)) if !dir.is_empty() && !dir.starts_with('.') && !name.is_empty() => {
+                format!("{}/{}", clean(dir), clean(name))
+            }
+            _ => clean(&stem),
+        };
         format!("{safe}.{}", self.layout.extension())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn base() -> SynthSpec {
+        SynthSpec {
+            kind: TestKind::Tension,
+            specimen: Specimen {
+                label: Some("a b/c".into()),
+                diameter_m: Some(2.8e-3),
+                free_length_m: Some(0.032),
+            },
+            law: "linear".into(),
+            params: BTreeMap::new(),
+            extension: None,
+            rig: Rig::default(),
+            protocol: Protocol {
+                steps: vec![Step::Ramp {
+                    to: 1e-5,
+                    rate: 1e-6,
+                }],
+            },
+            artefacts: Artefacts::default(),
+            layout: Layout::TestXpert,
+            seed: 0,
+            sample_rate_hz: 10.0,
+            file_stem: None,
+            specimen_number: None,
+        }
+    }
+
+    #[test]
+    fn validation_names_the_field() {
+        assert!(base().validate().is_ok());
+        let mut s = base();
+        s.specimen.free_length_m = None;
+        assert!(s
+            .validate()
+            .unwrap_err()
+            .to_string()
+            .contains("specimen.free_length_m"));
+        let mut s = base();
+        s.protocol.steps.push(Step::Cycles {
+            lower: 1.0,
+            upper: 0.5,
+            rate: 1.0,
+            count: 1,
+            dwell_s: 0.0,
+        });
+        assert!(s
+            .validate()
+            .unwrap_err()
+            .to_string()
+            .contains("protocol.steps[1].upper"));
+        let mut s = base();
+        s.artefacts.machine_compliance = -1.0;
+        assert!(s
+            .validate()
+            .unwrap_err()
+            .to_string()
+            .contains("artefacts.machine_compliance"));
+        let mut s = base();
+        s.sample_rate_hz = 0.0;
+        assert!(s
+            .validate()
+            .unwrap_err()
+            .to_string()
+            .contains("sample_rate_hz"));
+    }
+
+    #[test]
+    fn file_names_are_safe_and_keep_one_folder() {
+        assert_eq!(base().file_name(), "a_b_c.TXT");
+        let mut s = base();
+        s.file_stem = Some("cable/tension 1".into());
+        s.layout = Layout::Mts793Dat;
+        assert_eq!(s.file_name(), "cable/tension_1.dat");
+        s.file_stem = Some("../x".into());
+        assert_eq!(s.file_name(), ".._x.dat");
     }
 }

@@ -38,7 +38,11 @@ impl SectionalTruth {
         if !(free_length_m.is_finite() && free_length_m > 0.0) {
             return Err(invalid("specimen.free_length_m", "must be > 0"));
         }
-        Ok(SectionalTruth { law, component, free_length_m })
+        Ok(SectionalTruth {
+            law,
+            component,
+            free_length_m,
+        })
     }
 }
 
@@ -80,7 +84,10 @@ mod tests {
         }
         fn update(&self, eps: &Strain6, _dt: f64, _o: &[f64], _n: &mut [f64]) -> LawResponse {
             let d = nalgebra::Vector6::from_row_slice(&self.0);
-            LawResponse { stress: eps.component_mul(&d), tangent: Tangent6::from_diagonal(&d) }
+            LawResponse {
+                stress: eps.component_mul(&d),
+                tangent: Tangent6::from_diagonal(&d),
+            }
         }
         fn elastic_tangent(&self) -> Tangent6 {
             Tangent6::from_diagonal(&nalgebra::Vector6::from_row_slice(&self.0))

@@ -1,0 +1,274 @@
+//! The diagnosis in plain words: turns the numbers of a sim-to-real gap diagnosis (where, which,
+//! how far, equivalent explanations) into a few sentences a technician can act on, including
+//! which experiment would separate explanations that fit equally well.
+//!
+//! Plain text out (paragraphs separated by blank lines); the HTML renderer escapes it. It does
+//! not decide anything: the verdict comes from the diagnose crate.
+
+use crate::text::fmt_percent;
+
+/// The numbers the plain-words diagnosis needs, as the contract's `diagnose --json` has them.
+#[derive(Debug, Clone, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct DiagnosisSummary {
+    /// Baseline law name (`elastoplastic`).
+    pub baseline_law: String,
+    /// Held-out relative gap of the baseline (fraction of the largest |measured response|).
+    pub gap_before_rel: f64,
+    /// Vocabulary name of the verdict (`none` when the baseline fits to the noise floor).
+    pub verdict_effect: String,
+    /// Held-out relative gap with the verdict's effect added (`None` for `none`).
+    pub gap_after_rel: Option<f64>,
+    /// Effects that explain the data as well as the verdict.
+    pub equivalent: Vec<String>,
+    /// Noise floor, relative.
+    pub noise_rel: f64,
+    /// The location with the largest residual share and that share (`cycle 3 unloading`, 0.41).
+    pub top_location: Option<(String, f64)>,
+}
+
+/// What an effect of the vocabulary means, in words (unknown names are returned as given).
+pub fn effect_words(effect: &str) -> String {
+    match effect {
+        "none" => "no additional effect".into(),
+        "plasticity" => "plasticity (yield with permanent deformation)".into(),
+        "kinematic_hardening" => {
+            "kinematic hardening (the yield limit moves with the plastic deformation, so reverse \
+             yielding starts early)"
+                .into()
+        }
+        "stiffness_degradation" => {
+            "stiffness degradation (the unloading stiffness falls with the plastic history)".into()
+        }
+        "viscoelasticity" => {
+            "viscoelasticity (the response depends on the loading rate and relaxes at holds)".into()
+        }
+        "friction_hysteresis" => {
+            "friction hysteresis (rate-independent loops already in the elastic range, e.g. wires \
+             sliding on each other)"
+                .into()
+        }
+        "piecewise_elasticity" => {
+            "piecewise linear elasticity (the stiffness changes reversibly at a threshold)".into()
+        }
+        "machine_compliance" => {
+            "machine compliance (the test rig deforms with the specimen)".into()
+        }
+        "sensor_drift" => "sensor drift (the zero of a channel moves during the test)".into(),
+        "support_friction" => {
+            "support friction (friction where the rod slides over the supports)".into()
+        }
+        other => other.to_string(),
+    }
+}
+
+/// The experiment that would separate a set of equally good explanations, or `None` when no
+/// rule applies.
+pub fn separating_experiment(effects: &[&str]) -> Option<String> {
+    let has = |e: &str| effects.contains(&e);
+    let mut out = Vec::new();
+    if has("viscoelasticity") && effects.len() > 1 {
+        out.push(
+            "a hold at constant control (relaxation) or a second loading rate separates \
+             viscoelasticity from the rate-independent explanations",
+        );
+    }
+    if has("machine_compliance") && effects.len() > 1 {
+        out.push(
+            "a second specimen length separates machine compliance, which does not scale with \
+             the length, from the material's own behaviour",
+        );
+    }
+    if has("sensor_drift") && effects.len() > 1 {
+        out.push("a hold at zero load shows sensor drift directly");
+    }
+    if has("support_friction") && effects.len() > 1 {
+        out.push("a second span or lubricated supports separate support friction");
+    }
+    if (has("kinematic_hardening") || has("stiffness_degradation") || has("plasticity"))
+        && (has("kinematic_hardening") as u8
+            + has("stiffness_degradation") as u8
+            + has("plasticity") as u8)
+            > 1
+    {
+        out.push(
+            "cycles with reversed loading and growing amplitude separate kinematic hardening \
+             (early reverse yield) from stiffness degradation (softer unloading)",
+        );
+    }
+    if has("friction_hysteresis") && has("piecewise_elasticity") {
+        out.push(
+            "small cycles inside the first branch show whether loops open below the threshold",
+        );
+    }
+    if out.is_empty() {
+        None
+    } else {
+        let mut s = out.join("; ");
+        if let Some(first) = s.get(..1) {
+            s = first.to_uppercase() + &s[1..];
+        }
+        Some(s + ".")
+    }
+}
+
+/// Writes the diagnosis as plain-text paragraphs: where, which and how far, then the
+/// equivalent explanations and the experiment that would separate them.
+pub fn diagnosis_words(s: &DiagnosisSummary) -> String {
+    let mut paras = Vec::new();
+    let baseline = if s.baseline_law.is_empty() {
+        "baseline".to_string()
+    } else {
+        format!("{} baseline", s.baseline_law)
+    };
+    if let Some((place, share)) = &s.top_location {
+        paras.push(format!(
+            "Where: the largest share of the squared residual, {}, lies in {}.",
+            fmt_percent(*share, 0),
+            place
+        ));
+    }
+    match (s.verdict_effect.as_str(), s.gap_after_rel) {
+        ("none", _) | ("", _) => paras.push(format!(
+            "Which: none. The {baseline} already fits to the noise floor: its held-out gap is {} \
+             of the largest measured response, against a noise level of {}. No unmodelled effect \
+             is needed to explain these tests.",
+            fmt_percent(s.gap_before_rel, 1),
+            fmt_percent(s.noise_rel, 1)
+        )),
+        (effect, after) => {
+            let mut p = format!("Which: {} explains the gap best.", effect_words(effect));
+            if let Some(after) = after {
+                let reached = after <= 1.25 * s.noise_rel;
+                p.push_str(&format!(
+                    " How far: adding it to the {baseline} brings the held-out gap from {} to {} \
+                     of the largest measured response",
+                    fmt_percent(s.gap_before_rel, 1),
+                    fmt_percent(after, 1)
+                ));
+                if reached {
+                    p.push_str(&format!(
+                        ", down to the noise floor ({}).",
+                        fmt_percent(s.noise_rel, 1)
+                    ));
+                } else {
+                    p.push_str(&format!(
+                        "; {:.1} points remain above the noise floor ({}), so part of the gap is \
+                         still unexplained.",
+                        (after - s.noise_rel) * 100.0,
+                        fmt_percent(s.noise_rel, 1)
+                    ));
+                }
+            }
+            paras.push(p);
+        }
+    }
+    let equivalent: Vec<&str> = s
+        .equivalent
+        .iter()
+        .map(String::as_str)
+        .filter(|e| *e != s.verdict_effect && *e != "none")
+        .collect();
+    if !equivalent.is_empty() {
+        let names: Vec<String> = equivalent.iter().map(|e| e.replace('_', " ")).collect();
+        let mut p = format!(
+            "Equally good on the held-out data: {}. These tests cannot tell them apart.",
+            names.join(", ")
+        );
+        let mut all = equivalent.clone();
+        all.push(s.verdict_effect.as_str());
+        if let Some(exp) = separating_experiment(&all) {
+            p.push(' ');
+            p.push_str(&exp);
+        }
+        paras.push(p);
+    }
+    paras.join("\n\n")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn null_case_says_no_effect_is_needed() {
+        let s = DiagnosisSummary {
+            baseline_law: "elastoplastic".into(),
+            gap_before_rel: 0.009,
+            verdict_effect: "none".into(),
+            noise_rel: 0.008,
+            ..Default::default()
+        };
+        let w = diagnosis_words(&s);
+        assert_eq!(
+            w,
+            "Which: none. The elastoplastic baseline already fits to the noise floor: its \
+             held-out gap is 0.9\u{a0}% of the largest measured response, against a noise level \
+             of 0.8\u{a0}%. No unmodelled effect is needed to explain these tests."
+        );
+    }
+
+    #[test]
+    fn effect_case_gives_where_which_how_far_and_separation() {
+        let s = DiagnosisSummary {
+            baseline_law: "elastoplastic".into(),
+            gap_before_rel: 0.062,
+            verdict_effect: "kinematic_hardening".into(),
+            gap_after_rel: Some(0.011),
+            equivalent: vec!["stiffness_degradation".into()],
+            noise_rel: 0.009,
+            top_location: Some(("cycle 3 unloading".into(), 0.41)),
+        };
+        let w = diagnosis_words(&s);
+        let paras: Vec<&str> = w.split("\n\n").collect();
+        assert_eq!(paras.len(), 3, "{w}");
+        assert_eq!(
+            paras[0],
+            "Where: the largest share of the squared residual, 41\u{a0}%, lies in cycle 3 unloading."
+        );
+        assert!(paras[1].starts_with("Which: kinematic hardening (the yield limit moves"));
+        assert!(paras[1].contains("from 6.2\u{a0}% to 1.1\u{a0}%"));
+        assert!(
+            paras[1].ends_with("down to the noise floor (0.9\u{a0}%)."),
+            "{}",
+            paras[1]
+        );
+        assert!(paras[2].starts_with("Equally good on the held-out data: stiffness degradation."));
+        assert!(paras[2].contains("reversed loading"), "{}", paras[2]);
+    }
+
+    #[test]
+    fn remaining_gap_is_called_out() {
+        let s = DiagnosisSummary {
+            baseline_law: "elastoplastic".into(),
+            gap_before_rel: 0.08,
+            verdict_effect: "viscoelasticity".into(),
+            gap_after_rel: Some(0.04),
+            equivalent: vec!["friction_hysteresis".into()],
+            noise_rel: 0.01,
+            top_location: None,
+        };
+        let w = diagnosis_words(&s);
+        assert!(
+            w.contains("3.0 points remain above the noise floor (1.0\u{a0}%)"),
+            "{w}"
+        );
+        assert!(
+            w.contains("A hold at constant control (relaxation) or a second loading rate"),
+            "{w}"
+        );
+    }
+
+    #[test]
+    fn separating_experiments_for_known_pairs_only() {
+        assert!(
+            separating_experiment(&["machine_compliance", "stiffness_degradation"])
+                .unwrap()
+                .contains("second specimen length")
+        );
+        assert_eq!(separating_experiment(&["plasticity"]), None);
+        assert_eq!(
+            separating_experiment(&["piecewise_elasticity", "plasticity"]),
+            None
+        );
+    }
+}

@@ -1,0 +1,108 @@
+//! The hand-over from a read record to the physics: the complete rows of time, control and
+//! response as SI slices, and the specimen geometry resolved from flags, else from the file's
+//! metadata, else an error that says what is missing.
+//!
+//! Does not read files (see `cablab_ingest`) and does no physics (see `cablab_measure`).
+
+use anyhow::{anyhow, bail, Result};
+use cablab_core::{Role, TestKind};
+use cablab_ingest::{ReadOptions, TestRecord};
+
+/// One test's curve: the complete rows (time, control and response all numbers), SI.
+#[derive(Debug, Clone, Default)]
+pub struct Curve {
+    /// Time, s (None when the file has no time column).
+    pub time_s: Option<Vec<f64>>,
+    /// Machine control: elongation m, twist rad, deflection m or end rotation rad.
+    pub control: Vec<f64>,
+    /// Response: force N or moment N m.
+    pub response: Vec<f64>,
+    /// Rows of the main block that were dropped as incomplete.
+    pub dropped_rows: usize,
+}
+
+/// Extract the complete rows of a record. Errors name the file and the missing role.
+pub fn curve(rec: &TestRecord) -> Result<Curve> {
+    let file = &rec.provenance.path;
+    let control = rec.role_values(Role::Control).ok_or_else(|| {
+        anyhow!("{file}: no control channel (displacement, angle or rotation) was found; name one with --control")
+    })?;
+    let response = rec.role_values(Role::Response).ok_or_else(|| {
+        anyhow!("{file}: no response channel (force, torque or moment) was found; name one with --response")
+    })?;
+    let time = rec.role_values(Role::Time);
+    let mut c = Curve::default();
+    let mut t_out = time.as_ref().map(|_| Vec::new());
+    for i in 0..control.len() {
+        let ti = time.as_ref().map(|t| t[i]);
+        let ok = control[i].is_finite() && response[i].is_finite() && ti.is_none_or(f64::is_finite);
+        if ok {
+            c.control.push(control[i]);
+            c.response.push(response[i]);
+            if let (Some(v), Some(t)) = (t_out.as_mut(), ti) {
+                v.push(t);
+            }
+        } else {
+            c.dropped_rows += 1;
+        }
+    }
+    c.time_s = t_out;
+    if c.control.len() < 3 {
+        bail!(
+            "{file}: only {} complete rows (time, control and response all numbers); a test needs more",
+            c.control.len()
+        );
+    }
+    Ok(c)
+}
+
+/// Geometry from flags (mm), else from the record's metadata. The length is required; the
+/// diameter is optional (moduli need it) unless `need_diameter`.
+pub fn geometry(
+    rec: &TestRecord,
+    kind: TestKind,
+    length_mm: Option<f64>,
+    diameter_mm: Option<f64>,
+) -> Result<cablab_measure::Geometry> {
+    let file = &rec.provenance.path;
+    let what = if kind == TestKind::ThreePoint {
+        "support span"
+    } else {
+        "free length"
+    };
+    let free_length_m = match length_mm {
+        Some(l) if l.is_finite() && l > 0.0 => l * 1e-3,
+        Some(l) => bail!("--length-mm must be positive, got {l}"),
+        None => rec.specimen.free_length_m.ok_or_else(|| {
+            anyhow!("{file}: the {what} is missing: the file's metadata does not give it; pass --length-mm")
+        })?,
+    };
+    let diameter_m = match diameter_mm {
+        Some(d) if d.is_finite() && d > 0.0 => Some(d * 1e-3),
+        Some(d) => bail!("--diameter-mm must be positive, got {d}"),
+        None => rec.specimen.diameter_m,
+    };
+    Ok(cablab_measure::Geometry {
+        free_length_m,
+        diameter_m,
+    })
+}
+
+/// Reader options from the command line's reader flags.
+pub fn read_options(
+    r: &crate::cli::ReaderArgs,
+    kind: Option<TestKind>,
+) -> Result<ReadOptions> {
+    let format = match &r.format {
+        Some(f) => Some(f.parse().map_err(|e| anyhow!("--format: {e}"))?),
+        None => None,
+    };
+    Ok(ReadOptions {
+        format,
+        block: r.block,
+        time: r.time.clone(),
+        control: r.control.clone(),
+        response: r.response.clone(),
+        kind,
+    })
+}

@@ -1,0 +1,68 @@
+//! Plain-text renderings for people at a terminal (the JSON forms are the contract; these are
+//! not and may change).
+
+use cablab_measure::Analysis;
+use std::fmt::Write;
+
+/// A short, readable summary of one characterised test.
+pub fn analysis_text(file: &str, an: &Analysis) -> String {
+    let mut s = String::new();
+    let _ = writeln!(s, "{file}: {} test, behaviour {}", an.kind, an.behaviour.as_str());
+    match &an.stiffness {
+        Some(st) => {
+            let _ = writeln!(
+                s,
+                "  stiffness   {:.5e} {}  (95% CI {:.5e} .. {:.5e}; fit window {:.4e} .. {:.4e} {}{})",
+                st.value,
+                st.unit,
+                st.ci95[0],
+                st.ci95[1],
+                st.window[0],
+                st.window[1],
+                st.window_unit,
+                if st.window_automatic { ", automatic" } else { "" }
+            );
+        }
+        None => {
+            let _ = writeln!(s, "  stiffness   -  ({})", an.why_by_key.get("stiffness").map_or("", |w| w));
+        }
+    }
+    match an.modulus_pa {
+        Some(e) => {
+            let _ = writeln!(s, "  modulus     {:.1} MPa", e * 1e-6);
+        }
+        None => {
+            let _ = writeln!(s, "  modulus     -  ({})", an.why_by_key.get("modulus_pa").map_or("", |w| w));
+        }
+    }
+    match &an.yield_point {
+        Some(y) => {
+            let _ = writeln!(s, "  yield       control {:.5e}, response {:.5e}", y.control, y.response);
+        }
+        None => {
+            let _ = writeln!(s, "  yield       -  ({})", an.why_by_key.get("yield").map_or("", |w| w));
+        }
+    }
+    if let Some(p) = &an.piecewise {
+        let _ = writeln!(
+            s,
+            "  threshold   control {:.5e}, response {:.5e}",
+            p.threshold_control, p.threshold_response
+        );
+    }
+    for c in &an.cycles {
+        let f = |v: Option<f64>| v.map_or("-".to_string(), |x| format!("{x:.4e}"));
+        let _ = writeln!(
+            s,
+            "  cycle {:>2}    loop area {} J, residual {}, unloading stiffness {}",
+            c.index,
+            f(c.loop_area),
+            f(c.residual),
+            f(c.unloading_stiffness)
+        );
+    }
+    for w in &an.warnings {
+        let _ = writeln!(s, "  warning: {w}");
+    }
+    s
+}
