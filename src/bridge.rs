@@ -89,10 +89,7 @@ pub fn geometry(
 }
 
 /// Reader options from the command line's reader flags.
-pub fn read_options(
-    r: &crate::cli::ReaderArgs,
-    kind: Option<TestKind>,
-) -> Result<ReadOptions> {
+pub fn read_options(r: &crate::cli::ReaderArgs, kind: Option<TestKind>) -> Result<ReadOptions> {
     let format = match &r.format {
         Some(f) => Some(f.parse().map_err(|e| anyhow!("--format: {e}"))?),
         None => None,

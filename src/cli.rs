@@ -11,7 +11,12 @@ use std::path::PathBuf;
 /// exports, characterise stiffness, yield and hysteresis, calibrate Cosserat-rod laws, simulate
 /// the tests and diagnose where and why the simulation misses the measurement.
 #[derive(Debug, Parser)]
-#[command(name = "cablab", version, propagate_version = true, max_term_width = 100)]
+#[command(
+    name = "cablab",
+    version,
+    propagate_version = true,
+    max_term_width = 100
+)]
 pub struct Cli {
     /// What to do.
     #[command(subcommand)]
@@ -163,7 +168,12 @@ pub struct SimulateArgs {
     pub params: Vec<String>,
     /// Control path in SI (elongation m, twist rad, deflection m, end rotation rad), driven
     /// piecewise linearly from the unloaded state, e.g. 0,0.002,0.
-    #[arg(long, value_name = "V0,V1,...", value_delimiter = ',', allow_hyphen_values = true)]
+    #[arg(
+        long,
+        value_name = "V0,V1,...",
+        value_delimiter = ',',
+        allow_hyphen_values = true
+    )]
     pub path: Vec<f64>,
     /// Largest control increment per step (SI); default: chosen for accuracy.
     #[arg(long, value_name = "DV")]

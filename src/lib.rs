@@ -9,8 +9,8 @@ pub mod bridge;
 pub mod cli;
 pub mod commands;
 pub mod output;
-pub mod text;
 pub mod pipeline;
+pub mod text;
 
 pub use cablab_core as core;
 pub use cablab_diagnose as diagnose;

@@ -7,7 +7,12 @@ use std::fmt::Write;
 /// A short, readable summary of one characterised test.
 pub fn analysis_text(file: &str, an: &Analysis) -> String {
     let mut s = String::new();
-    let _ = writeln!(s, "{file}: {} test, behaviour {}", an.kind, an.behaviour.as_str());
+    let _ = writeln!(
+        s,
+        "{file}: {} test, behaviour {}",
+        an.kind,
+        an.behaviour.as_str()
+    );
     match &an.stiffness {
         Some(st) => {
             let _ = writeln!(
@@ -24,7 +29,11 @@ pub fn analysis_text(file: &str, an: &Analysis) -> String {
             );
         }
         None => {
-            let _ = writeln!(s, "  stiffness   -  ({})", an.why_by_key.get("stiffness").map_or("", |w| w));
+            let _ = writeln!(
+                s,
+                "  stiffness   -  ({})",
+                an.why_by_key.get("stiffness").map_or("", |w| w)
+            );
         }
     }
     match an.modulus_pa {
@@ -32,15 +41,27 @@ pub fn analysis_text(file: &str, an: &Analysis) -> String {
             let _ = writeln!(s, "  modulus     {:.1} MPa", e * 1e-6);
         }
         None => {
-            let _ = writeln!(s, "  modulus     -  ({})", an.why_by_key.get("modulus_pa").map_or("", |w| w));
+            let _ = writeln!(
+                s,
+                "  modulus     -  ({})",
+                an.why_by_key.get("modulus_pa").map_or("", |w| w)
+            );
         }
     }
     match &an.yield_point {
         Some(y) => {
-            let _ = writeln!(s, "  yield       control {:.5e}, response {:.5e}", y.control, y.response);
+            let _ = writeln!(
+                s,
+                "  yield       control {:.5e}, response {:.5e}",
+                y.control, y.response
+            );
         }
         None => {
-            let _ = writeln!(s, "  yield       -  ({})", an.why_by_key.get("yield").map_or("", |w| w));
+            let _ = writeln!(
+                s,
+                "  yield       -  ({})",
+                an.why_by_key.get("yield").map_or("", |w| w)
+            );
         }
     }
     if let Some(p) = &an.piecewise {

@@ -20,17 +20,26 @@ pub fn run(a: InspectArgs) -> CmdResult {
     println!("file      {}", p.path);
     println!("sha256    {}", p.sha256);
     println!("layout    {}  ({})", p.format.as_str(), p.reason);
-    println!("encoding  {}   separator {}   decimal {}", p.encoding, p.separator, p.decimal);
+    println!(
+        "encoding  {}   separator {}   decimal {}",
+        p.encoding, p.separator, p.decimal
+    );
     println!("kind      {}  ({})", rec.kind, rec.kind_reason);
     let sp = &rec.specimen;
     println!(
         "specimen  {}   diameter {}   length/span {}",
         sp.label.as_deref().unwrap_or("-"),
-        sp.diameter_m.map_or("-".into(), |d| format!("{:.4} mm", d * 1e3)),
-        sp.free_length_m.map_or("-".into(), |l| format!("{:.4} mm", l * 1e3)),
+        sp.diameter_m
+            .map_or("-".into(), |d| format!("{:.4} mm", d * 1e3)),
+        sp.free_length_m
+            .map_or("-".into(), |l| format!("{:.4} mm", l * 1e3)),
     );
     if rec.blocks.len() > 1 {
-        println!("blocks    {} (using block {}; choose with --block N)", rec.blocks.len(), rec.main_block);
+        println!(
+            "blocks    {} (using block {}; choose with --block N)",
+            rec.blocks.len(),
+            rec.main_block
+        );
         for b in &rec.blocks {
             println!(
                 "  #{:<2} lines {:>6}-{:<6} {:>7} rows  {}",
@@ -44,7 +53,10 @@ pub fn run(a: InspectArgs) -> CmdResult {
     }
     println!("rows      {}", report.rows);
     println!();
-    println!("{:<28} {:<10} {:<6} {:<9} {:>13} {:>13}", "channel", "unit", "SI", "role", "min (SI)", "max (SI)");
+    println!(
+        "{:<28} {:<10} {:<6} {:<9} {:>13} {:>13}",
+        "channel", "unit", "SI", "role", "min (SI)", "max (SI)"
+    );
     for c in &report.channels {
         let f = |v: Option<f64>| v.map_or("-".to_string(), |x| format!("{x:.6e}"));
         println!(

@@ -24,11 +24,17 @@ pub struct CliError {
 impl CliError {
     /// Bad input or usage (exit 2).
     pub fn input(e: impl Into<anyhow::Error>) -> Self {
-        CliError { code: 2, inner: e.into() }
+        CliError {
+            code: 2,
+            inner: e.into(),
+        }
     }
     /// The work itself failed (exit 1).
     pub fn failed(e: impl Into<anyhow::Error>) -> Self {
-        CliError { code: 1, inner: e.into() }
+        CliError {
+            code: 1,
+            inner: e.into(),
+        }
     }
     /// The process exit code.
     pub fn exit_code(&self) -> u8 {

@@ -1,10 +1,80 @@
-//! `cablab run` and `cablab verify` (being wired).
+//! `cablab run` (a campaign end to end) and `cablab verify` (rerun from a manifest and compare).
+
 use super::{CliError, CmdResult};
-/// Run.
-pub fn run(_a: crate::cli::RunArgs) -> CmdResult {
-    Err(CliError::failed(anyhow::anyhow!("not wired yet")))
+use crate::cli::{RunArgs, VerifyArgs};
+use crate::pipeline::{config, runner, verify as ver};
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+/// The demo campaign, relative to the working directory.
+pub const DEMO_PIPELINE: &str = "pipelines/demo.toml";
+
+/// Run `cablab run`.
+pub fn run(a: RunArgs) -> CmdResult {
+    let path = a.pipeline.unwrap_or_else(|| PathBuf::from(DEMO_PIPELINE));
+    if !path.exists() {
+        return Err(CliError::input(anyhow::anyhow!(
+            "pipeline {} not found (run from the project folder, or give a pipeline file)",
+            path.display()
+        )));
+    }
+    let campaign = config::load(&path).map_err(CliError::input)?;
+    let quiet = a.quiet || std::env::var_os("CI").is_some();
+    eprintln!(
+        "cablab: campaign '{}': {} tests from {}",
+        campaign.file.campaign.name,
+        campaign.tests.len(),
+        path.display()
+    );
+    let r = runner::run_campaign(
+        &campaign,
+        &runner::RunOptions {
+            jobs: a.jobs,
+            no_cache: a.no_cache,
+            quiet,
+            no_diagnosis: a.no_diagnosis,
+            output_override: None,
+        },
+    )
+    .map_err(CliError::failed)?;
+    for o in &r.outcomes {
+        if let Some(e) = &o.error {
+            eprintln!("cablab: FAILED {}: {e}", o.id);
+        }
+    }
+    let failed = r.failed();
+    eprintln!(
+        "cablab: {} tests, {} ok, {} failed, {} from cache, {:.1} s → {}",
+        r.outcomes.len(),
+        r.outcomes.len() - failed,
+        failed,
+        r.cached,
+        r.seconds,
+        r.out_dir.display()
+    );
+    eprintln!("cablab: open {}", r.out_dir.join("index.html").display());
+    Ok(if failed == 0 {
+        ExitCode::SUCCESS
+    } else {
+        ExitCode::from(1)
+    })
 }
-/// Verify.
-pub fn verify(_a: crate::cli::VerifyArgs) -> CmdResult {
-    Err(CliError::failed(anyhow::anyhow!("not wired yet")))
+
+/// Run `cablab verify`.
+pub fn verify(a: VerifyArgs) -> CmdResult {
+    let rep = ver::verify(&a.manifest, a.jobs).map_err(CliError::input)?;
+    if rep.differences.is_empty() {
+        println!(
+            "verified: {} files match {}",
+            rep.compared,
+            a.manifest.display()
+        );
+        Ok(ExitCode::SUCCESS)
+    } else {
+        for d in &rep.differences {
+            println!("DIFFERENT: {d}");
+        }
+        println!("{} of {} files differ", rep.differences.len(), rep.compared);
+        Ok(ExitCode::from(1))
+    }
 }

@@ -12,7 +12,9 @@ pub fn parse_params(pairs: &[String]) -> Result<BTreeMap<String, f64>, CliError>
     let mut out = BTreeMap::new();
     for p in pairs {
         let (name, value) = p.split_once('=').ok_or_else(|| {
-            CliError::input(anyhow::anyhow!("--param {p:?}: expected NAME=VALUE, e.g. EI=1.37e-3"))
+            CliError::input(anyhow::anyhow!(
+                "--param {p:?}: expected NAME=VALUE, e.g. EI=1.37e-3"
+            ))
         })?;
         let v: f64 = value.trim().parse().map_err(|_| {
             CliError::input(anyhow::anyhow!(
@@ -20,7 +22,9 @@ pub fn parse_params(pairs: &[String]) -> Result<BTreeMap<String, f64>, CliError>
             ))
         })?;
         if out.insert(name.trim().to_string(), v).is_some() {
-            return Err(CliError::input(anyhow::anyhow!("--param {name} given twice")));
+            return Err(CliError::input(anyhow::anyhow!(
+                "--param {name} given twice"
+            )));
         }
     }
     Ok(out)
@@ -30,13 +34,20 @@ pub fn parse_params(pairs: &[String]) -> Result<BTreeMap<String, f64>, CliError>
 pub fn run(a: SimulateArgs) -> CmdResult {
     let kind = parse_kind(&a.kind)?;
     if kind == TestKind::Unknown {
-        return Err(CliError::input(anyhow::anyhow!("--kind: give one of tension, torsion, three-point, pure-bending")));
+        return Err(CliError::input(anyhow::anyhow!(
+            "--kind: give one of tension, torsion, three-point, pure-bending"
+        )));
     }
     if !(a.length_mm.is_finite() && a.length_mm > 0.0) {
-        return Err(CliError::input(anyhow::anyhow!("--length-mm must be positive, got {}", a.length_mm)));
+        return Err(CliError::input(anyhow::anyhow!(
+            "--length-mm must be positive, got {}",
+            a.length_mm
+        )));
     }
     if a.path.is_empty() {
-        return Err(CliError::input(anyhow::anyhow!("--path needs at least one value")));
+        return Err(CliError::input(anyhow::anyhow!(
+            "--path needs at least one value"
+        )));
     }
     let params = parse_params(&a.params)?;
     let law = cablab_laws::build(kind, &a.law, &params).map_err(CliError::input)?;
@@ -67,7 +78,11 @@ pub fn run(a: SimulateArgs) -> CmdResult {
         response: &curve.response,
     };
     if let Some(path) = &a.output {
-        let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
+        let ext = path
+            .extension()
+            .and_then(|e| e.to_str())
+            .unwrap_or("")
+            .to_ascii_lowercase();
         match ext.as_str() {
             "json" => write_json(path, &out).map_err(CliError::failed)?,
             "csv" => {
@@ -82,10 +97,13 @@ pub fn run(a: SimulateArgs) -> CmdResult {
                 write_atomic(path, s.as_bytes()).map_err(CliError::failed)?;
             }
             "parquet" => {
-                let df = polars::prelude::DataFrame::new(curve.control.len(), vec![
-                    polars::prelude::Column::new("control".into(), &curve.control),
-                    polars::prelude::Column::new("response".into(), &curve.response),
-                ])
+                let df = polars::prelude::DataFrame::new(
+                    curve.control.len(),
+                    vec![
+                        polars::prelude::Column::new("control".into(), &curve.control),
+                        polars::prelude::Column::new("response".into(), &curve.response),
+                    ],
+                )
                 .map_err(CliError::failed)?;
                 crate::output::write_parquet(path, df).map_err(CliError::failed)?;
             }

@@ -319,8 +319,8 @@ pub fn project_root(pipeline: &Path) -> PathBuf {
 
 /// Parse and validate a pipeline file; every error names the file and what was wrong.
 pub fn load(pipeline: &Path) -> Result<Campaign> {
-    let bytes =
-        std::fs::read(pipeline).with_context(|| format!("cannot read pipeline {}", pipeline.display()))?;
+    let bytes = std::fs::read(pipeline)
+        .with_context(|| format!("cannot read pipeline {}", pipeline.display()))?;
     let text = std::str::from_utf8(&bytes)
         .map_err(|e| anyhow!("{}: not UTF-8 text ({e})", pipeline.display()))?;
     let file: PipelineFile =
@@ -353,11 +353,18 @@ fn validate(file: PipelineFile, path: &Path, bytes: Vec<u8>, root: PathBuf) -> R
         );
     }
     if !(0.0..0.5 + 1e-12).contains(&file.campaign.nu) {
-        bail!("{ctx}: campaign.nu must lie in [0, 0.5], got {}", file.campaign.nu);
+        bail!(
+            "{ctx}: campaign.nu must lie in [0, 0.5], got {}",
+            file.campaign.nu
+        );
     }
     let mut diam = BTreeMap::new();
     for s in &file.specimens {
-        positive(Some(s.diameter_mm), "diameter_mm", &format!("{ctx}: specimen '{}'", s.label))?;
+        positive(
+            Some(s.diameter_mm),
+            "diameter_mm",
+            &format!("{ctx}: specimen '{}'", s.label),
+        )?;
         if diam.insert(s.label.clone(), s.diameter_mm * 1e-3).is_some() {
             bail!("{ctx}: specimen '{}' is declared twice", s.label);
         }
@@ -383,17 +390,25 @@ fn validate(file: PipelineFile, path: &Path, bytes: Vec<u8>, root: PathBuf) -> R
     }
     for t in &file.reports.tables {
         if !["md", "csv", "json", "tex"].contains(&t.as_str()) {
-            bail!("{ctx}: reports.tables: unknown table format {t:?} (expected md, csv, json, tex)");
+            bail!(
+                "{ctx}: reports.tables: unknown table format {t:?} (expected md, csv, json, tex)"
+            );
         }
     }
     if file.model.elements < 4 || file.model.elements > 2000 {
-        bail!("{ctx}: model.elements must be between 4 and 2000, got {}", file.model.elements);
+        bail!(
+            "{ctx}: model.elements must be between 4 and 2000, got {}",
+            file.model.elements
+        );
     }
     let candidates = match &file.diagnosis.candidates {
         None => None,
         Some(v) => Some(
             v.iter()
-                .map(|s| s.parse().map_err(|e| anyhow!("{ctx}: diagnosis.candidates: {e}")))
+                .map(|s| {
+                    s.parse()
+                        .map_err(|e| anyhow!("{ctx}: diagnosis.candidates: {e}"))
+                })
                 .collect::<Result<Vec<_>>>()?,
         ),
     };
@@ -401,7 +416,10 @@ fn validate(file: PipelineFile, path: &Path, bytes: Vec<u8>, root: PathBuf) -> R
         None => None,
         Some(v) => Some(
             v.iter()
-                .map(|s| s.parse().map_err(|e| anyhow!("{ctx}: diagnosis.kinds: {e}")))
+                .map(|s| {
+                    s.parse()
+                        .map_err(|e| anyhow!("{ctx}: diagnosis.kinds: {e}"))
+                })
                 .collect::<Result<Vec<_>>>()?,
         ),
     };
@@ -445,7 +463,11 @@ fn validate(file: PipelineFile, path: &Path, bytes: Vec<u8>, root: PathBuf) -> R
             }
         }
         for p in matched {
-            let fname = p.file_name().and_then(|n| n.to_str()).unwrap_or("").to_string();
+            let fname = p
+                .file_name()
+                .and_then(|n| n.to_str())
+                .unwrap_or("")
+                .to_string();
             let id = p
                 .strip_prefix(&root)
                 .unwrap_or(&p)
@@ -461,7 +483,11 @@ fn validate(file: PipelineFile, path: &Path, bytes: Vec<u8>, root: PathBuf) -> R
                 skipped.push((id, why.clone()));
                 continue;
             }
-            positive(ov.length_mm, "length_mm", &format!("{gctx}: override {fname}"))?;
+            positive(
+                ov.length_mm,
+                "length_mm",
+                &format!("{gctx}: override {fname}"),
+            )?;
             tests.push(PlannedTest {
                 id,
                 path: p,
@@ -536,7 +562,11 @@ length_mm = 30
     fn unknown_key_is_named_with_its_line() {
         let d = tempfile::tempdir().unwrap();
         write(d.path(), "raw_data/a.csv", "x");
-        let p = write(d.path(), "pipelines/t.toml", &GOOD.replace("length_mm = 32", "lenght_mm = 32"));
+        let p = write(
+            d.path(),
+            "pipelines/t.toml",
+            &GOOD.replace("length_mm = 32", "lenght_mm = 32"),
+        );
         let e = format!("{:#}", load(&p).unwrap_err());
         assert!(e.contains("lenght_mm") && e.contains("line"), "{e}");
     }
@@ -549,13 +579,25 @@ length_mm = 30
         assert!(e.contains("no file matches"), "{e}");
         write(d.path(), "raw_data/a.csv", "x");
         write(d.path(), "raw_data/b.csv", "x");
-        let p = write(d.path(), "pipelines/t.toml", &GOOD.replace("length_mm = 32", "length_mm = -32"));
+        let p = write(
+            d.path(),
+            "pipelines/t.toml",
+            &GOOD.replace("length_mm = 32", "length_mm = -32"),
+        );
         let e = format!("{:#}", load(&p).unwrap_err());
         assert!(e.contains("positive"), "{e}");
-        let p = write(d.path(), "pipelines/t.toml", &GOOD.replace("specimen = \"cable\"\nkind", "specimen = \"cfrp\"\nkind"));
+        let p = write(
+            d.path(),
+            "pipelines/t.toml",
+            &GOOD.replace("specimen = \"cable\"\nkind", "specimen = \"cfrp\"\nkind"),
+        );
         let e = format!("{:#}", load(&p).unwrap_err());
         assert!(e.contains("not declared"), "{e}");
-        let p = write(d.path(), "pipelines/t.toml", &GOOD.replace("kind = \"tension\"", "kind = \"shear\""));
+        let p = write(
+            d.path(),
+            "pipelines/t.toml",
+            &GOOD.replace("kind = \"tension\"", "kind = \"shear\""),
+        );
         let e = format!("{:#}", load(&p).unwrap_err());
         assert!(e.contains("shear"), "{e}");
     }

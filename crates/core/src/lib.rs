@@ -89,7 +89,11 @@ pub struct UnknownName {
 
 impl fmt::Display for UnknownName {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "unknown name '{}': expected one of {}", self.given, self.expected)
+        write!(
+            f,
+            "unknown name '{}': expected one of {}",
+            self.given, self.expected
+        )
     }
 }
 impl std::error::Error for UnknownName {}
@@ -160,7 +164,9 @@ pub struct CircularSection {
 impl CircularSection {
     /// From a diameter in metres.
     pub fn from_diameter(d_m: f64) -> Self {
-        CircularSection { radius_m: 0.5 * d_m }
+        CircularSection {
+            radius_m: 0.5 * d_m,
+        }
     }
     /// Area A = πR², m².
     pub fn area(&self) -> f64 {
@@ -271,8 +277,14 @@ mod tests {
             assert_eq!(k.as_str().parse::<TestKind>().unwrap(), k);
             assert_eq!(serde_json_like(k.as_str()), k.as_str());
         }
-        assert_eq!("three-point".parse::<TestKind>().unwrap(), TestKind::ThreePoint);
-        assert_eq!("pure-bending".parse::<TestKind>().unwrap(), TestKind::PureBending);
+        assert_eq!(
+            "three-point".parse::<TestKind>().unwrap(),
+            TestKind::ThreePoint
+        );
+        assert_eq!(
+            "pure-bending".parse::<TestKind>().unwrap(),
+            TestKind::PureBending
+        );
         assert!("bend".parse::<TestKind>().is_err());
     }
 
@@ -291,9 +303,15 @@ mod tests {
     #[test]
     fn chapter_table1_moduli() {
         let s = CircularSection::from_diameter(2.8e-3);
-        let e_t = s.modulus_from_stiffness(TestKind::Tension, 7.96e4, 0.5).unwrap();
-        let e_tor = s.modulus_from_stiffness(TestKind::Torsion, 2.02e-3, 0.5).unwrap();
-        let e_b = s.modulus_from_stiffness(TestKind::PureBending, 1.37e-3, 0.5).unwrap();
+        let e_t = s
+            .modulus_from_stiffness(TestKind::Tension, 7.96e4, 0.5)
+            .unwrap();
+        let e_tor = s
+            .modulus_from_stiffness(TestKind::Torsion, 2.02e-3, 0.5)
+            .unwrap();
+        let e_b = s
+            .modulus_from_stiffness(TestKind::PureBending, 1.37e-3, 0.5)
+            .unwrap();
         assert!((e_t / 12_900e6 - 1.0).abs() < 0.01, "E_T = {e_t}");
         assert!((e_tor / 1003.7e6 - 1.0).abs() < 0.01, "E_tor = {e_tor}");
         assert!((e_b / 454.4e6 - 1.0).abs() < 0.01, "E_B = {e_b}");

@@ -12,7 +12,12 @@ use cablab_diagnose::{Context, DiagnoseOptions};
 
 fn main() {
     let args: Vec<String> = std::env::args().collect();
-    let get = |flag: &str| args.iter().position(|a| a == flag).and_then(|i| args.get(i + 1)).cloned();
+    let get = |flag: &str| {
+        args.iter()
+            .position(|a| a == flag)
+            .and_then(|i| args.get(i + 1))
+            .cloned()
+    };
     let kinds: Vec<TestKind> = get("--kinds")
         .unwrap_or_else(|| "tension,torsion,pure_bending".into())
         .split(',')
@@ -37,17 +42,27 @@ fn main() {
     if let Some(pat) = get("--show") {
         // Print the full diagnosis of the cases whose name contains the pattern.
         let rod = Rod::default();
-        let ctx = Context { catalog: &registry, rod: Some(&rod) };
+        let ctx = Context {
+            catalog: &registry,
+            rod: Some(&rod),
+        };
         for c in cases.iter().filter(|c| c.name.contains(&pat)) {
             match cablab_diagnose::diagnose(ctx, &c.tests, &DiagnoseOptions::default()) {
-                Ok(d) => println!("{}\n{}", c.name, serde_json::to_string_pretty(&d).unwrap_or_default()),
+                Ok(d) => println!(
+                    "{}\n{}",
+                    c.name,
+                    serde_json::to_string_pretty(&d).unwrap_or_default()
+                ),
                 Err(e) => println!("{}: {e}", c.name),
             }
         }
         return;
     }
     let rod = Rod::default();
-    let ctx = Context { catalog: &registry, rod: Some(&rod) };
+    let ctx = Context {
+        catalog: &registry,
+        rod: Some(&rod),
+    };
     let report = run_matrix(ctx, &cases, &DiagnoseOptions::default());
     print!("{}", render(&report));
     if let Some(path) = get("--json") {

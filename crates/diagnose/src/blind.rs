@@ -135,11 +135,16 @@ pub fn run_matrix(ctx: Context, cases: &[BlindCase], opts: &DiagnoseOptions) -> 
                     o.right_or_equivalent = o.right || d.verdict.equivalent.contains(&c.truth);
                     o.equivalent = d.verdict.equivalent.clone();
                     let noise = d.verdict.noise.max(f64::MIN_POSITIVE);
-                    o.gap_before_over_noise = d.baseline.gap_heldout_rel * d.verdict.noise / d.verdict.noise_rel.max(f64::MIN_POSITIVE) / noise;
+                    o.gap_before_over_noise = d.baseline.gap_heldout_rel * d.verdict.noise
+                        / d.verdict.noise_rel.max(f64::MIN_POSITIVE)
+                        / noise;
                     o.gap_after_over_noise = if c.truth == Effect::None {
                         Some(o.gap_before_over_noise)
                     } else {
-                        d.effects.iter().find(|e| e.effect == c.truth).map(|e| e.gap_after / noise)
+                        d.effects
+                            .iter()
+                            .find(|e| e.effect == c.truth)
+                            .map(|e| e.gap_after / noise)
                     };
                 }
                 Err(e) => o.error = Some(e.to_string()),
@@ -150,17 +155,35 @@ pub fn run_matrix(ctx: Context, cases: &[BlindCase], opts: &DiagnoseOptions) -> 
         .collect();
     let mut confusion: BTreeMap<String, BTreeMap<String, usize>> = BTreeMap::new();
     for o in &outcomes {
-        let v = o.verdict.map_or("error".to_string(), |v| v.as_str().to_string());
-        *confusion.entry(o.truth.as_str().to_string()).or_default().entry(v).or_default() += 1;
+        let v = o
+            .verdict
+            .map_or("error".to_string(), |v| v.as_str().to_string());
+        *confusion
+            .entry(o.truth.as_str().to_string())
+            .or_default()
+            .entry(v)
+            .or_default() += 1;
     }
     let n = outcomes.len().max(1) as f64;
     let right = outcomes.iter().filter(|o| o.right).count() as f64;
     let right_eq = outcomes.iter().filter(|o| o.right_or_equivalent).count() as f64;
-    let nulls: Vec<&CaseOutcome> = outcomes.iter().filter(|o| o.truth == Effect::None).collect();
-    let null_false = nulls.iter().filter(|o| o.verdict != Some(Effect::None)).count();
-    let found: Vec<&CaseOutcome> = outcomes.iter().filter(|o| o.right && o.truth != Effect::None).collect();
+    let nulls: Vec<&CaseOutcome> = outcomes
+        .iter()
+        .filter(|o| o.truth == Effect::None)
+        .collect();
+    let null_false = nulls
+        .iter()
+        .filter(|o| o.verdict != Some(Effect::None))
+        .count();
+    let found: Vec<&CaseOutcome> = outcomes
+        .iter()
+        .filter(|o| o.right && o.truth != Effect::None)
+        .collect();
     let mut before: Vec<f64> = found.iter().map(|o| o.gap_before_over_noise).collect();
-    let mut after: Vec<f64> = found.iter().filter_map(|o| o.gap_after_over_noise).collect();
+    let mut after: Vec<f64> = found
+        .iter()
+        .filter_map(|o| o.gap_after_over_noise)
+        .collect();
     let within = after.iter().filter(|&&a| a <= 1.5).count() as f64 / after.len().max(1) as f64;
     let max_after = after.iter().copied().fold(f64::NAN, f64::max);
     BlindReport {
@@ -193,13 +216,28 @@ pub fn render(r: &BlindReport) -> String {
             }
         }
     }
-    let order = |s: &str| Effect::ALL.iter().position(|e| e.as_str() == s).unwrap_or(99);
+    let order = |s: &str| {
+        Effect::ALL
+            .iter()
+            .position(|e| e.as_str() == s)
+            .unwrap_or(99)
+    };
     cols.sort_by_key(|c| order(c));
     let mut rows: Vec<&String> = r.confusion.keys().collect();
     rows.sort_by_key(|c| order(c));
-    let short = |s: &str| -> String { s.split('_').map(|w| &w[..w.len().min(4)]).collect::<Vec<_>>().join("_") };
+    let short = |s: &str| -> String {
+        s.split('_')
+            .map(|w| &w[..w.len().min(4)])
+            .collect::<Vec<_>>()
+            .join("_")
+    };
     let mut s = String::new();
-    let _ = writeln!(s, "blind check: {} cases, {:.1} s", r.outcomes.len(), r.seconds);
+    let _ = writeln!(
+        s,
+        "blind check: {} cases, {:.1} s",
+        r.outcomes.len(),
+        r.seconds
+    );
     let _ = writeln!(s, "confusion matrix (rows: truth, columns: verdict)");
     let _ = write!(s, "{:<22}", "truth \\ verdict");
     for c in &cols {
@@ -211,12 +249,25 @@ pub fn render(r: &BlindReport) -> String {
         let _ = write!(s, "{:<22}", t);
         let total: usize = row.values().sum();
         for c in &cols {
-            let _ = write!(s, "{:>11}", row.get(c).map_or("·".to_string(), |v| v.to_string()));
+            let _ = write!(
+                s,
+                "{:>11}",
+                row.get(c).map_or("·".to_string(), |v| v.to_string())
+            );
         }
         let _ = writeln!(s, "{:>5}/{:<2}", row.get(t).copied().unwrap_or(0), total);
     }
-    let _ = writeln!(s, "right verdicts: {:.1} % (right or reported equivalent: {:.1} %)", 100.0 * r.right_share, 100.0 * r.right_or_equivalent_share);
-    let _ = writeln!(s, "null cases: {}, effect claimed on {}", r.null_cases, r.null_false_claims);
+    let _ = writeln!(
+        s,
+        "right verdicts: {:.1} % (right or reported equivalent: {:.1} %)",
+        100.0 * r.right_share,
+        100.0 * r.right_or_equivalent_share
+    );
+    let _ = writeln!(
+        s,
+        "null cases: {}, effect claimed on {}",
+        r.null_cases, r.null_false_claims
+    );
     let sh = &r.shrink;
     let _ = writeln!(
         s,
@@ -236,7 +287,9 @@ pub fn render(r: &BlindReport) -> String {
                 v,
                 eq.join(", "),
                 o.gap_before_over_noise,
-                o.error.as_ref().map_or(String::new(), |e| format!(" error: {e}"))
+                o.error
+                    .as_ref()
+                    .map_or(String::new(), |e| format!(" error: {e}"))
             );
         }
     }
@@ -255,10 +308,34 @@ struct Nominal {
 
 fn nominal(kind: TestKind) -> Option<Nominal> {
     match kind {
-        TestKind::Tension => Some(Nominal { length_m: 0.032, stiff: ("EA", 7.96e4), strength: ("F_y", 54.0), hard: "H", strain: "Gamma" }),
-        TestKind::Torsion => Some(Nominal { length_m: 0.033, stiff: ("GJ", 2.02e-3), strength: ("M_y", 0.15), hard: "HI", strain: "K" }),
-        TestKind::PureBending => Some(Nominal { length_m: 0.05, stiff: ("EI", 1.37e-3), strength: ("M_y", 0.02), hard: "HI", strain: "K" }),
-        TestKind::ThreePoint => Some(Nominal { length_m: 0.056, stiff: ("EI", 1.37e-3), strength: ("M_y", 0.02), hard: "HI", strain: "K" }),
+        TestKind::Tension => Some(Nominal {
+            length_m: 0.032,
+            stiff: ("EA", 7.96e4),
+            strength: ("F_y", 54.0),
+            hard: "H",
+            strain: "Gamma",
+        }),
+        TestKind::Torsion => Some(Nominal {
+            length_m: 0.033,
+            stiff: ("GJ", 2.02e-3),
+            strength: ("M_y", 0.15),
+            hard: "HI",
+            strain: "K",
+        }),
+        TestKind::PureBending => Some(Nominal {
+            length_m: 0.05,
+            stiff: ("EI", 1.37e-3),
+            strength: ("M_y", 0.02),
+            hard: "HI",
+            strain: "K",
+        }),
+        TestKind::ThreePoint => Some(Nominal {
+            length_m: 0.056,
+            stiff: ("EI", 1.37e-3),
+            strength: ("M_y", 0.02),
+            hard: "HI",
+            strain: "K",
+        }),
         TestKind::Unknown => None,
     }
 }
@@ -285,9 +362,17 @@ pub fn truths_for(kind: TestKind) -> Vec<Effect> {
 /// `seed` (scatter ±25 %), response noise `noise_rel` of full scale, written as `layout`.
 /// `machine_compliance` cases hold two specimen lengths (l₀ and 2 l₀), the experiment that
 /// identifies it.
-pub fn generate_case(kind: TestKind, truth: Effect, noise_rel: f64, seed: u64, layout: Layout) -> Result<BlindCase, String> {
+pub fn generate_case(
+    kind: TestKind,
+    truth: Effect,
+    noise_rel: f64,
+    seed: u64,
+    layout: Layout,
+) -> Result<BlindCase, String> {
     let nom = nominal(kind).ok_or("unknown kind")?;
-    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed ^ 0x9e37_79b9_7f4a_7c15 ^ ((truth as u64) << 32) ^ ((kind as u64) << 40));
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(
+        seed ^ 0x9e37_79b9_7f4a_7c15 ^ ((truth as u64) << 32) ^ ((kind as u64) << 40),
+    );
     let mut draw = |lo: f64, hi: f64| rng.random_range(lo..hi);
     let s = nom.stiff.1 * draw(0.8, 1.25);
     let y = nom.strength.1 * draw(0.8, 1.25);
@@ -296,7 +381,10 @@ pub fn generate_case(kind: TestKind, truth: Effect, noise_rel: f64, seed: u64, l
     let mut params = BTreeMap::new();
     let mut law = "elastoplastic".to_string();
     let mut extension = None;
-    let mut artefacts = Artefacts { noise_rel, ..Artefacts::default() };
+    let mut artefacts = Artefacts {
+        noise_rel,
+        ..Artefacts::default()
+    };
     let mut rig = Rig::default();
     // Control at first yield (uniform tests: strain × l₀; three-point: w with M = F l/4 = M_y).
     let to_control = |strain: f64| match kind {
@@ -304,7 +392,12 @@ pub fn generate_case(kind: TestKind, truth: Effect, noise_rel: f64, seed: u64, l
         _ => strain * l0,
     };
     let u_y = to_control(y / s);
-    let ext = |name: &str, kv: Vec<(String, f64)>| Some(Extension { name: name.to_string(), params: kv.into_iter().collect() });
+    let ext = |name: &str, kv: Vec<(String, f64)>| {
+        Some(Extension {
+            name: name.to_string(),
+            params: kv.into_iter().collect(),
+        })
+    };
     match truth {
         Effect::PiecewiseElasticity => {
             law = "piecewise_linear".into();
@@ -319,16 +412,43 @@ pub fn generate_case(kind: TestKind, truth: Effect, noise_rel: f64, seed: u64, l
         }
     }
     match truth {
-        Effect::KinematicHardening => extension = ext("kinematic_hardening", vec![(format!("{}_kin", nom.hard), s * draw(0.06, 0.12))]),
+        Effect::KinematicHardening => {
+            extension = ext(
+                "kinematic_hardening",
+                vec![(format!("{}_kin", nom.hard), s * draw(0.06, 0.12))],
+            )
+        }
         Effect::StiffnessDegradation => {
-            extension = ext("stiffness_degradation", vec![("D_inf".into(), draw(0.25, 0.4)), ("alpha_D".into(), (y / s) * draw(1.0, 2.0))])
+            extension = ext(
+                "stiffness_degradation",
+                vec![
+                    ("D_inf".into(), draw(0.25, 0.4)),
+                    ("alpha_D".into(), (y / s) * draw(1.0, 2.0)),
+                ],
+            )
         }
         Effect::Viscoelasticity => {
-            extension = ext("viscoelasticity", vec![(format!("{}_v1", nom.stiff.0), s * draw(0.25, 0.4)), ("tau_v1".into(), draw(1.0, 3.0))])
+            extension = ext(
+                "viscoelasticity",
+                vec![
+                    (format!("{}_v1", nom.stiff.0), s * draw(0.25, 0.4)),
+                    ("tau_v1".into(), draw(1.0, 3.0)),
+                ],
+            )
         }
         Effect::FrictionHysteresis => {
-            let f_name = if kind == TestKind::Tension { "F_f" } else { "M_f" };
-            extension = ext("friction_hysteresis", vec![(format!("{}_f", nom.stiff.0), s * draw(0.25, 0.4)), (f_name.into(), y * draw(0.15, 0.25))])
+            let f_name = if kind == TestKind::Tension {
+                "F_f"
+            } else {
+                "M_f"
+            };
+            extension = ext(
+                "friction_hysteresis",
+                vec![
+                    (format!("{}_f", nom.stiff.0), s * draw(0.25, 0.4)),
+                    (f_name.into(), y * draw(0.15, 0.25)),
+                ],
+            )
         }
         Effect::MachineCompliance => {
             // Compliance that softens the shorter specimen by 25–40 %.
@@ -345,7 +465,13 @@ pub fn generate_case(kind: TestKind, truth: Effect, noise_rel: f64, seed: u64, l
     let rate = u_y / 2.0;
     let steps: Vec<Step> = [0.6, 1.6, 2.6, 3.6]
         .iter()
-        .map(|&a| Step::Cycles { lower: 0.0, upper: a * u_y, rate, count: 1, dwell_s: 2.0 })
+        .map(|&a| Step::Cycles {
+            lower: 0.0,
+            upper: a * u_y,
+            rate,
+            count: 1,
+            dwell_s: 2.0,
+        })
         .collect();
     let duration = 2.0 * (0.6 + 1.6 + 2.6 + 3.6) * 2.0 + 8.0 * 2.0;
     if truth == Effect::SensorDrift {
@@ -356,21 +482,46 @@ pub fn generate_case(kind: TestKind, truth: Effect, noise_rel: f64, seed: u64, l
         };
         artefacts.drift_per_s = r_y * draw(0.06, 0.1) / duration;
     }
-    let lengths: Vec<f64> = if truth == Effect::MachineCompliance { vec![l0, 2.0 * l0] } else { vec![l0] };
+    let lengths: Vec<f64> = if truth == Effect::MachineCompliance {
+        vec![l0, 2.0 * l0]
+    } else {
+        vec![l0]
+    };
     let mut tests = Vec::new();
     for (i, &len) in lengths.iter().enumerate() {
         // The longer specimen runs the same strain history (control scaled with its length).
-        let scale = len / l0 * if kind == TestKind::ThreePoint { len / l0 } else { 1.0 };
+        let scale = len / l0
+            * if kind == TestKind::ThreePoint {
+                len / l0
+            } else {
+                1.0
+            };
         let steps_i: Vec<Step> = steps
             .iter()
             .map(|st| match *st {
-                Step::Cycles { lower, upper, rate, count, dwell_s } => Step::Cycles { lower: lower * scale, upper: upper * scale, rate: rate * scale, count, dwell_s },
+                Step::Cycles {
+                    lower,
+                    upper,
+                    rate,
+                    count,
+                    dwell_s,
+                } => Step::Cycles {
+                    lower: lower * scale,
+                    upper: upper * scale,
+                    rate: rate * scale,
+                    count,
+                    dwell_s,
+                },
                 ref other => other.clone(),
             })
             .collect();
         let spec = SynthSpec {
             kind,
-            specimen: Specimen { label: Some(format!("blind-{i}")), diameter_m: Some(2.8e-3), free_length_m: Some(len) },
+            specimen: Specimen {
+                label: Some(format!("blind-{i}")),
+                diameter_m: Some(2.8e-3),
+                free_length_m: Some(len),
+            },
             law: law.clone(),
             params: params.clone(),
             extension: extension.clone(),
@@ -379,7 +530,11 @@ pub fn generate_case(kind: TestKind, truth: Effect, noise_rel: f64, seed: u64, l
             artefacts: artefacts.clone(),
             layout,
             seed: seed.wrapping_mul(31).wrapping_add(i as u64),
-            sample_rate_hz: if kind == TestKind::ThreePoint { 10.0 } else { 60.0 },
+            sample_rate_hz: if kind == TestKind::ThreePoint {
+                10.0
+            } else {
+                60.0
+            },
             file_stem: None,
             specimen_number: Some(i as u32 + 1),
         };
@@ -403,7 +558,14 @@ pub fn generate_case(kind: TestKind, truth: Effect, noise_rel: f64, seed: u64, l
         });
     }
     Ok(BlindCase {
-        name: format!("{}/{}/noise{:.1}%/seed{}/{:?}", kind, truth, 100.0 * noise_rel, seed, layout),
+        name: format!(
+            "{}/{}/noise{:.1}%/seed{}/{:?}",
+            kind,
+            truth,
+            100.0 * noise_rel,
+            seed,
+            layout
+        ),
         truth,
         noise_rel,
         layout: format!("{layout:?}"),
@@ -414,7 +576,11 @@ pub fn generate_case(kind: TestKind, truth: Effect, noise_rel: f64, seed: u64, l
 /// The standard matrix: every applicable truth (and `none`) × `noise_levels` × `seeds`, layouts
 /// cycling over the three the virtual lab writes. Cases that fail to generate are skipped and
 /// returned as messages.
-pub fn standard_matrix(kinds: &[TestKind], noise_levels: &[f64], seeds: &[u64]) -> (Vec<BlindCase>, Vec<String>) {
+pub fn standard_matrix(
+    kinds: &[TestKind],
+    noise_levels: &[f64],
+    seeds: &[u64],
+) -> (Vec<BlindCase>, Vec<String>) {
     let layouts = [Layout::TestXpert, Layout::BluehillCsv, Layout::Mts793Dat];
     let mut jobs = Vec::new();
     for &kind in kinds {
@@ -432,7 +598,8 @@ pub fn standard_matrix(kinds: &[TestKind], noise_levels: &[f64], seeds: &[u64]) 
         .par_iter()
         .enumerate()
         .map(|(i, &(kind, truth, noise, seed))| {
-            generate_case(kind, truth, noise, seed, layouts[i % layouts.len()]).map_err(|e| format!("{kind}/{truth}/seed {seed}: {e}"))
+            generate_case(kind, truth, noise, seed, layouts[i % layouts.len()])
+                .map_err(|e| format!("{kind}/{truth}/seed {seed}: {e}"))
         })
         .collect();
     let mut cases = Vec::new();

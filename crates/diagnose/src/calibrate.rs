@@ -62,7 +62,11 @@ pub struct FitOptions {
 
 impl Default for FitOptions {
     fn default() -> Self {
-        FitOptions { patience: 60, tol: 1e-9, fd_step: 1e-6 }
+        FitOptions {
+            patience: 60,
+            tol: 1e-9,
+            fd_step: 1e-6,
+        }
     }
 }
 
@@ -133,7 +137,12 @@ struct Problem<'a> {
 
 impl Problem<'_> {
     fn phys(&self, z: &DVector<f64>) -> Vec<f64> {
-        self.fwd.specs().iter().zip(z.iter()).map(|(s, &zi)| s.from_unbounded(zi)).collect()
+        self.fwd
+            .specs()
+            .iter()
+            .zip(z.iter())
+            .map(|(s, &zi)| s.from_unbounded(zi))
+            .collect()
     }
     fn eval(&self, z: &DVector<f64>) -> DVector<f64> {
         residuals(self.fwd, self.data, &self.phys(z))
@@ -182,13 +191,20 @@ pub fn fit(fwd: &dyn Forward, data: &FitData, starts: &[Vec<f64>], opts: &FitOpt
                 specs.len(),
                 specs.iter().zip(p0).map(|(s, &p)| s.to_unbounded(p)),
             );
-            let mut prob =
-                Problem { fwd, data, z: z0.clone(), r: DVector::zeros(0), fd_step: opts.fd_step };
+            let mut prob = Problem {
+                fwd,
+                data,
+                z: z0.clone(),
+                r: DVector::zeros(0),
+                fd_step: opts.fd_step,
+            };
             prob.set_params(&z0);
             let lm = LevenbergMarquardt::new()
                 .with_tol(opts.tol)
                 .with_patience(opts.patience.max(1) / (specs.len() + 1).max(1) + 1);
-            let (prob, report) = if specs.is_empty() { (prob, None) } else {
+            let (prob, report) = if specs.is_empty() {
+                (prob, None)
+            } else {
                 let (p, r) = lm.minimize(prob);
                 (p, Some(r))
             };
@@ -234,8 +250,11 @@ fn finish(
         None => 0.0,
     };
     let n_eff = stats::effective_sample_size(n, rho1);
-    let at_bound: Vec<Option<&'static str>> =
-        specs.iter().zip(&params).map(|(s, &p)| s.which_bound(p, 1e-3)).collect();
+    let at_bound: Vec<Option<&'static str>> = specs
+        .iter()
+        .zip(&params)
+        .map(|(s, &p)| s.which_bound(p, 1e-3))
+        .collect();
     let mut std_err = vec![None; k];
     let mut k_eff = 0usize;
     if let (Some(r0), true) = (&r0, n > k) {
@@ -267,7 +286,9 @@ fn finish(
                 let a = jf.transpose() * &jf;
                 let eig = a.symmetric_eigen();
                 let threshold = s2 / (0.02f64 * 0.02);
-                let det: Vec<usize> = (0..free.len()).filter(|&i| eig.eigenvalues[i] > threshold).collect();
+                let det: Vec<usize> = (0..free.len())
+                    .filter(|&i| eig.eigenvalues[i] > threshold)
+                    .collect();
                 k_eff = det.len();
                 for (c, &j) in free.iter().enumerate() {
                     // Weight of parameter j in the undetermined directions.
@@ -278,12 +299,19 @@ fn finish(
                     if undetermined > 0.1 {
                         continue;
                     }
-                    let var_u: f64 = det.iter().map(|&i| eig.eigenvectors[(c, i)].powi(2) / eig.eigenvalues[i]).sum::<f64>() * s2;
+                    let var_u: f64 = det
+                        .iter()
+                        .map(|&i| eig.eigenvectors[(c, i)].powi(2) / eig.eigenvalues[i])
+                        .sum::<f64>()
+                        * s2;
                     // Back to physical units: dp/du at the optimum.
                     let sp = &specs[j];
                     let u0 = sp.fraction(params[j]);
                     let du = 1e-6;
-                    let (a0, b0) = (sp.at_fraction((u0 - du).max(0.0)), sp.at_fraction((u0 + du).min(1.0)));
+                    let (a0, b0) = (
+                        sp.at_fraction((u0 - du).max(0.0)),
+                        sp.at_fraction((u0 + du).min(1.0)),
+                    );
                     let dpdu = (b0 - a0) / ((u0 + du).min(1.0) - (u0 - du).max(0.0));
                     let se = var_u.sqrt() * dpdu.abs();
                     if se.is_finite() {
@@ -354,8 +382,17 @@ mod tests {
         let truth = [3.0, 0.7, 0.2];
         let mut y = vec![0.0; m.t.len()];
         m.simulate(&truth, 0, &mut y).unwrap();
-        let data = FitData { measured: vec![&y], weight: vec![1.0], fit_idx: vec![(0..y.len()).collect()] };
-        let f = fit(&m, &data, &[vec![1.0, 5.0, 0.0], vec![50.0, 0.01, 1.0]], &FitOptions::default());
+        let data = FitData {
+            measured: vec![&y],
+            weight: vec![1.0],
+            fit_idx: vec![(0..y.len()).collect()],
+        };
+        let f = fit(
+            &m,
+            &data,
+            &[vec![1.0, 5.0, 0.0], vec![50.0, 0.01, 1.0]],
+            &FitOptions::default(),
+        );
         for (p, t) in f.params.iter().zip(truth) {
             assert!((p - t).abs() < 1e-6 * t.abs().max(1.0), "{:?}", f.params);
         }
@@ -382,7 +419,11 @@ mod tests {
             };
             let f = fit(&m, &data, &[vec![1.0, 5.0, 0.0]], &FitOptions::default());
             // χ²/n close to 1 when the weights are the true noise.
-            assert!((f.cost / f.n_fit as f64 - 1.0).abs() < 0.1, "chi2/n = {}", f.cost / f.n_fit as f64);
+            assert!(
+                (f.cost / f.n_fit as f64 - 1.0).abs() < 0.1,
+                "chi2/n = {}",
+                f.cost / f.n_fit as f64
+            );
             let se = f.std_err[1].expect("tau identified");
             assert!(se > 0.0 && se < 0.05, "se(tau) = {se}");
             if (0..3).all(|i| (f.params[i] - truth[i]).abs() <= 2.0 * f.std_err[i].unwrap()) {
@@ -399,7 +440,11 @@ mod tests {
         m.specs[2] = ParamSpec::linear("b", 0.5, 10.0, 1.0); // truth b = 0.2 is outside
         let mut y = vec![0.0; m.t.len()];
         m.simulate(&[3.0, 0.7, 0.2], 0, &mut y).unwrap();
-        let data = FitData { measured: vec![&y], weight: vec![1.0], fit_idx: vec![(0..y.len()).collect()] };
+        let data = FitData {
+            measured: vec![&y],
+            weight: vec![1.0],
+            fit_idx: vec![(0..y.len()).collect()],
+        };
         let f = fit(&m, &data, &[vec![1.0, 1.0, 2.0]], &FitOptions::default());
         assert_eq!(f.at_bound[2], Some("lower"), "{:?}", f.params);
         assert_eq!(f.at_bound[0], None);

@@ -19,7 +19,9 @@
 
 use crate::calibrate::{self, FitData, FitOptions, Forward};
 use crate::error::DiagError;
-use crate::model::{DiagTest, LawCatalog, ModelForward, ModelSpec, RodSimulator, SegLabel, TEST_LEVEL};
+use crate::model::{
+    DiagTest, LawCatalog, ModelForward, ModelSpec, RodSimulator, SegLabel, TEST_LEVEL,
+};
 use crate::params::ParamSpec;
 use crate::stats;
 use cablab_core::{Effect, TestKind};
@@ -155,7 +157,11 @@ impl Calibration {
     }
     /// Standard error of a named parameter.
     pub fn std_err_of(&self, name: &str) -> Option<f64> {
-        self.std_err.0.iter().find(|(n, _)| n == name).and_then(|p| p.1)
+        self.std_err
+            .0
+            .iter()
+            .find(|(n, _)| n == name)
+            .and_then(|p| p.1)
     }
     /// Effective number of parameters (see the module doc): the directions of parameter space
     /// the data determine (free parameters only: one at a bound does not count), less the
@@ -198,7 +204,14 @@ pub struct CalibrateOptions {
 
 impl Default for CalibrateOptions {
     fn default() -> Self {
-        CalibrateOptions { starts: 3, seed: 1, fit: FitOptions::default(), fit_idx: None, noise: None, warm: None }
+        CalibrateOptions {
+            starts: 3,
+            seed: 1,
+            fit: FitOptions::default(),
+            fit_idx: None,
+            noise: None,
+            warm: None,
+        }
     }
 }
 
@@ -217,19 +230,36 @@ pub fn noise_floor(tests: &[DiagTest]) -> Vec<f64> {
 
 /// Calibrate `model` to `tests` jointly (shared parameters), replaying each measured control
 /// history: bounded Levenberg–Marquardt from several starts, with standard errors.
-pub fn calibrate(ctx: Context, tests: &[DiagTest], model: &ModelSpec, opts: &CalibrateOptions) -> Result<Calibration, DiagError> {
+pub fn calibrate(
+    ctx: Context,
+    tests: &[DiagTest],
+    model: &ModelSpec,
+    opts: &CalibrateOptions,
+) -> Result<Calibration, DiagError> {
     for (i, t) in tests.iter().enumerate() {
         t.validate(i)?;
     }
     let fwd = ModelForward::new(tests, model, ctx.catalog, ctx.rod)?;
     let noise = opts.noise.clone().unwrap_or_else(|| noise_floor(tests));
-    let fit_idx = opts.fit_idx.clone().unwrap_or_else(|| tests.iter().map(|t| (0..t.control.len()).collect()).collect());
+    let fit_idx = opts.fit_idx.clone().unwrap_or_else(|| {
+        tests
+            .iter()
+            .map(|t| (0..t.control.len()).collect())
+            .collect()
+    });
     if fit_idx.iter().map(Vec::len).sum::<usize>() <= fwd.specs().len() {
-        return Err(DiagError::NotEnoughData(format!("{} fitted samples for {} parameters", fit_idx.iter().map(Vec::len).sum::<usize>(), fwd.specs().len())));
+        return Err(DiagError::NotEnoughData(format!(
+            "{} fitted samples for {} parameters",
+            fit_idx.iter().map(Vec::len).sum::<usize>(),
+            fwd.specs().len()
+        )));
     }
     let data = FitData {
         measured: tests.iter().map(|t| t.response.as_slice()).collect(),
-        weight: noise.iter().map(|s| 1.0 / s.max(f64::MIN_POSITIVE)).collect(),
+        weight: noise
+            .iter()
+            .map(|s| 1.0 / s.max(f64::MIN_POSITIVE))
+            .collect(),
         fit_idx,
     };
     let starts = make_starts(fwd.specs(), opts.warm.as_ref(), opts.starts, opts.seed);
@@ -246,9 +276,26 @@ pub fn calibrate(ctx: Context, tests: &[DiagTest], model: &ModelSpec, opts: &Cal
         .collect();
     Ok(Calibration {
         model: model.label(),
-        params: ParamMap(f.names.iter().cloned().zip(f.params.iter().copied()).collect()),
-        std_err: OptParamMap(f.names.iter().cloned().zip(f.std_err.iter().copied()).collect()),
-        at_bound: f.names.iter().zip(&f.at_bound).filter_map(|(n, b)| b.map(|b| (n.clone(), b))).collect(),
+        params: ParamMap(
+            f.names
+                .iter()
+                .cloned()
+                .zip(f.params.iter().copied())
+                .collect(),
+        ),
+        std_err: OptParamMap(
+            f.names
+                .iter()
+                .cloned()
+                .zip(f.std_err.iter().copied())
+                .collect(),
+        ),
+        at_bound: f
+            .names
+            .iter()
+            .zip(&f.at_bound)
+            .filter_map(|(n, b)| b.map(|b| (n.clone(), b)))
+            .collect(),
         gap_rms,
         chi2: f.cost,
         n_fit: f.n_fit,
@@ -272,7 +319,12 @@ fn make_starts(specs: &[ParamSpec], warm: Option<&ParamMap>, n: usize, seed: u64
         .iter()
         .zip(&initial)
         .map(|(s, &p0)| {
-            warm.and_then(|w| w.0.iter().find(|(k, _)| *k == s.name).map(|p| inside(s, p.1))).unwrap_or(p0)
+            warm.and_then(|w| {
+                w.0.iter()
+                    .find(|(k, _)| *k == s.name)
+                    .map(|p| inside(s, p.1))
+            })
+            .unwrap_or(p0)
         })
         .collect();
     let mut out = vec![first.clone()];
@@ -431,7 +483,10 @@ pub struct HoldoutSummary {
 }
 
 /// Split every test's samples into training and held-out indices.
-pub fn split(tests: &[DiagTest], policy: &HoldoutPolicy) -> Result<(Vec<Vec<usize>>, Vec<Vec<usize>>), DiagError> {
+pub fn split(
+    tests: &[DiagTest],
+    policy: &HoldoutPolicy,
+) -> Result<(Vec<Vec<usize>>, Vec<Vec<usize>>), DiagError> {
     let mut train = Vec::new();
     let mut held = Vec::new();
     for (ti, t) in tests.iter().enumerate() {
@@ -466,7 +521,9 @@ pub fn split(tests: &[DiagTest], policy: &HoldoutPolicy) -> Result<(Vec<Vec<usiz
     let nt: usize = train.iter().map(Vec::len).sum();
     let nh: usize = held.iter().map(Vec::len).sum();
     if nt < 20 || nh < 10 {
-        return Err(DiagError::NotEnoughData(format!("{nt} training and {nh} held-out samples")));
+        return Err(DiagError::NotEnoughData(format!(
+            "{nt} training and {nh} held-out samples"
+        )));
     }
     Ok((train, held))
 }
@@ -506,12 +563,31 @@ fn score(
     let cal = calibrate(ctx, tests, model, &copts)?;
     let fwd = ModelForward::new(tests, model, ctx.catalog, ctx.rod)?;
     let sims = fwd.simulate_all(cal.values())?;
-    let all_resid: Vec<Vec<f64>> =
-        tests.iter().zip(&sims).map(|(t, s)| t.response.iter().zip(s).map(|(m, s)| m - s).collect()).collect();
-    let held_resid: Vec<Vec<f64>> = all_resid.iter().zip(held).map(|(r, idx)| idx.iter().map(|&i| r[i]).collect()).collect();
-    let rss_noise = held_resid.iter().zip(noise).map(|(r, s)| r.iter().map(|v| (v / s).powi(2)).sum::<f64>()).sum();
+    let all_resid: Vec<Vec<f64>> = tests
+        .iter()
+        .zip(&sims)
+        .map(|(t, s)| t.response.iter().zip(s).map(|(m, s)| m - s).collect())
+        .collect();
+    let held_resid: Vec<Vec<f64>> = all_resid
+        .iter()
+        .zip(held)
+        .map(|(r, idx)| idx.iter().map(|&i| r[i]).collect())
+        .collect();
+    let rss_noise = held_resid
+        .iter()
+        .zip(noise)
+        .map(|(r, s)| r.iter().map(|v| (v / s).powi(2)).sum::<f64>())
+        .sum();
     let n_held = held.iter().map(Vec::len).sum();
-    Ok(Scored { effect, model: model.clone(), cal, held_resid, all_resid, rss_noise, n_held })
+    Ok(Scored {
+        effect,
+        model: model.clone(),
+        cal,
+        held_resid,
+        all_resid,
+        rss_noise,
+        n_held,
+    })
 }
 
 /// Effects that apply to `kind` on top of `base` (law extensions from the catalog, test-level
@@ -560,33 +636,67 @@ pub fn separating_experiment(a: Effect, b: Effect) -> &'static str {
 
 /// Run the diagnosis on `tests` (one kind; several tests are fitted jointly with shared
 /// parameters, e.g. two specimen lengths).
-pub fn diagnose(ctx: Context, tests: &[DiagTest], opts: &DiagnoseOptions) -> Result<Diagnosis, DiagError> {
+pub fn diagnose(
+    ctx: Context,
+    tests: &[DiagTest],
+    opts: &DiagnoseOptions,
+) -> Result<Diagnosis, DiagError> {
     let first = tests.first().ok_or(DiagError::NoTests)?;
     let kind = first.kind;
     for (i, t) in tests.iter().enumerate() {
         t.validate(i)?;
         if t.kind != kind {
-            return Err(DiagError::BadTest { test: i, why: format!("kind {} differs from test 0's {kind}", t.kind) });
+            return Err(DiagError::BadTest {
+                test: i,
+                why: format!("kind {} differs from test 0's {kind}", t.kind),
+            });
         }
     }
     let noise = opts.noise.clone().unwrap_or_else(|| noise_floor(tests));
     if noise.len() != tests.len() {
-        return Err(DiagError::BadTest { test: 0, why: format!("{} noise levels for {} tests", noise.len(), tests.len()) });
+        return Err(DiagError::BadTest {
+            test: 0,
+            why: format!("{} noise levels for {} tests", noise.len(), tests.len()),
+        });
     }
     let (train, held) = split(tests, &opts.holdout)?;
-    let scale = tests.iter().map(DiagTest::response_scale).fold(0.0f64, f64::max);
+    let scale = tests
+        .iter()
+        .map(DiagTest::response_scale)
+        .fold(0.0f64, f64::max);
     let n_held: usize = held.iter().map(Vec::len).sum();
     let n_train: usize = train.iter().map(Vec::len).sum();
-    let noise_rms = (tests.iter().zip(&noise).map(|(t, s)| s * s * t.control.len() as f64).sum::<f64>()
+    let noise_rms = (tests
+        .iter()
+        .zip(&noise)
+        .map(|(t, s)| s * s * t.control.len() as f64)
+        .sum::<f64>()
         / tests.iter().map(|t| t.control.len() as f64).sum::<f64>())
     .sqrt();
 
     let base_model = ModelSpec::law(&opts.baseline);
     // The baseline anchors every comparison: give it more starts.
-    let base_opts = DiagnoseOptions { starts: opts.starts + 2, ..opts.clone() };
-    let base = score(ctx, tests, &base_model, Effect::None, &train, &held, &noise, None, &base_opts)?;
+    let base_opts = DiagnoseOptions {
+        starts: opts.starts + 2,
+        ..opts.clone()
+    };
+    let base = score(
+        ctx,
+        tests,
+        &base_model,
+        Effect::None,
+        &train,
+        &held,
+        &noise,
+        None,
+        &base_opts,
+    )?;
     let cands: Vec<Effect> = match &opts.candidates {
-        Some(c) => c.iter().copied().filter(|e| *e != Effect::None && !base_model.has(*e)).collect(),
+        Some(c) => c
+            .iter()
+            .copied()
+            .filter(|e| *e != Effect::None && !base_model.has(*e))
+            .collect(),
         None => applicable(ctx, kind, &base_model),
     };
     let (scored, best_k) = compare(ctx, tests, &base, &cands, &train, &held, &noise, opts);
@@ -623,11 +733,18 @@ pub fn diagnose(ctx: Context, tests: &[DiagTest], opts: &DiagnoseOptions) -> Res
     let separating = choice
         .equivalent
         .iter()
-        .map(|&e| Separation { effects: [choice.effect, e], experiment: separating_experiment(choice.effect, e) })
+        .map(|&e| Separation {
+            effects: [choice.effect, e],
+            experiment: separating_experiment(choice.effect, e),
+        })
         .collect();
     let located = locate(tests, &base.all_resid);
     let all_gap = abs_rms(&base.all_resid);
-    let ladder = if opts.ladder { Some(ladder(ctx, tests, &train, &held, &noise, opts, scale)?) } else { None };
+    let ladder = if opts.ladder {
+        Some(ladder(ctx, tests, &train, &held, &noise, opts, scale)?)
+    } else {
+        None
+    };
     Ok(Diagnosis {
         kind,
         baseline: Baseline {
@@ -649,7 +766,11 @@ pub fn diagnose(ctx: Context, tests: &[DiagTest], opts: &DiagnoseOptions) -> Res
             separating,
         },
         ladder,
-        holdout: HoldoutSummary { policy: opts.holdout.clone(), n_heldout: n_held, n_train },
+        holdout: HoldoutSummary {
+            policy: opts.holdout.clone(),
+            n_heldout: n_held,
+            n_train,
+        },
     })
 }
 
@@ -672,7 +793,18 @@ fn compare(
             if m == base.model {
                 return None;
             }
-            score(ctx, tests, &m, e, train, held, noise, Some(&base.cal.params), opts).ok()
+            score(
+                ctx,
+                tests,
+                &m,
+                e,
+                train,
+                held,
+                noise,
+                Some(&base.cal.params),
+                opts,
+            )
+            .ok()
         })
         .collect();
     let k = base.cal.effective_params();
@@ -700,14 +832,19 @@ impl Choice {
 }
 
 fn ic(s: &Scored, n_eff: f64, n_held: usize) -> f64 {
-    n_eff * (s.rss_noise / n_held as f64).max(f64::MIN_POSITIVE).ln() + n_eff.max(2.0).ln() * s.cal.effective_params() as f64
+    n_eff * (s.rss_noise / n_held as f64).max(f64::MIN_POSITIVE).ln()
+        + n_eff.max(2.0).ln() * s.cal.effective_params() as f64
 }
 
 /// Parsimony on the held-out data (module doc).
 fn choose(base: &Scored, scored: &[Scored]) -> Choice {
     let n_held = base.n_held;
     // n_eff from the residuals of the best-fitting model: those closest to white noise.
-    let best = scored.iter().chain(std::iter::once(base)).min_by(|a, b| a.rss_noise.total_cmp(&b.rss_noise)).unwrap_or(base);
+    let best = scored
+        .iter()
+        .chain(std::iter::once(base))
+        .min_by(|a, b| a.rss_noise.total_cmp(&b.rss_noise))
+        .unwrap_or(base);
     let series: Vec<&[f64]> = best.held_resid.iter().map(Vec::as_slice).collect();
     let rho = stats::pooled_lag1(&series);
     let n_eff = stats::effective_sample_size(n_held, rho);
@@ -717,13 +854,16 @@ fn choose(base: &Scored, scored: &[Scored]) -> Choice {
     let tol = n_eff.max(2.0).ln() + 2.0;
     let g0 = (base.rss_noise / n_held as f64).sqrt();
     // The set of models indistinguishable from the best.
-    let mut set: Vec<usize> = (0..all.len()).filter(|&i| ics[i] - ic_best <= tol).collect();
+    let mut set: Vec<usize> = (0..all.len())
+        .filter(|&i| ics[i] - ic_best <= tol)
+        .collect();
     if g0 <= NOISE_FLOOR_FIT {
         set = vec![0];
     }
     set.sort_by(|&a, &b| {
         let (sa, sb) = (all[a], all[b]);
-        sa.cal.effective_params()
+        sa.cal
+            .effective_params()
             .cmp(&sb.cal.effective_params())
             .then(sa.cal.values().len().cmp(&sb.cal.values().len()))
             .then(ics[a].total_cmp(&ics[b]))
@@ -733,30 +873,56 @@ fn choose(base: &Scored, scored: &[Scored]) -> Choice {
     let equivalent = if effect == Effect::None {
         vec![]
     } else {
-        set.iter().skip(1).map(|&i| all[i].effect).filter(|e| *e != Effect::None).collect()
+        set.iter()
+            .skip(1)
+            .map(|&i| all[i].effect)
+            .filter(|e| *e != Effect::None)
+            .collect()
     };
-    Choice { effect, equivalent, n_eff, ic_best, n_held }
+    Choice {
+        effect,
+        equivalent,
+        n_eff,
+        ic_best,
+        n_held,
+    }
 }
 
 /// Shares of the squared residual by test, by cycle and branch, and by range of the control.
 pub fn locate(tests: &[DiagTest], resid: &[Vec<f64>]) -> Vec<Located> {
     use std::collections::BTreeMap;
-    let total: f64 = resid.iter().flatten().map(|v| v * v).sum::<f64>().max(f64::MIN_POSITIVE);
+    let total: f64 = resid
+        .iter()
+        .flatten()
+        .map(|v| v * v)
+        .sum::<f64>()
+        .max(f64::MIN_POSITIVE);
     let mut out = Vec::new();
     let multi = tests.len() > 1;
     if multi {
         for (i, r) in resid.iter().enumerate() {
             let s: f64 = r.iter().map(|v| v * v).sum();
-            out.push(Located { where_: format!("test {i}"), share: s / total, by: "test", n: r.len() });
+            out.push(Located {
+                where_: format!("test {i}"),
+                share: s / total,
+                by: "test",
+                n: r.len(),
+            });
         }
     }
     let mut cb: BTreeMap<(usize, usize, crate::model::Branch), (f64, usize)> = BTreeMap::new();
     let mut cr: BTreeMap<usize, (f64, usize)> = BTreeMap::new();
     for (ti, (t, r)) in tests.iter().zip(resid).enumerate() {
         let labels: Vec<SegLabel> = t.labels_or_derived();
-        let umax = t.control.iter().fold(0.0f64, |m, u| m.max(u.abs())).max(f64::MIN_POSITIVE);
+        let umax = t
+            .control
+            .iter()
+            .fold(0.0f64, |m, u| m.max(u.abs()))
+            .max(f64::MIN_POSITIVE);
         for (i, v) in r.iter().enumerate() {
-            let e = cb.entry((ti, labels[i].cycle, labels[i].branch)).or_insert((0.0, 0));
+            let e = cb
+                .entry((ti, labels[i].cycle, labels[i].branch))
+                .or_insert((0.0, 0));
             e.0 += v * v;
             e.1 += 1;
             let bin = ((t.control[i].abs() / umax) * 4.0).floor().min(3.0) as usize;
@@ -766,8 +932,17 @@ pub fn locate(tests: &[DiagTest], resid: &[Vec<f64>]) -> Vec<Located> {
         }
     }
     for ((ti, c, b), (s, n)) in cb {
-        let prefix = if multi { format!("test {ti} ") } else { String::new() };
-        out.push(Located { where_: format!("{prefix}cycle {} {}", c + 1, b.as_str()), share: s / total, by: "cycle_branch", n });
+        let prefix = if multi {
+            format!("test {ti} ")
+        } else {
+            String::new()
+        };
+        out.push(Located {
+            where_: format!("{prefix}cycle {} {}", c + 1, b.as_str()),
+            share: s / total,
+            by: "cycle_branch",
+            n,
+        });
     }
     for (bin, (s, n)) in cr {
         out.push(Located {
@@ -793,7 +968,17 @@ fn ladder(
     scale: f64,
 ) -> Result<Vec<Rung>, DiagError> {
     let kind = tests[0].kind;
-    let mut cur = score(ctx, tests, &ModelSpec::law("linear"), Effect::None, train, held, noise, None, opts)?;
+    let mut cur = score(
+        ctx,
+        tests,
+        &ModelSpec::law("linear"),
+        Effect::None,
+        train,
+        held,
+        noise,
+        None,
+        opts,
+    )?;
     let mut rungs = Vec::new();
     let rms_abs = |s: &Scored| {
         (s.held_resid.iter().flatten().map(|v| v * v).sum::<f64>() / s.n_held.max(1) as f64).sqrt()
@@ -809,14 +994,19 @@ fn ladder(
         if choice.effect == Effect::None {
             break;
         }
-        let Some(next) = scored.into_iter().find(|s| s.effect == choice.effect) else { break };
+        let Some(next) = scored.into_iter().find(|s| s.effect == choice.effect) else {
+            break;
+        };
         rungs.push(Rung {
             effect: next.effect,
             model: next.model.label(),
             gap_before_rel: rms_abs(&cur) / scale,
             gap_after_rel: rms_abs(&next) / scale,
         });
-        cur = Scored { effect: Effect::None, ..next };
+        cur = Scored {
+            effect: Effect::None,
+            ..next
+        };
     }
     Ok(rungs)
 }

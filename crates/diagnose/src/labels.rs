@@ -46,7 +46,10 @@ pub fn segment(control: &[f64]) -> Vec<crate::model::SegLabel> {
     let tol = 1e-4 * umax.max(f64::MIN_POSITIVE);
     // Direction of motion per sample (+1 away from zero, −1 towards, 0 held), smoothed by
     // carrying the last clear direction through sub-tolerance steps of a moving ramp.
-    let sign0 = control.iter().find(|u| u.abs() > 10.0 * tol).map_or(1.0, |u| u.signum());
+    let sign0 = control
+        .iter()
+        .find(|u| u.abs() > 10.0 * tol)
+        .map_or(1.0, |u| u.signum());
     let mut out = Vec::with_capacity(n);
     let mut cycle = 0usize;
     let mut seen_unload = false;
@@ -119,7 +122,13 @@ mod tests {
         let l = segment(&u);
         assert_eq!(l[10].branch, Branch::FirstLoading);
         assert_eq!(l[60].branch, Branch::Unloading);
-        assert_eq!(l[110], crate::model::SegLabel { cycle: 1, branch: Branch::Reloading });
+        assert_eq!(
+            l[110],
+            crate::model::SegLabel {
+                cycle: 1,
+                branch: Branch::Reloading
+            }
+        );
         assert_eq!(l[260].cycle, 2);
         assert_eq!(l.iter().map(|x| x.cycle).max(), Some(2));
     }

@@ -24,6 +24,9 @@ pub mod params;
 pub mod registry;
 pub mod stats;
 
-pub use diagnose::{calibrate, diagnose, Calibration, CalibrateOptions, Context, DiagnoseOptions, Diagnosis, HoldoutPolicy};
+pub use diagnose::{
+    calibrate, diagnose, CalibrateOptions, Calibration, Context, DiagnoseOptions, Diagnosis,
+    HoldoutPolicy,
+};
 pub use error::DiagError;
 pub use model::{DiagTest, ModelSpec, SegLabel};

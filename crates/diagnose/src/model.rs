@@ -64,7 +64,10 @@ impl DiagTest {
             return Err(bad("kind is unknown".into()));
         }
         if !(self.free_length_m.is_finite() && self.free_length_m > 0.0) {
-            return Err(bad(format!("free_length_m must be > 0, got {}", self.free_length_m)));
+            return Err(bad(format!(
+                "free_length_m must be > 0, got {}",
+                self.free_length_m
+            )));
         }
         let n = self.control.len();
         if n < 20 {
@@ -78,9 +81,16 @@ impl DiagTest {
             )));
         }
         if !self.labels.is_empty() && self.labels.len() != n {
-            return Err(bad(format!("labels has {} entries for {n} samples", self.labels.len())));
+            return Err(bad(format!(
+                "labels has {} entries for {n} samples",
+                self.labels.len()
+            )));
         }
-        for (name, v) in [("time_s", &self.time_s), ("control", &self.control), ("response", &self.response)] {
+        for (name, v) in [
+            ("time_s", &self.time_s),
+            ("control", &self.control),
+            ("response", &self.response),
+        ] {
             if let Some(i) = v.iter().position(|x| !x.is_finite()) {
                 return Err(bad(format!("{name}[{i}] is not finite")));
             }
@@ -119,13 +129,20 @@ pub struct ModelSpec {
 }
 
 /// Effects that act on the test rather than on the section's law.
-pub const TEST_LEVEL: [Effect; 3] =
-    [Effect::MachineCompliance, Effect::SensorDrift, Effect::SupportFriction];
+pub const TEST_LEVEL: [Effect; 3] = [
+    Effect::MachineCompliance,
+    Effect::SensorDrift,
+    Effect::SupportFriction,
+];
 
 impl ModelSpec {
     /// The bare law.
     pub fn law(name: &str) -> Self {
-        ModelSpec { law: name.to_string(), law_effects: vec![], test_effects: vec![] }
+        ModelSpec {
+            law: name.to_string(),
+            law_effects: vec![],
+            test_effects: vec![],
+        }
     }
 
     /// The same model with `effect` added (plasticity on a linear law turns it elastoplastic).
@@ -200,9 +217,20 @@ pub trait LawCatalog: Sync {
     fn law_effects(&self, kind: TestKind, law: &str) -> Vec<Effect>;
     /// Parameters of the model's sectional law (base plus law-level effects), with bounds and
     /// starting values scaled to the data.
-    fn specs(&self, kind: TestKind, model: &ModelSpec, scales: &DataScales) -> Result<Vec<ParamSpec>, DiagError>;
+    fn specs(
+        &self,
+        kind: TestKind,
+        model: &ModelSpec,
+        scales: &DataScales,
+    ) -> Result<Vec<ParamSpec>, DiagError>;
     /// Build the sectional law from values in the order of `specs`.
-    fn build(&self, kind: TestKind, model: &ModelSpec, names: &[String], values: &[f64]) -> Result<Box<dyn Law>, DiagError>;
+    fn build(
+        &self,
+        kind: TestKind,
+        model: &ModelSpec,
+        names: &[String],
+        values: &[f64],
+    ) -> Result<Box<dyn Law>, DiagError>;
 }
 
 /// The rod side of the diagnosis, for tests that do not load the section uniformly
@@ -210,8 +238,14 @@ pub trait LawCatalog: Sync {
 pub trait RodSimulator: Sync {
     /// Simulate `test`'s control history (specimen deformation, SI) with `law` and support
     /// friction `mu`, writing the response (N) per sample into `out`.
-    fn simulate(&self, test: &DiagTest, law: &dyn Law, control: &[f64], mu: f64, out: &mut [f64])
-        -> Result<(), String>;
+    fn simulate(
+        &self,
+        test: &DiagTest,
+        law: &dyn Law,
+        control: &[f64],
+        mu: f64,
+        out: &mut [f64],
+    ) -> Result<(), String>;
 }
 
 /// Index of the strain/stress component a uniformly loaded test drives, `None` for three-point.
@@ -251,7 +285,11 @@ pub fn data_scales(tests: &[DiagTest]) -> DataScales {
             }
         }
     }
-    let stiffness = if k_n > 0.0 && k_sum > 0.0 { k_sum / k_n } else { smax / emax.max(f64::MIN_POSITIVE) };
+    let stiffness = if k_n > 0.0 && k_sum > 0.0 {
+        k_sum / k_n
+    } else {
+        smax / emax.max(f64::MIN_POSITIVE)
+    };
     DataScales {
         stiffness,
         stress_max: smax.max(f64::MIN_POSITIVE),
@@ -301,7 +339,10 @@ pub fn test_effect_specs(effects: &[Effect], tests: &[DiagTest]) -> Vec<ParamSpe
         .iter()
         .filter_map(|t| initial_slope(&t.control, &t.response))
         .fold(0.0f64, f64::max);
-    let rmax = tests.iter().map(DiagTest::response_scale).fold(0.0f64, f64::max);
+    let rmax = tests
+        .iter()
+        .map(DiagTest::response_scale)
+        .fold(0.0f64, f64::max);
     let dur = tests
         .iter()
         .map(|t| t.time_s.last().copied().unwrap_or(0.0) - t.time_s.first().copied().unwrap_or(0.0))
@@ -349,22 +390,46 @@ impl<'a> ModelForward<'a> {
     ) -> Result<Self, DiagError> {
         let kind = tests.first().ok_or(DiagError::NoTests)?.kind;
         if let Some(i) = tests.iter().position(|t| t.kind != kind) {
-            return Err(DiagError::BadTest { test: i, why: format!("kind {} differs from test 0's {kind}", tests[i].kind) });
+            return Err(DiagError::BadTest {
+                test: i,
+                why: format!("kind {} differs from test 0's {kind}", tests[i].kind),
+            });
         }
         if kind == TestKind::ThreePoint && rod.is_none() {
-            return Err(DiagError::Model { model: model.label(), why: "three_point tests need the rod solver".into() });
+            return Err(DiagError::Model {
+                model: model.label(),
+                why: "three_point tests need the rod solver".into(),
+            });
         }
         if model.test_effects.contains(&Effect::SupportFriction) && kind != TestKind::ThreePoint {
-            return Err(DiagError::Model { model: model.label(), why: "support_friction applies to three_point only".into() });
+            return Err(DiagError::Model {
+                model: model.label(),
+                why: "support_friction applies to three_point only".into(),
+            });
         }
         let scales = data_scales(tests);
         let mut specs = catalog.specs(kind, model, &scales)?;
         let n_law = specs.len();
         specs.extend(test_effect_specs(&model.test_effects, tests));
         let find = |n: &str| specs.iter().position(|s| s.name == n);
-        let (i_compliance, i_drift, i_friction) = (find("compliance"), find("drift_per_s"), find("support_friction"));
+        let (i_compliance, i_drift, i_friction) = (
+            find("compliance"),
+            find("drift_per_s"),
+            find("support_friction"),
+        );
         let names = specs.iter().map(|s| s.name.clone()).collect();
-        Ok(ModelForward { tests, catalog, rod, model: model.clone(), specs, names, n_law, i_compliance, i_drift, i_friction })
+        Ok(ModelForward {
+            tests,
+            catalog,
+            rod,
+            model: model.clone(),
+            specs,
+            names,
+            n_law,
+            i_compliance,
+            i_drift,
+            i_friction,
+        })
     }
 
     /// The model.
@@ -377,11 +442,12 @@ impl<'a> ModelForward<'a> {
         (0..self.tests.len())
             .map(|t| {
                 let mut out = vec![0.0; self.tests[t].control.len()];
-                self.simulate(params, t, &mut out).map_err(|why| DiagError::Simulation {
-                    model: self.model.label(),
-                    test: t,
-                    why,
-                })?;
+                self.simulate(params, t, &mut out)
+                    .map_err(|why| DiagError::Simulation {
+                        model: self.model.label(),
+                        test: t,
+                        why,
+                    })?;
                 Ok(out)
             })
             .collect()
@@ -402,11 +468,24 @@ impl Forward for ModelForward<'_> {
         let t = &self.tests[test];
         let law = self
             .catalog
-            .build(t.kind, &self.model, &self.names[..self.n_law], &p[..self.n_law])
+            .build(
+                t.kind,
+                &self.model,
+                &self.names[..self.n_law],
+                &p[..self.n_law],
+            )
             .map_err(|e| e.to_string())?;
         let c = self.i_compliance.map_or(0.0, |i| p[i]);
         match uniform_component(t.kind) {
-            Some(comp) => drive_uniform_compliant(law.as_ref(), comp, t.free_length_m, c, &t.time_s, &t.control, out)?,
+            Some(comp) => drive_uniform_compliant(
+                law.as_ref(),
+                comp,
+                t.free_length_m,
+                c,
+                &t.time_s,
+                &t.control,
+                out,
+            )?,
             None => {
                 let rod = self.rod.ok_or("no rod solver")?;
                 let mu = self.i_friction.map_or(0.0, |i| p[i]);
@@ -462,7 +541,10 @@ pub fn drive_uniform_compliant(
     let mut eps = Strain6::zeros();
     let mut t_prev = time_s.first().copied().unwrap_or(0.0);
     let mut k_prev = law.elastic_tangent()[(comp, comp)];
-    let umax = control.iter().fold(0.0f64, |m, u| m.max(u.abs())).max(f64::MIN_POSITIVE);
+    let umax = control
+        .iter()
+        .fold(0.0f64, |m, u| m.max(u.abs()))
+        .max(f64::MIN_POSITIVE);
     let mut u_prev = 0.0;
     for (i, &u) in control.iter().enumerate() {
         let dt = (time_s[i] - t_prev).max(0.0);
@@ -490,12 +572,17 @@ pub fn drive_uniform_compliant(
                 eps[comp] -= g / dg;
             }
             if !converged {
-                return Err(format!("machine compliance: no convergence at sample {i} (control {u})"));
+                return Err(format!(
+                    "machine compliance: no convergence at sample {i} (control {u})"
+                ));
             }
             s = sigma;
         }
         if !s.is_finite() {
-            return Err(format!("law '{}' gave a non-finite response at sample {i}", law.name()));
+            return Err(format!(
+                "law '{}' gave a non-finite response at sample {i}",
+                law.name()
+            ));
         }
         out[i] = s;
         std::mem::swap(&mut old, &mut new);

@@ -26,12 +26,24 @@ pub struct ParamSpec {
 impl ParamSpec {
     /// A parameter on a linear axis.
     pub fn linear(name: &str, lower: f64, upper: f64, initial: f64) -> Self {
-        ParamSpec { name: name.to_string(), lower, upper, initial, log_scale: false }
+        ParamSpec {
+            name: name.to_string(),
+            lower,
+            upper,
+            initial,
+            log_scale: false,
+        }
     }
 
     /// A positive parameter on a logarithmic axis (falls back to linear if `lower <= 0`).
     pub fn log(name: &str, lower: f64, upper: f64, initial: f64) -> Self {
-        ParamSpec { name: name.to_string(), lower, upper, initial, log_scale: lower > 0.0 }
+        ParamSpec {
+            name: name.to_string(),
+            lower,
+            upper,
+            initial,
+            log_scale: lower > 0.0,
+        }
     }
 
     fn axis(&self, p: f64) -> f64 {
@@ -62,7 +74,8 @@ impl ParamSpec {
     /// Physical value at fraction `u` ∈ [0, 1] of the bounds (on the parameter's axis).
     pub fn at_fraction(&self, u: f64) -> f64 {
         let (lo, hi) = (self.axis(self.lower), self.axis(self.upper));
-        self.unaxis(lo + (hi - lo) * u.clamp(0.0, 1.0)).clamp(self.lower, self.upper)
+        self.unaxis(lo + (hi - lo) * u.clamp(0.0, 1.0))
+            .clamp(self.lower, self.upper)
     }
 
     /// Unbounded coordinate z of a physical value (inverse of [`ParamSpec::from_unbounded`]).
@@ -101,11 +114,18 @@ mod tests {
 
     #[test]
     fn unbounded_map_round_trips_and_respects_bounds() {
-        let specs = [ParamSpec::linear("a", -2.0, 3.0, 0.0), ParamSpec::log("b", 1e-3, 1e5, 1.0)];
+        let specs = [
+            ParamSpec::linear("a", -2.0, 3.0, 0.0),
+            ParamSpec::log("b", 1e-3, 1e5, 1.0),
+        ];
         for s in &specs {
             for &p in &[s.lower, s.upper, s.initial, 0.5 * (s.lower + s.upper)] {
                 let back = s.from_unbounded(s.to_unbounded(p));
-                assert!((back - p).abs() <= 1e-9 * p.abs().max(1.0), "{} {p} -> {back}", s.name);
+                assert!(
+                    (back - p).abs() <= 1e-9 * p.abs().max(1.0),
+                    "{} {p} -> {back}",
+                    s.name
+                );
             }
             for z in [-100.0, -1.0, 0.0, 2.0, 1e3] {
                 let p = s.from_unbounded(z);

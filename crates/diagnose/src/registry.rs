@@ -27,7 +27,9 @@ pub fn registry_name(model: &ModelSpec) -> Result<String, String> {
             let ext = e.as_str();
             match (model.law.as_str(), e) {
                 ("elastoplastic", _) => Ok(ext.to_string()),
-                (base, Effect::Viscoelasticity | Effect::FrictionHysteresis) => Ok(format!("{base}+{ext}")),
+                (base, Effect::Viscoelasticity | Effect::FrictionHysteresis) => {
+                    Ok(format!("{base}+{ext}"))
+                }
                 (base, _) => Err(format!("the registry has no {base}+{ext}")),
             }
         }
@@ -45,7 +47,9 @@ impl LawCatalog for Registry {
                 Effect::Viscoelasticity,
                 Effect::FrictionHysteresis,
             ],
-            "linear" | "piecewise_linear" => vec![Effect::Viscoelasticity, Effect::FrictionHysteresis],
+            "linear" | "piecewise_linear" => {
+                vec![Effect::Viscoelasticity, Effect::FrictionHysteresis]
+            }
             _ => vec![],
         };
         if law != "piecewise_linear" {
@@ -54,17 +58,44 @@ impl LawCatalog for Registry {
         v
     }
 
-    fn specs(&self, kind: TestKind, model: &ModelSpec, sc: &DataScales) -> Result<Vec<ParamSpec>, DiagError> {
-        let name = registry_name(model).map_err(|why| DiagError::Model { model: model.label(), why })?;
-        let specs = cablab_laws::try_param_specs(kind, &name)
-            .map_err(|e| DiagError::Model { model: model.label(), why: e.to_string() })?;
-        Ok(specs.into_iter().filter(|s| s.fitted).map(|s| scaled(&s, sc)).collect())
+    fn specs(
+        &self,
+        kind: TestKind,
+        model: &ModelSpec,
+        sc: &DataScales,
+    ) -> Result<Vec<ParamSpec>, DiagError> {
+        let name = registry_name(model).map_err(|why| DiagError::Model {
+            model: model.label(),
+            why,
+        })?;
+        let specs = cablab_laws::try_param_specs(kind, &name).map_err(|e| DiagError::Model {
+            model: model.label(),
+            why: e.to_string(),
+        })?;
+        Ok(specs
+            .into_iter()
+            .filter(|s| s.fitted)
+            .map(|s| scaled(&s, sc))
+            .collect())
     }
 
-    fn build(&self, kind: TestKind, model: &ModelSpec, names: &[String], values: &[f64]) -> Result<Box<dyn Law>, DiagError> {
-        let name = registry_name(model).map_err(|why| DiagError::Model { model: model.label(), why })?;
-        let map: BTreeMap<String, f64> = names.iter().cloned().zip(values.iter().copied()).collect();
-        cablab_laws::build(kind, &name, &map).map_err(|e| DiagError::Model { model: model.label(), why: e.to_string() })
+    fn build(
+        &self,
+        kind: TestKind,
+        model: &ModelSpec,
+        names: &[String],
+        values: &[f64],
+    ) -> Result<Box<dyn Law>, DiagError> {
+        let name = registry_name(model).map_err(|why| DiagError::Model {
+            model: model.label(),
+            why,
+        })?;
+        let map: BTreeMap<String, f64> =
+            names.iter().cloned().zip(values.iter().copied()).collect();
+        cablab_laws::build(kind, &name, &map).map_err(|e| DiagError::Model {
+            model: model.label(),
+            why: e.to_string(),
+        })
     }
 }
 
@@ -98,7 +129,12 @@ fn scaled(s: &cablab_laws::ParamSpec, sc: &DataScales) -> ParamSpec {
     } else if n == "tau_v1" {
         // From a few sample steps to far beyond the test: at the upper bound a Maxwell branch is
         // a parallel spring over the whole record.
-        ParamSpec::log(n, (3.0 * sc.dt_min_s).max(1e-6), 1e4 * sc.duration_s, 0.1 * sc.duration_s)
+        ParamSpec::log(
+            n,
+            (3.0 * sc.dt_min_s).max(1e-6),
+            1e4 * sc.duration_s,
+            0.1 * sc.duration_s,
+        )
     } else if matches!(n, "EA_f" | "GJ_f" | "EI_f") {
         ParamSpec::log(n, k * 1e-4, k * 10.0, 0.3 * k)
     } else if matches!(n, "F_f" | "M_f") {
@@ -156,8 +192,18 @@ pub fn decimate(control: &[f64], max_points: usize) -> Vec<usize> {
 }
 
 impl RodSimulator for Rod {
-    fn simulate(&self, test: &DiagTest, law: &dyn Law, control: &[f64], mu: f64, out: &mut [f64]) -> Result<(), String> {
-        let mut setup = test.rod_setup.clone().unwrap_or_else(|| cablab_rod::TestSetup::new(test.kind, test.free_length_m));
+    fn simulate(
+        &self,
+        test: &DiagTest,
+        law: &dyn Law,
+        control: &[f64],
+        mu: f64,
+        out: &mut [f64],
+    ) -> Result<(), String> {
+        let mut setup = test
+            .rod_setup
+            .clone()
+            .unwrap_or_else(|| cablab_rod::TestSetup::new(test.kind, test.free_length_m));
         setup.support_friction = mu;
         let idx = decimate(control, self.max_points);
         let c: Vec<f64> = idx.iter().map(|&i| control[i]).collect();
@@ -186,12 +232,31 @@ mod tests {
     #[test]
     fn registry_names_of_models() {
         let ep = ModelSpec::law("elastoplastic");
-        assert_eq!(registry_name(&ep.with(Effect::KinematicHardening)).unwrap(), "kinematic_hardening");
-        assert_eq!(registry_name(&ModelSpec::law("linear").with(Effect::Viscoelasticity)).unwrap(), "linear+viscoelasticity");
-        assert_eq!(ModelSpec::law("linear").with(Effect::Plasticity).law, "elastoplastic");
+        assert_eq!(
+            registry_name(&ep.with(Effect::KinematicHardening)).unwrap(),
+            "kinematic_hardening"
+        );
+        assert_eq!(
+            registry_name(&ModelSpec::law("linear").with(Effect::Viscoelasticity)).unwrap(),
+            "linear+viscoelasticity"
+        );
+        assert_eq!(
+            ModelSpec::law("linear").with(Effect::Plasticity).law,
+            "elastoplastic"
+        );
         assert_eq!(ep.with(Effect::PiecewiseElasticity).law, "piecewise_linear");
-        assert!(registry_name(&ep.with(Effect::KinematicHardening).with(Effect::Viscoelasticity)).is_err());
-        let sc = DataScales { stiffness: 1e5, stress_max: 100.0, strain_max: 2e-3, duration_s: 100.0, dt_min_s: 0.01 };
+        assert!(registry_name(
+            &ep.with(Effect::KinematicHardening)
+                .with(Effect::Viscoelasticity)
+        )
+        .is_err());
+        let sc = DataScales {
+            stiffness: 1e5,
+            stress_max: 100.0,
+            strain_max: 2e-3,
+            duration_s: 100.0,
+            dt_min_s: 0.01,
+        };
         let specs = Registry.specs(TestKind::Tension, &ep, &sc).unwrap();
         let names: Vec<&str> = specs.iter().map(|s| s.name.as_str()).collect();
         assert_eq!(names, ["EA", "F_y", "H"]);

@@ -44,7 +44,10 @@ pub fn pooled_lag1(series: &[&[f64]]) -> f64 {
         }
         let mean = x.iter().sum::<f64>() / x.len() as f64;
         var += x.iter().map(|v| (v - mean).powi(2)).sum::<f64>();
-        cov += x.windows(2).map(|w| (w[0] - mean) * (w[1] - mean)).sum::<f64>();
+        cov += x
+            .windows(2)
+            .map(|w| (w[0] - mean) * (w[1] - mean))
+            .sum::<f64>();
     }
     if var <= 0.0 {
         0.0
@@ -60,7 +63,10 @@ pub fn noise_from_second_differences(x: &[f64]) -> Option<f64> {
     if x.len() < 5 {
         return None;
     }
-    let mut d: Vec<f64> = x.windows(3).map(|w| (w[2] - 2.0 * w[1] + w[0]).abs()).collect();
+    let mut d: Vec<f64> = x
+        .windows(3)
+        .map(|w| (w[2] - 2.0 * w[1] + w[0]).abs())
+        .collect();
     let mid = d.len() / 2;
     d.select_nth_unstable_by(mid, |a, b| a.total_cmp(b));
     Some(d[mid] / (0.674_489_75 * 6f64.sqrt()))
@@ -83,7 +89,10 @@ mod tests {
         let r = lag1_autocorrelation(&x);
         assert!((r - 0.8).abs() < 0.02, "rho1 = {r}");
         let ne = effective_sample_size(x.len(), r);
-        assert!((ne / (20_000.0 * 0.2 / 1.8) - 1.0).abs() < 0.1, "n_eff = {ne}");
+        assert!(
+            (ne / (20_000.0 * 0.2 / 1.8) - 1.0).abs() < 0.1,
+            "n_eff = {ne}"
+        );
         assert_eq!(effective_sample_size(100, -0.5), 100.0);
     }
 
@@ -91,8 +100,9 @@ mod tests {
     fn noise_floor_from_second_differences_recovers_sigma_on_a_smooth_signal() {
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
         let n = Normal::new(0.0, 0.05).unwrap();
-        let x: Vec<f64> =
-            (0..5000).map(|i| 10.0 * (i as f64 * 0.002).sin() + n.sample(&mut rng)).collect();
+        let x: Vec<f64> = (0..5000)
+            .map(|i| 10.0 * (i as f64 * 0.002).sin() + n.sample(&mut rng))
+            .collect();
         let s = noise_from_second_differences(&x).unwrap();
         assert!((s / 0.05 - 1.0).abs() < 0.06, "sigma = {s}");
         assert!((rms(&[3.0, 4.0]) - (12.5f64).sqrt()).abs() < 1e-12);

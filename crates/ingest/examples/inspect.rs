@@ -11,11 +11,22 @@ fn main() {
             Err(e) => eprintln!("error: {e}"),
             Ok(r) => {
                 let p = &r.provenance;
-                println!("{a}\n  format {} ({}) | {} {} {} | kind {} ({})", p.format, p.reason, p.encoding, p.separator, p.decimal, r.kind, r.kind_reason);
+                println!(
+                    "{a}\n  format {} ({}) | {} {} {} | kind {} ({})",
+                    p.format, p.reason, p.encoding, p.separator, p.decimal, r.kind, r.kind_reason
+                );
                 println!("  specimen {:?}", r.specimen);
-                println!("  blocks {} main {} rows {}", r.blocks.len(), r.main_block, r.data.height());
+                println!(
+                    "  blocks {} main {} rows {}",
+                    r.blocks.len(),
+                    r.main_block,
+                    r.data.height()
+                );
                 for c in &r.channels {
-                    println!("    {:?} [{}] -> {} x{} {:?}", c.name, c.unit, c.si_unit, c.factor, c.role);
+                    println!(
+                        "    {:?} [{}] -> {} x{} {:?}",
+                        c.name, c.unit, c.si_unit, c.factor, c.role
+                    );
                 }
                 for w in &r.warnings {
                     println!("  {w}");

@@ -84,7 +84,13 @@ pub fn detect(bytes: &[u8]) -> Encoding {
     if std::str::from_utf8(bytes).is_ok() {
         return Encoding::Utf8;
     }
-    if bytes.iter().any(|&b| (0x80..0xA0).contains(&b)) {
+    // Branch-free per chunk so that the scan vectorises.
+    let c1 = bytes.chunks(256).any(|c| {
+        c.iter()
+            .fold(0u8, |a, &b| a | (b.wrapping_sub(0x80) < 0x20) as u8)
+            != 0
+    });
+    if c1 {
         Encoding::Windows1252
     } else {
         Encoding::Latin1
@@ -96,10 +102,61 @@ pub fn decode(bytes: &[u8], enc: Encoding) -> Cow<'_, str> {
     let body = &bytes[enc.bom_len().min(bytes.len())..];
     match enc {
         Encoding::Utf8 | Encoding::Utf8Bom => String::from_utf8_lossy(body),
-        Encoding::Utf16Le | Encoding::Utf16LeBom => encoding_rs::UTF_16LE.decode_without_bom_handling(body).0,
-        Encoding::Utf16Be | Encoding::Utf16BeBom => encoding_rs::UTF_16BE.decode_without_bom_handling(body).0,
-        Encoding::Latin1 | Encoding::Windows1252 => encoding_rs::WINDOWS_1252.decode_without_bom_handling(body).0,
+        Encoding::Utf16Le | Encoding::Utf16LeBom => {
+            Cow::Owned(decode_chunked(encoding_rs::UTF_16LE, body))
+        }
+        Encoding::Utf16Be | Encoding::Utf16BeBom => {
+            Cow::Owned(decode_chunked(encoding_rs::UTF_16BE, body))
+        }
+        Encoding::Latin1 | Encoding::Windows1252 => {
+            Cow::Owned(decode_chunked(encoding_rs::WINDOWS_1252, body))
+        }
     }
+}
+
+/// Decodes into a buffer sized from a counting pass (an upper bound of the UTF-8 length) rather
+/// than encoding_rs' worst case of 3 bytes per input unit, so that peak memory stays near
+/// input + output and the buffer is never reallocated (a reallocation copies on a heap-grown
+/// allocation and would touch twice the pages).
+fn decode_chunked(enc: &'static encoding_rs::Encoding, body: &[u8]) -> String {
+    let bound = if enc == encoding_rs::WINDOWS_1252 {
+        // ASCII stays one byte, 0xA0..=0xFF become two, 0x80..=0x9F at most three.
+        body.iter()
+            .map(|&b| if b < 0x80 { 1usize } else { 3 })
+            .sum::<usize>()
+    } else {
+        let le = enc == encoding_rs::UTF_16LE;
+        body.chunks_exact(2)
+            .map(|p| {
+                let u = if le {
+                    u16::from_le_bytes([p[0], p[1]])
+                } else {
+                    u16::from_be_bytes([p[0], p[1]])
+                };
+                if u < 0x80 {
+                    1usize
+                } else if u < 0x800 {
+                    2
+                } else {
+                    3
+                }
+            })
+            .sum::<usize>()
+            + 3
+    };
+    let mut dec = enc.new_decoder_without_bom_handling();
+    let mut out = String::with_capacity(bound + 16);
+    let mut rest = body;
+    loop {
+        let (res, read, _) = dec.decode_to_string(rest, &mut out, true);
+        rest = &rest[read..];
+        if res == encoding_rs::CoderResult::InputEmpty {
+            break;
+        }
+        // Not expected with the bound above; grow and go on.
+        out.reserve(rest.len() * 3 + 16);
+    }
+    out
 }
 
 /// Decodes an owned buffer, reusing it for UTF-8 and freeing it before returning otherwise, so
@@ -132,7 +189,11 @@ pub fn check_text(text: &str, source: &str) -> Result<(), IngestError> {
         let bad = b < 0x20 && !matches!(b, b'\t' | b'\n' | b'\r' | 0x0C | 0x1A);
         if bad {
             if b == 0 {
-                return Err(IngestError::Binary { file: source.into(), offset: i, detail: "NUL byte in the text".into() });
+                return Err(IngestError::Binary {
+                    file: source.into(),
+                    offset: i,
+                    detail: "NUL byte in the text".into(),
+                });
             }
             control += 1;
             first.get_or_insert(i);
@@ -142,10 +203,15 @@ pub fn check_text(text: &str, source: &str) -> Result<(), IngestError> {
         return Err(IngestError::Binary {
             file: source.into(),
             offset: first.unwrap_or(0),
-            detail: format!("{control} control characters in the first {} bytes", head.len()),
+            detail: format!(
+                "{control} control characters in the first {} bytes",
+                head.len()
+            ),
         });
     }
-    if text.contains('\u{FFFD}') && text.matches('\u{FFFD}').take(1000).count() * 200 > head.len().max(1) {
+    if text.contains('\u{FFFD}')
+        && text.matches('\u{FFFD}').take(1000).count() * 200 > head.len().max(1)
+    {
         return Err(IngestError::Binary {
             file: source.into(),
             offset: text.find('\u{FFFD}').unwrap_or(0),
@@ -180,7 +246,10 @@ mod tests {
         let text = "Zeit (s)\tKraft (N)\n0,5\t1,25\n";
         let cases: Vec<(Vec<u8>, Encoding)> = vec![
             (text.as_bytes().to_vec(), Encoding::Utf8),
-            ([&[0xEF, 0xBB, 0xBF][..], text.as_bytes()].concat(), Encoding::Utf8Bom),
+            (
+                [&[0xEF, 0xBB, 0xBF][..], text.as_bytes()].concat(),
+                Encoding::Utf8Bom,
+            ),
             (utf16le(text, false), Encoding::Utf16Le),
             (utf16le(text, true), Encoding::Utf16LeBom),
             (utf16be(text, false), Encoding::Utf16Be),

@@ -77,30 +77,65 @@ impl FromStr for Format {
     type Err = UnknownFormat;
     fn from_str(s: &str) -> Result<Self, Self::Err> {
         let t = s.trim().to_ascii_lowercase().replace('-', "_");
-        Format::ALL.iter().copied().find(|f| f.as_str() == t).ok_or_else(|| UnknownFormat(s.to_string()))
+        Format::ALL
+            .iter()
+            .copied()
+            .find(|f| f.as_str() == t)
+            .ok_or_else(|| UnknownFormat(s.to_string()))
     }
 }
 
 /// Scores every layout on the head of the text and returns the best with its reason.
 pub fn detect(text: &str, encoding: Encoding, source: &str) -> (Format, String) {
     let head: Vec<&str> = text.lines().take(200).collect();
-    let first = head.first().map(|l| l.trim_start_matches('\u{feff}')).unwrap_or("");
+    let first = head
+        .first()
+        .map(|l| l.trim_start_matches('\u{feff}'))
+        .unwrap_or("");
     let lower_head: Vec<String> = head.iter().take(60).map(|l| l.to_lowercase()).collect();
     let file_name = source.rsplit(['/', '\\']).next().unwrap_or(source);
 
     let mut cands: Vec<(u32, Format, String)> = Vec::new();
 
     if first.trim_start().starts_with("<?xml") || head_str(text, 4096).contains("<Signal ") {
-        let s = if head_str(text, 65536).contains("<Signal ") { 100 } else { 40 };
-        cands.push((s, Format::MtsTestsuiteXml, "XML with <Signal Name= Unit=> definitions (MTS TestSuite DAQ export)".into()));
+        let s = if head_str(text, 65536).contains("<Signal ") {
+            100
+        } else {
+            40
+        };
+        cands.push((
+            s,
+            Format::MtsTestsuiteXml,
+            "XML with <Signal Name= Unit=> definitions (MTS TestSuite DAQ export)".into(),
+        ));
     }
     if is_mts_locale_line(first) {
-        cands.push((90, Format::Mts793Dat, format!("MTS 793 locale line '{}'", shorten(first, 40))));
+        cands.push((
+            90,
+            Format::Mts793Dat,
+            format!("MTS 793 locale line '{}'", shorten(first, 40)),
+        ));
     }
-    if lower_head.iter().any(|l| l.contains("catman")) || lower_head.first().is_some_and(|l| l.trim() == "file header") {
-        cands.push((85, Format::CatmanAscii, "HBM catman signature ('catman' / 'File header') in the header".into()));
+    if lower_head.iter().any(|l| l.contains("catman"))
+        || lower_head
+            .first()
+            .is_some_and(|l| l.trim() == "file header")
+    {
+        cands.push((
+            85,
+            Format::CatmanAscii,
+            "HBM catman signature ('catman' / 'File header') in the header".into(),
+        ));
     }
-    let ts_keys = ["file path:", "dateipfad:", "test run:", "testlauf:", "test:", "percorso file:", "ruta de archivo:"];
+    let ts_keys = [
+        "file path:",
+        "dateipfad:",
+        "test run:",
+        "testlauf:",
+        "test:",
+        "percorso file:",
+        "ruta de archivo:",
+    ];
     let ts_hits = lower_head
         .iter()
         .take(10)
@@ -110,12 +145,21 @@ pub fn detect(text: &str, encoding: Encoding, source: &str) -> (Format, String) 
         })
         .count();
     if ts_hits >= 2 {
-        cands.push((80, Format::MtsTestsuiteCsv, format!("MTS TestSuite preamble ({ts_hits} lines like 'File Path:'/'Test:'/'Test Run:')")));
+        cands.push((
+            80,
+            Format::MtsTestsuiteCsv,
+            format!(
+                "MTS TestSuite preamble ({ts_hits} lines like 'File Path:'/'Test:'/'Test Run:')"
+            ),
+        ));
     }
     let has_paren_units_row = head.iter().take(40).any(|l| {
         let cells: Vec<&str> = l.split(',').map(|c| c.trim().trim_matches('"')).collect();
         let filled: Vec<&&str> = cells.iter().filter(|c| !c.is_empty()).collect();
-        filled.len() >= 2 && filled.iter().all(|c| c.starts_with('(') && c.ends_with(')'))
+        filled.len() >= 2
+            && filled
+                .iter()
+                .all(|c| c.starts_with('(') && c.ends_with(')'))
     });
     let bluehill_name = file_name.to_lowercase().starts_with("specimen_rawdata");
     if has_paren_units_row || bluehill_name {
@@ -128,22 +172,63 @@ pub fn detect(text: &str, encoding: Encoding, source: &str) -> (Format, String) 
     }
     if head.iter().take(5).any(|l| {
         let l = l.to_lowercase();
-        l.contains("total time (s)") && (l.contains("total cycles") || l.contains("elapsed cycles") || l.contains("cycle elapsed time"))
+        l.contains("total time (s)")
+            && (l.contains("total cycles")
+                || l.contains("elapsed cycles")
+                || l.contains("cycle elapsed time"))
     }) {
-        cands.push((75, Format::WavematrixCsv, "WaveMatrix header ('Total Time (s)', 'Total Cycles', 'Elapsed Cycles')".into()));
+        cands.push((
+            75,
+            Format::WavematrixCsv,
+            "WaveMatrix header ('Total Time (s)', 'Total Cycles', 'Elapsed Cycles')".into(),
+        ));
     }
-    let quoted_kv = head.iter().take(40).filter(|l| l.starts_with('"') && l.contains("\"\t")).count();
-    let zwick_words = ["prüfzeit", "standardkraft", "standardweg", "traversenweg", "testxpert", "zwick"];
-    if quoted_kv >= 5 && lower_head.iter().any(|l| zwick_words.iter().any(|w| l.contains(w))) {
-        cands.push((70, Format::TestxpertAscii, format!("testXpert quoted key/value lines ({quoted_kv}) and Zwick channel names")));
+    let quoted_kv = head
+        .iter()
+        .take(40)
+        .filter(|l| l.starts_with('"') && l.contains("\"\t"))
+        .count();
+    let zwick_words = [
+        "prüfzeit",
+        "standardkraft",
+        "standardweg",
+        "traversenweg",
+        "testxpert",
+        "zwick",
+    ];
+    if quoted_kv >= 5
+        && lower_head
+            .iter()
+            .any(|l| zwick_words.iter().any(|w| l.contains(w)))
+    {
+        cands.push((
+            70,
+            Format::TestxpertAscii,
+            format!("testXpert quoted key/value lines ({quoted_kv}) and Zwick channel names"),
+        ));
     }
-    let utf16 = matches!(encoding, Encoding::Utf16Le | Encoding::Utf16LeBom | Encoding::Utf16Be | Encoding::Utf16BeBom);
+    let utf16 = matches!(
+        encoding,
+        Encoding::Utf16Le | Encoding::Utf16LeBom | Encoding::Utf16Be | Encoding::Utf16BeBom
+    );
     if utf16 && first.contains('\t') && first.contains('(') {
         let lf = first.to_lowercase();
-        let s = if lf.contains("load (") || lf.contains("extension (") { 70 } else { 50 };
-        cands.push((s, Format::NexygenText, "NEXYGEN: UTF-16 text with one tab-separated header line, units in parentheses".into()));
+        let s = if lf.contains("load (") || lf.contains("extension (") {
+            70
+        } else {
+            50
+        };
+        cands.push((
+            s,
+            Format::NexygenText,
+            "NEXYGEN: UTF-16 text with one tab-separated header line, units in parentheses".into(),
+        ));
     }
-    cands.push((10, Format::Delimited, "no machine signature found: generic delimited text with a header".into()));
+    cands.push((
+        10,
+        Format::Delimited,
+        "no machine signature found: generic delimited text with a header".into(),
+    ));
     cands.sort_by(|a, b| b.0.cmp(&a.0));
     let (_, f, why) = cands.swap_remove(0);
     (f, why)
@@ -197,12 +282,23 @@ mod tests {
 
     #[test]
     fn signatures() {
-        let (f, why) = detect("MTS793|MPT|DEU|1|2|,|.|:|49|1|1|A\n\nx\n", Encoding::Latin1, "a.dat");
+        let (f, why) = detect(
+            "MTS793|MPT|DEU|1|2|,|.|:|49|1|1|A\n\nx\n",
+            Encoding::Latin1,
+            "a.dat",
+        );
         assert_eq!(f, Format::Mts793Dat);
         assert!(why.contains("MTS793"));
-        assert_eq!(mts_locale_decimal("MTS793|MPT|DEU|1|2|,|.|:|49|1|1|A"), Some(b','));
+        assert_eq!(
+            mts_locale_decimal("MTS793|MPT|DEU|1|2|,|.|:|49|1|1|A"),
+            Some(b',')
+        );
         assert_eq!(mts_locale_decimal("MTS***|MPT|**|*|*|*|*"), None);
-        let (f, _) = detect("File Path: C:\\x\nTest: T\nTest Run: 3\n", Encoding::Utf8Bom, "a.txt");
+        let (f, _) = detect(
+            "File Path: C:\\x\nTest: T\nTest Run: 3\n",
+            Encoding::Utf8Bom,
+            "a.txt",
+        );
         assert_eq!(f, Format::MtsTestsuiteCsv);
         let (f, _) = detect("1,Time,Force\n,(s),(kN)\n", Encoding::Utf8, "a.csv");
         assert_eq!(f, Format::BluehillCsv);

@@ -22,7 +22,9 @@ mod xml;
 pub use decode::Encoding;
 pub use error::{Diagnostic, IngestError};
 pub use format::{Format, UnknownFormat};
-pub use record::{BlockInfo, Channel, InspectChannel, InspectReport, MetadataObject, Provenance, TestRecord};
+pub use record::{
+    BlockInfo, Channel, InspectChannel, InspectReport, MetadataObject, Provenance, TestRecord,
+};
 
 use cablab_core::TestKind;
 use sha2::{Digest, Sha256};
@@ -48,7 +50,10 @@ pub struct ReadOptions {
 /// Reads a file. The bytes are read once, hashed, decoded once (the raw buffer is reused for
 /// UTF-8 and freed before parsing otherwise).
 pub fn read_path(path: &Path, opts: &ReadOptions) -> Result<TestRecord, IngestError> {
-    let bytes = std::fs::read(path).map_err(|e| IngestError::Io { path: path.to_path_buf(), source: e })?;
+    let bytes = std::fs::read(path).map_err(|e| IngestError::Io {
+        path: path.to_path_buf(),
+        source: e,
+    })?;
     let source = path.display().to_string();
     let sha = sha256_hex(&bytes);
     let enc = decode::detect(&bytes);
@@ -57,7 +62,11 @@ pub fn read_path(path: &Path, opts: &ReadOptions) -> Result<TestRecord, IngestEr
 }
 
 /// Reads bytes already in memory; `source` names them in messages and the provenance.
-pub fn read_bytes(bytes: &[u8], source: &str, opts: &ReadOptions) -> Result<TestRecord, IngestError> {
+pub fn read_bytes(
+    bytes: &[u8],
+    source: &str,
+    opts: &ReadOptions,
+) -> Result<TestRecord, IngestError> {
     let sha = sha256_hex(bytes);
     let enc = decode::detect(bytes);
     let text = decode::decode(bytes, enc);
@@ -68,9 +77,20 @@ fn sha256_hex(bytes: &[u8]) -> String {
     hex::encode(Sha256::digest(bytes))
 }
 
-fn parse(text: &str, enc: Encoding, sha256: String, source: &str, opts: &ReadOptions) -> Result<TestRecord, IngestError> {
-    if text.trim_matches(|c: char| c.is_whitespace() || c == '\u{feff}').is_empty() {
-        return Err(IngestError::Empty { file: source.into() });
+fn parse(
+    text: &str,
+    enc: Encoding,
+    sha256: String,
+    source: &str,
+    opts: &ReadOptions,
+) -> Result<TestRecord, IngestError> {
+    if text
+        .trim_matches(|c: char| c.is_whitespace() || c == '\u{feff}')
+        .is_empty()
+    {
+        return Err(IngestError::Empty {
+            file: source.into(),
+        });
     }
     decode::check_text(text, source)?;
     let (format, reason) = match opts.format {
@@ -88,7 +108,12 @@ fn parse(text: &str, enc: Encoding, sha256: String, source: &str, opts: &ReadOpt
         encoding: enc.as_str().to_string(),
         reason,
         separator: raw.separator.map_or("none", |s| s.as_str()).to_string(),
-        decimal: if raw.decimal == b',' { "comma" } else { "point" }.to_string(),
+        decimal: if raw.decimal == b',' {
+            "comma"
+        } else {
+            "point"
+        }
+        .to_string(),
     };
     record::build(raw, opts, provenance)
 }

@@ -7,7 +7,10 @@
 
 use crate::error::{Diagnostic, IngestError};
 use crate::format::Format;
-use crate::roles::{assign_roles, kind_from_channels, kind_from_text, roles_of, specimen_from_metadata, ChannelFacts};
+use crate::roles::{
+    assign_roles, kind_from_channels, kind_from_text, roles_of, specimen_from_metadata,
+    ChannelFacts,
+};
 use crate::table::{RawBlock, RawTable};
 use crate::units::{lookup, split_name_unit, strip_brackets, Dimension};
 use crate::ReadOptions;
@@ -195,7 +198,11 @@ fn find_column(names: &[String], headers: &[String], given: &str) -> Option<usiz
 }
 
 /// Builds the record from what a reader found.
-pub(crate) fn build(mut raw: RawTable, opts: &ReadOptions, provenance: Provenance) -> Result<TestRecord, IngestError> {
+pub(crate) fn build(
+    mut raw: RawTable,
+    opts: &ReadOptions,
+    provenance: Provenance,
+) -> Result<TestRecord, IngestError> {
     let source = provenance.path.clone();
     let blocks: Vec<BlockInfo> = raw
         .blocks
@@ -215,7 +222,11 @@ pub(crate) fn build(mut raw: RawTable, opts: &ReadOptions, provenance: Provenanc
         .collect();
     let main_block = match opts.block {
         Some(k) if k == 0 || k > blocks.len() => {
-            return Err(IngestError::BlockOutOfRange { file: source, requested: k, available: blocks.len() })
+            return Err(IngestError::BlockOutOfRange {
+                file: source,
+                requested: k,
+                available: blocks.len(),
+            })
         }
         Some(k) => k,
         None => {
@@ -237,8 +248,16 @@ pub(crate) fn build(mut raw: RawTable, opts: &ReadOptions, provenance: Provenanc
             message: format!(
                 "{} data blocks ({}); reading block {main_block}{} (choose another with --block)",
                 blocks.len(),
-                blocks.iter().map(|b| format!("{}: {} rows", b.index, b.rows)).collect::<Vec<_>>().join(", "),
-                if opts.block.is_some() { "" } else { ", the longest (ties: the first)" }
+                blocks
+                    .iter()
+                    .map(|b| format!("{}: {} rows", b.index, b.rows))
+                    .collect::<Vec<_>>()
+                    .join(", "),
+                if opts.block.is_some() {
+                    ""
+                } else {
+                    ", the longest (ties: the first)"
+                }
             ),
         });
     }
@@ -250,11 +269,27 @@ pub(crate) fn build(mut raw: RawTable, opts: &ReadOptions, provenance: Provenanc
     let mut names = Vec::with_capacity(n);
     let mut units = Vec::with_capacity(n);
     for i in 0..n {
-        let header = block.header_cells.get(i).map(|s| s.trim().to_string()).unwrap_or_default();
-        let unit_cell = block.unit_cells.get(i).map(|s| strip_brackets(s).to_string()).unwrap_or_default();
-        let (mut name, unit) = if unit_cell.is_empty() { split_name_unit(&header) } else { (header.clone(), unit_cell) };
+        let header = block
+            .header_cells
+            .get(i)
+            .map(|s| s.trim().to_string())
+            .unwrap_or_default();
+        let unit_cell = block
+            .unit_cells
+            .get(i)
+            .map(|s| strip_brackets(s).to_string())
+            .unwrap_or_default();
+        let (mut name, unit) = if unit_cell.is_empty() {
+            split_name_unit(&header)
+        } else {
+            (header.clone(), unit_cell)
+        };
         if name.is_empty() {
-            name = if header.is_empty() { format!("column {}", i + 1) } else { header.clone() };
+            name = if header.is_empty() {
+                format!("column {}", i + 1)
+            } else {
+                header.clone()
+            };
         }
         names.push(name);
         units.push(unit);
@@ -269,21 +304,28 @@ pub(crate) fn build(mut raw: RawTable, opts: &ReadOptions, provenance: Provenanc
     }
     let infos: Vec<_> = units.iter().map(|u| lookup(u)).collect();
     let facts: Vec<ChannelFacts> = (0..n)
-        .map(|i| ChannelFacts { name: names[i].clone(), dimension: infos[i].map(|x| x.dimension), unit_written: !units[i].is_empty() })
+        .map(|i| ChannelFacts {
+            name: names[i].clone(),
+            dimension: infos[i].map(|x| x.dimension),
+            unit_written: !units[i].is_empty(),
+        })
         .collect();
 
     // Roles.
-    let pick = |given: &Option<String>, option: &'static str| -> Result<Option<usize>, IngestError> {
-        match given {
-            None => Ok(None),
-            Some(g) => find_column(&names, &block.header_cells, g).map(Some).ok_or_else(|| IngestError::UnknownColumn {
-                file: source.clone(),
-                option,
-                given: g.clone(),
-                available: names.join(", "),
-            }),
-        }
-    };
+    let pick =
+        |given: &Option<String>, option: &'static str| -> Result<Option<usize>, IngestError> {
+            match given {
+                None => Ok(None),
+                Some(g) => find_column(&names, &block.header_cells, g)
+                    .map(Some)
+                    .ok_or_else(|| IngestError::UnknownColumn {
+                        file: source.clone(),
+                        option,
+                        given: g.clone(),
+                        available: names.join(", "),
+                    }),
+            }
+        };
     let ft = pick(&opts.time, "--time")?;
     let fc = pick(&opts.control, "--control")?;
     let fr = pick(&opts.response, "--response")?;
@@ -307,7 +349,10 @@ pub(crate) fn build(mut raw: RawTable, opts: &ReadOptions, provenance: Provenanc
                 file: source.clone(),
                 line: Some(block.names_line),
                 column: Some(i + 1),
-                message: format!("the {role} column '{}' has no unit; its values are taken as SI", names[i]),
+                message: format!(
+                    "the {role} column '{}' has no unit; its values are taken as SI",
+                    names[i]
+                ),
             });
         }
     }
@@ -324,7 +369,10 @@ pub(crate) fn build(mut raw: RawTable, opts: &ReadOptions, provenance: Provenanc
                         file: source.clone(),
                         line: Some(unit_line),
                         column: Some(i + 1),
-                        message: format!("unknown unit '{}' on column '{}'; values kept as written", units[i], names[i]),
+                        message: format!(
+                            "unknown unit '{}' on column '{}'; values kept as written",
+                            units[i], names[i]
+                        ),
                     });
                 }
                 (units[i].clone(), 1.0, 0.0, None)
@@ -398,11 +446,19 @@ pub(crate) fn build(mut raw: RawTable, opts: &ReadOptions, provenance: Provenanc
         Some(k) => (k, "set by --kind".to_string()),
         None => kind_from_text(&texts)
             .or_else(|| kind_from_channels(&dims, c, r))
-            .unwrap_or((TestKind::Unknown, "neither the metadata nor the channels say which test this is".into())),
+            .unwrap_or((
+                TestKind::Unknown,
+                "neither the metadata nor the channels say which test this is".into(),
+            )),
     };
     let (specimen, notes) = specimen_from_metadata(&raw.metadata);
     for m in notes {
-        warnings.push(Diagnostic { file: source.clone(), line: None, column: None, message: m });
+        warnings.push(Diagnostic {
+            file: source.clone(),
+            line: None,
+            column: None,
+            message: m,
+        });
     }
 
     let data = to_frame(&names, columns, &source)?;
@@ -421,7 +477,11 @@ pub(crate) fn build(mut raw: RawTable, opts: &ReadOptions, provenance: Provenanc
 }
 
 /// Moves the columns into a DataFrame without copying; NaN becomes null.
-fn to_frame(names: &[String], columns: Vec<Vec<f64>>, source: &str) -> Result<DataFrame, IngestError> {
+fn to_frame(
+    names: &[String],
+    columns: Vec<Vec<f64>>,
+    source: &str,
+) -> Result<DataFrame, IngestError> {
     let height = columns.first().map_or(0, |c| c.len());
     let mut cols = Vec::with_capacity(columns.len());
     for (name, vals) in names.iter().zip(columns) {
@@ -431,15 +491,22 @@ fn to_frame(names: &[String], columns: Vec<Vec<f64>>, source: &str) -> Result<Da
             for (i, v) in vals.iter().enumerate() {
                 bits[i >> 3] |= ((!v.is_nan()) as u8) << (i & 7);
             }
-            let bm = polars_arrow::bitmap::Bitmap::try_new(bits, len)
-                .map_err(|e| IngestError::Table { file: source.into(), detail: e.to_string() })?;
+            let bm = polars_arrow::bitmap::Bitmap::try_new(bits, len).map_err(|e| {
+                IngestError::Table {
+                    file: source.into(),
+                    detail: e.to_string(),
+                }
+            })?;
             Float64Chunked::from_vec_validity(name.as_str().into(), vals, Some(bm))
         } else {
             Float64Chunked::from_vec(name.as_str().into(), vals)
         };
         cols.push(ca.into_series().into_column());
     }
-    DataFrame::new(height, cols).map_err(|e| IngestError::Table { file: source.into(), detail: e.to_string() })
+    DataFrame::new(height, cols).map_err(|e| IngestError::Table {
+        file: source.into(),
+        detail: e.to_string(),
+    })
 }
 
 impl TestRecord {
@@ -490,7 +557,8 @@ impl TestRecord {
             .map(|i| {
                 let ch = &self.channels[i];
                 let v = self.values(i).unwrap_or_default();
-                let at = |r: Option<usize>| r.and_then(|r| v.get(r).copied()).filter(|x| !x.is_nan());
+                let at =
+                    |r: Option<usize>| r.and_then(|r| v.get(r).copied()).filter(|x| !x.is_nan());
                 let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
                 for &x in &v {
                     if !x.is_nan() {
@@ -498,13 +566,20 @@ impl TestRecord {
                         hi = hi.max(x);
                     }
                 }
-                let (min, max) = if lo <= hi { (Some(lo), Some(hi)) } else { (None, None) };
+                let (min, max) = if lo <= hi {
+                    (Some(lo), Some(hi))
+                } else {
+                    (None, None)
+                };
                 let first = at(first_row);
                 let last = at(last_row);
                 let why = if min.is_none() {
                     Some("the channel has no numeric value".to_string())
                 } else if first.is_none() || last.is_none() {
-                    Some("no complete row (time, control and response all numbers) has a value here".to_string())
+                    Some(
+                        "no complete row (time, control and response all numbers) has a value here"
+                            .to_string(),
+                    )
                 } else {
                     None
                 };
@@ -536,7 +611,10 @@ impl TestRecord {
     pub fn write_parquet(&self, path: &Path) -> Result<(), IngestError> {
         let mut df = self.data.clone();
         atomic_write(path, |f| {
-            polars_io::prelude::ParquetWriter::new(f).finish(&mut df).map(|_| ()).map_err(|e| e.to_string())
+            polars_io::prelude::ParquetWriter::new(f)
+                .finish(&mut df)
+                .map(|_| ())
+                .map_err(|e| e.to_string())
         })
     }
 
@@ -546,14 +624,23 @@ impl TestRecord {
         let mut df = self.data.clone();
         atomic_write(path, |f| {
             let mut w = std::io::BufWriter::new(f);
-            polars_io::prelude::CsvWriter::new(&mut w).include_header(true).finish(&mut df).map_err(|e| e.to_string())?;
+            polars_io::prelude::CsvWriter::new(&mut w)
+                .include_header(true)
+                .finish(&mut df)
+                .map_err(|e| e.to_string())?;
             w.flush().map_err(|e| e.to_string())
         })
     }
 }
 
-fn atomic_write(path: &Path, write: impl FnOnce(&mut std::fs::File) -> Result<(), String>) -> Result<(), IngestError> {
-    let err = |detail: String| IngestError::Write { path: PathBuf::from(path), detail };
+fn atomic_write(
+    path: &Path,
+    write: impl FnOnce(&mut std::fs::File) -> Result<(), String>,
+) -> Result<(), IngestError> {
+    let err = |detail: String| IngestError::Write {
+        path: PathBuf::from(path),
+        detail,
+    };
     let dir = match path.parent() {
         Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
         _ => PathBuf::from("."),
@@ -562,7 +649,12 @@ fn atomic_write(path: &Path, write: impl FnOnce(&mut std::fs::File) -> Result<()
         .prefix(".cablab-")
         .suffix(".part")
         .tempfile_in(&dir)
-        .map_err(|e| err(format!("cannot create a temporary file in {}: {e}", dir.display())))?;
+        .map_err(|e| {
+            err(format!(
+                "cannot create a temporary file in {}: {e}",
+                dir.display()
+            ))
+        })?;
     write(tmp.as_file_mut()).map_err(err)?;
     tmp.as_file().sync_all().map_err(|e| err(e.to_string()))?;
     tmp.persist(path).map_err(|e| err(e.error.to_string()))?;

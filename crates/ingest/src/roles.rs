@@ -18,23 +18,98 @@ fn has(name: &str, words: &[&str]) -> bool {
     words.iter().any(|w| name.contains(w))
 }
 
-const TIME_WORDS: &[&str] = &["time", "zeit", "tiempo", "tempo", "temps", "durée", "duration", "dauer"];
-const NOT_TIME: &[&str] = &["tageszeit", "uhrzeit", "datum", "date", "fecha", "time of day", "timestamp", "zeitstempel"];
-const TIME_PENALTY: &[&str] = &["cycle", "zyklus", "ciclo", "step", "segment", "schritt", "elapsed", "hold", "halte"];
-const FORCE_WORDS: &[&str] = &["force", "load", "kraft", "fuerza", "forza", "carico", "charge", "belastung"];
-const TORQUE_WORDS: &[&str] = &["torque", "moment", "drehmoment", "momento", "couple", "torsionsmoment"];
-const SETPOINT: &[&str] = &["soll", "setpoint", "set point", "command", "cmd", "target", "demand", "consigna", "riferimento"];
+const TIME_WORDS: &[&str] = &[
+    "time", "zeit", "tiempo", "tempo", "temps", "durée", "duration", "dauer",
+];
+const NOT_TIME: &[&str] = &[
+    "tageszeit",
+    "uhrzeit",
+    "datum",
+    "date",
+    "fecha",
+    "time of day",
+    "timestamp",
+    "zeitstempel",
+];
+const TIME_PENALTY: &[&str] = &[
+    "cycle", "zyklus", "ciclo", "step", "segment", "schritt", "elapsed", "hold", "halte",
+];
+const FORCE_WORDS: &[&str] = &[
+    "force",
+    "load",
+    "kraft",
+    "fuerza",
+    "forza",
+    "carico",
+    "charge",
+    "belastung",
+];
+const TORQUE_WORDS: &[&str] = &[
+    "torque",
+    "moment",
+    "drehmoment",
+    "momento",
+    "couple",
+    "torsionsmoment",
+];
+const SETPOINT: &[&str] = &[
+    "soll",
+    "setpoint",
+    "set point",
+    "command",
+    "cmd",
+    "target",
+    "demand",
+    "consigna",
+    "riferimento",
+];
 const LENGTH_WORDS: &[&str] = &[
-    "displacement", "extension", "position", "weg", "desplazamiento", "spostamento", "deflection",
-    "durchbiegung", "flecha", "freccia", "stroke", "crosshead", "elongation", "verlängerung",
-    "déplacement", "posizione", "posición", "travel",
+    "displacement",
+    "extension",
+    "position",
+    "weg",
+    "desplazamiento",
+    "spostamento",
+    "deflection",
+    "durchbiegung",
+    "flecha",
+    "freccia",
+    "stroke",
+    "crosshead",
+    "elongation",
+    "verlängerung",
+    "déplacement",
+    "posizione",
+    "posición",
+    "travel",
 ];
 const ANGLE_WORDS: &[&str] = &[
-    "rotation", "angle", "winkel", "drehwinkel", "ángulo", "angulo", "angolo", "twist", "verdrehung",
-    "giro", "rotazione", "rotación", "verdrillung", "torsionswinkel",
+    "rotation",
+    "angle",
+    "winkel",
+    "drehwinkel",
+    "ángulo",
+    "angulo",
+    "angolo",
+    "twist",
+    "verdrehung",
+    "giro",
+    "rotazione",
+    "rotación",
+    "verdrillung",
+    "torsionswinkel",
 ];
 const CURVATURE_WORDS: &[&str] = &["curvature", "krümmung", "curvatura", "courbure"];
-const CONTROL_PENALTY: &[&str] = &["strain", "dehnung", "breite", "width", "deformación", "deformazione", "stress", "spannung"];
+const CONTROL_PENALTY: &[&str] = &[
+    "strain",
+    "dehnung",
+    "breite",
+    "width",
+    "deformación",
+    "deformazione",
+    "stress",
+    "spannung",
+];
 
 /// Best index by score (ties: first), among candidates with a score.
 fn best(scores: impl Iterator<Item = (usize, Option<i32>)>, taken: &[usize]) -> Option<usize> {
@@ -74,7 +149,11 @@ fn time_score(c: &ChannelFacts) -> Option<i32> {
 
 fn response_score(c: &ChannelFacts, torque: bool) -> Option<i32> {
     let n = c.name.to_lowercase();
-    let (dim, words) = if torque { (Dimension::Torque, TORQUE_WORDS) } else { (Dimension::Force, FORCE_WORDS) };
+    let (dim, words) = if torque {
+        (Dimension::Torque, TORQUE_WORDS)
+    } else {
+        (Dimension::Force, FORCE_WORDS)
+    };
     let dim_ok = c.dimension == Some(dim);
     let word = has(&n, words);
     if !(dim_ok || (word && c.dimension.is_none())) {
@@ -134,16 +213,48 @@ pub(crate) fn assign_roles(
     fixed_control: Option<usize>,
     fixed_response: Option<usize>,
 ) -> (Option<usize>, Option<usize>, Option<usize>) {
-    let mut taken: Vec<usize> = [fixed_time, fixed_control, fixed_response].into_iter().flatten().collect();
-    let time = fixed_time.or_else(|| best(ch.iter().enumerate().map(|(i, c)| (i, time_score(c))), &taken));
+    let mut taken: Vec<usize> = [fixed_time, fixed_control, fixed_response]
+        .into_iter()
+        .flatten()
+        .collect();
+    let time = fixed_time.or_else(|| {
+        best(
+            ch.iter().enumerate().map(|(i, c)| (i, time_score(c))),
+            &taken,
+        )
+    });
     if let Some(t) = time {
         taken.push(t);
     }
-    let torque_resp = best(ch.iter().enumerate().map(|(i, c)| (i, response_score(c, true))), &taken);
-    let force_resp = best(ch.iter().enumerate().map(|(i, c)| (i, response_score(c, false))), &taken);
-    let ctl = |dim: Dimension, taken: &[usize]| best(ch.iter().enumerate().map(|(i, c)| (i, control_score(c, dim))), taken);
+    let torque_resp = best(
+        ch.iter()
+            .enumerate()
+            .map(|(i, c)| (i, response_score(c, true))),
+        &taken,
+    );
+    let force_resp = best(
+        ch.iter()
+            .enumerate()
+            .map(|(i, c)| (i, response_score(c, false))),
+        &taken,
+    );
+    let ctl = |dim: Dimension, taken: &[usize]| {
+        best(
+            ch.iter()
+                .enumerate()
+                .map(|(i, c)| (i, control_score(c, dim))),
+            taken,
+        )
+    };
 
-    let response = fixed_response.or(torque_resp.filter(|_| ctl(Dimension::Angle, &taken).or(ctl(Dimension::Curvature, &taken)).is_some()).or(force_resp).or(torque_resp));
+    let response = fixed_response.or(torque_resp
+        .filter(|_| {
+            ctl(Dimension::Angle, &taken)
+                .or(ctl(Dimension::Curvature, &taken))
+                .is_some()
+        })
+        .or(force_resp)
+        .or(torque_resp));
     if let Some(r) = response {
         if !taken.contains(&r) {
             taken.push(r);
@@ -151,8 +262,11 @@ pub(crate) fn assign_roles(
     }
     let control = fixed_control.or_else(|| {
         let rdim = response.and_then(|r| ch[r].dimension);
-        let rname = response.map(|r| ch[r].name.to_lowercase()).unwrap_or_default();
-        let torque_like = rdim == Some(Dimension::Torque) || (rdim.is_none() && has(&rname, TORQUE_WORDS));
+        let rname = response
+            .map(|r| ch[r].name.to_lowercase())
+            .unwrap_or_default();
+        let torque_like =
+            rdim == Some(Dimension::Torque) || (rdim.is_none() && has(&rname, TORQUE_WORDS));
         if torque_like {
             ctl(Dimension::Angle, &taken).or_else(|| ctl(Dimension::Curvature, &taken))
         } else {
@@ -163,7 +277,12 @@ pub(crate) fn assign_roles(
 }
 
 /// The role of each column from the chosen indices.
-pub(crate) fn roles_of(n: usize, t: Option<usize>, c: Option<usize>, r: Option<usize>) -> Vec<Role> {
+pub(crate) fn roles_of(
+    n: usize,
+    t: Option<usize>,
+    c: Option<usize>,
+    r: Option<usize>,
+) -> Vec<Role> {
     (0..n)
         .map(|i| {
             if Some(i) == t {
@@ -182,13 +301,57 @@ pub(crate) fn roles_of(n: usize, t: Option<usize>, c: Option<usize>, r: Option<u
 /// Test kind from metadata text (keys, values, block titles) where it names exactly one kind.
 pub(crate) fn kind_from_text(texts: &[&str]) -> Option<(TestKind, String)> {
     let table: &[(TestKind, &[&str])] = &[
-        (TestKind::Tension, &["tension", "tensile", "zugversuch", "zugprüfung", "tracción", "traccion", "trazione", "traction"]),
-        (TestKind::Torsion, &["torsion test", "torsionsversuch", "torsión", "torsione", "torsion"]),
+        (
+            TestKind::Tension,
+            &[
+                "tension",
+                "tensile",
+                "zugversuch",
+                "zugprüfung",
+                "tracción",
+                "traccion",
+                "trazione",
+                "traction",
+            ],
+        ),
+        (
+            TestKind::Torsion,
+            &[
+                "torsion test",
+                "torsionsversuch",
+                "torsión",
+                "torsione",
+                "torsion",
+            ],
+        ),
         (
             TestKind::ThreePoint,
-            &["three-point", "three point", "3-point", "3 point", "3pb", "dreipunkt", "3-punkt", "tres puntos", "tre punti", "flexion 3 points"],
+            &[
+                "three-point",
+                "three point",
+                "3-point",
+                "3 point",
+                "3pb",
+                "dreipunkt",
+                "3-punkt",
+                "tres puntos",
+                "tre punti",
+                "flexion 3 points",
+            ],
         ),
-        (TestKind::PureBending, &["pure bending", "reine biegung", "flexión pura", "flessione pura", "four-point", "four point", "4-point", "vierpunkt"]),
+        (
+            TestKind::PureBending,
+            &[
+                "pure bending",
+                "reine biegung",
+                "flexión pura",
+                "flessione pura",
+                "four-point",
+                "four point",
+                "4-point",
+                "vierpunkt",
+            ],
+        ),
     ];
     let mut found: Vec<(TestKind, String)> = Vec::new();
     for t in texts {
@@ -210,15 +373,22 @@ pub(crate) fn kind_from_text(texts: &[&str]) -> Option<(TestKind, String)> {
 
 /// Test kind from the channel dimensions, where they leave no doubt: torque against angle with no
 /// force channel is torsion; moment against curvature is pure bending.
-pub(crate) fn kind_from_channels(dims: &[Option<Dimension>], control: Option<usize>, response: Option<usize>) -> Option<(TestKind, String)> {
+pub(crate) fn kind_from_channels(
+    dims: &[Option<Dimension>],
+    control: Option<usize>,
+    response: Option<usize>,
+) -> Option<(TestKind, String)> {
     let rd = response.and_then(|r| dims[r]);
     let cd = control.and_then(|c| dims[c]);
     let any_force = dims.contains(&Some(Dimension::Force));
     match (cd, rd) {
-        (Some(Dimension::Angle), Some(Dimension::Torque)) if !any_force => {
-            Some((TestKind::Torsion, "torque against twist angle, no force channel".into()))
+        (Some(Dimension::Angle), Some(Dimension::Torque)) if !any_force => Some((
+            TestKind::Torsion,
+            "torque against twist angle, no force channel".into(),
+        )),
+        (Some(Dimension::Curvature), Some(Dimension::Torque)) => {
+            Some((TestKind::PureBending, "moment against curvature".into()))
         }
-        (Some(Dimension::Curvature), Some(Dimension::Torque)) => Some((TestKind::PureBending, "moment against curvature".into())),
         _ => None,
     }
 }
@@ -244,7 +414,10 @@ fn length_m(key: &str, value: &str) -> Option<(f64, bool)> {
     let mut parts = value.split_whitespace();
     let num = parts.next()?;
     let v: f64 = num.replace(',', ".").parse().ok()?;
-    let unit = parts.next().map(|s| s.to_string()).or_else(|| key_unit(key));
+    let unit = parts
+        .next()
+        .map(|s| s.to_string())
+        .or_else(|| key_unit(key));
     match unit {
         Some(u) => {
             let info = lookup(&u)?;
@@ -255,14 +428,56 @@ fn length_m(key: &str, value: &str) -> Option<(f64, bool)> {
 }
 
 /// Specimen label, diameter and free length (or span) from metadata; warnings for assumed units.
-pub(crate) fn specimen_from_metadata(meta: &[(String, String)]) -> (cablab_core::Specimen, Vec<String>) {
+pub(crate) fn specimen_from_metadata(
+    meta: &[(String, String)],
+) -> (cablab_core::Specimen, Vec<String>) {
     let mut sp = cablab_core::Specimen::default();
     let mut notes = Vec::new();
-    let label_keys = ["specimen name", "specimen id", "specimen label", "specimen", "probenbezeichnung", "probenname", "probe", "probenkennung", "sample id", "sample", "probeta", "provino", "muestra"];
-    let diam_keys = ["gauge diameter", "specimen diameter", "diameter", "durchmesser", "diámetro", "diametro", "d0"];
+    let label_keys = [
+        "specimen name",
+        "specimen id",
+        "specimen label",
+        "specimen",
+        "probenbezeichnung",
+        "probenname",
+        "probe",
+        "probenkennung",
+        "sample id",
+        "sample",
+        "probeta",
+        "provino",
+        "muestra",
+    ];
+    let diam_keys = [
+        "gauge diameter",
+        "specimen diameter",
+        "diameter",
+        "durchmesser",
+        "diámetro",
+        "diametro",
+        "d0",
+    ];
     let len_keys: [&[&str]; 3] = [
-        &["free length", "freie länge", "clamp length", "einspannlänge", "versuchslänge", "test length", "support span", "span", "stützweite", "auflagerabstand", "luz", "distanza appoggi"],
-        &["gauge length", "messlänge", "parallel length", "longitud calibrada"],
+        &[
+            "free length",
+            "freie länge",
+            "clamp length",
+            "einspannlänge",
+            "versuchslänge",
+            "test length",
+            "support span",
+            "span",
+            "stützweite",
+            "auflagerabstand",
+            "luz",
+            "distanza appoggi",
+        ],
+        &[
+            "gauge length",
+            "messlänge",
+            "parallel length",
+            "longitud calibrada",
+        ],
         &["length", "länge", "longitud", "lunghezza"],
     ];
     let find = |keys: &[&str]| -> Option<(String, String)> {
@@ -271,7 +486,10 @@ pub(crate) fn specimen_from_metadata(meta: &[(String, String)]) -> (cablab_core:
                 let nk = norm_key(key);
                 nk == *k || nk.starts_with(&format!("{k} "))
             };
-            if let Some((key, v)) = meta.iter().find(|(key, v)| !v.trim().is_empty() && matches(key)) {
+            if let Some((key, v)) = meta
+                .iter()
+                .find(|(key, v)| !v.trim().is_empty() && matches(key))
+            {
                 return Some((key.clone(), v.clone()));
             }
         }
@@ -284,7 +502,9 @@ pub(crate) fn specimen_from_metadata(meta: &[(String, String)]) -> (cablab_core:
         if let Some((d, assumed)) = length_m(&k, &v) {
             sp.diameter_m = Some(d);
             if assumed {
-                notes.push(format!("specimen diameter from '{k}: {v}' has no unit; mm assumed"));
+                notes.push(format!(
+                    "specimen diameter from '{k}: {v}' has no unit; mm assumed"
+                ));
             }
         }
     }
@@ -293,7 +513,9 @@ pub(crate) fn specimen_from_metadata(meta: &[(String, String)]) -> (cablab_core:
             if let Some((l, assumed)) = length_m(&k, &v) {
                 sp.free_length_m = Some(l);
                 if assumed {
-                    notes.push(format!("specimen length from '{k}: {v}' has no unit; mm assumed"));
+                    notes.push(format!(
+                        "specimen length from '{k}: {v}' has no unit; mm assumed"
+                    ));
                 }
                 break;
             }
@@ -308,44 +530,106 @@ mod tests {
 
     fn facts(cols: &[(&str, &str)]) -> Vec<ChannelFacts> {
         cols.iter()
-            .map(|(n, u)| ChannelFacts { name: n.to_string(), dimension: lookup(u).map(|i| i.dimension), unit_written: !u.is_empty() })
+            .map(|(n, u)| ChannelFacts {
+                name: n.to_string(),
+                dimension: lookup(u).map(|i| i.dimension),
+                unit_written: !u.is_empty(),
+            })
             .collect()
     }
 
     #[test]
     fn german_names() {
-        let f = facts(&[("Datum", "d"), ("Laufzeit", "s"), ("Ch 1 Kraft Sollwert", "kN"), ("Ch 1 Kraft", "kN"), ("Ch 1 Weg", "mm"), ("1944 B", "mm")]);
-        assert_eq!(assign_roles(&f, None, None, None), (Some(1), Some(4), Some(3)));
-        let f = facts(&[("Prüfzeit", "s"), ("Standardkraft", "N"), ("Traversenweg absolut", "mm"), ("Standardweg", "mm"), ("Breitenänderung", "mm"), ("Dehnung", "mm")]);
-        assert_eq!(assign_roles(&f, None, None, None), (Some(0), Some(3), Some(1)));
+        let f = facts(&[
+            ("Datum", "d"),
+            ("Laufzeit", "s"),
+            ("Ch 1 Kraft Sollwert", "kN"),
+            ("Ch 1 Kraft", "kN"),
+            ("Ch 1 Weg", "mm"),
+            ("1944 B", "mm"),
+        ]);
+        assert_eq!(
+            assign_roles(&f, None, None, None),
+            (Some(1), Some(4), Some(3))
+        );
+        let f = facts(&[
+            ("Prüfzeit", "s"),
+            ("Standardkraft", "N"),
+            ("Traversenweg absolut", "mm"),
+            ("Standardweg", "mm"),
+            ("Breitenänderung", "mm"),
+            ("Dehnung", "mm"),
+        ]);
+        assert_eq!(
+            assign_roles(&f, None, None, None),
+            (Some(0), Some(3), Some(1))
+        );
     }
 
     #[test]
     fn spanish_italian_and_no_units() {
-        let f = facts(&[("Tiempo", "Sec"), ("Channel 1 Displacement", "mm"), ("Channel 1 Force", "kgf"), ("Channel 1 Recuento", "cycles")]);
-        assert_eq!(assign_roles(&f, None, None, None), (Some(0), Some(1), Some(2)));
+        let f = facts(&[
+            ("Tiempo", "Sec"),
+            ("Channel 1 Displacement", "mm"),
+            ("Channel 1 Force", "kgf"),
+            ("Channel 1 Recuento", "cycles"),
+        ]);
+        assert_eq!(
+            assign_roles(&f, None, None, None),
+            (Some(0), Some(1), Some(2))
+        );
         let f = facts(&[("Tempo", ""), ("Spostamento", ""), ("Carico", "")]);
-        assert_eq!(assign_roles(&f, None, None, None), (Some(0), Some(1), Some(2)));
+        assert_eq!(
+            assign_roles(&f, None, None, None),
+            (Some(0), Some(1), Some(2))
+        );
     }
 
     #[test]
     fn torsion_pair_preferred_when_torque_and_angle() {
-        let f = facts(&[("Total Time", "s"), ("Position", "mm"), ("Force", "kN"), ("Rotation", "deg"), ("Torque", "N·m"), ("Digital Rotation", "deg")]);
-        assert_eq!(assign_roles(&f, None, None, None), (Some(0), Some(3), Some(4)));
+        let f = facts(&[
+            ("Total Time", "s"),
+            ("Position", "mm"),
+            ("Force", "kN"),
+            ("Rotation", "deg"),
+            ("Torque", "N·m"),
+            ("Digital Rotation", "deg"),
+        ]);
+        assert_eq!(
+            assign_roles(&f, None, None, None),
+            (Some(0), Some(3), Some(4))
+        );
         let dims: Vec<_> = f.iter().map(|c| c.dimension).collect();
-        assert!(kind_from_channels(&dims, Some(3), Some(4)).is_none(), "axial-torsional is not plain torsion");
+        assert!(
+            kind_from_channels(&dims, Some(3), Some(4)).is_none(),
+            "axial-torsional is not plain torsion"
+        );
         let f = facts(&[("curvature", "1/m"), ("bending_moment", "N.m")]);
         let (t, c, r) = assign_roles(&f, None, None, None);
         assert_eq!((t, c, r), (None, Some(0), Some(1)));
         let dims: Vec<_> = f.iter().map(|c| c.dimension).collect();
-        assert_eq!(kind_from_channels(&dims, c, r).unwrap().0, TestKind::PureBending);
+        assert_eq!(
+            kind_from_channels(&dims, c, r).unwrap().0,
+            TestKind::PureBending
+        );
     }
 
     #[test]
     fn kind_from_metadata_words() {
-        assert_eq!(kind_from_text(&["MTS EM Tension (Extensometer)"]).unwrap().0, TestKind::Tension);
-        assert_eq!(kind_from_text(&["Round Tensile Specimen"]).unwrap().0, TestKind::Tension);
-        assert_eq!(kind_from_text(&["Dreipunkt-Biegeversuch"]).unwrap().0, TestKind::ThreePoint);
+        assert_eq!(
+            kind_from_text(&["MTS EM Tension (Extensometer)"])
+                .unwrap()
+                .0,
+            TestKind::Tension
+        );
+        assert_eq!(
+            kind_from_text(&["Round Tensile Specimen"]).unwrap().0,
+            TestKind::Tension
+        );
+        assert_eq!(
+            kind_from_text(&["Dreipunkt-Biegeversuch"]).unwrap().0,
+            TestKind::ThreePoint
+        );
         assert!(kind_from_text(&["Kraftgeregelt 3,9 kN/s"]).is_none());
         assert!(kind_from_text(&["tension", "torsion"]).is_none());
     }
@@ -362,7 +646,10 @@ mod tests {
         assert!((s.diameter_m.unwrap() - 5.003e-3).abs() < 1e-15);
         assert!((s.free_length_m.unwrap() - 0.025).abs() < 1e-15);
         assert!(notes.is_empty());
-        let meta = vec![("Durchmesser".to_string(), "98,5".to_string()), ("Breite [mm]".into(), "150".into())];
+        let meta = vec![
+            ("Durchmesser".to_string(), "98,5".to_string()),
+            ("Breite [mm]".into(), "150".into()),
+        ];
         let (s, notes) = specimen_from_metadata(&meta);
         assert!((s.diameter_m.unwrap() - 0.0985).abs() < 1e-12);
         assert_eq!(notes.len(), 1);

@@ -8,7 +8,7 @@
 
 use crate::error::{Diagnostic, IngestError};
 use crate::format::{is_mts_locale_line, mts_locale_decimal, shorten, Format};
-use crate::tokenize::{cell_text_raw, numeric_any, parse_cell, split, Cell, Separator};
+use crate::tokenize::{cell_text_raw, find_byte, numeric_any, parse_cell, split, Cell, Separator};
 use crate::units::looks_like_unit;
 
 /// One data block as read: raw header cells, raw values (not yet SI).
@@ -85,9 +85,15 @@ struct Engine<'a> {
 }
 
 /// Reads every block of a delimited text.
-pub(crate) fn read_table(text: &str, format: Format, source: &str) -> Result<RawTable, IngestError> {
+pub(crate) fn read_table(
+    text: &str,
+    format: Format,
+    source: &str,
+) -> Result<RawTable, IngestError> {
     let bytes = text.as_bytes();
-    let eol = if memchr::memchr(b'\n', &bytes[..bytes.len().min(1 << 16)]).is_none() && bytes.contains(&b'\r') {
+    let eol = if memchr::memchr(b'\n', &bytes[..bytes.len().min(1 << 16)]).is_none()
+        && bytes.contains(&b'\r')
+    {
         b'\r'
     } else {
         b'\n'
@@ -95,7 +101,10 @@ pub(crate) fn read_table(text: &str, format: Format, source: &str) -> Result<Raw
     let sample = sample_lines(bytes, eol, 400);
     let sep = detect_separator(&sample);
     let mut dec = detect_decimal(&sample, sep);
-    let first_line = sample.first().map(|l| String::from_utf8_lossy(l).into_owned()).unwrap_or_default();
+    let first_line = sample
+        .first()
+        .map(|l| String::from_utf8_lossy(l).into_owned())
+        .unwrap_or_default();
     if is_mts_locale_line(&first_line) {
         if let Some(d) = mts_locale_decimal(&first_line) {
             dec = d;
@@ -109,7 +118,11 @@ pub(crate) fn read_table(text: &str, format: Format, source: &str) -> Result<Raw
         dec,
         cells: Vec::with_capacity(64),
         pending: Vec::new(),
-        out: RawTable { separator: Some(sep), decimal: dec, ..Default::default() },
+        out: RawTable {
+            separator: Some(sep),
+            decimal: dec,
+            ..Default::default()
+        },
         open: None,
         blank_in_table: false,
         orphan_first: None,
@@ -137,7 +150,12 @@ fn sample_lines(bytes: &[u8], eol: u8, n: usize) -> Vec<&[u8]> {
 fn detect_separator(lines: &[&[u8]]) -> Separator {
     let mut best = (0usize, Separator::Tab);
     let mut cells = Vec::new();
-    for sep in [Separator::Tab, Separator::Semicolon, Separator::Comma, Separator::Space] {
+    for sep in [
+        Separator::Tab,
+        Separator::Semicolon,
+        Separator::Comma,
+        Separator::Space,
+    ] {
         let mut counts: Vec<(usize, usize)> = Vec::new();
         for line in lines {
             split(line, sep, &mut cells);
@@ -169,9 +187,17 @@ fn detect_separator(lines: &[&[u8]]) -> Separator {
         return best.1;
     }
     // No numeric line: the most frequent separator character of the first non-empty line.
-    let first = lines.iter().find(|l| !l.iter().all(|&b| b == b' ')).copied().unwrap_or(b"");
+    let first = lines
+        .iter()
+        .find(|l| !l.iter().all(|&b| b == b' '))
+        .copied()
+        .unwrap_or(b"");
     let count = |b: u8| first.iter().filter(|&&x| x == b).count();
-    let mut c = [(count(b'\t'), Separator::Tab), (count(b';'), Separator::Semicolon), (count(b','), Separator::Comma)];
+    let mut c = [
+        (count(b'\t'), Separator::Tab),
+        (count(b';'), Separator::Semicolon),
+        (count(b','), Separator::Comma),
+    ];
     c.sort_by(|a, b| b.0.cmp(&a.0));
     if c[0].0 > 0 {
         c[0].1
@@ -192,7 +218,8 @@ fn detect_decimal(lines: &[&[u8]], sep: Separator) -> u8 {
             }
             let last_dot = c.iter().rposition(|&x| x == b'.');
             let last_comma = c.iter().rposition(|&x| x == b',');
-            let digits_after = |p: usize| c[p + 1..].iter().take_while(|x| x.is_ascii_digit()).count();
+            let digits_after =
+                |p: usize| c[p + 1..].iter().take_while(|x| x.is_ascii_digit()).count();
             match (last_dot, last_comma) {
                 (Some(d), Some(k)) => {
                     if d > k {
@@ -230,7 +257,7 @@ impl<'a> Engine<'a> {
         let mut pos = 0usize;
         let mut line_no = 0usize;
         while pos < bytes.len() {
-            let end = memchr::memchr(eol, &bytes[pos..]).map_or(bytes.len(), |p| pos + p);
+            let end = find_byte(eol, &bytes[pos..]).map_or(bytes.len(), |p| pos + p);
             let mut lend = end;
             if lend > pos && bytes[lend - 1] == b'\r' {
                 lend -= 1;
@@ -245,7 +272,9 @@ impl<'a> Engine<'a> {
 
     fn line(&mut self, start: usize, end: usize, line_no: usize) {
         let line = &self.text[start..end];
-        let blank = line.iter().all(|&b| b == b' ' || b == b'\t' || b == b'"' || b == b',' || b == b';');
+        let blank = line
+            .iter()
+            .all(|&b| b == b' ' || b == b'\t' || b == b'"' || b == b',' || b == b';');
         if self.open.is_some() {
             if blank {
                 self.blank_in_table = true;
@@ -257,7 +286,12 @@ impl<'a> Engine<'a> {
             self.close_block();
         }
         if blank {
-            self.pending.push(Pending { line_no, start, end, blank: true });
+            self.pending.push(Pending {
+                line_no,
+                start,
+                end,
+                blank: true,
+            });
             return;
         }
         // Outside a table: does a block start here?
@@ -292,13 +326,21 @@ impl<'a> Engine<'a> {
             self.orphans += 1;
             self.orphan_first.get_or_insert(line_no);
         }
-        self.pending.push(Pending { line_no, start, end, blank: false });
+        self.pending.push(Pending {
+            line_no,
+            start,
+            end,
+            blank: false,
+        });
     }
 
     fn cells_of(&mut self, p: Pending) -> Vec<String> {
         let line = &self.text[p.start..p.end];
         split(line, self.sep, &mut self.cells);
-        self.cells.iter().map(|&sp| cell_text_raw(line, sp)).collect()
+        self.cells
+            .iter()
+            .map(|&sp| cell_text_raw(line, sp))
+            .collect()
     }
 
     /// Looks for the names row (and units row) just above a first data row.
@@ -316,7 +358,9 @@ impl<'a> Engine<'a> {
             let last = self.cells_of(self.pending[k - 1]);
             let is_units = last.iter().any(|c| !c.trim().is_empty())
                 && last.iter().all(|c| looks_like_unit(c))
-                && !last.iter().all(|c| c.trim().is_empty() || numeric_any(c.as_bytes()));
+                && !last
+                    .iter()
+                    .all(|c| c.trim().is_empty() || numeric_any(c.as_bytes()));
             let mut found = None;
             if is_units && k >= 2 && !self.pending[k - 2].blank {
                 let names = self.cells_of(self.pending[k - 2]);
@@ -353,7 +397,11 @@ impl<'a> Engine<'a> {
         };
         let title = title_idx.map(|i| {
             let c = self.cells_of(above[i]);
-            c.iter().map(|s| s.trim()).filter(|s| !s.is_empty()).collect::<Vec<_>>().join(" ")
+            c.iter()
+                .map(|s| s.trim())
+                .filter(|s| !s.is_empty())
+                .collect::<Vec<_>>()
+                .join(" ")
         });
         for p in above.iter().filter(|p| !p.blank) {
             let cells = self.cells_of(*p);
@@ -391,8 +439,15 @@ impl<'a> Engine<'a> {
                 continue;
             }
             let c = self.cells_of(self.pending[i]);
-            let key = c.first().map(|s| s.trim_end_matches(':').trim().to_lowercase()).unwrap_or_default();
-            if matches!(key.as_str(), "channel name" | "kanalname" | "channel" | "name") && c.len() > 1 {
+            let key = c
+                .first()
+                .map(|s| s.trim_end_matches(':').trim().to_lowercase())
+                .unwrap_or_default();
+            if matches!(
+                key.as_str(),
+                "channel name" | "kanalname" | "channel" | "name"
+            ) && c.len() > 1
+            {
                 names = Some((i, c[1..].to_vec()));
             } else if matches!(key.as_str(), "unit" | "units" | "einheit") && c.len() > 1 {
                 units = Some((i, c[1..].to_vec()));
@@ -417,11 +472,21 @@ impl<'a> Engine<'a> {
         let _ = last;
         // Re-order pending so that the generic code sees: metadata..., names, units.
         let mut new_pending = rest;
-        let names_p = Pending { line_no: names_line, start: 0, end: 0, blank: false };
+        let names_p = Pending {
+            line_no: names_line,
+            start: 0,
+            end: 0,
+            blank: false,
+        };
         new_pending.push(names_p);
         let names_idx = new_pending.len() - 1;
         let units_idx = units_line.map(|l| {
-            new_pending.push(Pending { line_no: l, start: 0, end: 0, blank: false });
+            new_pending.push(Pending {
+                line_no: l,
+                start: 0,
+                end: 0,
+                blank: false,
+            });
             new_pending.len() - 1
         });
         self.pending = new_pending;
@@ -429,7 +494,9 @@ impl<'a> Engine<'a> {
     }
 
     fn push_row(&mut self, line: &[u8], line_no: usize) -> bool {
-        let Some((block, stats)) = self.open.as_mut() else { return false };
+        let Some((block, stats)) = self.open.as_mut() else {
+            return false;
+        };
         split(line, self.sep, &mut self.cells);
         let ncols = block.columns.len();
         let (mut num, mut text, mut extra) = (0usize, 0usize, 0usize);
@@ -461,7 +528,8 @@ impl<'a> Engine<'a> {
                     col.push(f64::NAN);
                     text += 1;
                     if first_text.is_none() {
-                        first_text = Some((ci + 1, String::from_utf8_lossy(raw).trim().to_string()));
+                        first_text =
+                            Some((ci + 1, String::from_utf8_lossy(raw).trim().to_string()));
                     }
                 }
             }
@@ -504,7 +572,9 @@ impl<'a> Engine<'a> {
     }
 
     fn close_block(&mut self) {
-        let Some((block, st)) = self.open.take() else { return };
+        let Some((block, st)) = self.open.take() else {
+            return;
+        };
         let idx = self.out.blocks.len() + 1;
         let src = self.source.to_string();
         if st.short_rows > 0 {
@@ -520,7 +590,11 @@ impl<'a> Engine<'a> {
             });
         }
         if let Some((l, c, t)) = st.first_text {
-            let name = block.header_cells.get(c.saturating_sub(1)).cloned().unwrap_or_default();
+            let name = block
+                .header_cells
+                .get(c.saturating_sub(1))
+                .cloned()
+                .unwrap_or_default();
             self.out.warnings.push(Diagnostic {
                 file: src.clone(),
                 line: Some(l),
@@ -538,7 +612,10 @@ impl<'a> Engine<'a> {
                 file: src,
                 line: Some(l),
                 column: Some(c),
-                message: format!("block {idx}: {} cell(s) hold nan/sentinel values; read as missing", st.missing),
+                message: format!(
+                    "block {idx}: {} cell(s) hold nan/sentinel values; read as missing",
+                    st.missing
+                ),
             });
         }
         self.out.blocks.push(block);
@@ -557,14 +634,19 @@ impl<'a> Engine<'a> {
                 file: self.source.to_string(),
                 line: self.orphan_first,
                 column: None,
-                message: format!("{} numeric line(s) without a header row above them were ignored", self.orphans),
+                message: format!(
+                    "{} numeric line(s) without a header row above them were ignored",
+                    self.orphans
+                ),
             });
         }
         if self.out.blocks.is_empty() {
             if let Some(l) = self.orphan_first {
                 return Err(IngestError::NoData {
                     file: self.source.to_string(),
-                    detail: format!("numeric rows from line {l} on have no names row directly above them"),
+                    detail: format!(
+                        "numeric rows from line {l} on have no names row directly above them"
+                    ),
                 });
             }
             if let Some(p) = pending.iter().rev().find(|p| !p.blank) {
@@ -586,29 +668,48 @@ impl<'a> Engine<'a> {
 
 /// A names row: some non-numeric cell, and at least as many cells as the data row fills.
 fn names_ok(cells: &[String], last_nonempty: usize) -> bool {
-    let filled = cells.iter().rposition(|c| !c.trim().is_empty()).map_or(0, |p| p + 1);
-    let has_text = cells.iter().any(|c| !c.trim().is_empty() && !numeric_any(c.as_bytes()));
+    let filled = cells
+        .iter()
+        .rposition(|c| !c.trim().is_empty())
+        .map_or(0, |p| p + 1);
+    let has_text = cells
+        .iter()
+        .any(|c| !c.trim().is_empty() && !numeric_any(c.as_bytes()));
     has_text && filled >= 1 && cells.len() > last_nonempty
 }
 
 /// A metadata line as (key, value): `Key:<sep>value<sep>unit`, `Key: value`, or the MTS locale line.
 fn key_value(cells: &[String], raw: &[u8]) -> Option<(String, String)> {
-    let filled: Vec<&str> = cells.iter().map(|s| s.trim()).filter(|s| !s.is_empty()).collect();
+    let filled: Vec<&str> = cells
+        .iter()
+        .map(|s| s.trim())
+        .filter(|s| !s.is_empty())
+        .collect();
     let raw_s = String::from_utf8_lossy(raw);
     if is_mts_locale_line(&raw_s) {
-        return Some(("MTS locale".into(), raw_s.trim().trim_start_matches('\u{feff}').to_string()));
+        return Some((
+            "MTS locale".into(),
+            raw_s.trim().trim_start_matches('\u{feff}').to_string(),
+        ));
     }
     match filled.as_slice() {
         [] => None,
         [one] => {
             let one = one.trim_start_matches('\u{feff}');
             match one.find(':') {
-                Some(p) if p > 0 => Some((one[..p].trim().to_string(), one[p + 1..].trim().to_string())),
+                Some(p) if p > 0 => {
+                    Some((one[..p].trim().to_string(), one[p + 1..].trim().to_string()))
+                }
                 _ => Some((one.trim().to_string(), String::new())),
             }
         }
         [k, rest @ ..] => {
-            let key = k.trim_start_matches('\u{feff}').trim().trim_end_matches(':').trim().to_string();
+            let key = k
+                .trim_start_matches('\u{feff}')
+                .trim()
+                .trim_end_matches(':')
+                .trim()
+                .to_string();
             Some((key, rest.join(" ")))
         }
     }
@@ -624,19 +725,37 @@ mod tests {
 
     #[test]
     fn names_units_row_and_metadata() {
-        let t = read("Specimen name:\tA1\nGauge length:\t25\tmm\nTime\tForce\ns\tkN\n0\t1.5\n0.1\t2.5\n");
+        let t = read(
+            "Specimen name:\tA1\nGauge length:\t25\tmm\nTime\tForce\ns\tkN\n0\t1.5\n0.1\t2.5\n",
+        );
         assert_eq!(t.blocks.len(), 1);
         let b = &t.blocks[0];
         assert_eq!(b.header_cells, ["Time", "Force"]);
         assert_eq!(b.unit_cells, ["s", "kN"]);
-        assert_eq!((b.names_line, b.units_line, b.first_data_line, b.last_data_line), (3, Some(4), 5, 6));
+        assert_eq!(
+            (
+                b.names_line,
+                b.units_line,
+                b.first_data_line,
+                b.last_data_line
+            ),
+            (3, Some(4), 5, 6)
+        );
         assert_eq!(b.columns[1], [1.5, 2.5]);
-        assert_eq!(t.metadata, [("Specimen name".to_string(), "A1".to_string()), ("Gauge length".into(), "25 mm".into())]);
+        assert_eq!(
+            t.metadata,
+            [
+                ("Specimen name".to_string(), "A1".to_string()),
+                ("Gauge length".into(), "25 mm".into())
+            ]
+        );
     }
 
     #[test]
     fn decimal_comma_semicolon_quoted_crlf_no_final_newline() {
-        let t = read("\"Zeit\";\"Kraft\"\r\n\"sec\";\"kN\"\r\n\"0,5\";\"-7,5E-05\"\r\n\"1,5\";\"1.234,5\"");
+        let t = read(
+            "\"Zeit\";\"Kraft\"\r\n\"sec\";\"kN\"\r\n\"0,5\";\"-7,5E-05\"\r\n\"1,5\";\"1.234,5\"",
+        );
         assert_eq!(t.decimal, b',');
         assert_eq!(t.separator, Some(Separator::Semicolon));
         let b = &t.blocks[0];
@@ -677,9 +796,18 @@ mod tests {
     #[test]
     fn header_without_data_and_no_numbers_are_errors() {
         let e = read_table("Time,Force\n", Format::Delimited, "f.csv").unwrap_err();
-        assert!(matches!(e, IngestError::HeaderWithoutData { line: 1, .. }), "{e}");
+        assert!(
+            matches!(e, IngestError::HeaderWithoutData { line: 1, .. }),
+            "{e}"
+        );
         let e = read_table("hello\nworld\n", Format::Delimited, "f.csv").unwrap_err();
-        assert!(matches!(e, IngestError::HeaderWithoutData { .. } | IngestError::NoData { .. }), "{e}");
+        assert!(
+            matches!(
+                e,
+                IngestError::HeaderWithoutData { .. } | IngestError::NoData { .. }
+            ),
+            "{e}"
+        );
     }
 
     #[test]

@@ -39,6 +39,13 @@ impl Separator {
     }
 }
 
+/// Position of `b` in `hay`. A plain loop: compiled in this crate (optimised in the dev profile),
+/// and cells are short, so it beats a call into a SIMD search here.
+#[inline(always)]
+pub fn find_byte(b: u8, hay: &[u8]) -> Option<usize> {
+    hay.iter().position(|&x| x == b)
+}
+
 /// Splits `line` (no line ending) into cell spans `(start, end)` of the cell *content*: quotes
 /// removed (a doubled `""` inside stays doubled, see [`cell_text`]). A trailing separator gives a
 /// final empty cell.
@@ -60,7 +67,7 @@ pub fn split(line: &[u8], sep: Separator, out: &mut Vec<(usize, usize)>) {
             let mut k = start;
             let end;
             loop {
-                match memchr::memchr(b'"', &line[k.min(n)..]) {
+                match find_byte(b'"', &line[k.min(n)..]) {
                     None => {
                         end = n;
                         k = n;
@@ -79,12 +86,12 @@ pub fn split(line: &[u8], sep: Separator, out: &mut Vec<(usize, usize)>) {
                 }
             }
             out.push((start, end));
-            match memchr::memchr(s, &line[k.min(n)..]) {
+            match find_byte(s, &line[k.min(n)..]) {
                 Some(p) => i = k + p + 1,
                 None => return,
             }
         } else {
-            match memchr::memchr(s, &line[i..]) {
+            match find_byte(s, &line[i..]) {
                 Some(p) => {
                     out.push((i, i + p));
                     i += p + 1;
@@ -110,7 +117,7 @@ fn split_space(line: &[u8], out: &mut Vec<(usize, usize)>) {
         }
         if line[i] == b'"' {
             let start = i + 1;
-            let end = memchr::memchr(b'"', &line[start..]).map_or(n, |p| start + p);
+            let end = find_byte(b'"', &line[start..]).map_or(n, |p| start + p);
             out.push((start, end));
             i = end + 1;
         } else {
@@ -155,9 +162,35 @@ pub enum Cell {
 pub const SENTINEL_ABS: f64 = 1e30;
 
 const NA_WORDS: &[&str] = &[
-    "nan", "-nan", "+nan", "n/a", "#n/a", "na", "#nv", "null", "none", "--", "---", "-", "inf", "-inf", "+inf",
-    "infinity", "-infinity", "1.#qnan", "-1.#qnan", "1.#ind", "-1.#ind", "1.#inf", "-1.#inf", "#div/0!",
-    "#value!", "#num!", "overflow", "*", "****",
+    "nan",
+    "-nan",
+    "+nan",
+    "n/a",
+    "#n/a",
+    "na",
+    "#nv",
+    "null",
+    "none",
+    "--",
+    "---",
+    "-",
+    "inf",
+    "-inf",
+    "+inf",
+    "infinity",
+    "-infinity",
+    "1.#qnan",
+    "-1.#qnan",
+    "1.#ind",
+    "-1.#ind",
+    "1.#inf",
+    "-1.#inf",
+    "#div/0!",
+    "#value!",
+    "#num!",
+    "overflow",
+    "*",
+    "****",
 ];
 
 /// Reads one cell. `dec` is the decimal mark (`b'.'` or `b','`); the other one of the two is
@@ -174,6 +207,13 @@ pub fn parse_cell(raw: &[u8], dec: u8) -> Cell {
     if s.is_empty() {
         return Cell::Empty;
     }
+    if let Some(v) = fast_number(s, dec) {
+        return if v.abs() < SENTINEL_ABS {
+            Cell::Num(v)
+        } else {
+            Cell::Missing
+        };
+    }
     let thou = if dec == b',' { b'.' } else { b',' };
     let mut buf = [0u8; 64];
     if s.len() > buf.len() {
@@ -185,7 +225,8 @@ pub fn parse_cell(raw: &[u8], dec: u8) -> Cell {
     let mut int_closed = false; // decimal mark or exponent seen
     for &b in s {
         if b == thou {
-            if int_closed || (has_thou && digits != 3) || (!has_thou && (digits == 0 || digits > 3)) {
+            if int_closed || (has_thou && digits != 3) || (!has_thou && (digits == 0 || digits > 3))
+            {
                 return na_or_text(s);
             }
             has_thou = true;
@@ -222,6 +263,103 @@ pub fn parse_cell(raw: &[u8], dec: u8) -> Cell {
     }
 }
 
+/// Exact powers of ten representable in an f64.
+const POW10: [f64; 23] = [
+    1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15, 1e16,
+    1e17, 1e18, 1e19, 1e20, 1e21, 1e22,
+];
+
+/// Clinger's fast path, the one fast_float itself takes first: a decimal with at most 2^53 as
+/// mantissa and a power of ten within ±22 is exact in f64 on both sides, so one multiplication
+/// or division rounds correctly. Returns `None` for anything else (thousands separators, long
+/// mantissas, large exponents, words), which then goes to fast-float2. It exists because in the
+/// dev profile dependencies are compiled without optimisation and this loop is not.
+#[inline(always)]
+fn fast_number(s: &[u8], dec: u8) -> Option<f64> {
+    let n = s.len();
+    let mut i = 0;
+    let neg = match s.first()? {
+        b'-' => {
+            i = 1;
+            true
+        }
+        b'+' => {
+            i = 1;
+            false
+        }
+        _ => false,
+    };
+    let mut m: u64 = 0;
+    let mut sig = 0u32;
+    let mut digits = 0u32;
+    let mut exp: i32 = 0;
+    while i < n && s[i].is_ascii_digit() {
+        m = m * 10 + (s[i] - b'0') as u64;
+        sig += (m != 0) as u32;
+        digits += 1;
+        i += 1;
+        if sig > 19 {
+            return None;
+        }
+    }
+    if i < n && s[i] == dec {
+        i += 1;
+        while i < n && s[i].is_ascii_digit() {
+            m = m * 10 + (s[i] - b'0') as u64;
+            sig += (m != 0) as u32;
+            digits += 1;
+            exp -= 1;
+            i += 1;
+            if sig > 19 {
+                return None;
+            }
+        }
+    }
+    if digits == 0 {
+        return None;
+    }
+    if i < n && (s[i] | 0x20) == b'e' {
+        i += 1;
+        let eneg = match s.get(i) {
+            Some(b'-') => {
+                i += 1;
+                true
+            }
+            Some(b'+') => {
+                i += 1;
+                false
+            }
+            _ => false,
+        };
+        let start = i;
+        let mut e: i32 = 0;
+        while i < n && s[i].is_ascii_digit() {
+            e = (e * 10 + (s[i] - b'0') as i32).min(10_000);
+            i += 1;
+        }
+        if i == start {
+            return None;
+        }
+        exp += if eneg { -e } else { e };
+    }
+    if i != n || m > (1u64 << 53) {
+        return None;
+    }
+    let v = m as f64;
+    let v = if exp == 0 {
+        v
+    } else if (1..=22).contains(&exp) {
+        v * POW10[exp as usize]
+    } else if (-22..0).contains(&exp) {
+        v / POW10[(-exp) as usize]
+    } else if m == 0 {
+        0.0
+    } else {
+        return None;
+    };
+    Some(if neg { -v } else { v })
+}
+
 #[cold]
 fn na_or_text(s: &[u8]) -> Cell {
     let t = String::from_utf8_lossy(s).to_ascii_lowercase();
@@ -250,17 +388,32 @@ mod tests {
     #[test]
     fn splits_separators_quotes_trailing() {
         assert_eq!(cells("a\tb\t\tc", Separator::Tab), ["a", "b", "", "c"]);
-        assert_eq!(cells("\"Zeit \";\"Kraft\";\"1,5\"", Separator::Semicolon), ["Zeit", "Kraft", "1,5"]);
-        assert_eq!(cells("\"1,234.5\",2,", Separator::Comma), ["1,234.5", "2", ""]);
-        assert_eq!(cells("  1.5   2.5  -3 ", Separator::Space), ["1.5", "2.5", "-3"]);
-        assert_eq!(cells("\"say \"\"hi\"\"\",x", Separator::Comma), ["say \"hi\"", "x"]);
+        assert_eq!(
+            cells("\"Zeit \";\"Kraft\";\"1,5\"", Separator::Semicolon),
+            ["Zeit", "Kraft", "1,5"]
+        );
+        assert_eq!(
+            cells("\"1,234.5\",2,", Separator::Comma),
+            ["1,234.5", "2", ""]
+        );
+        assert_eq!(
+            cells("  1.5   2.5  -3 ", Separator::Space),
+            ["1.5", "2.5", "-3"]
+        );
+        assert_eq!(
+            cells("\"say \"\"hi\"\"\",x", Separator::Comma),
+            ["say \"hi\"", "x"]
+        );
         assert_eq!(cells("\"unbalanced,x", Separator::Comma), ["unbalanced,x"]);
         assert_eq!(cells("", Separator::Comma), [""]);
     }
 
     #[test]
     fn numbers_with_decimal_comma_exponents_thousands() {
-        assert_eq!(parse_cell(b"-7,89761571695635E-05", b','), Cell::Num(-7.89761571695635e-5));
+        assert_eq!(
+            parse_cell(b"-7,89761571695635E-05", b','),
+            Cell::Num(-7.89761571695635e-5)
+        );
         assert_eq!(parse_cell(b"33,549805", b','), Cell::Num(33.549805));
         assert_eq!(parse_cell(b"1.234,5", b','), Cell::Num(1234.5));
         assert_eq!(parse_cell(b"1,234.5", b'.'), Cell::Num(1234.5));
@@ -277,6 +430,60 @@ mod tests {
         assert_eq!(parse_cell(b"12,34.5", b'.'), Cell::Text);
         assert_eq!(parse_cell(b"abc", b'.'), Cell::Text);
         assert_eq!(parse_cell(b"1.2.3", b'.'), Cell::Text);
+    }
+
+    #[test]
+    fn fast_path_agrees_with_fast_float() {
+        // Every number a fast path would take, and some it must not, against fast-float2.
+        let mut cases: Vec<String> = vec![
+            "0".into(),
+            "-0.0".into(),
+            "1.".into(),
+            ".5".into(),
+            "9007199254740992".into(),
+            "9007199254740993".into(),
+            "0.0007143817674338952".into(),
+            "2.857527069735581e-05".into(),
+            "-7.89761571695635E-05".into(),
+            "123456789012345678901".into(),
+            "1e22".into(),
+            "1e23".into(),
+            "4.9e-324".into(),
+            "1.7976931348623157e308".into(),
+            "0.1".into(),
+            "0.2".into(),
+            "0.30000000000000004".into(),
+            "+3.25E+2".into(),
+        ];
+        let mut x: u64 = 0x9E3779B97F4A7C15;
+        for _ in 0..20_000 {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            let mant = x % 100_000_000_000_000_000;
+            let e = (x >> 40) as i32 % 30 - 15;
+            let dot = (x >> 20) as usize % 18;
+            let mut m = mant.to_string();
+            if dot < m.len() {
+                m.insert(dot, '.');
+            }
+            cases.push(format!("{}{m}e{e}", if x & 1 == 1 { "-" } else { "" }));
+            cases.push(format!("{m}"));
+        }
+        for c in &cases {
+            let want: f64 = fast_float2::parse(c.as_bytes()).unwrap();
+            if let Some(got) = fast_number(c.as_bytes(), b'.') {
+                assert_eq!(got.to_bits(), want.to_bits(), "{c}");
+            }
+            let comma = c.replace('.', ",");
+            if let Some(got) = fast_number(comma.as_bytes(), b',') {
+                assert_eq!(got.to_bits(), want.to_bits(), "{comma}");
+            }
+        }
+        assert!(fast_number(b"1,234.5", b'.').is_none());
+        assert!(fast_number(b"abc", b'.').is_none());
+        assert!(fast_number(b"1e", b'.').is_none());
+        assert!(fast_number(b"-", b'.').is_none());
     }
 
     #[test]

@@ -60,24 +60,66 @@ const KGF_N: f64 = 9.806_65;
 const DEG_RAD: f64 = std::f64::consts::PI / 180.0;
 
 /// (spellings, dimension, si unit, factor, offset, case-insensitive?)
-type Row = (&'static [&'static str], Dimension, &'static str, f64, f64, bool);
+type Row = (
+    &'static [&'static str],
+    Dimension,
+    &'static str,
+    f64,
+    f64,
+    bool,
+);
 
 use Dimension as D;
 
 /// The table. Product units are listed in their normalised form (`·`), see [`normalise`].
 static TABLE: &[Row] = &[
     // time
-    (&["s", "sec", "secs", "second", "seconds", "seg", "sek"], D::Time, "s", 1.0, 0.0, true),
+    (
+        &["s", "sec", "secs", "second", "seconds", "seg", "sek"],
+        D::Time,
+        "s",
+        1.0,
+        0.0,
+        true,
+    ),
     (&["ms", "msec"], D::Time, "s", 1e-3, 0.0, true),
-    (&["min", "mins", "minute", "minutes"], D::Time, "s", 60.0, 0.0, true),
-    (&["h", "hr", "hrs", "hour", "hours"], D::Time, "s", 3600.0, 0.0, true),
+    (
+        &["min", "mins", "minute", "minutes"],
+        D::Time,
+        "s",
+        60.0,
+        0.0,
+        true,
+    ),
+    (
+        &["h", "hr", "hrs", "hour", "hours"],
+        D::Time,
+        "s",
+        3600.0,
+        0.0,
+        true,
+    ),
     (&["d", "day", "days"], D::Time, "s", 86400.0, 0.0, false),
     // length
     (&["m"], D::Length, "m", 1.0, 0.0, false),
     (&["mm"], D::Length, "m", 1e-3, 0.0, true),
     (&["cm"], D::Length, "m", 1e-2, 0.0, true),
-    (&["µm", "μm", "um", "micron", "microns"], D::Length, "m", 1e-6, 0.0, false),
-    (&["in", "inch", "inches", "\""], D::Length, "m", IN_M, 0.0, true),
+    (
+        &["µm", "μm", "um", "micron", "microns"],
+        D::Length,
+        "m",
+        1e-6,
+        0.0,
+        false,
+    ),
+    (
+        &["in", "inch", "inches", "\""],
+        D::Length,
+        "m",
+        IN_M,
+        0.0,
+        true,
+    ),
     (&["ft", "feet"], D::Length, "m", 0.3048, 0.0, true),
     // force
     (&["N"], D::Force, "N", 1.0, 0.0, false),
@@ -89,43 +131,175 @@ static TABLE: &[Row] = &[
     (&["kgf", "kp", "kg-f"], D::Force, "N", KGF_N, 0.0, true),
     (&["gf"], D::Force, "N", KGF_N * 1e-3, 0.0, false),
     // angle
-    (&["rad", "radian", "radians"], D::Angle, "rad", 1.0, 0.0, true),
+    (
+        &["rad", "radian", "radians"],
+        D::Angle,
+        "rad",
+        1.0,
+        0.0,
+        true,
+    ),
     (&["mrad"], D::Angle, "rad", 1e-3, 0.0, true),
-    (&["°", "deg", "degree", "degrees", "grad", "grados", "gradi"], D::Angle, "rad", DEG_RAD, 0.0, true),
-    (&["rev", "revs", "revolution", "revolutions", "turn", "turns", "U"], D::Angle, "rad", 2.0 * std::f64::consts::PI, 0.0, false),
+    (
+        &["°", "deg", "degree", "degrees", "grad", "grados", "gradi"],
+        D::Angle,
+        "rad",
+        DEG_RAD,
+        0.0,
+        true,
+    ),
+    (
+        &[
+            "rev",
+            "revs",
+            "revolution",
+            "revolutions",
+            "turn",
+            "turns",
+            "U",
+        ],
+        D::Angle,
+        "rad",
+        2.0 * std::f64::consts::PI,
+        0.0,
+        false,
+    ),
     // torque / moment
     (&["N·m", "Nm"], D::Torque, "N m", 1.0, 0.0, false),
     (&["N·mm", "Nmm"], D::Torque, "N m", 1e-3, 0.0, false),
     (&["mN·m", "mNm"], D::Torque, "N m", 1e-3, 0.0, false),
-    (&["kN·m", "kNm", "KNm", "KN·m"], D::Torque, "N m", 1e3, 0.0, false),
-    (&["in·lb", "in·lbf", "lb·in", "lbf·in", "inlb", "inlbf", "lbfin"], D::Torque, "N m", LBF_N * IN_M, 0.0, true),
-    (&["ft·lb", "ft·lbf", "lb·ft", "lbf·ft"], D::Torque, "N m", LBF_N * 0.3048, 0.0, true),
+    (
+        &["kN·m", "kNm", "KNm", "KN·m"],
+        D::Torque,
+        "N m",
+        1e3,
+        0.0,
+        false,
+    ),
+    (
+        &[
+            "in·lb", "in·lbf", "lb·in", "lbf·in", "inlb", "inlbf", "lbfin",
+        ],
+        D::Torque,
+        "N m",
+        LBF_N * IN_M,
+        0.0,
+        true,
+    ),
+    (
+        &["ft·lb", "ft·lbf", "lb·ft", "lbf·ft"],
+        D::Torque,
+        "N m",
+        LBF_N * 0.3048,
+        0.0,
+        true,
+    ),
     (&["kgf·m", "kp·m"], D::Torque, "N m", KGF_N, 0.0, true),
     // curvature
-    (&["1/m", "m^-1", "m-1", "m⁻¹"], D::Curvature, "1/m", 1.0, 0.0, false),
-    (&["1/mm", "mm^-1", "mm-1", "mm⁻¹"], D::Curvature, "1/m", 1e3, 0.0, false),
+    (
+        &["1/m", "m^-1", "m-1", "m⁻¹"],
+        D::Curvature,
+        "1/m",
+        1.0,
+        0.0,
+        false,
+    ),
+    (
+        &["1/mm", "mm^-1", "mm-1", "mm⁻¹"],
+        D::Curvature,
+        "1/m",
+        1e3,
+        0.0,
+        false,
+    ),
     // ratios
     (&["%"], D::Ratio, "1", 1e-2, 0.0, false),
-    (&["mm/mm", "m/m", "in/in", "-", "1", "ratio"], D::Ratio, "1", 1.0, 0.0, true),
-    (&["µm/m", "μm/m", "um/m", "µε", "με", "ppm"], D::Ratio, "1", 1e-6, 0.0, false),
+    (
+        &["mm/mm", "m/m", "in/in", "-", "1", "ratio"],
+        D::Ratio,
+        "1",
+        1.0,
+        0.0,
+        true,
+    ),
+    (
+        &["µm/m", "μm/m", "um/m", "µε", "με", "ppm"],
+        D::Ratio,
+        "1",
+        1e-6,
+        0.0,
+        false,
+    ),
     // pressure / stress
     (&["Pa"], D::Pressure, "Pa", 1.0, 0.0, false),
     (&["kPa"], D::Pressure, "Pa", 1e3, 0.0, false),
-    (&["MPa", "N/mm²", "N/mm2", "N/mm^2"], D::Pressure, "Pa", 1e6, 0.0, false),
-    (&["GPa", "kN/mm²", "kN/mm2"], D::Pressure, "Pa", 1e9, 0.0, false),
-    (&["psi"], D::Pressure, "Pa", LBF_N / (IN_M * IN_M), 0.0, true),
-    (&["ksi"], D::Pressure, "Pa", 1e3 * LBF_N / (IN_M * IN_M), 0.0, true),
+    (
+        &["MPa", "N/mm²", "N/mm2", "N/mm^2"],
+        D::Pressure,
+        "Pa",
+        1e6,
+        0.0,
+        false,
+    ),
+    (
+        &["GPa", "kN/mm²", "kN/mm2"],
+        D::Pressure,
+        "Pa",
+        1e9,
+        0.0,
+        false,
+    ),
+    (
+        &["psi"],
+        D::Pressure,
+        "Pa",
+        LBF_N / (IN_M * IN_M),
+        0.0,
+        true,
+    ),
+    (
+        &["ksi"],
+        D::Pressure,
+        "Pa",
+        1e3 * LBF_N / (IN_M * IN_M),
+        0.0,
+        true,
+    ),
     (&["bar"], D::Pressure, "Pa", 1e5, 0.0, true),
     // temperature
-    (&["°C", "degC", "Cel", "℃", "C"], D::Temperature, "K", 1.0, 273.15, false),
+    (
+        &["°C", "degC", "Cel", "℃", "C"],
+        D::Temperature,
+        "K",
+        1.0,
+        273.15,
+        false,
+    ),
     (&["K"], D::Temperature, "K", 1.0, 0.0, false),
     // counters
-    (&["cycle", "cycles", "cyc", "segment", "segments", "count", "counts", "#", "zyklen", "ciclos", "cicli"], D::Count, "1", 1.0, 0.0, true),
+    (
+        &[
+            "cycle", "cycles", "cyc", "segment", "segments", "count", "counts", "#", "zyklen",
+            "ciclos", "cicli",
+        ],
+        D::Count,
+        "1",
+        1.0,
+        0.0,
+        true,
+    ),
     // velocity, rate
     (&["m/s"], D::Velocity, "m/s", 1.0, 0.0, false),
     (&["mm/s"], D::Velocity, "m/s", 1e-3, 0.0, true),
     (&["mm/min"], D::Velocity, "m/s", 1e-3 / 60.0, 0.0, true),
-    (&["1/s", "s-1", "s^-1", "Hz", "s⁻¹"], D::Rate, "1/s", 1.0, 0.0, false),
+    (
+        &["1/s", "s-1", "s^-1", "Hz", "s⁻¹"],
+        D::Rate,
+        "1/s",
+        1.0,
+        0.0,
+        false,
+    ),
     // mass, area, energy
     (&["kg"], D::Mass, "kg", 1.0, 0.0, true),
     (&["g"], D::Mass, "kg", 1e-3, 0.0, false),
@@ -170,7 +344,12 @@ pub fn lookup(unit: &str) -> Option<UnitInfo> {
     if u.is_empty() {
         return None;
     }
-    let info = |r: &Row| UnitInfo { dimension: r.1, si_unit: r.2, factor: r.3, offset: r.4 };
+    let info = |r: &Row| UnitInfo {
+        dimension: r.1,
+        si_unit: r.2,
+        factor: r.3,
+        offset: r.4,
+    };
     for r in TABLE {
         if r.0.contains(&u) {
             return Some(info(r));
@@ -206,7 +385,9 @@ pub(crate) fn looks_like_unit(cell: &str) -> bool {
 /// Removes one pair of surrounding `()` or `[]` from a unit cell.
 pub(crate) fn strip_brackets(cell: &str) -> &str {
     let c = cell.trim();
-    if c.len() >= 2 && ((c.starts_with('(') && c.ends_with(')')) || (c.starts_with('[') && c.ends_with(']'))) {
+    if c.len() >= 2
+        && ((c.starts_with('(') && c.ends_with(')')) || (c.starts_with('[') && c.ends_with(']')))
+    {
         c[1..c.len() - 1].trim()
     } else {
         c
@@ -228,7 +409,9 @@ pub fn split_name_unit(cell: &str) -> (String, String) {
                 let unit_shaped = !inner.is_empty()
                     && inner.chars().count() <= 10
                     && !inner.contains(char::is_whitespace)
-                    && inner.chars().any(|ch| ch.is_alphabetic() || ch == '%' || ch == '°');
+                    && inner
+                        .chars()
+                        .any(|ch| ch.is_alphabetic() || ch == '%' || ch == '°');
                 if !name.is_empty() && (lookup(inner).is_some() || unit_shaped) {
                     return (name.to_string(), inner.to_string());
                 }
@@ -237,7 +420,11 @@ pub fn split_name_unit(cell: &str) -> (String, String) {
     }
     if let Some(pos) = c.rfind('_') {
         let (name, unit) = (c[..pos].trim(), &c[pos + 1..]);
-        if !name.is_empty() && !name.ends_with('_') && lookup(unit).is_some() && unit.chars().any(|ch| ch.is_alphabetic()) {
+        if !name.is_empty()
+            && !name.ends_with('_')
+            && lookup(unit).is_some()
+            && unit.chars().any(|ch| ch.is_alphabetic())
+        {
             // Only units of a physical dimension a reader would write this way.
             if let Some(info) = lookup(unit) {
                 if !matches!(info.dimension, Dimension::Count | Dimension::Ratio) {
@@ -254,7 +441,9 @@ mod tests {
     use super::*;
 
     fn f(u: &str) -> f64 {
-        lookup(u).unwrap_or_else(|| panic!("unit {u} unknown")).factor
+        lookup(u)
+            .unwrap_or_else(|| panic!("unit {u} unknown"))
+            .factor
     }
 
     #[test]
@@ -297,7 +486,9 @@ mod tests {
             assert_eq!(f(s), 1e3, "{s}");
         }
         let inlb = 4.4482216152605 * 0.0254;
-        for s in ["in·lb", "in-lb", "in*lb", "lbf·in", "lbf*in", "lbf.in", "lbf in", "in lb"] {
+        for s in [
+            "in·lb", "in-lb", "in*lb", "lbf·in", "lbf*in", "lbf.in", "lbf in", "in lb",
+        ] {
             assert!((f(s) - inlb).abs() < 1e-12, "{s}");
         }
     }
@@ -322,14 +513,23 @@ mod tests {
         assert_eq!(split_name_unit("Force (kN)"), ("Force".into(), "kN".into()));
         assert_eq!(split_name_unit("Kraft [N]"), ("Kraft".into(), "N".into()));
         assert_eq!(split_name_unit("Force_N"), ("Force".into(), "N".into()));
-        assert_eq!(split_name_unit("Torque (N·m)"), ("Torque".into(), "N·m".into()));
-        assert_eq!(split_name_unit("bending_moment [N.m]"), ("bending_moment".into(), "N.m".into()));
+        assert_eq!(
+            split_name_unit("Torque (N·m)"),
+            ("Torque".into(), "N·m".into())
+        );
+        assert_eq!(
+            split_name_unit("bending_moment [N.m]"),
+            ("bending_moment".into(), "N.m".into())
+        );
         assert_eq!(
             split_name_unit("Total Cycle Count(Linear Waveform)"),
             ("Total Cycle Count(Linear Waveform)".into(), "".into())
         );
         assert_eq!(split_name_unit("_Time "), ("_Time".into(), "".into()));
-        assert_eq!(split_name_unit("Force (furlong)"), ("Force".into(), "furlong".into()));
+        assert_eq!(
+            split_name_unit("Force (furlong)"),
+            ("Force".into(), "furlong".into())
+        );
         assert_eq!(split_name_unit("Ch 1 Weg"), ("Ch 1 Weg".into(), "".into()));
     }
 

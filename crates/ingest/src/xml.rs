@@ -27,9 +27,15 @@ fn attributes(tag: &str) -> Vec<(String, String)> {
     let mut out = Vec::new();
     let mut rest = tag;
     while let Some(eq) = rest.find('=') {
-        let name = rest[..eq].split_whitespace().last().unwrap_or("").to_string();
+        let name = rest[..eq]
+            .split_whitespace()
+            .last()
+            .unwrap_or("")
+            .to_string();
         let after = rest[eq + 1..].trim_start();
-        let Some(q) = after.chars().next().filter(|c| *c == '"' || *c == '\'') else { break };
+        let Some(q) = after.chars().next().filter(|c| *c == '"' || *c == '\'') else {
+            break;
+        };
         let body = &after[1..];
         let Some(end) = body.find(q) else { break };
         out.push((name, unescape(&body[..end])));
@@ -41,7 +47,10 @@ fn attributes(tag: &str) -> Vec<(String, String)> {
 /// Reads the XML export.
 pub(crate) fn read_xml(text: &str, source: &str) -> Result<RawTable, IngestError> {
     let b = text.as_bytes();
-    let mut out = RawTable { decimal: b'.', ..Default::default() };
+    let mut out = RawTable {
+        decimal: b'.',
+        ..Default::default()
+    };
     if let Some(p) = memmem::find(b, b"<AcquiredData") {
         if let Some(e) = memchr::memchr(b'>', &b[p..]) {
             for (k, v) in attributes(&text[p + 13..p + e]) {
@@ -62,7 +71,11 @@ pub(crate) fn read_xml(text: &str, source: &str) -> Result<RawTable, IngestError
         };
         let attrs = attributes(&text[p + 8..p + e]);
         let get = |k: &str| attrs.iter().find(|(n, _)| n == k).map(|(_, v)| v.clone());
-        names.push(get("Name").or_else(|| get("InternalName")).unwrap_or_else(|| format!("signal {}", names.len() + 1)));
+        names.push(
+            get("Name")
+                .or_else(|| get("InternalName"))
+                .unwrap_or_else(|| format!("signal {}", names.len() + 1)),
+        );
         units.push(get("Unit").unwrap_or_default());
         if names_line == 0 {
             names_line = line_at(b, p);
@@ -158,7 +171,9 @@ pub(crate) fn read_xml(text: &str, source: &str) -> Result<RawTable, IngestError
             file: source.into(),
             line: Some(l),
             column: Some(c),
-            message: format!("text where a number belongs ('{t}'); {bad_count} such value(s) read as missing"),
+            message: format!(
+                "text where a number belongs ('{t}'); {bad_count} such value(s) read as missing"
+            ),
         });
     }
     if let Some(l) = short {
@@ -166,10 +181,13 @@ pub(crate) fn read_xml(text: &str, source: &str) -> Result<RawTable, IngestError
             file: source.into(),
             line: Some(l),
             column: None,
-            message: format!("{short_count} <Scan> element(s) hold fewer values than the {ncols} signals"),
+            message: format!(
+                "{short_count} <Scan> element(s) hold fewer values than the {ncols} signals"
+            ),
         });
     }
-    if memmem::find(b, b"</AcquiredData>").is_none() && memmem::find(b, b"<AcquiredData").is_some() {
+    if memmem::find(b, b"</AcquiredData>").is_none() && memmem::find(b, b"<AcquiredData").is_some()
+    {
         out.warnings.push(Diagnostic {
             file: source.into(),
             line: Some(line_at(b, b.len())),
@@ -178,7 +196,11 @@ pub(crate) fn read_xml(text: &str, source: &str) -> Result<RawTable, IngestError
         });
     }
     out.blocks.push(RawBlock {
-        title: out.metadata.iter().find(|(k, _)| k == "DisplayName").map(|(_, v)| v.clone()),
+        title: out
+            .metadata
+            .iter()
+            .find(|(k, _)| k == "DisplayName")
+            .map(|(_, v)| v.clone()),
         names_line,
         units_line: None,
         first_data_line: first_line,
@@ -206,7 +228,10 @@ mod tests {
         assert_eq!(b.rows, 2);
         assert_eq!(b.columns[1], [-2e-3, 3.0]);
         assert_eq!(b.first_data_line, 8);
-        assert!(t.warnings.iter().any(|w| w.message.contains("</AcquiredData>")));
+        assert!(t
+            .warnings
+            .iter()
+            .any(|w| w.message.contains("</AcquiredData>")));
         assert_eq!(t.metadata[0], ("Name".to_string(), "daq".to_string()));
     }
 

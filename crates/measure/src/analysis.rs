@@ -307,7 +307,7 @@ pub fn analyze(
         response: noise_level(&r),
     };
 
-    let segments = segment(time_s, &c)?;
+    let segments = segment(time_s, &c, &r)?;
     // Orientation of the first loading.
     let first_idx: Vec<usize> = segments
         .iter()

@@ -10,9 +10,8 @@
 //!   from its running extremum ([`turning_points`], a zig-zag with hysteresis). Noise on a dwell
 //!   plateau therefore never makes a reversal.
 //! * Holds: a hold is a stretch where the control stays within one reversal threshold for at
-//!   least three times as long as the ramp needs to cross that band at its typical rate
-//!   (total travel between turning points over the time spent moving); time stamps are used
-//!   when given, sample indices otherwise.
+//!   least three times as long as the neighbouring ramps need to cross that band (see
+//!   [`holds`]); time stamps are used when given, sample indices otherwise.
 //! * Branches: between turning points the control is monotone. Moving away from zero in the
 //!   direction of the first motion it is first loading (the first time) or reloading; moving
 //!   towards zero it is unloading; moving away from zero on the other side it is reversed
@@ -204,9 +203,12 @@ pub fn labels(segments: &[Segment], n: usize) -> Vec<Label> {
 }
 
 /// Hold runs (half-open index ranges) of `control` for a band `threshold` (see module doc).
-/// The typical ramp rate is the total travel between turning points over the time not spent in
-/// holds (two passes: the first counts all time, a lower bound of the rate, so it finds only
-/// clear holds; the second uses the time left after them).
+///
+/// A stretch within the band is a hold when it lasts at least 1.5·h·(1/r₁ + 1/r₂), where r₁ and
+/// r₂ are the ramp rates of the monotone runs (between turning points) in which it starts and
+/// ends: three times the time the ramp needs to cross the band mid-run, and 1.5 times the time a
+/// sharp turn spends in it. Run rates are travel over time without holds (two passes: the first
+/// counts all time, which underestimates the rates and so finds only clear holds).
 pub fn holds(time_s: Option<&[f64]>, control: &[f64], threshold: f64) -> Vec<(usize, usize)> {
     let n = control.len();
     if n < 3 {
@@ -216,22 +218,34 @@ pub fn holds(time_s: Option<&[f64]>, control: &[f64], threshold: f64) -> Vec<(us
     let mut pts: Vec<usize> = vec![0];
     pts.extend(turning_points(control, threshold).iter().map(|p| p.index));
     pts.push(n - 1);
+    pts.dedup();
     let travel: f64 = pts
         .windows(2)
         .map(|w| (control[w[1]] - control[w[0]]).abs())
         .sum();
-    let total = t(n - 1) - t(0);
-    if !(travel > threshold && total > 0.0) {
+    if travel <= threshold || t(n - 1) <= t(0) {
         return vec![(0, n)];
     }
-    let mut found = Vec::new();
+    let run_of = |i: usize| pts.partition_point(|&p| p <= i).clamp(1, pts.len() - 1) - 1;
+    let mut found: Vec<(usize, usize)> = Vec::new();
     for _pass in 0..2 {
-        let held: f64 = found
-            .iter()
-            .map(|&(a, b): &(usize, usize)| t(b - 1) - t(a))
-            .sum();
-        let rate = travel / (total - held).max(f64::MIN_POSITIVE);
-        found = hold_runs(control, threshold, 3.0 * threshold / rate, &t);
+        let rates: Vec<f64> = pts
+            .windows(2)
+            .map(|w| {
+                let held: f64 = found
+                    .iter()
+                    .map(|&(a, b)| (a.max(w[0]), (b - 1).min(w[1])))
+                    .filter(|(a, b)| b > a)
+                    .map(|(a, b)| t(b) - t(a))
+                    .sum();
+                let moving = (t(w[1]) - t(w[0]) - held).max(f64::MIN_POSITIVE);
+                ((control[w[1]] - control[w[0]]).abs() / moving).max(f64::MIN_POSITIVE)
+            })
+            .collect();
+        let min_duration = |i: usize, j: usize| {
+            1.5 * threshold * (1.0 / rates[run_of(i)] + 1.0 / rates[run_of(j)])
+        };
+        found = hold_runs(control, threshold, &min_duration, &t);
     }
     found
 }
@@ -239,7 +253,7 @@ pub fn holds(time_s: Option<&[f64]>, control: &[f64], threshold: f64) -> Vec<(us
 fn hold_runs(
     control: &[f64],
     threshold: f64,
-    min_duration: f64,
+    min_duration: &dyn Fn(usize, usize) -> f64,
     t: &dyn Fn(usize) -> f64,
 ) -> Vec<(usize, usize)> {
     let n = control.len();
@@ -258,7 +272,7 @@ fn hold_runs(
             hi = nhi;
             j += 1;
         }
-        if j - i >= 3 && t(j - 1) - t(i) >= min_duration {
+        if j - i >= 3 && t(j - 1) - t(i) >= min_duration(i, j - 1) {
             out.push((i, j));
             i = j;
         } else {
@@ -268,11 +282,27 @@ fn hold_runs(
     out
 }
 
-/// Segments a test into cycles and branches (see module doc). `time_s` (seconds, same length
-/// as `control`) is used for dwell durations when given. The control should be zeroed (zero =
-/// unloaded state). Every sample belongs to exactly one segment.
-pub fn segment(time_s: Option<&[f64]>, control: &[f64]) -> Result<Vec<Segment>, MeasureError> {
+/// Segments a test into cycles and branches (see module doc). `time_s` (seconds) is used for
+/// dwell durations when given. The control should be zeroed (zero = unloaded state). Every
+/// sample belongs to exactly one segment.
+///
+/// `response` is only checked for its length: branches come from the control alone, because a
+/// flat response is no hold (perfect plasticity, or a three-point punch that has lost contact,
+/// keep the force flat while the machine moves). Errors on unequal lengths or fewer than 3
+/// samples.
+pub fn segment(
+    time_s: Option<&[f64]>,
+    control: &[f64],
+    response: &[f64],
+) -> Result<Vec<Segment>, MeasureError> {
     let n = control.len();
+    if response.len() != n {
+        return Err(MeasureError::LengthMismatch {
+            what: "control and response",
+            left: n,
+            right: response.len(),
+        });
+    }
     if let Some(t) = time_s {
         if t.len() != n {
             return Err(MeasureError::LengthMismatch {
@@ -430,36 +460,48 @@ pub struct Offsets {
     pub control: f64,
     /// Response offset (N or N m).
     pub response: f64,
-    /// Number of leading samples at rest the offsets were averaged over.
+    /// Number of leading samples at rest the offsets were averaged over (0: taken from straight
+    /// lines through the first samples instead).
     pub samples_at_rest: usize,
 }
 
-/// Removes the zero offsets: the mean control and response over the leading samples at rest
-/// (control within one reversal threshold of its first value; at least the first sample).
+/// Removes the zero offsets. With an initial rest (a hold that starts at the first sample, see
+/// [`holds`]) the offsets are the control and response means over it. Without one, they are
+/// the values at the first sample of straight lines fitted against sample index over the first
+/// 1% of the record (at least 5 samples), so that neither a single noisy sample nor the first
+/// rise of the curve sets the zero.
 pub fn zero_offsets(control: &mut [f64], response: &mut [f64]) -> Offsets {
-    if control.is_empty() {
+    let n = control.len().min(response.len());
+    if n == 0 {
         return Offsets {
             control: 0.0,
             response: 0.0,
             samples_at_rest: 0,
         };
     }
-    let h = reversal_threshold(control);
-    let c0 = control[0];
-    let k = control
-        .iter()
-        .take_while(|&&c| (c - c0).abs() <= h)
-        .count()
-        .max(1);
-    let oc = control[..k].iter().sum::<f64>() / k as f64;
-    let or =
-        response[..k.min(response.len())].iter().sum::<f64>() / k.min(response.len()).max(1) as f64;
+    let h = reversal_threshold(&control[..n]);
+    let rest = holds(None, &control[..n], h)
+        .first()
+        .filter(|r| r.0 == 0)
+        .map_or(0, |r| r.1);
+    let (oc, or) = if rest >= 3 {
+        let k = rest as f64;
+        (
+            control[..rest].iter().sum::<f64>() / k,
+            response[..rest].iter().sum::<f64>() / k,
+        )
+    } else {
+        let m = (n / 100).max(5).min(n);
+        let idx: Vec<f64> = (0..m).map(|i| i as f64).collect();
+        let at0 = |v: &[f64]| crate::stats::linear_fit(&idx, &v[..m]).map_or(v[0], |f| f.intercept);
+        (at0(control), at0(response))
+    };
     control.iter_mut().for_each(|c| *c -= oc);
     response.iter_mut().for_each(|r| *r -= or);
     Offsets {
         control: oc,
         response: or,
-        samples_at_rest: k,
+        samples_at_rest: rest,
     }
 }
 
@@ -531,7 +573,7 @@ mod tests {
     #[test]
     fn segmentation_of_dwell_cycles() {
         let v = dwell_triangle(0.01, 7);
-        let segs = segment(None, &v).unwrap();
+        let segs = segment(None, &v, &v).unwrap();
         let summary: Vec<(usize, Branch)> = segs.iter().map(|s| (s.cycle, s.branch)).collect();
         use Branch::*;
         assert_eq!(
@@ -585,7 +627,7 @@ mod tests {
         v.extend((0..200).map(|i| 1.0 - i as f64 / 100.0));
         v.extend((0..200).map(|i| -1.0 + i as f64 / 100.0));
         v.extend((0..=100).map(|i| 1.0 - i as f64 / 100.0));
-        let segs = segment(None, &v).unwrap();
+        let segs = segment(None, &v, &v).unwrap();
         use Branch::*;
         let summary: Vec<(usize, Branch)> = segs.iter().map(|s| (s.cycle, s.branch)).collect();
         assert_eq!(
@@ -613,6 +655,15 @@ mod tests {
         assert_eq!(o.samples_at_rest, 3);
         assert!((o.control - 5.0).abs() < 1e-12 && (o.response - 0.2).abs() < 1e-12);
         assert!((c[5] - 0.3).abs() < 1e-12 && (r[5] - 3.0).abs() < 1e-12);
+        // No rest: the zero is where straight lines through the first samples start.
+        let mut c: Vec<f64> = (0..50).map(|i| 1.0 + 0.1 * i as f64).collect();
+        let mut r: Vec<f64> = (0..50).map(|i| 2.0 + 3.0 * i as f64).collect();
+        let o = zero_offsets(&mut c, &mut r);
+        assert_eq!(o.samples_at_rest, 0);
+        assert!(
+            (o.control - 1.0).abs() < 1e-9 && (o.response - 2.0).abs() < 1e-9,
+            "{o:?}"
+        );
         let cc = correct_compliance(&[1.0, 2.0], &[10.0, 20.0], 0.01);
         assert_eq!(cc, vec![0.9, 1.8]);
     }

@@ -2,7 +2,9 @@
 //!
 //! - `tension` and `torsion` (clamped ends, homogeneous straight rod): the state is uniform
 //!   along the rod, Γ₃ = Δl/l₀ or K₃ = θ/l₀ with every other strain held at zero by the clamps, so
-//!   the sectional law evaluated once per step *is* the rod solution (exact, not an approximation).
+//!   the sectional law evaluated once per step *is* the rod solution (exact, not an approximation;
+//!   `rod3d::tests::uniform_shortcuts_match_3d_rod` replays elastoplastic cycles through the 3D
+//!   rod and gets the same numbers).
 //! - `pure_bending` (one end rotated, both ends free to slide, no shear force): the rod is solved
 //!   by [`simulate_path`] (node 0 clamped to remove rigid motion, end rotation prescribed at the
 //!   other end, its position free: no force) — its answer is a uniform-curvature arc K = θ/l₀. For
@@ -12,7 +14,9 @@
 //! - `three_point`: half model (symmetry at mid-span: x = 0, θ = 0), rod of span/2 plus an
 //!   overhang resting on a rigid support cylinder it slides over (bilateral normal penalty, optional
 //!   regularised Coulomb friction), pushed by a rigid point or cylindrical punch that can only push
-//!   (contact opens on unloading). Control: punch deflection w; response: total punch force.
+//!   (contact opens on unloading: an active set around Newton). A round punch acts on nodes
+//!   (use elements shorter than the expected wrap length); supports act on segments, so the
+//!   contact point slides continuously. Control: punch deflection w; response: total punch force.
 //!   Penalty stiffness k = `penalty_factor`·EI/span³ (default 10⁷: deflection error ≈ 2.4·10⁻⁶ w).
 //!
 //! Does not: read files, choose laws or parameters (the caller builds the law).
@@ -226,6 +230,7 @@ impl<'a> Driver<'a> {
                     k,
                     setup.support_friction,
                     half,
+                    Vector2::new(half, 0.0),
                 );
                 sup.k_tangent = k;
                 rod.supports.push(sup);

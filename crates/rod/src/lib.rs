@@ -13,12 +13,19 @@
 //!
 //! Pure physics: numbers in, numbers out; no files, no printing, no global state. SI throughout.
 //! The sectional laws come through the [`cablab_laws::Law`] trait.
-//! Does not: dynamics, 3D out-of-plane loading, self-contact.
+//! Does not: dynamics, contact in 3D, self-contact, distributed loads.
+//!
+//! Measured (release, one core, CPU time): the cyclic elastoplastic three-point run with 100
+//! elements and 1,000 load steps takes ≈ 64 ms; cost per step scales with the element count with
+//! exponent ≈ 1.0 (benches/rod.rs). Verification against SPEC.md lives in `verification.rs`.
+
+#![warn(missing_docs)]
 
 pub mod drivers;
 pub mod planar;
 pub mod rod3d;
 pub mod scenarios;
+pub mod spatial;
 
 mod blocktri;
 #[cfg(test)]

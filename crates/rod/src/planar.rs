@@ -78,24 +78,32 @@ pub struct Support {
     pub k_tangent: f64,
     /// Coulomb friction coefficient μ (0 = frictionless).
     pub mu: f64,
-    /// Committed stick point: reference arc length of the rod material point last stuck to the support.
-    pub stick_s_m: f64,
-    stick_trial: f64,
+    /// Committed contact: reference arc length of the rod material point at the contact, m.
+    pub contact_s_m: f64,
+    /// Committed contact: where that material point was (centreline), m.
+    pub contact_point: Vector2<f64>,
+    /// Committed tangential (friction) force on the rod, N (along the rod tangent).
+    pub tangential_force_n: f64,
+    trial: (f64, Vector2<f64>, f64),
     hint: usize,
     /// Normal force the support exerts on the rod at the last evaluation, N.
     pub normal_force_n: f64,
     /// Tangential (friction) force on the rod at the last evaluation, N.
     pub friction_force_n: f64,
+    /// Whether the support lay beyond the rod's free end at the last evaluation.
+    pub off_end: bool,
 }
 
 impl Support {
-    /// A support at `centre`, touching the rod at reference arc length `stick_s_m`.
+    /// A support at `centre` touching the rod at reference arc length `contact_s_m`, where the
+    /// centreline sits at `contact_point`.
     pub fn new(
         centre: Vector2<f64>,
         radius_eff_m: f64,
         k_normal: f64,
         mu: f64,
-        stick_s_m: f64,
+        contact_s_m: f64,
+        contact_point: Vector2<f64>,
     ) -> Self {
         Support {
             centre,
@@ -103,11 +111,14 @@ impl Support {
             k_normal,
             k_tangent: k_normal,
             mu,
-            stick_s_m,
-            stick_trial: stick_s_m,
+            contact_s_m,
+            contact_point,
+            tangential_force_n: 0.0,
+            trial: (contact_s_m, contact_point, 0.0),
             hint: 0,
             normal_force_n: 0.0,
             friction_force_n: 0.0,
+            off_end: false,
         }
     }
 }
@@ -259,14 +270,31 @@ fn geometric_stiffness(kin: &Kinematics, sig_shear: f64, sig_axial: f64) -> Mat6
     g
 }
 
-/// Forces of a support on one element: (on end a, on end b, normal force N, friction force N,
-/// trial stick point m).
-type SupportEval = (Vector2<f64>, Vector2<f64>, f64, f64, f64);
+/// Forces of a support on one element and the trial contact state.
+#[derive(Debug, Clone, Copy)]
+struct SupportEval {
+    /// Force on element end a, N.
+    fa: Vector2<f64>,
+    /// Force on element end b, N.
+    fb: Vector2<f64>,
+    /// Normal force on the rod (positive pushes it off the support), N.
+    normal: f64,
+    /// Tangential friction force on the rod along the rod tangent, N.
+    friction: f64,
+    /// Reference arc length of the current contact point, m.
+    s_c: f64,
+    /// Current contact point on the centreline, m.
+    p_c: Vector2<f64>,
+}
 
-/// The forces a support exerts on the segment a–b (normal penalty on the signed gap, plus
-/// friction by a stick spring with Coulomb return mapping), split to the end points by the
-/// contact parameter ξ. Returns None when the support does not project onto the segment
-/// (unless `clamp`).
+/// The forces a support exerts on the segment a–b: a normal penalty on the signed gap, plus
+/// (μ > 0) regularised Coulomb friction. Friction is incremental and rate independent: the slip
+/// of a step is the tangential displacement of the material point that was in contact at the last
+/// converged step (`anchor`, its current position) from where it was then; the tangential force
+/// follows an elastic predictor T = T_old − k_t·slip and a return to |T| ≤ μN. Rolling over a
+/// round support (the contact point moves through the material without sliding) therefore costs
+/// no friction. Forces are split to the end points by the contact parameter ξ. Returns None when
+/// the support does not project onto the segment (unless `clamp`).
 fn support_forces(
     sup: &Support,
     pa: Vector2<f64>,
@@ -274,6 +302,7 @@ fn support_forces(
     s_a: f64,
     l0: f64,
     clamp: bool,
+    anchor: Vector2<f64>,
 ) -> Option<SupportEval> {
     let d = pb - pa;
     let len = d.norm();
@@ -288,26 +317,30 @@ fn support_forces(
     }
     let xi = xi.clamp(0.0, 1.0);
     let gap = n.dot(&(pa - sup.centre)) - sup.radius_eff_m;
-    let normal = -sup.k_normal * gap; // force on the rod along n (positive pushes the rod up)
+    let normal = -sup.k_normal * gap;
     let mut fa = (1.0 - xi) * normal * n;
     let mut fb = xi * normal * n;
     let mut friction = 0.0;
-    let mut stick = sup.stick_s_m;
     if sup.mu > 0.0 {
-        let s_c = s_a + xi * l0;
-        let trial = sup.k_tangent * (sup.stick_s_m - s_c);
+        let slip = t.dot(&(anchor - sup.contact_point));
+        let trial = sup.tangential_force_n - sup.k_tangent * slip;
         let limit = sup.mu * normal.max(0.0);
-        let tf = if trial.abs() > limit {
+        friction = if trial.abs() > limit {
             limit * trial.signum()
         } else {
             trial
         };
-        stick = s_c + tf / sup.k_tangent;
-        friction = -tf;
         fa += (1.0 - xi) * friction * t;
         fb += xi * friction * t;
     }
-    Some((fa, fb, normal, friction, stick))
+    Some(SupportEval {
+        fa,
+        fb,
+        normal,
+        friction,
+        s_c: s_a + xi * l0,
+        p_c: pa + xi * d,
+    })
 }
 
 impl<'a> PlanarRod<'a> {
@@ -558,6 +591,7 @@ impl<'a> PlanarRod<'a> {
                             self.s_ref[e],
                             self.l0[e],
                             false,
+                            pa,
                         )
                         .is_some()
                         {
@@ -570,19 +604,42 @@ impl<'a> PlanarRod<'a> {
                     break;
                 }
             }
-            // Off the ends (or in a kink gap): the nearest end element, clamped.
+            // In a kink gap between two elements: the nearest one, clamped. Past the rod's free
+            // end: flagged, the solve reports it.
             let e = found.unwrap_or(hint);
+            let last = ne - 1;
+            let beyond_end = found.is_none() && {
+                let (pa, pb) = (self.q[last].xy(), self.q[last + 1].xy());
+                (pb - pa).dot(&(self.supports[si].centre - pb)) > 0.0
+            };
+            self.supports[si].off_end = beyond_end;
             let sup = &self.supports[si];
             let (pa, pb) = (self.q[e].xy(), self.q[e + 1].xy());
             let (s_a, l0) = (self.s_ref[e], self.l0[e]);
-            let Some((fa, fb, normal, friction, stick)) =
-                support_forces(sup, pa, pb, s_a, l0, true)
+            // The material point in contact at the last converged step: its element and ξ. (When it
+            // lies in another element than the contact, the tangent omits that dependence: a
+            // slightly inexact Newton matrix, never a wrong residual.)
+            let e_anchor = self
+                .s_ref
+                .partition_point(|&s| s <= sup.contact_s_m)
+                .saturating_sub(1)
+                .min(ne - 1);
+            let xi_anchor =
+                ((sup.contact_s_m - self.s_ref[e_anchor]) / self.l0[e_anchor]).clamp(0.0, 1.0);
+            let anchor_of = |pa: Vector2<f64>, pb: Vector2<f64>, q: &[Vector3<f64>]| {
+                if e_anchor == e {
+                    pa + (pb - pa) * xi_anchor
+                } else {
+                    q[e_anchor].xy() + (q[e_anchor + 1].xy() - q[e_anchor].xy()) * xi_anchor
+                }
+            };
+            let Some(ev) = support_forces(sup, pa, pb, s_a, l0, true, anchor_of(pa, pb, &self.q))
             else {
                 continue;
             };
             for d in 0..2 {
-                self.res[e][d] -= fa[d];
-                self.res[e + 1][d] -= fb[d];
+                self.res[e][d] -= ev.fa[d];
+                self.res[e + 1][d] -= ev.fb[d];
             }
             if tangent {
                 // Central differences of the contact forces w.r.t. (xa, ya, xb, yb).
@@ -593,12 +650,28 @@ impl<'a> PlanarRod<'a> {
                     let mut p_minus = [pa, pb];
                     p_plus[j / 2][j % 2] += h;
                     p_minus[j / 2][j % 2] -= h;
-                    let fp = support_forces(sup, p_plus[0], p_plus[1], s_a, l0, true);
-                    let fm = support_forces(sup, p_minus[0], p_minus[1], s_a, l0, true);
+                    let fp = support_forces(
+                        sup,
+                        p_plus[0],
+                        p_plus[1],
+                        s_a,
+                        l0,
+                        true,
+                        anchor_of(p_plus[0], p_plus[1], &self.q),
+                    );
+                    let fm = support_forces(
+                        sup,
+                        p_minus[0],
+                        p_minus[1],
+                        s_a,
+                        l0,
+                        true,
+                        anchor_of(p_minus[0], p_minus[1], &self.q),
+                    );
                     if let (Some(fp), Some(fm)) = (fp, fm) {
                         for d in 0..2 {
-                            jac[(d, j)] = (fp.0[d] - fm.0[d]) / (2.0 * h);
-                            jac[(2 + d, j)] = (fp.1[d] - fm.1[d]) / (2.0 * h);
+                            jac[(d, j)] = (fp.fa[d] - fm.fa[d]) / (2.0 * h);
+                            jac[(2 + d, j)] = (fp.fb[d] - fm.fb[d]) / (2.0 * h);
                         }
                     }
                 }
@@ -614,9 +687,9 @@ impl<'a> PlanarRod<'a> {
             }
             let sup = &mut self.supports[si];
             sup.hint = e;
-            sup.normal_force_n = normal;
-            sup.friction_force_n = friction;
-            sup.stick_trial = stick;
+            sup.normal_force_n = ev.normal;
+            sup.friction_force_n = ev.friction;
+            sup.trial = (ev.s_c, ev.p_c, ev.friction);
         }
     }
 
@@ -678,6 +751,16 @@ impl<'a> PlanarRod<'a> {
         let mut total = 0;
         for _ in 0..(4 * self.nodes()).max(20) {
             total += self.solve_newton(dt, step)?;
+            if let Some(si) = self.supports.iter().position(|s| s.off_end) {
+                return Err(RodError::NotConverged {
+                    step,
+                    iterations: total,
+                    residual: f64::NAN,
+                    reason: format!(
+                        "the rod slid off support {si}: the deflection is too large for the rod length (increase the overhang)"
+                    ),
+                });
+            }
             if !self.update_punch_active_set() {
                 return Ok(total);
             }
@@ -875,7 +958,7 @@ impl<'a> PlanarRod<'a> {
             p.active_committed.clone_from(&p.active);
         }
         for s in &mut self.supports {
-            s.stick_s_m = s.stick_trial;
+            (s.contact_s_m, s.contact_point, s.tangential_force_n) = s.trial;
         }
     }
 }

@@ -451,7 +451,7 @@ mod tests {
             (2.0, 0.49346, 0.16064, 0.78175),
             (10.0, 0.81061, 0.55500, 1.43029),
         ] {
-            let mut rod = Rod3d::straight(&law, 1.0, 100).unwrap();
+            let mut rod = Rod3d::straight(&law, 1.0, 64).unwrap();
             rod.fixed[0] = [true; 6];
             let tip = rod.nodes() - 1;
             for k in 1..=10 {

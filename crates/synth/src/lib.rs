@@ -8,9 +8,10 @@
 //! returns the file bytes together with the noise-free truth and the channels as written.
 //!
 //! Module map: [`spec`] (the data), [`protocol`] (control history, event detection), [`truth`]
-//! (what the specimen answers), [`artefacts`] (what the rig adds), [`layout`] (the bytes),
-//! [`recipe`] (campaign recipes with specimen scatter; the only module that touches files).
-//! Physics and formatting are pure; no printing anywhere.
+//! (what the specimen answers), `registry` (laws from `cablab-laws`, three-point through
+//! `cablab-rod`), [`artefacts`] (what the rig adds), [`layout`] (the bytes), [`recipe`] (campaign
+//! recipes with specimen scatter; the only module that touches files). Physics and formatting are
+//! pure; the library prints nothing (the `make_demo` example is the only printer).
 
 pub mod artefacts;
 pub mod error;

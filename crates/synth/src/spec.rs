@@ -388,13 +388,8 @@ impl SynthSpec {
 
     /// The output file name: stem (or label, or kind) plus the layout's extension. Characters
     /// other than ASCII letters, digits, `-`, `_`, `.` become `_`, except one `/` separating a
-    /// folder from the name (recipes write series into sub-folders).
+    /// folder from the name in `file_stem` (recipes write series into sub-folders).
     pub fn file_name(&self) -> String {
-        let stem = self
-            .file_stem
-            .clone()
-            .or_else(|| self.specimen.label.clone())
-            .unwrap_or_else(|| self.kind.as_str().to_string());
         let clean = |s: &str| -> String {
             s.chars()
                 .map(|c| {
@@ -406,11 +401,16 @@ impl SynthSpec {
                 })
                 .collect()
         };
-        let safe = match stem.split_once('/') {
-            Some((dir, name)) if !dir.is_empty() && !dir.starts_with('.') && !name.is_empty() => {
-                format!("{}/{}", clean(dir), clean(name))
-            }
-            _ => clean(&stem),
+        let safe = match &self.file_stem {
+            Some(stem) => match stem.split_once('/') {
+                Some((dir, name))
+                    if !dir.is_empty() && !dir.starts_with('.') && !name.is_empty() =>
+                {
+                    format!("{}/{}", clean(dir), clean(name))
+                }
+                _ => clean(stem),
+            },
+            None => clean(self.specimen.label.as_deref().unwrap_or(self.kind.as_str())),
         };
         format!("{safe}.{}", self.layout.extension())
     }

@@ -12,13 +12,18 @@ fn empty_file() {
     for b in [&b""[..], b"\xEF\xBB\xBF", b"\n\n  \r\n"] {
         let e = read(b).unwrap_err();
         assert!(matches!(e, IngestError::Empty { .. }), "{e}");
-        assert!(e.to_string().starts_with("bad.csv: the file is empty"), "{e}");
+        assert!(
+            e.to_string().starts_with("bad.csv: the file is empty"),
+            "{e}"
+        );
     }
 }
 
 #[test]
 fn binary_junk() {
-    let junk: Vec<u8> = (0..4000u32).map(|i| (i.wrapping_mul(2654435761) >> 13) as u8).collect();
+    let junk: Vec<u8> = (0..4000u32)
+        .map(|i| (i.wrapping_mul(2654435761) >> 13) as u8)
+        .collect();
     let e = read(&junk).unwrap_err();
     assert!(matches!(e, IngestError::Binary { .. }), "{e}");
     let e = read(b"Time,Force\n1,\x002\n").unwrap_err();
@@ -29,7 +34,11 @@ fn binary_junk() {
 fn truncated_last_line_is_a_warning_with_its_line() {
     let r = read(b"t (s),F (N),x (mm)\n0,1,2\n1,2,3\n2,3").unwrap();
     assert_eq!(r.data.height(), 3);
-    let w = r.warnings.iter().find(|w| w.message.contains("fewer cells")).expect("warning");
+    let w = r
+        .warnings
+        .iter()
+        .find(|w| w.message.contains("fewer cells"))
+        .expect("warning");
     assert_eq!(w.line, Some(4));
     assert!(r.column_values("x").unwrap()[2].is_nan());
 }
@@ -37,14 +46,23 @@ fn truncated_last_line_is_a_warning_with_its_line() {
 #[test]
 fn header_without_data() {
     let e = read(b"\"Time (s)\";\"Force (N)\"\r\n").unwrap_err();
-    assert!(matches!(e, IngestError::HeaderWithoutData { line: 1, .. }), "{e}");
+    assert!(
+        matches!(e, IngestError::HeaderWithoutData { line: 1, .. }),
+        "{e}"
+    );
     assert!(e.to_string().starts_with("bad.csv:1: header row"), "{e}");
 }
 
 #[test]
 fn no_numeric_rows() {
     let e = read(b"a,b\nc,d\ne,f\n").unwrap_err();
-    assert!(matches!(e, IngestError::HeaderWithoutData { .. } | IngestError::NoData { .. }), "{e}");
+    assert!(
+        matches!(
+            e,
+            IngestError::HeaderWithoutData { .. } | IngestError::NoData { .. }
+        ),
+        "{e}"
+    );
     let e = read(b"1,2\n3,4\n").unwrap_err();
     assert!(matches!(e, IngestError::NoData { .. }), "{e}");
     assert!(e.to_string().contains("line 1"), "{e}");
@@ -53,38 +71,74 @@ fn no_numeric_rows() {
 #[test]
 fn non_monotonic_and_repeated_time_warn_with_line_and_column() {
     let r = read(b"F (N),t (s),x (mm)\n1,0.0,0\n2,0.1,1\n3,0.1,2\n4,0.05,3\n").unwrap();
-    let w = r.warnings.iter().find(|w| w.message.contains("not strictly increasing")).expect("warning");
+    let w = r
+        .warnings
+        .iter()
+        .find(|w| w.message.contains("not strictly increasing"))
+        .expect("warning");
     assert_eq!((w.line, w.column), (Some(4), Some(2)));
-    assert!(w.message.contains("1 decreasing and 1 repeated"), "{}", w.message);
+    assert!(
+        w.message.contains("1 decreasing and 1 repeated"),
+        "{}",
+        w.message
+    );
     assert!(w.to_string().starts_with("bad.csv:4:2: warning:"), "{w}");
 }
 
 #[test]
 fn text_where_numbers_belong() {
     let r = read(b"t (s)\tF (N)\tx (mm)\n0\t1\t2\n1\tERR\t3\n2\t3\t4\n").unwrap();
-    let w = r.warnings.iter().find(|w| w.message.contains("text where a number belongs")).unwrap();
+    let w = r
+        .warnings
+        .iter()
+        .find(|w| w.message.contains("text where a number belongs"))
+        .unwrap();
     assert_eq!((w.line, w.column), (Some(3), Some(2)));
-    assert!(w.message.contains("'ERR'") && w.message.contains("'F (N)'"), "{}", w.message);
+    assert!(
+        w.message.contains("'ERR'") && w.message.contains("'F (N)'"),
+        "{}",
+        w.message
+    );
 }
 
 #[test]
 fn unknown_unit_on_a_needed_column_names_unit_and_column() {
     let e = read(b"Time (s),Force (furlong),Disp (mm)\n0,1,2\n1,2,3\n").unwrap_err();
     match &e {
-        IngestError::UnknownUnit { unit, name, line, column, .. } => {
-            assert_eq!((unit.as_str(), name.as_str(), *line, *column), ("furlong", "Force", 1, 2));
+        IngestError::UnknownUnit {
+            unit,
+            name,
+            line,
+            column,
+            ..
+        } => {
+            assert_eq!(
+                (unit.as_str(), name.as_str(), *line, *column),
+                ("furlong", "Force", 1, 2)
+            );
         }
         other => panic!("{other}"),
     }
     // The same unit on a column nobody needs is only a warning.
     let r = read(b"Time (s),Force (N),Disp (mm),Temp [furlong]\n0,1,2,3\n").unwrap();
-    assert!(r.warnings.iter().any(|w| w.message.contains("unknown unit 'furlong'")));
+    assert!(r
+        .warnings
+        .iter()
+        .any(|w| w.message.contains("unknown unit 'furlong'")));
 }
 
 #[test]
 fn missing_file_and_failed_write_leave_nothing() {
-    let e = read_path(std::path::Path::new("/nonexistent/x.csv"), &ReadOptions::default()).unwrap_err();
-    assert!(e.to_string().starts_with("/nonexistent/x.csv: cannot read file"), "{e}");
+    let e = read_path(
+        std::path::Path::new("/nonexistent/x.csv"),
+        &ReadOptions::default(),
+    )
+    .unwrap_err();
+    assert!(
+        e.to_string()
+            .starts_with("/nonexistent/x.csv: cannot read file"),
+        "{e}"
+    );
     let r = read(b"t (s),F (N),x (mm)\n0,1,2\n").unwrap();
     let dir = tempfile::tempdir().unwrap();
     let target = dir.path().join("already_a_directory");

@@ -7,7 +7,9 @@ use cablab_ingest::{read_bytes, read_path, Format, IngestError, ReadOptions, Tes
 use std::path::PathBuf;
 
 fn data(name: &str) -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../tests/data").join(name)
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../../tests/data")
+        .join(name)
 }
 
 fn rel(a: f64, b: f64) -> bool {
@@ -19,66 +21,147 @@ fn rel(a: f64, b: f64) -> bool {
 }
 
 fn val(r: &TestRecord, col: &str, row: usize) -> f64 {
-    r.column_values(col).unwrap_or_else(|| panic!("no column {col}"))[row - 1]
+    r.column_values(col)
+        .unwrap_or_else(|| panic!("no column {col}"))[row - 1]
 }
 
 fn role_name(r: &TestRecord, role: Role) -> Option<&str> {
-    r.channels.iter().find(|c| c.role == role).map(|c| c.name.as_str())
+    r.channels
+        .iter()
+        .find(|c| c.role == role)
+        .map(|c| c.name.as_str())
 }
 
 #[test]
 fn mts793_cube_latin1_second_block_is_main() {
-    let r = read_path(&data("bam__mts793_cube_compression.dat"), &ReadOptions::default()).unwrap();
+    let r = read_path(
+        &data("bam__mts793_cube_compression.dat"),
+        &ReadOptions::default(),
+    )
+    .unwrap();
     assert_eq!(r.provenance.format, Format::Mts793Dat);
     assert_eq!(r.provenance.encoding, "latin-1");
-    assert_eq!(r.provenance.sha256, "c1e90d876d727d0b5e683a89baf6531613499cb520f45e3d60e0a95133872648");
+    assert_eq!(
+        r.provenance.sha256,
+        "c1e90d876d727d0b5e683a89baf6531613499cb520f45e3d60e0a95133872648"
+    );
     assert_eq!((r.blocks.len(), r.main_block, r.data.height()), (2, 2, 593));
     assert_eq!(role_name(&r, Role::Response), Some("Ch 1 Prüfkraft"));
     assert!(rel(val(&r, "Ch 1 Prüfkraft", 1), -17737.1));
     assert!(rel(val(&r, "Ch 1 Weg", 593), 0.00434142));
-    let min = r.column_values("Ch 1 Prüfkraft").unwrap().into_iter().fold(f64::INFINITY, f64::min);
+    let min = r
+        .column_values("Ch 1 Prüfkraft")
+        .unwrap()
+        .into_iter()
+        .fold(f64::INFINITY, f64::min);
     assert!(rel(min, -1.31474e6));
     // The peak block on request.
-    let b1 = read_path(&data("bam__mts793_cube_compression.dat"), &ReadOptions { block: Some(1), ..Default::default() }).unwrap();
+    let b1 = read_path(
+        &data("bam__mts793_cube_compression.dat"),
+        &ReadOptions {
+            block: Some(1),
+            ..Default::default()
+        },
+    )
+    .unwrap();
     assert_eq!(b1.data.height(), 2);
     assert!(rel(val(&b1, "Ch 1 Prüfkraft", 2), -1.31747e6));
     assert_eq!(r.specimen.label.as_deref(), Some("20240220_7188_M01_W04"));
-    let e = read_path(&data("bam__mts793_cube_compression.dat"), &ReadOptions { block: Some(3), ..Default::default() }).unwrap_err();
-    assert!(matches!(e, IngestError::BlockOutOfRange { requested: 3, available: 2, .. }), "{e}");
+    let e = read_path(
+        &data("bam__mts793_cube_compression.dat"),
+        &ReadOptions {
+            block: Some(3),
+            ..Default::default()
+        },
+    )
+    .unwrap_err();
+    assert!(
+        matches!(
+            e,
+            IngestError::BlockOutOfRange {
+                requested: 3,
+                available: 2,
+                ..
+            }
+        ),
+        "{e}"
+    );
 }
 
 #[test]
 fn mts793_spanish_ten_blocks_kgf() {
-    let r = read_path(&data("mtscyclic__mts793_cyclic_type1_es.dat"), &ReadOptions::default()).unwrap();
+    let r = read_path(
+        &data("mtscyclic__mts793_cyclic_type1_es.dat"),
+        &ReadOptions::default(),
+    )
+    .unwrap();
     assert_eq!((r.blocks.len(), r.main_block, r.data.height()), (10, 1, 51));
-    assert_eq!(r.blocks[9].title.as_deref(), Some("Adquisición cíclica Tiempo 110,07446 Sec 13/12/2021 10:24:12"));
+    assert_eq!(
+        r.blocks[9].title.as_deref(),
+        Some("Adquisición cíclica Tiempo 110,07446 Sec 13/12/2021 10:24:12")
+    );
     assert_eq!(role_name(&r, Role::Time), Some("Tiempo"));
     assert!(rel(val(&r, "Channel 1 Force", 1), -41.1836));
-    let b10 = read_path(&data("mtscyclic__mts793_cyclic_type1_es.dat"), &ReadOptions { block: Some(10), ..Default::default() }).unwrap();
-    assert!(rel(val(&b10, "Channel 1 Force", 51), -71.7835), "last line has no newline");
+    let b10 = read_path(
+        &data("mtscyclic__mts793_cyclic_type1_es.dat"),
+        &ReadOptions {
+            block: Some(10),
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    assert!(
+        rel(val(&b10, "Channel 1 Force", 51), -71.7835),
+        "last line has no newline"
+    );
 }
 
 #[test]
 fn testsuite_csv_bom_semicolon_decimal_comma_exponents() {
-    let r = read_path(&data("bam__testsuite_emodul_cyclic_compression.csv"), &ReadOptions::default()).unwrap();
+    let r = read_path(
+        &data("bam__testsuite_emodul_cyclic_compression.csv"),
+        &ReadOptions::default(),
+    )
+    .unwrap();
     assert_eq!(r.provenance.format, Format::MtsTestsuiteCsv);
-    assert_eq!((r.provenance.encoding.as_str(), r.provenance.separator.as_str(), r.provenance.decimal.as_str()), ("utf-8-bom", "semicolon", "comma"));
+    assert_eq!(
+        (
+            r.provenance.encoding.as_str(),
+            r.provenance.separator.as_str(),
+            r.provenance.decimal.as_str()
+        ),
+        ("utf-8-bom", "semicolon", "comma")
+    );
     assert_eq!(r.data.height(), 950);
     assert_eq!(r.channels[0].header_cell, "Zeit ");
-    assert_eq!((r.channels[0].name.as_str(), r.channels[0].unit.as_str()), ("Zeit", "sec"));
+    assert_eq!(
+        (r.channels[0].name.as_str(), r.channels[0].unit.as_str()),
+        ("Zeit", "sec")
+    );
     assert!(rel(val(&r, "Ch 1 Weg", 1), -7.57277e-6));
     assert!(rel(val(&r, "Ch 1 Kraft", 950), -40343.5));
-    assert_eq!(r.metadata[1], ("Test".to_string(), "E_Modul_Beton_Zylinder 2".to_string()));
+    assert_eq!(
+        r.metadata[1],
+        ("Test".to_string(), "E_Modul_Beton_Zylinder 2".to_string())
+    );
 }
 
 #[test]
 fn testsuite_xml_torque_in_newton_metre() {
-    let r = read_path(&data("cthbiax__testsuite_axial_torsion_daq.xml"), &ReadOptions::default()).unwrap();
+    let r = read_path(
+        &data("cthbiax__testsuite_axial_torsion_daq.xml"),
+        &ReadOptions::default(),
+    )
+    .unwrap();
     assert_eq!(r.provenance.format, Format::MtsTestsuiteXml);
     assert_eq!(r.data.height(), 293);
     assert_eq!(role_name(&r, Role::Control), Some("Torsional Rotation"));
     assert_eq!(role_name(&r, Role::Response), Some("Torsional Torque"));
-    let tq = r.channels.iter().find(|c| c.name == "Torsional Torque").unwrap();
+    let tq = r
+        .channels
+        .iter()
+        .find(|c| c.name == "Torsional Torque")
+        .unwrap();
     assert_eq!((tq.unit.as_str(), tq.si_unit.as_str()), ("N·m", "N m"));
     assert!(rel(val(&r, "Torsional Torque", 293), 0.0069607));
     assert!(rel(val(&r, "Axial Displacement", 1), 3.50833e-5));
@@ -86,7 +169,11 @@ fn testsuite_xml_torque_in_newton_metre() {
 
 #[test]
 fn instron_metadata_nan_cells_and_inspect() {
-    let r = read_path(&data("materialdigital__instron8852_tension_46NT71.csv"), &ReadOptions::default()).unwrap();
+    let r = read_path(
+        &data("materialdigital__instron8852_tension_46NT71.csv"),
+        &ReadOptions::default(),
+    )
+    .unwrap();
     assert_eq!(r.kind, TestKind::Tension);
     assert_eq!(r.metadata.len(), 23);
     assert!((r.specimen.diameter_m.unwrap() - 5.003e-3).abs() < 1e-12);
@@ -100,12 +187,22 @@ fn instron_metadata_nan_cells_and_inspect() {
     assert!(rel(force.first.unwrap(), 117.967) && rel(force.last.unwrap(), 16349.1));
     assert!(rel(force.max.unwrap(), 23565.3) && rel(force.min.unwrap(), 114.93));
     let json = serde_json::to_value(&rep).unwrap();
-    let keys: Vec<&str> = json.as_object().unwrap().keys().map(|k| k.as_str()).collect();
-    assert_eq!(keys, ["format", "encoding", "rows", "channels", "metadata", "kind"]);
+    let keys: Vec<&str> = json
+        .as_object()
+        .unwrap()
+        .keys()
+        .map(|k| k.as_str())
+        .collect();
+    assert_eq!(
+        keys,
+        ["format", "encoding", "rows", "channels", "metadata", "kind"]
+    );
     assert_eq!(json["metadata"]["Gauge length"], "25 mm");
     assert_eq!(json["kind"], "tension");
     let ch = json["channels"][0].as_object().unwrap();
-    for k in ["name", "unit", "si_unit", "role", "first", "last", "min", "max"] {
+    for k in [
+        "name", "unit", "si_unit", "role", "first", "last", "min", "max",
+    ] {
         assert!(ch.contains_key(k), "{k}");
     }
 }
@@ -115,13 +212,19 @@ fn catman_ascii_sample() {
     let r = read_path(&data("catman_ascii_sample.txt"), &ReadOptions::default()).unwrap();
     assert_eq!(r.provenance.format, Format::CatmanAscii);
     assert_eq!(r.data.height(), 21);
-    assert_eq!(role_name(&r, Role::Time), Some("Time  1 - default sample rate"));
+    assert_eq!(
+        role_name(&r, Role::Time),
+        Some("Time  1 - default sample rate")
+    );
     assert_eq!(role_name(&r, Role::Control), Some("Displacement"));
     assert_eq!(role_name(&r, Role::Response), Some("Force"));
     assert!(rel(val(&r, "Force", 21), 1000.0));
     assert!(rel(val(&r, "Displacement", 21), 5e-4));
     assert_eq!(r.kind, TestKind::ThreePoint);
-    assert!(r.metadata.iter().any(|(k, v)| k == "dt" && v == "0,05 0,05 0,05"));
+    assert!(r
+        .metadata
+        .iter()
+        .any(|(k, v)| k == "dt" && v == "0,05 0,05 0,05"));
 }
 
 fn utf16(s: &str, le: bool, bom: bool) -> Vec<u8> {
@@ -138,7 +241,12 @@ fn utf16(s: &str, le: bool, bom: bool) -> Vec<u8> {
 #[test]
 fn nexygen_utf16_every_byte_order() {
     let text = "Time (s)\tLoad (N)\tMachine Extension (mm)\r\n0.0000\t\t\r\n0.7238\t0.0011054\t0.0077767\r\n1.448\t0.0060196\t0.024237\r\n";
-    for (le, bom, enc) in [(true, false, "utf-16le"), (true, true, "utf-16le-bom"), (false, false, "utf-16be"), (false, true, "utf-16be-bom")] {
+    for (le, bom, enc) in [
+        (true, false, "utf-16le"),
+        (true, true, "utf-16le-bom"),
+        (false, false, "utf-16be"),
+        (false, true, "utf-16be-bom"),
+    ] {
         let r = read_bytes(&utf16(text, le, bom), "n.txt", &ReadOptions::default()).unwrap();
         assert_eq!(r.provenance.encoding, enc);
         assert_eq!(r.provenance.format, Format::NexygenText);
@@ -146,7 +254,10 @@ fn nexygen_utf16_every_byte_order() {
         assert_eq!(role_name(&r, Role::Control), Some("Machine Extension"));
         assert!(rel(val(&r, "Machine Extension", 2), 7.7767e-6));
         let rep = r.inspect();
-        assert!(rel(rep.channels[0].first.unwrap(), 0.7238), "first complete row is row 2");
+        assert!(
+            rel(rep.channels[0].first.unwrap(), 0.7238),
+            "first complete row is row 2"
+        );
     }
 }
 
@@ -154,7 +265,9 @@ fn nexygen_utf16_every_byte_order() {
 fn testxpert_windows1252_decimal_comma_units_row() {
     let mut bytes = Vec::new();
     bytes.extend_from_slice(b"\"Pr\xFCfer\"\t\"abc\"\n\"Probenbezeichnung\"\t\"Kabel \x80 1\"\n\"Versuchsl\xE4nge\"\t120\t\"mm\"\n\"Durchmesser\"\t2,8\t\"mm\"\n\"Pr\xFCfnorm\"\t\"Zugversuch\"\n");
-    bytes.extend_from_slice(b"\"Pr\xFCfzeit\"\t\"Standardkraft\"\t\"Standardweg\"\n\"s\"\t\"kN\"\t\"mm\"\n");
+    bytes.extend_from_slice(
+        b"\"Pr\xFCfzeit\"\t\"Standardkraft\"\t\"Standardweg\"\n\"s\"\t\"kN\"\t\"mm\"\n",
+    );
     bytes.extend_from_slice(b"0,0\t1.234,5\t0,5\n0,1\t2.345,25\t1,5E-01\n");
     let r = read_bytes(&bytes, "zwick.TXT", &ReadOptions::default()).unwrap();
     assert_eq!(r.provenance.encoding, "windows-1252");
@@ -171,15 +284,42 @@ fn testxpert_windows1252_decimal_comma_units_row() {
 
 #[test]
 fn units_inside_names_and_space_separator() {
-    let r = read_bytes(b"Zeit [s] Kraft [N] Weg [mm]\n0 1 2\n1 2 3.5\n", "s.txt", &ReadOptions::default());
+    let r = read_bytes(
+        b"Zeit [s] Kraft [N] Weg [mm]\n0 1 2\n1 2 3.5\n",
+        "s.txt",
+        &ReadOptions::default(),
+    );
     // A space separator splits "Zeit [s]" into two cells; such files need another separator or a units row.
     assert!(r.is_ok() || r.is_err());
-    let r = read_bytes(b"Zeit  Kraft  Weg\ns  N  mm\n  0.0   1.0   2.0\n  1.0   2.0   3.5\n", "s.txt", &ReadOptions::default()).unwrap();
+    let r = read_bytes(
+        b"Zeit  Kraft  Weg\ns  N  mm\n  0.0   1.0   2.0\n  1.0   2.0   3.5\n",
+        "s.txt",
+        &ReadOptions::default(),
+    )
+    .unwrap();
     assert_eq!(r.provenance.separator, "space");
     assert!(rel(val(&r, "Weg", 2), 3.5e-3));
-    let r = read_bytes(b"Time_s,Force_kN,Disp_mm,Angle (deg),Torque (lbf*in)\n0,1,2,90,1\n", "u.csv", &ReadOptions::default()).unwrap();
-    let u: Vec<(&str, &str)> = r.channels.iter().map(|c| (c.name.as_str(), c.unit.as_str())).collect();
-    assert_eq!(u, [("Time", "s"), ("Force", "kN"), ("Disp", "mm"), ("Angle", "deg"), ("Torque", "lbf*in")]);
+    let r = read_bytes(
+        b"Time_s,Force_kN,Disp_mm,Angle (deg),Torque (lbf*in)\n0,1,2,90,1\n",
+        "u.csv",
+        &ReadOptions::default(),
+    )
+    .unwrap();
+    let u: Vec<(&str, &str)> = r
+        .channels
+        .iter()
+        .map(|c| (c.name.as_str(), c.unit.as_str()))
+        .collect();
+    assert_eq!(
+        u,
+        [
+            ("Time", "s"),
+            ("Force", "kN"),
+            ("Disp", "mm"),
+            ("Angle", "deg"),
+            ("Torque", "lbf*in")
+        ]
+    );
     assert!(rel(val(&r, "Angle", 1), std::f64::consts::FRAC_PI_2));
     assert!(rel(val(&r, "Torque", 1), 0.112984829));
     assert!(rel(val(&r, "Force", 1), 1000.0));
@@ -188,7 +328,12 @@ fn units_inside_names_and_space_separator() {
 #[test]
 fn bluehill_specimen_column_and_quoted_thousands() {
     let text = "1,Time,Displacement,Force\n,(s),(mm),(kN)\n\"\",\"0.0000\",\"1,234.5\",\"0.0005\"\n\"\",\"0.0200\",\"0.0072\",\"0.0009\"\n\n";
-    let r = read_bytes(text.as_bytes(), "Specimen_RawData_1.csv", &ReadOptions::default()).unwrap();
+    let r = read_bytes(
+        text.as_bytes(),
+        "Specimen_RawData_1.csv",
+        &ReadOptions::default(),
+    )
+    .unwrap();
     assert_eq!(r.provenance.format, Format::BluehillCsv);
     assert!(r.provenance.reason.contains("Specimen_RawData_1.csv"));
     assert_eq!(r.data.height(), 2);
@@ -199,27 +344,57 @@ fn bluehill_specimen_column_and_quoted_thousands() {
 #[test]
 fn overrides_of_roles_kind_and_format() {
     let text = b"Time (s),Position (mm),Aux (mm),Load (N)\n0,0,0,0\n1,1,2,3\n";
-    let opts = ReadOptions { control: Some("Aux".into()), kind: Some(TestKind::ThreePoint), ..Default::default() };
+    let opts = ReadOptions {
+        control: Some("Aux".into()),
+        kind: Some(TestKind::ThreePoint),
+        ..Default::default()
+    };
     let r = read_bytes(text, "o.csv", &opts).unwrap();
     assert_eq!(role_name(&r, Role::Control), Some("Aux"));
     assert_eq!(r.channels[1].role, Role::Other);
     assert_eq!(r.kind, TestKind::ThreePoint);
-    let r = read_bytes(text, "o.csv", &ReadOptions { format: Some(Format::WavematrixCsv), ..Default::default() }).unwrap();
+    let r = read_bytes(
+        text,
+        "o.csv",
+        &ReadOptions {
+            format: Some(Format::WavematrixCsv),
+            ..Default::default()
+        },
+    )
+    .unwrap();
     assert_eq!(r.provenance.format, Format::WavematrixCsv);
     assert_eq!(r.provenance.reason, "forced by --format");
-    let e = read_bytes(text, "o.csv", &ReadOptions { response: Some("Kraft".into()), ..Default::default() }).unwrap_err();
-    assert!(e.to_string().contains("--response 'Kraft'") && e.to_string().contains("Load"), "{e}");
+    let e = read_bytes(
+        text,
+        "o.csv",
+        &ReadOptions {
+            response: Some("Kraft".into()),
+            ..Default::default()
+        },
+    )
+    .unwrap_err();
+    assert!(
+        e.to_string().contains("--response 'Kraft'") && e.to_string().contains("Load"),
+        "{e}"
+    );
 }
 
 #[test]
 fn writes_parquet_and_csv_atomically_and_round_trips() {
-    let r = read_path(&data("bam__mts793_cube_compression.dat"), &ReadOptions::default()).unwrap();
+    let r = read_path(
+        &data("bam__mts793_cube_compression.dat"),
+        &ReadOptions::default(),
+    )
+    .unwrap();
     let dir = tempfile::tempdir().unwrap();
     let csv = dir.path().join("out.csv");
     r.write_csv(&csv).unwrap();
     let back = read_path(&csv, &ReadOptions::default()).unwrap();
     assert_eq!(back.data.height(), 593);
-    assert_eq!(back.column_values("Ch 1 Prüfkraft"), r.column_values("Ch 1 Prüfkraft"));
+    assert_eq!(
+        back.column_values("Ch 1 Prüfkraft"),
+        r.column_values("Ch 1 Prüfkraft")
+    );
     let pq = dir.path().join("out.parquet");
     r.write_parquet(&pq).unwrap();
     let f = std::fs::File::open(&pq).unwrap();
@@ -227,6 +402,9 @@ fn writes_parquet_and_csv_atomically_and_round_trips() {
     let df = polars_io::prelude::ParquetReader::new(f).finish().unwrap();
     assert!(df.equals_missing(&r.data));
     // Only the two outputs: no temporary files left.
-    let names: Vec<String> = std::fs::read_dir(dir.path()).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
+    let names: Vec<String> = std::fs::read_dir(dir.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
     assert_eq!(names.len(), 2, "{names:?}");
 }

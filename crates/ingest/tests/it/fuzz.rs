@@ -30,9 +30,16 @@ fn fixtures() -> Vec<Vec<u8>> {
 fn all_options() -> Vec<ReadOptions> {
     let mut v = vec![ReadOptions::default()];
     for f in Format::ALL {
-        v.push(ReadOptions { format: Some(f), ..Default::default() });
+        v.push(ReadOptions {
+            format: Some(f),
+            ..Default::default()
+        });
     }
-    v.push(ReadOptions { block: Some(2), time: Some("Time".into()), ..Default::default() });
+    v.push(ReadOptions {
+        block: Some(2),
+        time: Some("Time".into()),
+        ..Default::default()
+    });
     v
 }
 
@@ -47,7 +54,26 @@ enum Edit {
 fn edit() -> impl Strategy<Value = Edit> {
     prop_oneof![
         (any::<usize>(), any::<u8>()).prop_map(|(p, b)| Edit::Flip(p, b)),
-        (any::<usize>(), prop::collection::vec(prop_oneof![Just(b'\t'), Just(b';'), Just(b','), Just(b'"'), Just(b'\n'), Just(b'\r'), Just(b'0'), Just(b'-'), Just(b'E'), Just(0xFCu8), Just(0u8), any::<u8>()], 1..8))
+        (
+            any::<usize>(),
+            prop::collection::vec(
+                prop_oneof![
+                    Just(b'\t'),
+                    Just(b';'),
+                    Just(b','),
+                    Just(b'"'),
+                    Just(b'\n'),
+                    Just(b'\r'),
+                    Just(b'0'),
+                    Just(b'-'),
+                    Just(b'E'),
+                    Just(0xFCu8),
+                    Just(0u8),
+                    any::<u8>()
+                ],
+                1..8
+            )
+        )
             .prop_map(|(p, b)| Edit::Insert(p, b)),
         (any::<usize>(), 1usize..200).prop_map(|(p, n)| Edit::Delete(p, n)),
         any::<usize>().prop_map(Edit::Truncate),

@@ -18,7 +18,8 @@ fn i(v: &Value, k: &str) -> Option<usize> {
     v.get(k).and_then(|x| x.as_integer()).map(|x| x as usize)
 }
 fn f(v: &Value, k: &str) -> Option<f64> {
-    v.get(k).and_then(|x| x.as_float().or_else(|| x.as_integer().map(|i| i as f64)))
+    v.get(k)
+        .and_then(|x| x.as_float().or_else(|| x.as_integer().map(|i| i as f64)))
 }
 
 /// The manifest writes N·m; cablab-core spells the SI torque unit "N m".
@@ -47,20 +48,36 @@ fn check_file(entry: &Value, errs: &mut Vec<String>) {
         err(format!("sha256 {} differs", p.sha256));
     }
     if Some(p.encoding.as_str()) != s(entry, "encoding") {
-        err(format!("encoding {} != {:?}", p.encoding, s(entry, "encoding")));
+        err(format!(
+            "encoding {} != {:?}",
+            p.encoding,
+            s(entry, "encoding")
+        ));
     }
     let sep = s(entry, "separator").unwrap();
     if p.separator != sep {
         err(format!("separator {} != {sep}", p.separator));
     }
     if Some(p.decimal.as_str()) != s(entry, "decimal") {
-        err(format!("decimal {} != {:?}", p.decimal, s(entry, "decimal")));
+        err(format!(
+            "decimal {} != {:?}",
+            p.decimal,
+            s(entry, "decimal")
+        ));
     }
     if Some(rec.blocks.len()) != i(entry, "blocks") {
-        err(format!("blocks {} != {:?}", rec.blocks.len(), i(entry, "blocks")));
+        err(format!(
+            "blocks {} != {:?}",
+            rec.blocks.len(),
+            i(entry, "blocks")
+        ));
     }
     if Some(rec.main_block) != i(entry, "main_block") {
-        err(format!("main block {} != {:?}", rec.main_block, i(entry, "main_block")));
+        err(format!(
+            "main block {} != {:?}",
+            rec.main_block,
+            i(entry, "main_block")
+        ));
     }
     let rows = rec.data.height();
     if Some(rows) != i(entry, "rows") {
@@ -81,30 +98,63 @@ fn check_file(entry: &Value, errs: &mut Vec<String>) {
     }
     if let Some(list) = entry.get("block_list").and_then(|x| x.as_array()) {
         for (bi, want) in list.iter().enumerate() {
-            let Some(got) = rec.blocks.get(bi) else { continue };
+            let Some(got) = rec.blocks.get(bi) else {
+                continue;
+            };
             if Some(got.rows) != i(want, "rows") || Some(got.names_line) != i(want, "names_line") {
-                err(format!("block {} rows/names_line {}/{} differ", bi + 1, got.rows, got.names_line));
+                err(format!(
+                    "block {} rows/names_line {}/{} differ",
+                    bi + 1,
+                    got.rows,
+                    got.names_line
+                ));
             }
-            if Some(got.first_data_line) != i(want, "first_data_line") || Some(got.last_data_line) != i(want, "last_data_line") {
+            if Some(got.first_data_line) != i(want, "first_data_line")
+                || Some(got.last_data_line) != i(want, "last_data_line")
+            {
                 err(format!("block {} data lines differ", bi + 1));
             }
             if got.title.as_deref() != s(want, "title") {
-                err(format!("block {} title {:?} != {:?}", bi + 1, got.title, s(want, "title")));
+                err(format!(
+                    "block {} title {:?} != {:?}",
+                    bi + 1,
+                    got.title,
+                    s(want, "title")
+                ));
             }
-            let names: Vec<&str> = want["names"].as_array().unwrap().iter().map(|x| x.as_str().unwrap()).collect();
+            let names: Vec<&str> = want["names"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|x| x.as_str().unwrap())
+                .collect();
             if got.names.iter().map(|x| x.as_str()).collect::<Vec<_>>() != names {
-                err(format!("block {} names {:?} != {names:?}", bi + 1, got.names));
+                err(format!(
+                    "block {} names {:?} != {names:?}",
+                    bi + 1,
+                    got.names
+                ));
             }
         }
     }
     // Columns.
     let cols = entry["columns"].as_array().unwrap();
     if cols.len() != rec.channels.len() {
-        err(format!("{} channels != {} columns", rec.channels.len(), cols.len()));
+        err(format!(
+            "{} channels != {} columns",
+            rec.channels.len(),
+            cols.len()
+        ));
     }
     for (c, ch) in cols.iter().zip(&rec.channels) {
         if Some(ch.name.as_str()) != s(c, "name") || Some(ch.unit.as_str()) != s(c, "unit") {
-            err(format!("column {:?}/{:?} != {:?}/{:?}", ch.name, ch.unit, s(c, "name"), s(c, "unit")));
+            err(format!(
+                "column {:?}/{:?} != {:?}/{:?}",
+                ch.name,
+                ch.unit,
+                s(c, "name"),
+                s(c, "unit")
+            ));
         }
         if let Some(h) = s(c, "header_cell") {
             if ch.header_cell != h {
@@ -123,9 +173,17 @@ fn check_file(entry: &Value, errs: &mut Vec<String>) {
         }
     }
     // Roles.
-    for (k, role) in [("time_column", Role::Time), ("control_column", Role::Control), ("response_column", Role::Response)] {
+    for (k, role) in [
+        ("time_column", Role::Time),
+        ("control_column", Role::Control),
+        ("response_column", Role::Response),
+    ] {
         let want = s(entry, k);
-        let got = rec.channels.iter().find(|c| c.role == role).map(|c| c.name.as_str());
+        let got = rec
+            .channels
+            .iter()
+            .find(|c| c.role == role)
+            .map(|c| c.name.as_str());
         if want != got {
             err(format!("{k}: {got:?} != {want:?}"));
         }
@@ -134,7 +192,10 @@ fn check_file(entry: &Value, errs: &mut Vec<String>) {
     let complete = rec.complete_rows();
     let n_complete = complete.iter().filter(|&&c| c).count();
     if Some(n_complete) != i(entry, "rows_complete") {
-        err(format!("rows_complete {n_complete} != {:?}", i(entry, "rows_complete")));
+        err(format!(
+            "rows_complete {n_complete} != {:?}",
+            i(entry, "rows_complete")
+        ));
     }
     let first = complete.iter().position(|&c| c).map(|x| x + 1);
     let last = complete.iter().rposition(|&c| c).map(|x| x + 1);
@@ -186,7 +247,13 @@ fn check_file(entry: &Value, errs: &mut Vec<String>) {
             None => &rec,
             Some(k) => {
                 if !other_blocks.iter().any(|(b, _)| *b == k) {
-                    match read_path(&path, &ReadOptions { block: Some(k), ..Default::default() }) {
+                    match read_path(
+                        &path,
+                        &ReadOptions {
+                            block: Some(k),
+                            ..Default::default()
+                        },
+                    ) {
                         Ok(r) => other_blocks.push((k, r)),
                         Err(e) => {
                             err(format!("block {k}: {e}"));
@@ -199,7 +266,10 @@ fn check_file(entry: &Value, errs: &mut Vec<String>) {
         };
         match r.column_values(col).and_then(|v| v.get(row - 1).copied()) {
             Some(x) if close(x, want, 1e-5) => {}
-            other => err(format!("row {row} {col} = {other:?} != {want} (raw {:?})", s(c, "raw"))),
+            other => err(format!(
+                "row {row} {col} = {other:?} != {want} (raw {:?})",
+                s(c, "raw")
+            )),
         }
     }
 }
@@ -209,15 +279,26 @@ fn real_logs_match_manifest() {
     let d = dir();
     let manifest = d.join("MANIFEST.toml");
     let Ok(text) = std::fs::read_to_string(&manifest) else {
-        println!("SKIPPED: {} is absent; the real-log test needs ../shared/real_logs", manifest.display());
+        println!(
+            "SKIPPED: {} is absent; the real-log test needs ../shared/real_logs",
+            manifest.display()
+        );
         return;
     };
-    let m: Value = text.parse::<toml::Table>().map(Value::Table).expect("MANIFEST.toml parses");
+    let m: Value = text
+        .parse::<toml::Table>()
+        .map(Value::Table)
+        .expect("MANIFEST.toml parses");
     let files = m["file"].as_array().unwrap();
     assert_eq!(files.len(), 17);
     let mut errs = Vec::new();
     for entry in files {
         check_file(entry, &mut errs);
     }
-    assert!(errs.is_empty(), "{} mismatch(es):\n{}", errs.len(), errs.join("\n"));
+    assert!(
+        errs.is_empty(),
+        "{} mismatch(es):\n{}",
+        errs.len(),
+        errs.join("\n")
+    );
 }

@@ -1,0 +1,330 @@
+//! The campaign outputs: `summary.json` (CONTRACT.md), the Table 1 / Table 2 style tables, the
+//! campaign plots, the self-contained HTML report and `manifest.json` (hashes of inputs,
+//! pipeline, version and every output). Everything here is built from the per-test outcomes in
+//! campaign order, so reruns are byte-identical.
+
+use super::config::Campaign;
+use super::evaluate::TestOutcome;
+use super::runner::VERSION;
+use crate::output::{sha256_hex, to_json_bytes, write_atomic};
+use anyhow::{Context, Result};
+use cablab_core::TestKind;
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+
+/// One row of the manifest: a file and its SHA-256.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq, Eq, PartialOrd, Ord)]
+pub struct Hashed {
+    /// Path (inputs: relative to the project root; outputs: relative to the report folder).
+    pub path: String,
+    /// SHA-256, lowercase hex.
+    pub sha256: String,
+}
+
+/// `manifest.json`.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct Manifest {
+    /// cablab's version.
+    pub cablab_version: String,
+    /// Campaign name.
+    pub campaign: String,
+    /// The pipeline file, relative to the project root.
+    pub pipeline: Hashed,
+    /// The project root as seen from the report folder (e.g. `../..`).
+    pub root_from_report: String,
+    /// Every input.
+    pub inputs: Vec<Hashed>,
+    /// Every output except this manifest.
+    pub outputs: Vec<Hashed>,
+}
+
+/// `summary.json` per-test entry.
+#[derive(Debug, Clone, Serialize)]
+struct SummaryTest<'a> {
+    id: &'a str,
+    specimen: &'a str,
+    kind: TestKind,
+    ok: bool,
+    error: Option<&'a str>,
+    stiffness: Option<f64>,
+    stiffness_ci95: Option<[f64; 2]>,
+    stiffness_unit: &'a str,
+    modulus_pa: Option<f64>,
+    behaviour: Option<&'a str>,
+    #[serde(rename = "yield")]
+    yield_point: Option<serde_json::Value>,
+    cycles: usize,
+    baseline_gap_rel: Option<f64>,
+    verdict: Option<&'a str>,
+    why: &'a [String],
+    report: String,
+}
+
+fn rel(from: &Path, to: &Path) -> String {
+    // Both are joined to the same root; count the components of `from` below the common prefix.
+    let f: Vec<_> = from.components().collect();
+    let t: Vec<_> = to.components().collect();
+    let common = f.iter().zip(&t).take_while(|(a, b)| a == b).count();
+    let mut parts: Vec<String> = std::iter::repeat_n("..".to_string(), f.len() - common).collect();
+    parts.extend(
+        t[common..]
+            .iter()
+            .map(|c| c.as_os_str().to_string_lossy().to_string()),
+    );
+    if parts.is_empty() {
+        ".".into()
+    } else {
+        parts.join("/")
+    }
+}
+
+/// Write summary, tables, plots, report and manifest into `out_dir`.
+pub fn write_campaign_outputs(
+    c: &Campaign,
+    out_dir: &Path,
+    outcomes: &[TestOutcome],
+) -> Result<()> {
+    let mut written: Vec<(String, Vec<u8>)> = Vec::new();
+    // Table 1: groups per specimen type and kind.
+    let rows: Vec<cablab_measure::TableRow> = outcomes
+        .iter()
+        .filter(|o| o.error.is_none())
+        .filter_map(|o| {
+            Some(cablab_measure::TableRow {
+                specimen: o.specimen.clone(),
+                diameter_m: Some(o.diameter_m),
+                kind: o.kind,
+                stiffness: o.stiffness?,
+                modulus_pa: o.modulus_pa,
+            })
+        })
+        .collect();
+    let groups = cablab_measure::campaign_table(&rows);
+    let table2 = piecewise_rows(outcomes);
+    for t in &c.file.reports.tables {
+        let (name, text) = match t.as_str() {
+            "md" => ("table1.md", cablab_measure::render_markdown(&groups)),
+            "csv" => ("table1.csv", cablab_measure::render_csv(&groups)),
+            "json" => ("table1.json", cablab_measure::render_json(&groups)),
+            _ => ("table1.tex", cablab_measure::render_latex(&groups)),
+        };
+        written.push((name.to_string(), text.into_bytes()));
+    }
+    if !table2.is_empty() {
+        written.push(("table2.json".into(), to_json_bytes(&table2)?));
+    }
+    let tests: Vec<SummaryTest> = outcomes
+        .iter()
+        .map(|o| SummaryTest {
+            id: &o.id,
+            specimen: &o.specimen,
+            kind: o.kind,
+            ok: o.error.is_none(),
+            error: o.error.as_deref(),
+            stiffness: o.stiffness,
+            stiffness_ci95: o.stiffness_ci95,
+            stiffness_unit: &o.stiffness_unit,
+            modulus_pa: o.modulus_pa,
+            behaviour: o.behaviour.as_deref(),
+            yield_point: o
+                .yield_point
+                .map(|[c, r]| serde_json::json!({"control": c, "response": r})),
+            cycles: o.cycles,
+            baseline_gap_rel: o.baseline_gap_rel,
+            verdict: o.verdict.as_deref(),
+            why: &o.why,
+            report: format!("tests/{}/result.json", o.slug),
+        })
+        .collect();
+    let summary = serde_json::json!({
+        "campaign": c.file.campaign.name,
+        "description": c.file.campaign.description,
+        "cablab_version": VERSION,
+        "n_tests": outcomes.len(),
+        "n_failed": outcomes.iter().filter(|o| o.error.is_some()).count(),
+        "skipped": c.skipped.iter().map(|(id, why)| serde_json::json!({"id": id, "why": why})).collect::<Vec<_>>(),
+        "groups": groups,
+        "piecewise": table2,
+        "tests": tests,
+    });
+    written.push(("summary.json".into(), to_json_bytes(&summary)?));
+    if c.file.reports.svg || c.file.reports.html {
+        for (name, svg) in super::report::campaign_svgs(outcomes)? {
+            written.push((name, svg.into_bytes()));
+        }
+    }
+    if c.file.reports.html {
+        let html = super::report::html(c, out_dir, outcomes, &groups, &table2, &written)?;
+        written.push(("index.html".into(), html.into_bytes()));
+    }
+    for (name, bytes) in &written {
+        write_atomic(&out_dir.join(name), bytes).with_context(|| format!("cannot write {name}"))?;
+    }
+    // Remove folders of tests no longer in the campaign (only folders cablab made).
+    if let Ok(rd) = std::fs::read_dir(out_dir.join("tests")) {
+        for e in rd.flatten() {
+            let name = e.file_name().to_string_lossy().to_string();
+            if !outcomes.iter().any(|o| o.slug == name) && e.path().join("outcome.json").exists() {
+                let _ = std::fs::remove_dir_all(e.path());
+            }
+        }
+    }
+    // Manifest.
+    let mut outputs: Vec<Hashed> = written
+        .iter()
+        .map(|(n, b)| Hashed {
+            path: n.clone(),
+            sha256: sha256_hex(b),
+        })
+        .collect();
+    for o in outcomes {
+        let dir = out_dir.join("tests").join(&o.slug);
+        for (name, sha) in &o.files {
+            outputs.push(Hashed {
+                path: format!("tests/{}/{}", o.slug, name),
+                sha256: sha.clone(),
+            });
+        }
+        if let Ok(b) = std::fs::read(dir.join("outcome.json")) {
+            outputs.push(Hashed {
+                path: format!("tests/{}/outcome.json", o.slug),
+                sha256: sha256_hex(&b),
+            });
+        }
+    }
+    outputs.sort();
+    let mut inputs: Vec<Hashed> = Vec::new();
+    for t in &c.tests {
+        let b = std::fs::read(&t.path).with_context(|| format!("cannot read {}", t.id))?;
+        inputs.push(Hashed {
+            path: t.id.clone(),
+            sha256: sha256_hex(&b),
+        });
+    }
+    let pipeline_rel = rel(&abs(&c.root), &abs(&c.pipeline_path));
+    let manifest = Manifest {
+        cablab_version: VERSION.into(),
+        campaign: c.file.campaign.name.clone(),
+        pipeline: Hashed {
+            path: pipeline_rel,
+            sha256: sha256_hex(&c.pipeline_bytes),
+        },
+        root_from_report: rel(&abs(&c.output_dir()), &abs(&c.root)),
+        inputs,
+        outputs,
+    };
+    write_atomic(&out_dir.join("manifest.json"), &to_json_bytes(&manifest)?)
+        .context("cannot write manifest.json")?;
+    Ok(())
+}
+
+fn abs(p: &Path) -> PathBuf {
+    let p = if p.is_absolute() {
+        p.to_path_buf()
+    } else {
+        std::env::current_dir()
+            .map(|d| d.join(p))
+            .unwrap_or_else(|_| p.to_path_buf())
+    };
+    // Normalise `.` and `..` without touching the file system (folders may not exist yet).
+    let mut out = PathBuf::new();
+    for comp in p.components() {
+        match comp {
+            std::path::Component::CurDir => {}
+            std::path::Component::ParentDir => {
+                out.pop();
+            }
+            c => out.push(c.as_os_str()),
+        }
+    }
+    out
+}
+
+/// Table 2 style rows: per specimen type, the piecewise linear elastic parameters from the
+/// pure-bending tests classed piecewise linear elastic (mean and SD over the tests).
+#[derive(Debug, Clone, Serialize)]
+pub struct PiecewiseRow {
+    /// Specimen type.
+    pub specimen: String,
+    /// Tests contributing.
+    pub n: usize,
+    /// (EI)_B,1 mean, N m².
+    pub ei1_mean: f64,
+    /// (EI)_B,1 SD.
+    pub ei1_sd: Option<f64>,
+    /// (EI)_B,2 mean, N m².
+    pub ei2_mean: f64,
+    /// (EI)_B,2 SD.
+    pub ei2_sd: Option<f64>,
+    /// K_B,t mean, 1/m.
+    pub k_t_mean: f64,
+    /// K_B,t SD.
+    pub k_t_sd: Option<f64>,
+}
+
+fn piecewise_rows(outcomes: &[TestOutcome]) -> Vec<PiecewiseRow> {
+    let mut specimens: Vec<&str> = outcomes.iter().map(|o| o.specimen.as_str()).collect();
+    specimens.dedup();
+    let mut out = Vec::new();
+    let mut seen = std::collections::BTreeSet::new();
+    for s in specimens {
+        if !seen.insert(s) {
+            continue;
+        }
+        let mut ei1 = vec![];
+        let mut ei2 = vec![];
+        let mut kt = vec![];
+        for o in outcomes.iter().filter(|o| {
+            o.specimen == s
+                && o.kind == TestKind::PureBending
+                && o.behaviour.as_deref() == Some("piecewise_linear_elastic")
+        }) {
+            if let Some(p) = &o.piecewise {
+                let g = |k: &str| p.get(k).and_then(|v| v.as_f64());
+                if let (Some(a), Some(b), Some(t)) =
+                    (g("stiffness_1"), g("stiffness_2"), g("threshold_control"))
+                {
+                    ei1.push(a);
+                    ei2.push(b);
+                    kt.push(t);
+                }
+            }
+        }
+        if ei1.is_empty() {
+            continue;
+        }
+        let ms = |v: &[f64]| {
+            let (m, sd) = cablab_measure::stats::mean_sd(v);
+            (m, (v.len() > 1).then_some(sd))
+        };
+        let (a, asd) = ms(&ei1);
+        let (b, bsd) = ms(&ei2);
+        let (t, tsd) = ms(&kt);
+        out.push(PiecewiseRow {
+            specimen: s.to_string(),
+            n: ei1.len(),
+            ei1_mean: a,
+            ei1_sd: asd,
+            ei2_mean: b,
+            ei2_sd: bsd,
+            k_t_mean: t,
+            k_t_sd: tsd,
+        });
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn relative_paths() {
+        assert_eq!(rel(Path::new("/a/reports/demo"), Path::new("/a")), "../..");
+        assert_eq!(
+            rel(Path::new("/a"), Path::new("/a/pipelines/demo.toml")),
+            "pipelines/demo.toml"
+        );
+        assert_eq!(rel(Path::new("/a"), Path::new("/a")), ".");
+    }
+}

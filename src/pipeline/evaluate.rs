@@ -1,0 +1,473 @@
+//! One test through the stages: ingest → characterise → calibrate/simulate → diagnose → plots.
+//!
+//! Pure with respect to the campaign: takes the planned test and the raw bytes, returns the
+//! per-test result and the files to write (path relative to the test's folder, bytes). Writing,
+//! caching and progress are the runner's business.
+
+use super::config::{Campaign, PlannedTest};
+use crate::bridge::Curve;
+use anyhow::{anyhow, Context as _, Result};
+use cablab_core::{Effect, TestKind};
+use cablab_diagnose::registry::{Registry, Rod};
+use cablab_diagnose::{DiagTest, ModelSpec, SegLabel};
+use cablab_measure::{Analysis, Branch};
+use serde::{Deserialize, Serialize};
+
+/// Stages, in order; the runner shows one progress bar per stage.
+pub const STAGES: [&str; 5] = ["ingest", "characterise", "calibrate", "diagnose", "report"];
+
+/// What the campaign keeps of one test (written as `outcome.json`; read back on a cache hit).
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+pub struct TestOutcome {
+    /// Root-relative path of the raw file.
+    pub id: String,
+    /// Folder name under `tests/`.
+    pub slug: String,
+    /// Specimen type label.
+    pub specimen: String,
+    /// Diameter, m.
+    pub diameter_m: f64,
+    /// Kind.
+    pub kind: TestKind,
+    /// Content hash of everything this result depends on.
+    pub cache_key: String,
+    /// SHA-256 of the raw file.
+    pub input_sha256: String,
+    /// `null` when the test evaluated; else the error, naming the stage.
+    pub error: Option<String>,
+    /// Reader layout.
+    pub format: Option<String>,
+    /// Free length or span used, m.
+    pub free_length_m: Option<f64>,
+    /// Complete rows evaluated.
+    pub rows: Option<usize>,
+    /// Stiffness value (SI) or null.
+    pub stiffness: Option<f64>,
+    /// Stiffness 95% CI.
+    pub stiffness_ci95: Option<[f64; 2]>,
+    /// Unit of the stiffness.
+    pub stiffness_unit: String,
+    /// Young's modulus, Pa.
+    pub modulus_pa: Option<f64>,
+    /// Behaviour class.
+    pub behaviour: Option<String>,
+    /// Yield (control, response) SI.
+    pub yield_point: Option<[f64; 2]>,
+    /// Piecewise threshold (sectional control) and the two stiffnesses, when found.
+    pub piecewise: Option<serde_json::Value>,
+    /// Cycles found.
+    pub cycles: usize,
+    /// Baseline law and its calibrated parameters.
+    pub calibration: Option<serde_json::Value>,
+    /// Relative RMS gap of the calibrated baseline over the whole test.
+    pub baseline_gap_rel: Option<f64>,
+    /// Verdict effect of the diagnosis, with the held-out gaps.
+    pub verdict: Option<String>,
+    /// Diagnosis in plain words.
+    pub diagnosis_words: Option<String>,
+    /// Why a stage was skipped (`diagnose: disabled for this kind`).
+    pub why: Vec<String>,
+    /// Warnings from the reader and the characterisation.
+    pub warnings: Vec<String>,
+    /// Files of this test (relative to the test's folder) with their SHA-256.
+    pub files: Vec<(String, String)>,
+}
+
+/// Stage hooks the runner passes in (progress bars); called after each stage.
+pub trait StageObserver: Sync {
+    /// `stage` (index into [`STAGES`]) finished for one test.
+    fn done(&self, stage: usize);
+}
+
+/// A no-op observer.
+pub struct Silent;
+impl StageObserver for Silent {
+    fn done(&self, _stage: usize) {}
+}
+
+/// Folder name for a test id: path separators become `__`, anything unusual `_`.
+pub fn slug(id: &str) -> String {
+    id.chars()
+        .map(|c| match c {
+            '/' | '\\' => '~',
+            c if c.is_ascii_alphanumeric() || c == '-' || c == '_' || c == '.' => c,
+            _ => '_',
+        })
+        .collect::<String>()
+        .replace('~', "__")
+}
+
+/// Files produced by one test: (relative name, bytes).
+pub type Files = Vec<(String, Vec<u8>)>;
+
+/// Evaluate one test. Never panics on bad data: errors become `outcome.error`.
+pub fn evaluate(
+    c: &Campaign,
+    t: &PlannedTest,
+    bytes: &[u8],
+    key: &str,
+    diagnosis_enabled: bool,
+    obs: &dyn StageObserver,
+) -> (TestOutcome, Files) {
+    let mut out = TestOutcome {
+        id: t.id.clone(),
+        slug: slug(&t.id),
+        specimen: t.specimen.clone(),
+        diameter_m: t.diameter_m,
+        kind: t.kind,
+        cache_key: key.to_string(),
+        input_sha256: crate::output::sha256_hex(bytes),
+        error: None,
+        format: None,
+        free_length_m: t.free_length_m,
+        rows: None,
+        stiffness: None,
+        stiffness_ci95: None,
+        stiffness_unit: t.kind.stiffness_unit().to_string(),
+        modulus_pa: None,
+        behaviour: None,
+        yield_point: None,
+        piecewise: None,
+        cycles: 0,
+        calibration: None,
+        baseline_gap_rel: None,
+        verdict: None,
+        diagnosis_words: None,
+        why: vec![],
+        warnings: vec![],
+        files: vec![],
+    };
+    let mut files = Files::new();
+    let mut stage_done = 0usize;
+    let r = stages(
+        c,
+        t,
+        bytes,
+        diagnosis_enabled,
+        &mut out,
+        &mut files,
+        &mut |s| {
+            obs.done(s);
+            stage_done = s + 1;
+        },
+    );
+    if let Err(e) = r {
+        out.error = Some(format!(
+            "{}: {e:#}",
+            STAGES[stage_done.min(STAGES.len() - 1)]
+        ));
+        // Count the stages this test will not reach, so the bars still end full.
+        for s in stage_done..STAGES.len() {
+            obs.done(s);
+        }
+    }
+    (out, files)
+}
+
+#[allow(clippy::too_many_arguments)]
+fn stages(
+    c: &Campaign,
+    t: &PlannedTest,
+    bytes: &[u8],
+    diagnosis_enabled: bool,
+    out: &mut TestOutcome,
+    files: &mut Files,
+    done: &mut dyn FnMut(usize),
+) -> Result<()> {
+    // 1. ingest
+    let opts = cablab_ingest::ReadOptions {
+        format: t
+            .format
+            .as_deref()
+            .map(|f| f.parse().map_err(|e| anyhow!("format: {e}")))
+            .transpose()?,
+        block: t.block,
+        time: t.time.clone(),
+        control: t.control.clone(),
+        response: t.response.clone(),
+        kind: Some(t.kind),
+    };
+    let rec = cablab_ingest::read_bytes(bytes, &t.id, &opts)?;
+    out.format = Some(rec.provenance.format.as_str().to_string());
+    out.warnings
+        .extend(rec.warnings.iter().map(|w| w.to_string()));
+    let geom = crate::bridge::geometry(
+        &rec,
+        t.kind,
+        t.free_length_m.map(|l| l * 1e3),
+        Some(t.diameter_m * 1e3),
+    )?;
+    out.free_length_m = Some(geom.free_length_m);
+    let curve = crate::bridge::curve(&rec)?;
+    out.rows = Some(curve.control.len());
+    drop(rec);
+    done(0);
+
+    // 2. characterise
+    let ao = cablab_measure::AnalyzeOptions {
+        nu: c.file.campaign.nu,
+        fit_window: t.settings.fit_window.map(|[a, b]| (a, b)),
+        compliance_m_per_n: t.settings.compliance,
+        ..Default::default()
+    };
+    let an = cablab_measure::analyze(
+        t.kind,
+        &geom,
+        curve.time_s.as_deref(),
+        &curve.control,
+        &curve.response,
+        &ao,
+    )?;
+    fill_analysis(out, &an);
+    done(1);
+
+    // 3. calibrate and simulate the baseline
+    let time_s = curve
+        .time_s
+        .clone()
+        .unwrap_or_else(|| (0..curve.control.len()).map(|i| i as f64).collect());
+    let labels = seg_labels(&an, curve.control.len());
+    let mut rod_setup = cablab_rod::TestSetup::new(t.kind, geom.free_length_m);
+    rod_setup.elements = c.file.model.elements;
+    let dtest = DiagTest {
+        kind: t.kind,
+        free_length_m: geom.free_length_m,
+        diameter_m: geom.diameter_m,
+        time_s,
+        control: curve.control.clone(),
+        response: curve.response.clone(),
+        labels,
+        specimen: Some(t.specimen.clone()),
+        rod_setup: Some(rod_setup),
+    };
+    let tests = std::slice::from_ref(&dtest);
+    let rod = Rod::default();
+    let ctx = cablab_diagnose::Context {
+        catalog: &Registry,
+        rod: Some(&rod),
+    };
+    let mut simulated: Option<Vec<f64>> = None;
+    if c.file.model.calibrate {
+        let model = ModelSpec::law(&c.file.model.baseline);
+        let cal = cablab_diagnose::calibrate(ctx, tests, &model, &Default::default())
+            .context("calibrating the baseline")?;
+        let fwd = cablab_diagnose::model::ModelForward::new(tests, &model, &Registry, Some(&rod))?;
+        let sim = fwd.simulate_all(cal.values())?.pop().unwrap_or_default();
+        let scale = curve.response.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        let rms = (sim
+            .iter()
+            .zip(&curve.response)
+            .map(|(s, m)| (m - s).powi(2))
+            .sum::<f64>()
+            / sim.len().max(1) as f64)
+            .sqrt();
+        out.baseline_gap_rel = (scale > 0.0).then(|| rms / scale);
+        out.calibration = Some(serde_json::to_value(&cal)?);
+        simulated = Some(sim);
+    } else {
+        out.why.push("calibrate: disabled in [model]".into());
+    }
+    done(2);
+
+    // 4. diagnose
+    let mut diagnosis = None;
+    let kind_ok = c
+        .diagnose_kinds
+        .as_ref()
+        .is_none_or(|k| k.contains(&t.kind));
+    if diagnosis_enabled && kind_ok {
+        let dopts = cablab_diagnose::DiagnoseOptions {
+            baseline: c.file.model.baseline.clone(),
+            candidates: c.candidates.clone(),
+            ladder: c.file.diagnosis.ladder,
+            ..Default::default()
+        };
+        let d = cablab_diagnose::diagnose(ctx, tests, &dopts).context("diagnosing the gap")?;
+        out.verdict = Some(d.verdict.effect.as_str().to_string());
+        out.diagnosis_words = Some(words(&d));
+        diagnosis = Some(d);
+    } else if !diagnosis_enabled {
+        out.why.push("diagnose: disabled for this run".into());
+    } else {
+        out.why.push(format!(
+            "diagnose: {} is not among [diagnosis].kinds",
+            t.kind
+        ));
+    }
+    done(3);
+
+    // 5. per-test files
+    let result = serde_json::json!({
+        "id": t.id,
+        "specimen": t.specimen,
+        "kind": t.kind,
+        "input": {"path": t.id, "sha256": out.input_sha256, "format": out.format},
+        "geometry": {"free_length_m": geom.free_length_m, "diameter_m": geom.diameter_m},
+        "analysis": an,
+        "calibration": out.calibration,
+        "baseline_gap_rel": out.baseline_gap_rel,
+        "diagnosis": diagnosis,
+    });
+    files.push(("result.json".into(), crate::output::to_json_bytes(&result)?));
+    if c.file.reports.parquet {
+        files.push((
+            "curve.parquet".into(),
+            curve_parquet(t.kind, &geom, &curve, &an, simulated.as_deref())?,
+        ));
+    }
+    if c.file.reports.svg || c.file.reports.html {
+        files.push((
+            "curve.svg".into(),
+            super::views::curve_svg(t, &geom, &curve, &an, simulated.as_deref())?.into_bytes(),
+        ));
+        if let Some(d) = &diagnosis {
+            for (name, svg) in super::views::gap_svgs(d)? {
+                files.push((name, svg.into_bytes()));
+            }
+        }
+    }
+    done(4);
+    Ok(())
+}
+
+fn fill_analysis(out: &mut TestOutcome, an: &Analysis) {
+    if let Some(s) = &an.stiffness {
+        out.stiffness = Some(s.value);
+        out.stiffness_ci95 = Some(s.ci95);
+    }
+    out.modulus_pa = an.modulus_pa;
+    out.behaviour = Some(an.behaviour.as_str().to_string());
+    out.yield_point = an.yield_point.as_ref().map(|y| [y.control, y.response]);
+    out.piecewise = an
+        .piecewise
+        .as_ref()
+        .and_then(|p| serde_json::to_value(p).ok());
+    out.cycles = an.cycles.len();
+    out.warnings.extend(an.warnings.iter().cloned());
+    for (k, v) in &an.why_by_key {
+        out.why.push(format!("{k}: {v}"));
+    }
+}
+
+/// Per-sample cycle/branch labels from the characterisation's segments (the one segmenter).
+pub fn seg_labels(an: &Analysis, n: usize) -> Vec<SegLabel> {
+    cablab_measure::labels(&an.segments, n)
+        .into_iter()
+        .map(|l| SegLabel {
+            cycle: l.cycle,
+            branch: diag_branch(l.branch),
+        })
+        .collect()
+}
+
+fn diag_branch(b: Branch) -> cablab_diagnose::model::Branch {
+    use cablab_diagnose::model::Branch as D;
+    match b {
+        Branch::FirstLoading => D::FirstLoading,
+        Branch::Unloading => D::Unloading,
+        Branch::Reloading => D::Reloading,
+        Branch::ReversedLoading => D::ReversedLoading,
+        Branch::Hold => D::Hold,
+    }
+}
+
+/// The diagnosis in plain words (the report crate's wording).
+pub fn words(d: &cablab_diagnose::Diagnosis) -> String {
+    let verdict = d.verdict.effect;
+    let after = d
+        .effects
+        .iter()
+        .find(|e| e.effect == verdict)
+        .map(|e| e.gap_after_rel);
+    let top = d.located.first().map(|l| (l.where_.clone(), l.share));
+    cablab_report::words::diagnosis_words(&cablab_report::words::DiagnosisSummary {
+        baseline_law: d.baseline.law.clone(),
+        gap_before_rel: d.baseline.gap_heldout_rel,
+        verdict_effect: verdict.as_str().to_string(),
+        gap_after_rel: if verdict == Effect::None { None } else { after },
+        equivalent: d
+            .verdict
+            .equivalent
+            .iter()
+            .map(|e| e.as_str().to_string())
+            .collect(),
+        noise_rel: d.verdict.noise_rel,
+        top_location: top,
+    })
+}
+
+/// The conditioned curve as Parquet: time, machine control, sectional control, response,
+/// cycle, branch and (when calibrated) the simulated response.
+fn curve_parquet(
+    kind: TestKind,
+    geom: &cablab_measure::Geometry,
+    curve: &Curve,
+    an: &Analysis,
+    simulated: Option<&[f64]>,
+) -> Result<Vec<u8>> {
+    use polars::prelude::{Column, DataFrame};
+    let n = curve.control.len();
+    let labels = cablab_measure::labels(&an.segments, n);
+    let mut cols = Vec::new();
+    if let Some(t) = &curve.time_s {
+        cols.push(Column::new("time_s".into(), t));
+    }
+    cols.push(Column::new(
+        format!("control_{}", unit_tag(kind.control_unit())).into(),
+        &curve.control,
+    ));
+    let sect = cablab_measure::sectional(kind, geom, &curve.control);
+    cols.push(Column::new(
+        format!(
+            "sectional_{}",
+            unit_tag(cablab_measure::sectional_unit(kind))
+        )
+        .into(),
+        &sect,
+    ));
+    cols.push(Column::new(
+        format!("response_{}", unit_tag(kind.response_unit())).into(),
+        &curve.response,
+    ));
+    if let Some(s) = simulated {
+        cols.push(Column::new(
+            format!("simulated_{}", unit_tag(kind.response_unit())).into(),
+            s,
+        ));
+    }
+    let cyc: Vec<u32> = labels.iter().map(|l| l.cycle as u32).collect();
+    let br: Vec<&str> = labels.iter().map(|l| branch_name(l.branch)).collect();
+    cols.push(Column::new("cycle".into(), cyc));
+    cols.push(Column::new("branch".into(), br));
+    let mut df = DataFrame::new(n, cols)?;
+    let mut buf = Vec::new();
+    polars_io::parquet::write::ParquetWriter::new(&mut buf).finish(&mut df)?;
+    Ok(buf)
+}
+
+fn branch_name(b: Branch) -> &'static str {
+    b.as_str()
+}
+
+fn unit_tag(u: &str) -> String {
+    match u {
+        "" => "1".into(),
+        "N m" => "N_m".into(),
+        "1/m" => "per_m".into(),
+        other => other.replace(' ', "_").replace('/', "_per_"),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn slugs_are_folder_names() {
+        assert_eq!(
+            slug("raw_data/cable/tension_A.TXT"),
+            "raw_data__cable__tension_A.TXT"
+        );
+        assert_eq!(slug("raw data/ä.csv"), "raw_data___.csv");
+    }
+}

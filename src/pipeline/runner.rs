@@ -1,0 +1,269 @@
+//! Runs a validated campaign: every test through [`super::evaluate`] in parallel (rayon, a pool of
+//! `--jobs` threads), with a content-hash cache per test, indicatif progress per stage, then the
+//! campaign outputs (tables, summary, report, manifest). Outputs are written atomically and are
+//! byte-identical across runs and thread counts: results are collected in the campaign's fixed
+//! order and nothing time- or thread-dependent is written.
+
+use super::config::{Campaign, PlannedTest};
+use super::evaluate::{evaluate, StageObserver, TestOutcome, STAGES};
+use crate::output::{sha256_hex, to_json_bytes, write_atomic};
+use anyhow::{anyhow, Context, Result};
+use indicatif::{MultiProgress, ProgressBar, ProgressDrawTarget, ProgressStyle};
+use rayon::prelude::*;
+use serde::Serialize;
+use std::path::{Path, PathBuf};
+
+/// How to run.
+#[derive(Debug, Clone, Default)]
+pub struct RunOptions {
+    /// Worker threads (None: all cores).
+    pub jobs: Option<usize>,
+    /// Recompute everything.
+    pub no_cache: bool,
+    /// No progress bars.
+    pub quiet: bool,
+    /// Skip the diagnosis.
+    pub no_diagnosis: bool,
+    /// Write here instead of the campaign's output folder (used by `verify`).
+    pub output_override: Option<PathBuf>,
+}
+
+/// What a run did.
+#[derive(Debug, Clone)]
+pub struct RunReport {
+    /// Output folder.
+    pub out_dir: PathBuf,
+    /// Per-test outcomes, campaign order.
+    pub outcomes: Vec<TestOutcome>,
+    /// Tests served from the cache.
+    pub cached: usize,
+    /// Wall time, s (printed, never written).
+    pub seconds: f64,
+}
+
+impl RunReport {
+    /// Tests that failed.
+    pub fn failed(&self) -> usize {
+        self.outcomes.iter().filter(|o| o.error.is_some()).count()
+    }
+}
+
+/// The cablab version written into manifests and cache keys.
+pub const VERSION: &str = env!("CARGO_PKG_VERSION");
+
+struct Bars {
+    bars: Vec<ProgressBar>,
+    _multi: MultiProgress,
+}
+
+impl StageObserver for Bars {
+    fn done(&self, stage: usize) {
+        if let Some(b) = self.bars.get(stage) {
+            b.inc(1);
+        }
+    }
+}
+
+fn bars(n: usize, quiet: bool) -> Bars {
+    let multi = MultiProgress::with_draw_target(if quiet {
+        ProgressDrawTarget::hidden()
+    } else {
+        ProgressDrawTarget::stderr()
+    });
+    let style =
+        ProgressStyle::with_template("{prefix:>13} [{bar:30}] {pos:>4}/{len:4} {elapsed:>4}")
+            .unwrap_or_else(|_| ProgressStyle::default_bar())
+            .progress_chars("=> ");
+    let bars = STAGES
+        .iter()
+        .map(|s| {
+            let b = multi.add(ProgressBar::new(n as u64));
+            b.set_style(style.clone());
+            b.set_prefix(s.to_string());
+            b
+        })
+        .collect();
+    Bars {
+        bars,
+        _multi: multi,
+    }
+}
+
+/// The cache key of one test: everything its result depends on.
+fn cache_key(c: &Campaign, t: &PlannedTest, input_sha: &str, diagnosis: bool) -> Result<String> {
+    #[derive(Serialize)]
+    struct KeyParts<'a> {
+        version: &'a str,
+        input_sha256: &'a str,
+        test: &'a PlannedTest,
+        nu: f64,
+        model: &'a super::config::ModelSettings,
+        diagnosis: Option<&'a super::config::DiagnosisSettings>,
+        reports: &'a super::config::ReportSettings,
+    }
+    let parts = KeyParts {
+        version: VERSION,
+        input_sha256: input_sha,
+        test: t,
+        nu: c.file.campaign.nu,
+        model: &c.file.model,
+        diagnosis: diagnosis.then_some(&c.file.diagnosis),
+        reports: &c.file.reports,
+    };
+    let mut v = serde_json::to_value(&parts)?;
+    // The absolute path must not enter the key: the id (root-relative) identifies the file.
+    if let Some(o) = v.get_mut("test").and_then(|t| t.as_object_mut()) {
+        o.remove("path");
+    }
+    Ok(sha256_hex(serde_json::to_string(&v)?.as_bytes()))
+}
+
+/// A cached outcome is valid when its key matches and every file it lists is present with its
+/// recorded hash.
+fn cached(test_dir: &Path, key: &str) -> Option<TestOutcome> {
+    let bytes = std::fs::read(test_dir.join("outcome.json")).ok()?;
+    let o: TestOutcome = serde_json::from_slice(&bytes).ok()?;
+    // Failures are not served from the cache: a rerun tries them again.
+    if o.cache_key != key || o.error.is_some() {
+        return None;
+    }
+    for (name, sha) in &o.files {
+        let b = std::fs::read(test_dir.join(name)).ok()?;
+        if &sha256_hex(&b) != sha {
+            return None;
+        }
+    }
+    Some(o)
+}
+
+/// Run the campaign.
+pub fn run_campaign(c: &Campaign, o: &RunOptions) -> Result<RunReport> {
+    let start = std::time::Instant::now();
+    let out_dir = o.output_override.clone().unwrap_or_else(|| c.output_dir());
+    std::fs::create_dir_all(out_dir.join("tests"))
+        .with_context(|| format!("cannot create {}", out_dir.display()))?;
+    let diagnosis = c.file.diagnosis.enabled && !o.no_diagnosis;
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(o.jobs.unwrap_or(0))
+        .build()
+        .map_err(|e| anyhow!("cannot start {} worker threads: {e}", o.jobs.unwrap_or(0)))?;
+    let progress = bars(c.tests.len(), o.quiet);
+    let results: Vec<(TestOutcome, bool)> = pool.install(|| {
+        c.tests
+            .par_iter()
+            .map(|t| one_test(c, t, &out_dir, diagnosis, o.no_cache, &progress))
+            .collect()
+    });
+    for b in &progress.bars {
+        b.finish();
+    }
+    let cached_n = results.iter().filter(|r| r.1).count();
+    let outcomes: Vec<TestOutcome> = results.into_iter().map(|r| r.0).collect();
+    super::campaign::write_campaign_outputs(c, &out_dir, &outcomes)?;
+    Ok(RunReport {
+        out_dir,
+        outcomes,
+        cached: cached_n,
+        seconds: start.elapsed().as_secs_f64(),
+    })
+}
+
+/// One test: hash the input, serve from the cache or evaluate, write its files atomically.
+fn one_test(
+    c: &Campaign,
+    t: &PlannedTest,
+    out_dir: &Path,
+    diagnosis: bool,
+    no_cache: bool,
+    obs: &Bars,
+) -> (TestOutcome, bool) {
+    let test_dir = out_dir.join("tests").join(super::evaluate::slug(&t.id));
+    let bytes = match std::fs::read(&t.path) {
+        Ok(b) => b,
+        Err(e) => {
+            for s in 0..STAGES.len() {
+                obs.done(s);
+            }
+            let mut o = failed_outcome(t, format!("ingest: cannot read {}: {e}", t.id));
+            o.slug = super::evaluate::slug(&t.id);
+            return (o, false);
+        }
+    };
+    let input_sha = sha256_hex(&bytes);
+    let key = match cache_key(c, t, &input_sha, diagnosis) {
+        Ok(k) => k,
+        Err(e) => return (failed_outcome(t, format!("cache key: {e}")), false),
+    };
+    if !no_cache {
+        if let Some(o) = cached(&test_dir, &key) {
+            for s in 0..STAGES.len() {
+                obs.done(s);
+            }
+            return (o, true);
+        }
+    }
+    let (mut outcome, files) = evaluate(c, t, &bytes, &key, diagnosis, obs);
+    drop(bytes);
+    // Remove files of an earlier run that this run does not produce (e.g. gap plots of a test
+    // that is no longer diagnosed), then write the new ones.
+    if let Ok(rd) = std::fs::read_dir(&test_dir) {
+        for e in rd.flatten() {
+            let name = e.file_name().to_string_lossy().to_string();
+            if name != "outcome.json" && !files.iter().any(|(n, _)| n == &name) {
+                let _ = std::fs::remove_file(e.path());
+            }
+        }
+    }
+    for (name, b) in &files {
+        if let Err(e) = write_atomic(&test_dir.join(name), b) {
+            outcome
+                .error
+                .get_or_insert(format!("report: cannot write {name}: {e}"));
+        }
+        outcome.files.push((name.clone(), sha256_hex(b)));
+    }
+    match to_json_bytes(&outcome) {
+        Ok(b) => {
+            if let Err(e) = write_atomic(&test_dir.join("outcome.json"), &b) {
+                outcome
+                    .error
+                    .get_or_insert(format!("report: cannot write outcome.json: {e}"));
+            }
+        }
+        Err(e) => {
+            outcome.error.get_or_insert(format!("report: {e}"));
+        }
+    }
+    (outcome, false)
+}
+
+fn failed_outcome(t: &PlannedTest, error: String) -> TestOutcome {
+    TestOutcome {
+        id: t.id.clone(),
+        slug: super::evaluate::slug(&t.id),
+        specimen: t.specimen.clone(),
+        diameter_m: t.diameter_m,
+        kind: t.kind,
+        cache_key: String::new(),
+        input_sha256: String::new(),
+        error: Some(error),
+        format: None,
+        free_length_m: t.free_length_m,
+        rows: None,
+        stiffness: None,
+        stiffness_ci95: None,
+        stiffness_unit: t.kind.stiffness_unit().to_string(),
+        modulus_pa: None,
+        behaviour: None,
+        yield_point: None,
+        piecewise: None,
+        cycles: 0,
+        calibration: None,
+        baseline_gap_rel: None,
+        verdict: None,
+        diagnosis_words: None,
+        why: vec![],
+        warnings: vec![],
+        files: vec![],
+    }
+}

@@ -1,0 +1,230 @@
+//! Fills the report crate's view models from the stage results (characterisation, calibration,
+//! diagnosis). The report crate draws; this module only maps numbers onto its structures.
+
+use super::config::PlannedTest;
+use crate::bridge::Curve;
+use anyhow::Result;
+use cablab_core::TestKind;
+use cablab_measure::{Analysis, Branch};
+use cablab_report::{BranchKind, CurveView, CycleSeries, FitLine};
+
+/// Plot at most this many points per test: curves of 20,000 samples stay legible and small.
+const MAX_PLOT_POINTS: usize = 2500;
+
+fn branch_kind(b: Branch) -> BranchKind {
+    match b {
+        Branch::FirstLoading => BranchKind::FirstLoading,
+        Branch::Unloading => BranchKind::Unloading,
+        Branch::Reloading => BranchKind::Reloading,
+        Branch::ReversedLoading => BranchKind::ReversedLoading,
+        Branch::Hold => BranchKind::Hold,
+    }
+}
+
+/// x of the plot: pure bending is drawn as moment over curvature K_B = θ/l₀ (the chapter's
+/// figure); the other kinds over the machine's control.
+fn plot_x(kind: TestKind, geom: &cablab_measure::Geometry, control: &[f64]) -> Vec<f64> {
+    if kind == TestKind::PureBending {
+        cablab_measure::sectional(kind, geom, control)
+    } else {
+        control.to_vec()
+    }
+}
+
+/// Factor from the sectional control (the unit of the fit window) to the plot's x.
+fn window_to_x(kind: TestKind, geom: &cablab_measure::Geometry) -> f64 {
+    match kind {
+        TestKind::Tension | TestKind::Torsion => geom.free_length_m,
+        _ => 1.0,
+    }
+}
+
+/// The measured curve coloured by cycle with branch markers, the elastic fit line and window,
+/// the yield point, shaded loops and, when calibrated, the simulated curve with residuals.
+pub fn curve_svg(
+    t: &PlannedTest,
+    geom: &cablab_measure::Geometry,
+    curve: &Curve,
+    an: &Analysis,
+    simulated: Option<&[f64]>,
+) -> Result<String> {
+    let kind = t.kind;
+    let n = curve.control.len();
+    let x = plot_x(kind, geom, &curve.control);
+    let y = &curve.response;
+    let stride = n.div_ceil(MAX_PLOT_POINTS).max(1);
+    let labels = cablab_measure::labels(&an.segments, n);
+    let mut cycles: Vec<CycleSeries> = Vec::new();
+    let mut loops = Vec::new();
+    let mut i = 0;
+    while i < n {
+        let cyc = labels[i].cycle;
+        let mut j = i;
+        while j < n && labels[j].cycle == cyc {
+            j += 1;
+        }
+        let idx = cycle_indices(i, j, stride);
+        let mut marks = Vec::new();
+        for k in i..j {
+            if k == i || labels[k].branch != labels[k - 1].branch {
+                marks.push((x[k], y[k], branch_kind(labels[k].branch)));
+            }
+        }
+        let xs: Vec<f64> = idx.iter().map(|&k| x[k]).collect();
+        let ys: Vec<f64> = idx.iter().map(|&k| y[k]).collect();
+        if cyc > 0
+            && an
+                .cycles
+                .iter()
+                .any(|c| c.index == cyc && c.loop_area.is_some())
+        {
+            loops.push(xs.iter().copied().zip(ys.iter().copied()).collect());
+        }
+        cycles.push(CycleSeries {
+            index: cyc,
+            x: xs,
+            y: ys,
+            branch_marks: marks,
+        });
+        i = j;
+    }
+    let fit = an.stiffness.as_ref().and_then(|s| {
+        let f = window_to_x(kind, geom);
+        let sect = cablab_measure::sectional(kind, geom, &curve.control);
+        let (lo, hi) = (s.window[0], s.window[1]);
+        let first = an
+            .segments
+            .iter()
+            .find(|sg| sg.branch == Branch::FirstLoading)
+            .map_or(0..n, |sg| sg.start..sg.end);
+        let (fx, fy): (Vec<f64>, Vec<f64>) = first
+            .filter(|&k| sect[k] >= lo && sect[k] <= hi)
+            .map(|k| (x[k], y[k]))
+            .unzip();
+        let fit = cablab_measure::linear_fit(&fx, &fy).ok()?;
+        let to_x = if kind == TestKind::PureBending {
+            1.0
+        } else {
+            f
+        };
+        Some(FitLine {
+            slope: fit.slope,
+            intercept: fit.intercept,
+            window: (lo * to_x, hi * to_x),
+        })
+    });
+    let yield_point = an.yield_point.as_ref().map(|yp| {
+        let xx = if kind == TestKind::PureBending {
+            yp.control
+        } else {
+            yp.machine_control
+        };
+        (xx, yp.response)
+    });
+    let (xl, yl) = cablab_report::axis_labels(kind);
+    let view = CurveView {
+        title: format!("{} — {}", t.id, kind),
+        x_label: xl.to_string(),
+        y_label: yl.to_string(),
+        cycles,
+        fit,
+        yield_point,
+        loops,
+        simulated: simulated.map(|s| (x.clone(), s.to_vec())),
+    };
+    // The residual panel needs the simulated curve point for point on the plotted samples.
+    let view = decimate_simulated(view, &x, simulated, stride, &labels);
+    Ok(cablab_report::curve_svg(&view)?)
+}
+
+/// Every `stride`-th sample of `i..j` and always the last one (no duplicates).
+fn cycle_indices(i: usize, j: usize, stride: usize) -> Vec<usize> {
+    let mut idx: Vec<usize> = (i..j).step_by(stride).collect();
+    if idx.last() != Some(&(j - 1)) {
+        idx.push(j - 1);
+    }
+    idx
+}
+
+/// With decimated cycles, pass the simulated curve on exactly the plotted samples.
+fn decimate_simulated(
+    mut view: CurveView,
+    x: &[f64],
+    simulated: Option<&[f64]>,
+    stride: usize,
+    labels: &[cablab_measure::Label],
+) -> CurveView {
+    if let Some(sim) = simulated {
+        let n = x.len();
+        let mut idx = Vec::new();
+        let mut i = 0;
+        while i < n {
+            let mut j = i;
+            while j < n && labels[j].cycle == labels[i].cycle {
+                j += 1;
+            }
+            idx.extend(cycle_indices(i, j, stride));
+            i = j;
+        }
+        view.simulated = Some((
+            idx.iter().map(|&k| x[k]).collect(),
+            idx.iter().map(|&k| sim[k]).collect(),
+        ));
+    }
+    view
+}
+
+/// The gap views of one diagnosis: where (shares), which (candidates before/after), how far
+/// (waterfall to the noise floor).
+pub fn gap_svgs(d: &cablab_diagnose::Diagnosis) -> Result<Vec<(String, String)>> {
+    let mut out = Vec::new();
+    let shares: Vec<(String, f64)> = d
+        .located
+        .iter()
+        .filter(|l| l.by != "test")
+        .take(12)
+        .map(|l| (l.where_.clone(), l.share))
+        .collect();
+    if !shares.is_empty() {
+        out.push((
+            "gap_where.svg".to_string(),
+            cablab_report::gap::gap_where_svg(&shares)?,
+        ));
+    }
+    let bars: Vec<cablab_report::gap::CandidateBar> = d
+        .effects
+        .iter()
+        .map(|e| cablab_report::gap::CandidateBar {
+            effect: e.effect.as_str().to_string(),
+            before: e.gap_before_rel,
+            after: e.gap_after_rel,
+        })
+        .collect();
+    if !bars.is_empty() {
+        out.push((
+            "gap_which.svg".to_string(),
+            cablab_report::gap::gap_which_svg(&bars)?,
+        ));
+    }
+    let mut steps = vec![(
+        format!("baseline ({})", d.baseline.law),
+        d.baseline.gap_heldout_rel,
+    )];
+    match &d.ladder {
+        Some(rungs) => steps.extend(
+            rungs
+                .iter()
+                .map(|r| (r.effect.as_str().to_string(), r.gap_after_rel)),
+        ),
+        None => {
+            if let Some(e) = d.effects.iter().find(|e| e.effect == d.verdict.effect) {
+                steps.push((e.effect.as_str().to_string(), e.gap_after_rel));
+            }
+        }
+    }
+    out.push((
+        "gap_waterfall.svg".to_string(),
+        cablab_report::gap::gap_waterfall_svg(&steps, d.verdict.noise_rel)?,
+    ));
+    Ok(out)
+}
