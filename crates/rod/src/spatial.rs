@@ -382,6 +382,9 @@ pub struct SpatialRod<'a> {
 impl<'a> SpatialRod<'a> {
     /// A rod whose stress-free reference configuration is given by node positions and director
     /// frames (straight or curved; the reference strains are subtracted from the law's input).
+    /// Element lengths are the chords between nodes, so the discrete reference curvature is the
+    /// relative rotation of the end frames over the chord (for nodes on an arc of curvature κ₀,
+    /// slightly more than κ₀: κ₀ Δs / chord).
     pub fn from_reference(
         law: &'a dyn Law,
         x: Vec<Vector3<f64>>,

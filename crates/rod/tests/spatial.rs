@@ -642,3 +642,26 @@ fn spatial_timing() {
         t0.elapsed().as_secs_f64() * 1e3
     );
 }
+
+#[test]
+#[ignore = "probe"]
+fn probe_cuts() {
+    let law = stiff_law();
+    for (name, f, m, fm) in [
+        ("cantilever 10", Vector3::new(10.0, 0.0, 0.0), Vector3::zeros(), Vector3::zeros()),
+        ("cantilever 50", Vector3::new(50.0, 0.0, 0.0), Vector3::zeros(), Vector3::zeros()),
+        ("helix x3", Vector3::zeros(), Vector3::new(2.4, 0.0, 3.6), Vector3::zeros()),
+        ("follower 2pi", Vector3::zeros(), Vector3::zeros(), Vector3::new(2.0 * PI, 0.0, 0.0)),
+        ("follower 3d", Vector3::zeros(), Vector3::zeros(), Vector3::new(3.0, 1.0, 2.0)),
+        ("mixed", Vector3::new(5.0, 3.0, 0.0), Vector3::new(1.0, 0.0, 3.0), Vector3::zeros()),
+    ] {
+        let mut rod = SpatialRod::straight(&law, 1.0, 32).unwrap();
+        rod.clamp(0);
+        let mut c = Controls::new(rod.nodes());
+        c.force[32] = f;
+        c.moment[32] = m;
+        c.follower_moment[32] = fm;
+        let r = rod.apply(&c, 0.0, 0);
+        println!("{name}: {r:?}");
+    }
+}
