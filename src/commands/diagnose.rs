@@ -1,6 +1,95 @@
-//! `cablab diagnose` (being wired).
-use super::{CliError, CmdResult};
-/// Run.
-pub fn run(_a: crate::cli::DiagnoseArgs) -> CmdResult {
-    Err(CliError::failed(anyhow::anyhow!("not wired yet")))
+//! `cablab diagnose`: the sim-to-real gap of one or more tests of one kind (CONTRACT.md) —
+//! where it lies, which unmodelled effect causes it, how far it shrinks on held-out data.
+
+use super::{parse_kind, print_json, CliError, CmdResult};
+use crate::cli::DiagnoseArgs;
+use cablab_core::TestKind;
+use cablab_diagnose::registry::{Registry, Rod};
+use cablab_diagnose::DiagTest;
+use std::process::ExitCode;
+
+/// Read one file into a diagnosis test (segments from the characterisation's segmenter).
+pub fn diag_test(
+    path: &std::path::Path,
+    kind: TestKind,
+    a: &DiagnoseArgs,
+) -> Result<DiagTest, CliError> {
+    let opts = crate::bridge::read_options(&a.reader, Some(kind)).map_err(CliError::input)?;
+    let rec = cablab_ingest::read_path(path, &opts).map_err(CliError::input)?;
+    let geom = crate::bridge::geometry(&rec, kind, a.length_mm, a.diameter_mm).map_err(CliError::input)?;
+    let curve = crate::bridge::curve(&rec).map_err(CliError::input)?;
+    let segments = cablab_measure::segment(curve.time_s.as_deref(), &curve.control, &curve.response)
+        .map_err(|e| CliError::input(anyhow::anyhow!("{}: {e}", path.display())))?;
+    let an_labels = cablab_measure::labels(&segments, curve.control.len());
+    let labels = an_labels
+        .into_iter()
+        .map(|l| cablab_diagnose::SegLabel {
+            cycle: l.cycle,
+            branch: crate::pipeline::evaluate::diag_branch(l.branch),
+        })
+        .collect();
+    let n = curve.control.len();
+    Ok(DiagTest {
+        kind,
+        free_length_m: geom.free_length_m,
+        diameter_m: geom.diameter_m,
+        time_s: curve.time_s.unwrap_or_else(|| (0..n).map(|i| i as f64).collect()),
+        control: curve.control,
+        response: curve.response,
+        labels,
+        specimen: rec.specimen.label.clone(),
+        rod_setup: None,
+    })
+}
+
+/// Run `cablab diagnose`.
+pub fn run(a: DiagnoseArgs) -> CmdResult {
+    let kind = parse_kind(&a.kind)?;
+    if kind == TestKind::Unknown {
+        return Err(CliError::input(anyhow::anyhow!(
+            "--kind: give one of tension, torsion, three-point, pure-bending"
+        )));
+    }
+    let candidates = match &a.candidates {
+        None => None,
+        Some(v) => Some(
+            v.iter()
+                .map(|s| s.parse().map_err(|e| CliError::input(anyhow::anyhow!("--candidates: {e}"))))
+                .collect::<Result<Vec<_>, _>>()?,
+        ),
+    };
+    let tests = a
+        .files
+        .iter()
+        .map(|f| diag_test(f, kind, &a))
+        .collect::<Result<Vec<_>, _>>()?;
+    let rod = Rod::default();
+    let ctx = cablab_diagnose::Context {
+        catalog: &Registry,
+        rod: Some(&rod),
+    };
+    let opts = cablab_diagnose::DiagnoseOptions {
+        baseline: a.baseline.clone(),
+        candidates,
+        ladder: a.ladder,
+        ..Default::default()
+    };
+    let d = cablab_diagnose::diagnose(ctx, &tests, &opts).map_err(CliError::failed)?;
+    if a.json {
+        print_json(&d)?;
+    } else {
+        println!("{}", crate::pipeline::evaluate::words(&d));
+        println!();
+        println!("{:<24} {:>12} {:>12}", "effect", "gap before", "gap after");
+        for e in &d.effects {
+            println!(
+                "{:<24} {:>11.3}% {:>11.3}%",
+                e.effect.as_str(),
+                100.0 * e.gap_before_rel,
+                100.0 * e.gap_after_rel
+            );
+        }
+        println!("noise floor {:.3}% of the largest response", 100.0 * d.verdict.noise_rel);
+    }
+    Ok(ExitCode::SUCCESS)
 }

@@ -360,7 +360,8 @@ pub fn seg_labels(an: &Analysis, n: usize) -> Vec<SegLabel> {
         .collect()
 }
 
-fn diag_branch(b: Branch) -> cablab_diagnose::model::Branch {
+/// measure's branch as the diagnosis names it.
+pub fn diag_branch(b: Branch) -> cablab_diagnose::model::Branch {
     use cablab_diagnose::model::Branch as D;
     match b {
         Branch::FirstLoading => D::FirstLoading,

@@ -290,29 +290,26 @@ fn fast_number(s: &[u8], dec: u8) -> Option<f64> {
         _ => false,
     };
     let mut m: u64 = 0;
-    let mut sig = 0u32;
     let mut digits = 0u32;
     let mut exp: i32 = 0;
     while i < n && s[i].is_ascii_digit() {
-        m = m * 10 + (s[i] - b'0') as u64;
-        sig += (m != 0) as u32;
-        digits += 1;
-        i += 1;
-        if sig > 19 {
+        if m >= 100_000_000_000_000_000 {
             return None;
         }
+        m = m * 10 + (s[i] - b'0') as u64;
+        digits += 1;
+        i += 1;
     }
     if i < n && s[i] == dec {
         i += 1;
         while i < n && s[i].is_ascii_digit() {
+            if m >= 100_000_000_000_000_000 {
+                return None;
+            }
             m = m * 10 + (s[i] - b'0') as u64;
-            sig += (m != 0) as u32;
             digits += 1;
             exp -= 1;
             i += 1;
-            if sig > 19 {
-                return None;
-            }
         }
     }
     if digits == 0 {

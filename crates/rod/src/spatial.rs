@@ -37,11 +37,14 @@
 //! - follower nodal moments, given in the node's director frame (they turn with the node), with
 //!   their load stiffness in the tangent.
 //!
-//! Solver: Newton on the block-tridiagonal (6×6 blocks) system, O(n) per iteration
-//! ([`crate::blocktri`]); plain Newton first, then a Crisfield line search (secant on Δ·R, with
-//! residual backtracking); a control step that fails is cut in half up to
-//! [`SolverOptions::max_bisections`] times, and the law's internal variables are committed only
-//! after each converged sub-step. Failures return [`RodError::NotConverged`] with the reason.
+//! Solver: Newton on the block-tridiagonal (6×6 blocks) system, solved in O(n) per iteration by
+//! the crate's block Thomas solver (nalgebra LU per block); plain Newton for the first
+//! iterations, then a Crisfield line search (secant on Δ·R, with residual backtracking). A control
+//! step that fails is cut in half (at most [`SolverOptions::max_bisections`] cuts per step; the
+//! sub-step doubles again after two easy sub-steps), and the law's internal variables are
+//! committed only after each converged sub-step. Failures return [`RodError::NotConverged`]
+//! with the reason (singular tangent = mechanism, non-finite residual, element rotation too large
+//! for the mesh, no convergence), the residual and the iterations spent.
 //!
 //! Pure physics: numbers in, numbers out. Does not: contact, distributed loads, dynamics,
 //! arc-length control (limit points under load control are not passed).
@@ -94,7 +97,7 @@ fn jl_coefs(t: f64) -> (f64, f64, f64, f64) {
             -1.0 / 60.0 + t2 / 1260.0 - t4 / 60480.0,
         )
     } else {
-        let (s, c) = t.sin_cos();
+        let s = t.sin();
         let one_minus_cos = 2.0 * (0.5 * t).sin().powi(2);
         let t2 = t * t;
         let t3 = t2 * t;
@@ -103,7 +106,6 @@ fn jl_coefs(t: f64) -> (f64, f64, f64, f64) {
         let db = (t * s - 2.0 * one_minus_cos) / t4;
         let cc = (t - s) / t3;
         let dc = (one_minus_cos / t3 - 3.0 * (t - s) / t4) / t;
-        let _ = c;
         (b, db, cc, dc)
     }
 }
@@ -766,6 +768,7 @@ impl<'a> SpatialRod<'a> {
         let (xs, qs) = (self.x.clone(), self.rot.clone());
         let mut stats = StepStats::default();
         let (mut done, mut inc) = (0.0_f64, 1.0_f64);
+        let mut streak = 0;
         while done < 1.0 {
             let lam = (done + inc).min(1.0);
             self.current = start.interpolate(target, &xs, &qs, lam);
@@ -777,6 +780,12 @@ impl<'a> SpatialRod<'a> {
                     self.commit();
                     self.controls = self.current.clone();
                     done = lam;
+                    // Two easy sub-steps in a row: try a step twice as long again.
+                    streak += 1;
+                    if streak >= 2 && inc < 1.0 {
+                        inc *= 2.0;
+                        streak = 0;
+                    }
                 }
                 Err(err) => {
                     self.x = x0;
@@ -803,6 +812,7 @@ impl<'a> SpatialRod<'a> {
                         });
                     }
                     stats.bisections += 1;
+                    streak = 0;
                     inc *= 0.5;
                 }
             }
@@ -812,6 +822,9 @@ impl<'a> SpatialRod<'a> {
     }
 
     /// Reach `target` from the last converged state in `steps` equal quasi-static steps (dt = 0).
+    /// Prescribed rotations are interpolated along the shortest geodesic, so a ramped prescribed
+    /// rotation must differ from the start by less than π (use [`apply`](Self::apply) step by step
+    /// for several turns).
     pub fn ramp(&mut self, target: &Controls, steps: usize) -> Result<StepStats, RodError> {
         self.check_controls(target)?;
         let steps = steps.max(1);

@@ -523,19 +523,24 @@ fn curved_reference_is_stress_free_and_straightens_under_its_moment() {
     assert!(rod.rot.iter().all(|q| q.angle() < 1e-9));
 }
 
-/// Step cutting rescues a step Newton cannot take at once: the full circle in one load step
-/// (dead moment 2π from the straight rod) converges after bisections, to the same circle.
+/// Step cutting rescues a step Newton cannot take at once: the α = 10 cantilever in a single
+/// load step from the straight rod converges after bisections, to the table values.
 #[test]
 fn step_cutting_rescues_a_large_load_step() {
     let law = stiff_law();
-    let mut rod = SpatialRod::straight(&law, 1.0, 32).unwrap();
+    let mut rod = SpatialRod::straight(&law, 1.0, 64).unwrap();
     rod.clamp(0);
     let mut c = Controls::new(rod.nodes());
-    c.moment[32] = Vector3::new(2.0 * PI, 0.0, 0.0);
+    c.force[64] = Vector3::new(10.0, 0.0, 0.0);
     let stats = rod.apply(&c, 0.0, 0).unwrap();
-    eprintln!("one-step full circle: {stats:?}");
-    assert!(stats.bisections > 0, "{stats:?}");
-    assert!(rod.x[32].norm() < 1e-9);
+    assert!(stats.bisections > 0 && stats.substeps > 1, "{stats:?}");
+    assert!(rel(rod.x[64].x, 0.81061) < 1e-3, "w/L {}", rod.x[64].x);
+    assert!(
+        rel(1.0 - rod.x[64].z, 0.55500) < 1e-3,
+        "u/L {}",
+        1.0 - rod.x[64].z
+    );
+    assert_eq!(rod.controls(), &c);
 }
 
 /// Failures are errors with reasons, never panics: a free rod under a force is a mechanism,
@@ -605,28 +610,33 @@ fn rotation_vector_inverts_the_exponential() {
 fn spatial_timing() {
     let law = stiff_law();
     for (elements, steps) in [(32, 20), (64, 20), (128, 20)] {
-        let t0 = std::time::Instant::now();
-        let c = cantilever(
-            &law,
-            10.0,
-            elements,
-            steps,
-            UnitQuaternion::identity(),
-            Vector3::zeros(),
-        );
-        let dt = t0.elapsed();
+        // Best of five (the machine is shared).
+        let mut best = f64::INFINITY;
+        let mut last = None;
+        for _ in 0..5 {
+            let t0 = std::time::Instant::now();
+            let c = cantilever(
+                &law,
+                10.0,
+                elements,
+                steps,
+                UnitQuaternion::identity(),
+                Vector3::zeros(),
+            );
+            best = best.min(t0.elapsed().as_secs_f64());
+            last = Some(c);
+        }
+        let c = last.unwrap();
         println!(
-            "spatial_timing: alpha 10, {elements} elements, {steps} load steps, {} Newton iterations ({} sub-steps, {} cuts), {:.2} ms, w/L {:.5}",
+            "spatial_timing: alpha 10, {elements} elements, {steps} load steps, {} Newton iterations ({} sub-steps, {} cuts), best of 5 {:.2} ms, w/L {:.5}",
             c.stats.newton_iterations,
             c.stats.substeps,
             c.stats.bisections,
-            dt.as_secs_f64() * 1e3,
+            best * 1e3,
             c.w
         );
     }
     // The finite-difference-tangent reference rod of the same crate on the same problem.
-    let law_fd = cablab_rod::Rod3d::straight(&law, 1.0, 64).map(|_| ());
-    assert!(law_fd.is_ok());
     let t0 = std::time::Instant::now();
     let mut rod = cablab_rod::Rod3d::straight(&law, 1.0, 64).unwrap();
     rod.fixed[0] = [true; 6];
@@ -641,27 +651,4 @@ fn spatial_timing() {
         "rod3d (FD tangent) for comparison: 64 elements, 20 load steps, {its} Newton iterations, {:.2} ms",
         t0.elapsed().as_secs_f64() * 1e3
     );
-}
-
-#[test]
-#[ignore = "probe"]
-fn probe_cuts() {
-    let law = stiff_law();
-    for (name, f, m, fm) in [
-        ("cantilever 10", Vector3::new(10.0, 0.0, 0.0), Vector3::zeros(), Vector3::zeros()),
-        ("cantilever 50", Vector3::new(50.0, 0.0, 0.0), Vector3::zeros(), Vector3::zeros()),
-        ("helix x3", Vector3::zeros(), Vector3::new(2.4, 0.0, 3.6), Vector3::zeros()),
-        ("follower 2pi", Vector3::zeros(), Vector3::zeros(), Vector3::new(2.0 * PI, 0.0, 0.0)),
-        ("follower 3d", Vector3::zeros(), Vector3::zeros(), Vector3::new(3.0, 1.0, 2.0)),
-        ("mixed", Vector3::new(5.0, 3.0, 0.0), Vector3::new(1.0, 0.0, 3.0), Vector3::zeros()),
-    ] {
-        let mut rod = SpatialRod::straight(&law, 1.0, 32).unwrap();
-        rod.clamp(0);
-        let mut c = Controls::new(rod.nodes());
-        c.force[32] = f;
-        c.moment[32] = m;
-        c.follower_moment[32] = fm;
-        let r = rod.apply(&c, 0.0, 0);
-        println!("{name}: {r:?}");
-    }
 }

@@ -1,0 +1,7 @@
+//! Integration tests: drive the `cablab` binary and the library as a user does. One test crate
+//! (faster links than one binary per file).
+
+mod campaign;
+mod characterise;
+mod cli_contract;
+mod common;
