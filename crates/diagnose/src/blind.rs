@@ -332,7 +332,8 @@ fn nominal(kind: TestKind) -> Option<Nominal> {
         TestKind::ThreePoint => Some(Nominal {
             length_m: 0.056,
             stiff: ("EI", 1.37e-3),
-            strength: ("M_y", 0.02),
+            // First yield near w = 1.5 mm: cycles to 5.4 mm, as the chapter's 2 and 6 mm.
+            strength: ("M_y", 0.008),
             hard: "HI",
             strain: "K",
         }),
@@ -368,6 +369,20 @@ pub fn generate_case(
     noise_rel: f64,
     seed: u64,
     layout: Layout,
+) -> Result<BlindCase, String> {
+    let rate = if kind == TestKind::ThreePoint { 10.0 } else { 60.0 };
+    generate_case_at(kind, truth, noise_rel, seed, layout, rate)
+}
+
+/// [`generate_case`] with the logger's sample rate given (Hz): the protocol lasts 49.6 s, so
+/// 100 Hz gives about 5,000 samples.
+pub fn generate_case_at(
+    kind: TestKind,
+    truth: Effect,
+    noise_rel: f64,
+    seed: u64,
+    layout: Layout,
+    sample_rate_hz: f64,
 ) -> Result<BlindCase, String> {
     let nom = nominal(kind).ok_or("unknown kind")?;
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(
@@ -530,11 +545,7 @@ pub fn generate_case(
             artefacts: artefacts.clone(),
             layout,
             seed: seed.wrapping_mul(31).wrapping_add(i as u64),
-            sample_rate_hz: if kind == TestKind::ThreePoint {
-                10.0
-            } else {
-                60.0
-            },
+            sample_rate_hz,
             file_stem: None,
             specimen_number: Some(i as u32 + 1),
         };

@@ -64,6 +64,8 @@ pub struct DiagnoseOptions {
     pub holdout: HoldoutPolicy,
     /// Starts per fit (the first is data-informed or warm, the rest quasi-random in the bounds).
     pub starts: usize,
+    /// Starts per fit for tests through the rod (three-point), where a simulation is costly.
+    pub rod_starts: usize,
     /// Seed of the random starts.
     pub seed: u64,
     /// Levenberg–Marquardt settings.
@@ -80,6 +82,7 @@ impl Default for DiagnoseOptions {
             ladder: false,
             holdout: HoldoutPolicy::LastCycle,
             starts: 4,
+            rod_starts: 2,
             seed: 1,
             fit: FitOptions::default(),
             noise: None,
@@ -215,13 +218,13 @@ impl Default for CalibrateOptions {
     }
 }
 
-/// Noise floor per test: σ of the response noise estimated from the data itself (second
-/// differences of the response; robust to turning points).
+/// Noise floor per test: σ of the response noise estimated from the data itself
+/// (`cablab_measure::noise_level`: MAD of the second differences, robust to turning points).
 pub fn noise_floor(tests: &[DiagTest]) -> Vec<f64> {
     tests
         .iter()
         .map(|t| {
-            let s = stats::noise_from_second_differences(&t.response).unwrap_or(0.0);
+            let s = cablab_measure::noise_level(&t.response);
             // Never below a part in 10⁶ of the range (noise-free synthetic data, quantisation).
             s.max(1e-6 * t.response_scale())
         })
@@ -507,7 +510,7 @@ pub fn split(
                 let labels = t.labels_or_derived();
                 let last = labels.iter().map(|l| l.cycle).max().unwrap_or(0);
                 let first_of_last = labels.iter().position(|l| l.cycle == last).unwrap_or(n);
-                if last >= 1 && first_of_last >= n / 5 && n - first_of_last >= 10 {
+                if first_of_last > 0 && first_of_last >= n / 5 && n - first_of_last >= 10 {
                     ((0..first_of_last).collect(), (first_of_last..n).collect())
                 } else {
                     let cut = (0.7 * n as f64) as usize;
@@ -553,7 +556,7 @@ fn score(
     opts: &DiagnoseOptions,
 ) -> Result<Scored, DiagError> {
     let copts = CalibrateOptions {
-        starts: opts.starts,
+        starts: if tests[0].kind == TestKind::ThreePoint { opts.rod_starts } else { opts.starts },
         seed: opts.seed,
         fit: opts.fit,
         fit_idx: Some(train.to_vec()),
@@ -678,6 +681,7 @@ pub fn diagnose(
     // The baseline anchors every comparison: give it more starts.
     let base_opts = DiagnoseOptions {
         starts: opts.starts + 2,
+        rod_starts: opts.rod_starts + 1,
         ..opts.clone()
     };
     let base = score(
@@ -910,7 +914,7 @@ pub fn locate(tests: &[DiagTest], resid: &[Vec<f64>]) -> Vec<Located> {
             });
         }
     }
-    let mut cb: BTreeMap<(usize, usize, crate::model::Branch), (f64, usize)> = BTreeMap::new();
+    let mut cb: BTreeMap<(usize, usize, &'static str), (f64, usize)> = BTreeMap::new();
     let mut cr: BTreeMap<usize, (f64, usize)> = BTreeMap::new();
     for (ti, (t, r)) in tests.iter().zip(resid).enumerate() {
         let labels: Vec<SegLabel> = t.labels_or_derived();
@@ -921,7 +925,7 @@ pub fn locate(tests: &[DiagTest], resid: &[Vec<f64>]) -> Vec<Located> {
             .max(f64::MIN_POSITIVE);
         for (i, v) in r.iter().enumerate() {
             let e = cb
-                .entry((ti, labels[i].cycle, labels[i].branch))
+                .entry((ti, labels[i].cycle, labels[i].branch.as_str()))
                 .or_insert((0.0, 0));
             e.0 += v * v;
             e.1 += 1;
@@ -938,7 +942,7 @@ pub fn locate(tests: &[DiagTest], resid: &[Vec<f64>]) -> Vec<Located> {
             String::new()
         };
         out.push(Located {
-            where_: format!("{prefix}cycle {} {}", c + 1, b.as_str()),
+            where_: format!("{prefix}cycle {c} {}", b.replace('_', " ")),
             share: s / total,
             by: "cycle_branch",
             n,

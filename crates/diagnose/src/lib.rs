@@ -10,7 +10,6 @@
 //! - [`blind`]: the blind check on virtual-lab cases whose effect is withheld.
 //! - [`stats`]: residual statistics (RMS, lag-1 autocorrelation, effective sample size, noise).
 //! - [`registry`]: the project's law registry and rod as the diagnosis sees them.
-//! - [`labels`]: cycle/branch labels when the caller has none.
 //!
 //! Pure: numbers in, numbers out; no files, no printing.
 
@@ -18,7 +17,6 @@ pub mod blind;
 pub mod calibrate;
 pub mod diagnose;
 pub mod error;
-pub mod labels;
 pub mod model;
 pub mod params;
 pub mod registry;
@@ -30,3 +28,6 @@ pub use diagnose::{
 };
 pub use error::DiagError;
 pub use model::{DiagTest, ModelSpec, SegLabel};
+
+#[cfg(test)]
+mod tests;

@@ -20,13 +20,13 @@ use cablab_laws::{Law, Strain6};
 use serde::Serialize;
 
 /// Which branch of a cyclic history a sample belongs to (SPEC: first loading, unloading,
-/// reloading, reversed loading, holds).
-pub use crate::labels::Branch;
+/// reloading, reversed loading, holds): the project's segmenter's (`cablab-measure`).
+pub use cablab_measure::Branch;
 
 /// Cycle and branch of one sample.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
 pub struct SegLabel {
-    /// Cycle index, 0-based.
+    /// Cycle number, from 1 (as `cablab_measure::segment` numbers them).
     pub cycle: usize,
     /// Branch within the cycle.
     pub branch: Branch,
@@ -106,12 +106,19 @@ impl DiagTest {
         self.response.iter().fold(0.0f64, |m, r| m.max(r.abs()))
     }
 
-    /// Labels, derived from the control history when none were given.
+    /// Labels, from the project's segmenter (`cablab_measure::segment`) when none were given;
+    /// a history it cannot segment is one first loading.
     pub fn labels_or_derived(&self) -> Vec<SegLabel> {
         if self.labels.len() == self.control.len() {
-            self.labels.clone()
-        } else {
-            crate::labels::segment(&self.control)
+            return self.labels.clone();
+        }
+        let n = self.control.len();
+        match cablab_measure::segment(Some(&self.time_s), &self.control, &self.response) {
+            Ok(seg) => cablab_measure::labels(&seg, n)
+                .into_iter()
+                .map(|l| SegLabel { cycle: l.cycle, branch: l.branch })
+                .collect(),
+            Err(_) => vec![SegLabel { cycle: 1, branch: Branch::FirstLoading }; n],
         }
     }
 }
@@ -313,22 +320,13 @@ pub fn initial_slope(control: &[f64], response: &[f64]) -> Option<f64> {
             break;
         }
     }
-    let (mut sx, mut sy, mut sxx, mut sxy, mut n) = (0.0, 0.0, 0.0, 0.0, 0.0);
-    for i in 0..=end {
-        let x = control[i];
-        if x.abs() <= 0.3 * peak {
-            sx += x;
-            sy += response[i];
-            sxx += x * x;
-            sxy += x * response[i];
-            n += 1.0;
-        }
-    }
-    let det = n * sxx - sx * sx;
-    if n < 5.0 || det <= 0.0 {
+    let idx: Vec<usize> = (0..=end).filter(|&i| control[i].abs() <= 0.3 * peak).collect();
+    if idx.len() < 5 {
         return None;
     }
-    let k = (n * sxy - sx * sy) / det;
+    let x: Vec<f64> = idx.iter().map(|&i| control[i]).collect();
+    let y: Vec<f64> = idx.iter().map(|&i| response[i]).collect();
+    let k = cablab_measure::linear_fit(&x, &y).ok()?.slope;
     (k.is_finite() && k != 0.0).then_some(k.abs())
 }
 
@@ -492,20 +490,31 @@ impl Forward for ModelForward<'_> {
                 if c == 0.0 {
                     rod.simulate(t, law.as_ref(), &t.control, mu, out)?;
                 } else {
-                    // Fixed point on the specimen deflection w = u − C F over the whole history
-                    // (contracts when C·k_specimen < 1, which the compliance bound ensures).
+                    // Relaxed fixed point on the specimen deflection w = u − C F(w) over the
+                    // whole history, scaled by 1/(1 + C k) with k the specimen's elastic
+                    // stiffness estimated from the data (Newton where the rod is elastic,
+                    // contracting where it is softer or has lost contact).
+                    let k_app = initial_slope(&t.control, &t.response).unwrap_or(0.0);
+                    let k_est = if c * k_app < 0.99 { k_app / (1.0 - c * k_app) } else { 100.0 * k_app };
+                    let relax = 1.0 / (1.0 + c * k_est);
+                    let umax = t.control.iter().fold(1e-12f64, |m, x| m.max(x.abs()));
                     let mut w = t.control.clone();
-                    for _ in 0..30 {
+                    let mut converged = false;
+                    for _ in 0..25 {
                         rod.simulate(t, law.as_ref(), &w, mu, out)?;
                         let mut change = 0.0f64;
                         for i in 0..w.len() {
-                            let wn = t.control[i] - c * out[i];
-                            change = change.max((wn - w[i]).abs());
-                            w[i] = wn;
+                            let g = t.control[i] - c * out[i] - w[i];
+                            change = change.max(g.abs());
+                            w[i] += relax * g;
                         }
-                        if change <= 1e-9 * t.control.iter().fold(1e-12f64, |m, x| m.max(x.abs())) {
+                        if change <= 1e-5 * umax {
+                            converged = true;
                             break;
                         }
+                    }
+                    if !converged {
+                        return Err("machine compliance: the deflection fixed point did not converge".into());
                     }
                 }
             }

@@ -159,7 +159,7 @@ pub struct Rod {
 
 impl Default for Rod {
     fn default() -> Self {
-        Rod { max_points: 240 }
+        Rod { max_points: 120 }
     }
 }
 

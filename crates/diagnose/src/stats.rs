@@ -1,5 +1,5 @@
 //! Small statistics the diagnosis needs on residual series: RMS, lag-1 autocorrelation, the
-//! effective sample size of autocorrelated residuals, and a data-driven noise floor fallback.
+//! effective sample size of autocorrelated residuals. (The noise floor is `cablab_measure::noise_level`.)
 //!
 //! Pure functions on slices; no fitting, no I/O.
 
@@ -56,22 +56,6 @@ pub fn pooled_lag1(series: &[&[f64]]) -> f64 {
     }
 }
 
-/// Noise standard deviation of a sampled signal estimated from its second differences:
-/// for white noise σ on a locally linear signal, Var(x[i+1] − 2x[i] + x[i−1]) = 6σ². Uses the
-/// median absolute second difference (robust to turning points and jumps): σ ≈ MAD / (0.6745 √6).
-pub fn noise_from_second_differences(x: &[f64]) -> Option<f64> {
-    if x.len() < 5 {
-        return None;
-    }
-    let mut d: Vec<f64> = x
-        .windows(3)
-        .map(|w| (w[2] - 2.0 * w[1] + w[0]).abs())
-        .collect();
-    let mid = d.len() / 2;
-    d.select_nth_unstable_by(mid, |a, b| a.total_cmp(b));
-    Some(d[mid] / (0.674_489_75 * 6f64.sqrt()))
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -96,15 +80,4 @@ mod tests {
         assert_eq!(effective_sample_size(100, -0.5), 100.0);
     }
 
-    #[test]
-    fn noise_floor_from_second_differences_recovers_sigma_on_a_smooth_signal() {
-        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
-        let n = Normal::new(0.0, 0.05).unwrap();
-        let x: Vec<f64> = (0..5000)
-            .map(|i| 10.0 * (i as f64 * 0.002).sin() + n.sample(&mut rng))
-            .collect();
-        let s = noise_from_second_differences(&x).unwrap();
-        assert!((s / 0.05 - 1.0).abs() < 0.06, "sigma = {s}");
-        assert!((rms(&[3.0, 4.0]) - (12.5f64).sqrt()).abs() < 1e-12);
-    }
 }

@@ -7,7 +7,7 @@
 //! opt-level 2, dependencies at 0). Prints a table; writes nothing outside the temporary directory.
 
 use std::io::Write;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::Command;
 use std::time::Instant;
 
@@ -56,9 +56,9 @@ fn gen_latin1(path: &Path, target: usize) {
         let t = i as f64 * 0.01;
         let x = 0.5 * (t * 0.37).sin() + t * 1e-3;
         use std::fmt::Write as _;
-        let _ = write!(
+        let _ = writeln!(
             line,
-            "{:.6}\t{:.5}\t{:.7}\t{:.7}\t{:.6E}\n",
+            "{:.6}\t{:.5}\t{:.7}\t{:.7}\t{:.6E}",
             t,
             1234.5 * x,
             x * 1.01,
@@ -75,7 +75,7 @@ fn gen_latin1(path: &Path, target: usize) {
 fn gen_utf16(path: &Path, target: usize) {
     let mut f = std::io::BufWriter::with_capacity(1 << 20, std::fs::File::create(path).unwrap());
     let mut n = 0usize;
-    let mut put = |s: &str, f: &mut std::io::BufWriter<std::fs::File>| {
+    let put = |s: &str, f: &mut std::io::BufWriter<std::fs::File>| {
         let mut buf = Vec::with_capacity(s.len() * 2);
         for u in s.encode_utf16() {
             buf.extend_from_slice(&u.to_le_bytes());

@@ -121,9 +121,7 @@ pub fn decode(bytes: &[u8], enc: Encoding) -> Cow<'_, str> {
 fn decode_chunked(enc: &'static encoding_rs::Encoding, body: &[u8]) -> String {
     let bound = if enc == encoding_rs::WINDOWS_1252 {
         // ASCII stays one byte, 0xA0..=0xFF become two, 0x80..=0x9F at most three.
-        body.iter()
-            .map(|&b| if b < 0x80 { 1usize } else { 3 })
-            .sum::<usize>()
+        body.len() + 2 * body.iter().filter(|&&b| b >= 0x80).count()
     } else {
         let le = enc == encoding_rs::UTF_16LE;
         body.chunks_exact(2)
@@ -209,12 +207,11 @@ pub fn check_text(text: &str, source: &str) -> Result<(), IngestError> {
             ),
         });
     }
-    if text.contains('\u{FFFD}')
-        && text.matches('\u{FFFD}').take(1000).count() * 200 > head.len().max(1)
-    {
+    let head_text = crate::format::head_str(text, 65536);
+    if head_text.matches('\u{FFFD}').take(1000).count() * 200 > head.len().max(1) {
         return Err(IngestError::Binary {
             file: source.into(),
-            offset: text.find('\u{FFFD}').unwrap_or(0),
+            offset: head_text.find('\u{FFFD}').unwrap_or(0),
             detail: "undecodable bytes".into(),
         });
     }

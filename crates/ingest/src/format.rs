@@ -3,6 +3,14 @@
 //!
 //! Detection looks only at the decoded head of the file (first 200 lines) and the file name. It
 //! reads no data; the readers (`table.rs`, `xml.rs`) do that.
+//!
+//! HBM catman ASCII: no public description of the export and no openly licensed catman file
+//! could be found (searched the docs, pages and code corpora for the catman ASCII export layout),
+//! so the accepted layout is a reconstruction and is unverified against real files: a `catman` or
+//! `File header` signature, a `Channel name` row and a `Unit` row whose first cell is the key
+//! followed by one cell per channel, optional per-channel rows (`T0`, `dt`, `Length`, kept as
+//! metadata), then the numeric rows without a key cell. `tests/data/catman_ascii_sample.txt`
+//! is written in that layout.
 
 use crate::decode::Encoding;
 use std::fmt;
@@ -229,7 +237,7 @@ pub fn detect(text: &str, encoding: Encoding, source: &str) -> (Format, String) 
         Format::Delimited,
         "no machine signature found: generic delimited text with a header".into(),
     ));
-    cands.sort_by(|a, b| b.0.cmp(&a.0));
+    cands.sort_by_key(|c| std::cmp::Reverse(c.0));
     let (_, f, why) = cands.swap_remove(0);
     (f, why)
 }

@@ -406,7 +406,7 @@ pub(crate) fn build(
                 continue;
             }
             if let Some(p) = prev {
-                if v < p || v == p {
+                if v <= p {
                     if v < p {
                         dec += 1
                     } else {

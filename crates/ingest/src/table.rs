@@ -198,7 +198,7 @@ fn detect_separator(lines: &[&[u8]]) -> Separator {
         (count(b';'), Separator::Semicolon),
         (count(b','), Separator::Comma),
     ];
-    c.sort_by(|a, b| b.0.cmp(&a.0));
+    c.sort_by_key(|x| std::cmp::Reverse(x.0));
     if c[0].0 > 0 {
         c[0].1
     } else {
@@ -316,12 +316,11 @@ impl<'a> Engine<'a> {
         if all_numeric && nums > 0 {
             let ncells = self.cells.len();
             if self.start_block(line_no, last_nonempty, ncells) {
-                let ok = self.push_row(line, line_no);
-                debug_assert!(ok);
-                if !ok {
-                    self.close_block();
+                if self.push_row(line, line_no) {
+                    return;
                 }
-                return;
+                // Cannot happen (the row was checked above); drop the empty block rather than panic.
+                self.open = None;
             }
             self.orphans += 1;
             self.orphan_first.get_or_insert(line_no);
@@ -379,8 +378,26 @@ impl<'a> Engine<'a> {
         while names.last().is_some_and(|n| n.trim().is_empty()) && names.len() > last_nonempty + 1 {
             names.pop();
         }
+        // Space-separated headers split "Zeit [s]" into two cells: join bracketed units back.
+        if self.sep == Separator::Space && names.len() > ncells {
+            let mut merged: Vec<String> = Vec::with_capacity(names.len());
+            for c in &names {
+                let t = c.trim();
+                let bracketed = (t.starts_with('[') && t.ends_with(']'))
+                    || (t.starts_with('(') && t.ends_with(')'));
+                match merged.last_mut() {
+                    Some(last) if bracketed => {
+                        last.push(' ');
+                        last.push_str(t);
+                    }
+                    _ => merged.push(c.clone()),
+                }
+            }
+            if merged.len() == ncells {
+                names = merged;
+            }
+        }
         let ncols = names.len().max(last_nonempty + 1);
-        let _ = ncells;
         for i in names.len()..ncols {
             names.push(format!("column {}", i + 1));
         }

@@ -379,7 +379,16 @@ pub(crate) fn looks_like_unit(cell: &str) -> bool {
     if (c.starts_with('(') && c.ends_with(')')) || (c.starts_with('[') && c.ends_with(']')) {
         return true;
     }
-    lookup(c).is_some()
+    if lookup(c).is_some() {
+        return true;
+    }
+    // Unknown but unit-shaped (`N/mm`, `kN·mm²`): short, no spaces, a unit operator.
+    c.chars().count() <= 10
+        && !c.contains(char::is_whitespace)
+        && c.chars()
+            .any(|ch| matches!(ch, '/' | '^' | '·' | '*' | '²' | '³' | '%' | '°'))
+        && c.chars()
+            .any(|ch| ch.is_alphabetic() || ch == '%' || ch == '°')
 }
 
 /// Removes one pair of surrounding `()` or `[]` from a unit cell.

@@ -239,6 +239,104 @@ fn tension_elastic_reports_no_yield() {
     }
 }
 
+/// Load-limited cycles as the chapter ran them: first loading from 0 N, then five cycles between
+/// a 2 N preload and the upper load, read through a 0.1 µm encoder (a count per sample, as in the
+/// demo campaign) with 0.025 N load noise and 1 s dwells. The unloading never reaches zero force
+/// and the encoder's rounding shifts whole branches by up to a count; neither may make an elastic
+/// test look irreversible. To 40 N: linear elastic, no yield, residuals ~0 (extrapolated). To
+/// 100 N (yield 54 N, H = 2·10⁴ N): elastoplastic, yield within 2%, first-cycle residual strain
+/// (F_max − F_y)/H within 2%, later cycles closed.
+#[test]
+fn tension_preload_cycles_on_a_quantised_encoder() {
+    let (ea, l0, fy, h, q) = (7.96e4, 0.032, 54.0, 2.0e4, 1e-7);
+    let geom = Geometry {
+        free_length_m: l0,
+        diameter_m: Some(2.8e-3),
+    };
+    for (upper, plastic) in [(40.0, false), (100.0, true)] {
+        // Strain at a force on the first loading, and the plastic strain after it.
+        let eps_p = if plastic { (upper - fy) / h } else { 0.0 };
+        let load = l0 * (upper / ea + eps_p);
+        let pre = l0 * (2.0 / ea + eps_p);
+        let mut path = vec![0.0, load];
+        for _ in 0..4 {
+            path.extend([pre, load]);
+        }
+        path.push(pre);
+        for seed in 0..3 {
+            let mut law = Law1D::plastic(ea, fy, h, 0.0);
+            let per_leg = (load / q).round() as usize;
+            let (c, r) = drive(&path, per_leg, 20, 1.0 / l0, &mut law);
+            let mut rng = ChaCha8Rng::seed_from_u64(4200 + seed);
+            let d = Normal::new(0.0, 0.025).unwrap();
+            let c: Vec<f64> = c.iter().map(|v| (v / q).round() * q).collect();
+            let r: Vec<f64> = r.iter().map(|v| v + d.sample(&mut rng)).collect();
+            let a = analyze(
+                TestKind::Tension,
+                &geom,
+                None,
+                &c,
+                &r,
+                &AnalyzeOptions::default(),
+            )
+            .unwrap();
+            let tag = format!("upper {upper} N, seed {seed}");
+            assert_eq!(a.cycles.len(), 5, "{tag}");
+            assert!(
+                rel_err(a.stiffness.as_ref().unwrap().value, ea) < 0.01,
+                "{tag}: {:?}",
+                a.stiffness
+            );
+            assert!(
+                a.cycles.iter().all(|c| c.residual_extrapolated),
+                "{tag}: {:?}",
+                a.cycles
+            );
+            assert!(
+                a.cycles.iter().skip(1).all(|c| c.coincide == Some(true)),
+                "{tag}: {:?}",
+                a.cycles
+            );
+            if plastic {
+                assert_eq!(
+                    a.behaviour,
+                    Behaviour::Elastoplastic,
+                    "{tag}: {:?}",
+                    a.cycles
+                );
+                let y = a.yield_point.as_ref().expect("yield");
+                assert!(rel_err(y.response, fy) < 0.02, "{tag}: {y:?}");
+                let c1 = &a.cycles[0];
+                assert_eq!(c1.coincide, Some(false), "{tag}");
+                assert_eq!(c1.residual_significant, Some(true), "{tag}");
+                assert!(
+                    rel_err(c1.residual.unwrap(), eps_p) < 0.02,
+                    "{tag}: residual {:?} vs {eps_p}",
+                    c1.residual
+                );
+            } else {
+                assert_eq!(
+                    a.behaviour,
+                    Behaviour::LinearElastic,
+                    "{tag}: {:?}",
+                    a.cycles
+                );
+                assert!(a.yield_point.is_none(), "{tag}");
+                for c in &a.cycles {
+                    assert_eq!(c.residual_significant, Some(false), "{tag}: {c:?}");
+                    // Within two encoder counts of zero (as strain).
+                    assert!(c.residual.unwrap().abs() < 2.0 * q / l0, "{tag}: {c:?}");
+                }
+                assert!(
+                    !a.holds.iter().any(|h| h.significant),
+                    "{tag}: elastic dwells do not relax: {:?}",
+                    a.holds
+                );
+            }
+        }
+    }
+}
+
 /// Bowden cable in pure bending (chapter Table 2): (EI)_B,1 = 1.40, (EI)_B,2 = 0.19 N m²,
 /// K_B,t = 0.18 1/m, l₀ = 320 mm, cycles to 60°. K_t within 10%, class piecewise, no yield.
 #[test]
@@ -494,13 +592,20 @@ fn chapter_table1_from_generated_logs() {
         &opts,
     )
     .unwrap();
+    // The reported stiffness is the elastica-corrected one; eq. (3) on the same window is
+    // softer by about the elastica's softening (1.3 % at w/l0 = 0.036).
     let ld = a.large_deflection.as_ref().unwrap();
-    assert!(rel_err(ld.corrected_stiffness, ei) < 0.01, "{ld:?}");
-    let small = a.stiffness.as_ref().unwrap().value;
+    let st = a.stiffness.as_ref().unwrap().value;
+    assert!(rel_err(st, ei) < 0.005, "corrected {st}");
+    assert_eq!(ld.corrected_stiffness, st);
+    let small = ld.small_deflection_stiffness;
     assert!(
-        small < ei && rel_err(small, ei) < 0.03,
+        small < ei && rel_err(small, ei) > 0.002 && rel_err(small, ei) < 0.03,
         "eq. (3) value {small}"
     );
+    // The geometric softening is no material threshold: the elastic elastica is linear elastic.
+    assert_eq!(a.behaviour, Behaviour::LinearElastic, "{:?}", a.piecewise);
+    assert!(a.piecewise.is_none() && a.yield_point.is_none());
     assert!(
         a.warnings.iter().any(|w| w.contains("small-deflection")),
         "{:?}",

@@ -4,9 +4,14 @@
 //! * Noise: [`noise_level`] is the MAD of the second differences scaled to a Gaussian σ
 //!   (second differences of white noise have variance 6σ²; a smooth, densely sampled curve
 //!   contributes almost nothing, and the few kinks at turning points do not move a median).
+//! * Resolution: [`resolution`] is the smallest step a quantised channel makes (an encoder's
+//!   count, an ADC's least significant bit). On a slow ramp the rounding error of a quantised
+//!   control is not noise but a constant offset along a branch, which no σ estimate sees, so the
+//!   branch comparisons in [`crate::hysteresis`] allow for one resolution step.
 //! * Reversals: [`reversal_threshold`] is the largest excursion that pure noise of that σ is
 //!   expected to make over the record, 2σ√(2 ln N) (the expected range of N Gaussian samples),
-//!   times a safety factor 1.5; a turning point needs the signal to retreat by more than that
+//!   times a safety factor 1.5, and at least half a percent of the signal's range (smooth servo
+//!   wander at a hold is no noise the second differences see); a turning point needs the signal to retreat by more than that
 //!   from its running extremum ([`turning_points`], a zig-zag with hysteresis). Noise on a dwell
 //!   plateau therefore never makes a reversal.
 //! * Holds: a hold is a stretch where the control stays within one reversal threshold for at
@@ -39,13 +44,39 @@ pub fn noise_level(signal: &[f64]) -> f64 {
     median(&abs_dev) / (0.674_489_750_196_081_7 * 6f64.sqrt())
 }
 
+/// Smallest reversal that counts, as a fraction of the control's range (see
+/// [`reversal_threshold`]).
+pub const MIN_REVERSAL_FRACTION: f64 = 0.005;
+
+/// Resolution of a (possibly quantised) channel: the smallest step between consecutive samples,
+/// ignoring steps below 1e-9 of the channel's range (floating-point rounding of "equal" readings,
+/// e.g. after an offset was subtracted). For a quantised channel this is its count (or a small
+/// multiple of it, when the signal never moves by a single count between samples); for an
+/// unquantised noisy channel it is a tiny fraction of the noise, so allowing for it costs nothing.
+/// Returns 0 for a constant signal or fewer than 2 samples.
+pub fn resolution(signal: &[f64]) -> f64 {
+    let (lo, hi) = min_max(signal);
+    let floor = 1e-9 * (hi - lo);
+    signal
+        .windows(2)
+        .map(|w| (w[1] - w[0]).abs())
+        .filter(|d| d.is_finite() && *d > floor)
+        .fold(f64::INFINITY, f64::min)
+        .min(hi - lo)
+        .max(0.0)
+}
+
 /// The smallest retreat that counts as a reversal: 1.5 · 2σ√(2 ln N) with σ = [`noise_level`],
-/// floored at 1e-9 of the signal's range (for noise-free data).
+/// floored at [`MIN_REVERSAL_FRACTION`] of the signal's range: a servo holding a position
+/// wanders smoothly (a real WaveMatrix torsion export wanders by 0.01° while the axial step
+/// runs), which the second differences do not see as noise, and every wiggle would otherwise
+/// count as a cycle. Loops that small are far below what a stiffness, yield or hysteresis
+/// analysis resolves.
 pub fn reversal_threshold(signal: &[f64]) -> f64 {
     let n = signal.len().max(2) as f64;
     let sigma = noise_level(signal);
     let (lo, hi) = min_max(signal);
-    (1.5 * 2.0 * sigma * (2.0 * n.ln()).sqrt()).max(1e-9 * (hi - lo))
+    (1.5 * 2.0 * sigma * (2.0 * n.ln()).sqrt()).max(MIN_REVERSAL_FRACTION * (hi - lo))
 }
 
 fn min_max(v: &[f64]) -> (f64, f64) {
@@ -645,6 +676,38 @@ mod tests {
         // The reversed loading starts at the zero crossing (sample 200).
         assert!((segs[2].start as i64 - 200).abs() <= 1, "{segs:?}");
         assert!((segs[4].start as i64 - 400).abs() <= 1, "{segs:?}");
+    }
+
+    /// A servo holding position wanders smoothly (no white noise for the second differences to
+    /// see) before ten sine cycles of ±19° (the real WaveMatrix torsion export): the wander makes
+    /// no cycles, the ten cycles are counted.
+    #[test]
+    fn smooth_servo_wander_makes_no_cycles() {
+        let amp = 19f64.to_radians();
+        let mut v: Vec<f64> = (0..1000)
+            .map(|i| 1.2e-4 * (i as f64 * 0.05).sin() + 0.5e-4 * (i as f64 * 0.013).sin())
+            .collect();
+        v.extend((0..2500).map(|i| amp * (std::f64::consts::TAU * i as f64 / 250.0).sin()));
+        let segs = segment(None, &v, &v).unwrap();
+        let cycles = segs.iter().map(|s| s.cycle).max().unwrap();
+        assert_eq!(cycles, 10, "{segs:?}");
+        assert_eq!(segs[0].branch, Branch::Hold, "{segs:?}");
+    }
+
+    #[test]
+    fn resolution_of_quantised_and_continuous_channels() {
+        // An encoder of 0.1 µm counting a slow ramp with an offset: one count per sample or less.
+        let q = 1e-7;
+        let v: Vec<f64> = (0..500)
+            .map(|i| ((3.3e-5 + 0.6e-7 * i as f64) / q).round() * q - 3.3e-5)
+            .collect();
+        let r = resolution(&v);
+        assert!((r / q - 1.0).abs() < 1e-6, "{r}");
+        // Unquantised noise: the smallest step is a small fraction of σ.
+        let n = noisy(&vec![0.0; 2000], 0.01, 3);
+        assert!(resolution(&n) < 1e-2 * 0.01, "{}", resolution(&n));
+        assert_eq!(resolution(&[1.0, 1.0, 1.0]), 0.0);
+        assert_eq!(resolution(&[]), 0.0);
     }
 
     #[test]

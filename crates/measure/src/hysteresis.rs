@@ -8,7 +8,19 @@
 //! dissipated energy, on the first cycle it also holds the work of the first plastic loading.
 //! Coincidence compares the areas under the loading and the unloading branch over their common
 //! control range (integrals of the linear interpolants), with the noise-implied standard
-//! deviation σ·X·√(1/n_l + 1/n_u) and a 4σ criterion. It does not fit laws or classify.
+//! deviation σ·X·√(1/n_l + 1/n_u) and a 4σ criterion, plus what the control's resolution q
+//! cannot resolve: a quantised control read on a slow ramp is off by a rounding error that stays
+//! nearly constant along a branch, so two coinciding branches may appear shifted by up to q,
+//! which changes the area by up to q·ΔF (ΔF the response span over the common range).
+//!
+//! Residual deformation: where the unloading reaches zero response. Load-limited cycles often
+//! stop at a small preload instead (a tension test cycling between 2 N and 40 N never unloads to
+//! zero); when the unloading ends below a fifth of the cycle's peak response without reaching
+//! zero, the residual is where the straight line through its lower part reaches zero (a short
+//! extrapolation along the elastic unloading line: exact for elastic unloading, the usual
+//! definition of the plastic strain), flagged `residual_extrapolated`. Its significance allows
+//! for the noise, the extrapolation's standard error and the control's resolution.
+//! It does not fit laws or classify.
 
 use crate::condition::{noise_level, Branch, Segment};
 use crate::elastic::{initial_slope, residual_noise};
@@ -27,8 +39,11 @@ pub struct CycleResult {
     /// Sectional control (strain, 1/m, or deflection m for three-point) where the response
     /// reaches zero on the cycle's unloading (for three-point: where the punch loses contact).
     pub residual: Option<f64>,
-    /// Whether `residual` differs from zero beyond the noise.
+    /// Whether `residual` differs from zero beyond the noise and the control's resolution.
     pub residual_significant: Option<bool>,
+    /// Whether `residual` was extrapolated to zero response along the unloading line (the
+    /// unloading stopped at a preload, see the module doc); false when it was crossed.
+    pub residual_extrapolated: bool,
     /// Initial unloading slope converted to the kind's stiffness unit (N or N m²).
     pub unloading_stiffness: Option<f64>,
     /// Initial reloading slope converted to the kind's stiffness unit (N or N m²).
@@ -66,6 +81,9 @@ pub struct CycleInputs<'a> {
     pub three_point: bool,
     /// Sectional control per machine control (1/l₀, or 1 for three-point).
     pub sectional_per_control: f64,
+    /// Resolution of the machine control (its quantisation step, [`crate::resolution`]; 0 when
+    /// unquantised).
+    pub control_resolution: f64,
 }
 
 fn collect(segs: &[Segment], cycle: usize, branch: Branch) -> Vec<usize> {
@@ -107,6 +125,8 @@ pub fn cycles(inp: &CycleInputs) -> Vec<CycleResult> {
     let n = inp.control.len();
     let ncycles = inp.segments.iter().map(|s| s.cycle).max().unwrap_or(0);
     let z = normal_quantile(1.0 - 1e-3 / 2.0);
+    let q_control = inp.control_resolution.max(0.0);
+    let q_sect = q_control * inp.sectional_per_control.abs();
     let mut out = Vec::new();
     for c in 1..=ncycles {
         let idx: Vec<usize> = inp
@@ -144,6 +164,7 @@ pub fn cycles(inp: &CycleInputs) -> Vec<CycleResult> {
             loop_area: Some(area),
             residual: None,
             residual_significant: None,
+            residual_extrapolated: false,
             unloading_stiffness: None,
             reloading_stiffness: None,
             coincide: None,
@@ -205,7 +226,7 @@ pub fn cycles(inp: &CycleInputs) -> Vec<CycleResult> {
                     let slope = fit.map(|f| f.slope.abs()).unwrap_or(0.0);
                     if slope > 0.0 {
                         let sx = noise_level(ux);
-                        let tol = z * std::f64::consts::SQRT_2 * (sigma / slope + sx);
+                        let tol = z * std::f64::consts::SQRT_2 * (sigma / slope + sx) + q_sect;
                         r.residual_significant = Some(xr.abs() > tol);
                     }
                     if inp.three_point {
@@ -216,12 +237,23 @@ pub fn cycles(inp: &CycleInputs) -> Vec<CycleResult> {
                         }
                     }
                 }
-                None => {
-                    why.insert(
-                        "residual".into(),
-                        "the response does not reach zero on this cycle's unloading".into(),
-                    );
-                }
+                None => match extrapolated_residual(ux, uy, sigma, z) {
+                    Ok((xr, se)) => {
+                        r.residual = Some(xr);
+                        r.residual_extrapolated = true;
+                        let sx = noise_level(ux);
+                        let slope = fit.map(|f| f.slope.abs()).unwrap_or(0.0);
+                        if slope > 0.0 {
+                            let tol = z * std::f64::consts::SQRT_2 * (sigma / slope + sx)
+                                + z * se
+                                + q_sect;
+                            r.residual_significant = Some(xr.abs() > tol);
+                        }
+                    }
+                    Err(reason) => {
+                        why.insert("residual".into(), reason.into());
+                    }
+                },
             }
             // Coincidence of loading and unloading.
             if load.len() >= 5 && ub - ua >= 5 {
@@ -245,8 +277,17 @@ pub fn cycles(inp: &CycleInputs) -> Vec<CycleResult> {
                     let s_u = residual_noise(&inp.control[ua..ub], &inp.response[ua..ub]);
                     let x = hi - lo;
                     let sd = x * (s_l * s_l / n_l as f64 + s_u * s_u / n_u as f64).sqrt();
+                    // Response span over the common range: a shift of one branch by the
+                    // control's resolution changes the gap by up to q·ΔF (module doc).
+                    let (f_lo, f_hi) = lp
+                        .iter()
+                        .chain(up.iter())
+                        .filter(|p| p.0 >= lo && p.0 <= hi)
+                        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| {
+                            (a.min(p.1), b.max(p.1))
+                        });
                     r.branch_gap_area = Some(gap);
-                    r.coincide = Some(gap.abs() <= 4.0 * sd);
+                    r.coincide = Some(gap.abs() <= 4.0 * sd + q_control * (f_hi - f_lo));
                 } else {
                     why.insert(
                         "coincide".into(),
@@ -287,6 +328,42 @@ pub fn cycles(inp: &CycleInputs) -> Vec<CycleResult> {
         out.push(r);
     }
     out
+}
+
+/// Residual of an unloading that stops above zero response (module doc): the zero of the
+/// straight line through the unloading samples below max(4zσ, 0.2·peak), with the standard error
+/// of that zero. Errors (with the reason) when the unloading ends above a fifth of its peak or
+/// its lower part is too short or not rising with the control.
+fn extrapolated_residual(
+    ux: &[f64],
+    uy: &[f64],
+    sigma: f64,
+    z: f64,
+) -> Result<(f64, f64), &'static str> {
+    let peak = uy.iter().fold(0.0f64, |m, v| m.max(*v));
+    let end = uy.iter().fold(f64::INFINITY, |m, v| m.min(*v));
+    if peak <= 0.0 || end > 0.2 * peak {
+        return Err("the unloading neither reaches zero response nor comes within a fifth of its peak (nothing to extrapolate from)");
+    }
+    let hi = (4.0 * z * sigma).max(0.2 * peak);
+    let i1 = uy.iter().position(|&v| v < hi).unwrap_or(uy.len());
+    if uy.len() < i1 + 5 {
+        return Err("too few unloading samples near the preload to extrapolate the residual");
+    }
+    let (x, y) = (&ux[i1..], &uy[i1..]);
+    let f = linear_fit(x, y).map_err(|_| "the unloading near the preload is degenerate")?;
+    match f.x_intercept() {
+        Some(x0) if f.slope > 0.0 => {
+            // se of the zero of a fitted line: (s/b)·√(1/n + (x0 − x̄)²/Sxx), Sxx = (s/se_b)².
+            let n = x.len() as f64;
+            let xm = x.iter().sum::<f64>() / n;
+            let s = f.residual_sd.max(f64::MIN_POSITIVE);
+            let sxx_inv = (f.slope_se / s).powi(2);
+            let se = s / f.slope * (1.0 / n + (x0 - xm).powi(2) * sxx_inv).sqrt();
+            Ok((x0, se))
+        }
+        _ => Err("the unloading near the preload does not fall with the control"),
+    }
 }
 
 fn span(p: &[(f64, f64)]) -> (f64, f64) {

@@ -26,11 +26,11 @@ pub mod table;
 
 pub use analysis::{
     analyze, Analysis, AnalyzeOptions, Behaviour, HoldRelaxation, LargeDeflection, Noise,
-    Piecewise, Stiffness, Toe, YieldPoint,
+    Piecewise, Stiffness, Toe, YieldPoint, THREE_POINT_GEOMETRY_LIMIT,
 };
 pub use condition::{
-    correct_compliance, labels, noise_level, reversal_threshold, segment, turning_points,
-    zero_offsets, Branch, Extremum, Label, Offsets, Segment, TurningPoint,
+    correct_compliance, labels, noise_level, resolution, reversal_threshold, segment,
+    turning_points, zero_offsets, Branch, Extremum, Label, Offsets, Segment, TurningPoint,
 };
 pub use elastic::{auto_elastic_range, hinge_fit, user_elastic_range, ElasticRange, Hinge};
 pub use elastica::ThreePointElastica;

@@ -7,7 +7,8 @@
 use cablab_core::TestKind;
 use cablab_laws::{build, Law, LinearElastic, SectionStiffness};
 use cablab_rod::scenarios::cantilever_tip_load;
-use cablab_rod::{simulate_history, Rod3d, TestSetup};
+use cablab_rod::spatial::{Controls, SpatialRod};
+use cablab_rod::{simulate_history, TestSetup};
 use nalgebra::Vector3;
 use std::collections::BTreeMap;
 
@@ -65,7 +66,7 @@ fn cantilever_alpha10_100_elements(bencher: divan::Bencher) {
 }
 
 /// The same cantilever (α = 10, 100 elements, 10 load steps) through the 3D rod (quaternions,
-/// 6×6 blocks, difference-quotient strain Jacobians).
+/// 6×6 blocks, analytic consistent tangent).
 #[divan::bench(sample_count = 10)]
 fn cantilever_alpha10_100_elements_3d(bencher: divan::Bencher) {
     let mut s = SectionStiffness::CHAPTER_CABLE;
@@ -75,14 +76,12 @@ fn cantilever_alpha10_100_elements_3d(bencher: divan::Bencher) {
     s.ga_n = 1e7;
     let law = LinearElastic::new(s);
     bencher.bench(|| {
-        let mut rod = Rod3d::straight(&law, 1.0, 100).expect("rod");
-        rod.fixed[0] = [true; 6];
+        let mut rod = SpatialRod::straight(&law, 1.0, 100).expect("rod");
+        rod.clamp(0);
         let tip = rod.nodes() - 1;
-        for k in 1..=10 {
-            rod.force[tip] = Vector3::new(-divan::black_box(10.0) * k as f64 / 10.0, 0.0, 0.0);
-            rod.solve(0.0, k).expect("converges");
-            rod.commit();
-        }
+        let mut c = Controls::new(rod.nodes());
+        c.force[tip] = Vector3::new(-divan::black_box(10.0), 0.0, 0.0);
+        rod.ramp(&c, 10).expect("converges");
         rod.x[tip]
     });
 }

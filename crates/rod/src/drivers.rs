@@ -3,8 +3,8 @@
 //! - `tension` and `torsion` (clamped ends, homogeneous straight rod): the state is uniform
 //!   along the rod, Γ₃ = Δl/l₀ or K₃ = θ/l₀ with every other strain held at zero by the clamps, so
 //!   the sectional law evaluated once per step *is* the rod solution (exact, not an approximation;
-//!   `rod3d::tests::uniform_shortcuts_match_3d_rod` replays elastoplastic cycles through the 3D
-//!   rod and gets the same numbers).
+//!   `uniform_shortcuts_match_the_spatial_rod` in `tests/spatial.rs` replays elastoplastic cycles
+//!   through the 3D rod [`crate::spatial::SpatialRod`] and gets the same numbers).
 //! - `pure_bending` (one end rotated, both ends free to slide, no shear force): the rod is solved
 //!   by [`simulate_path`] (node 0 clamped to remove rigid motion, end rotation prescribed at the
 //!   other end, its position free: no force) — its answer is a uniform-curvature arc K = θ/l₀. For

@@ -5,9 +5,11 @@
 //!   Newton with line search and step bisection, internal law variables per integration point.
 //! - [`drivers`]: the tests as run — tension, torsion, pure bending, three-point bending —
 //!   replaying a control path ([`simulate_path`]) or a measured history ([`simulate_history`]).
-//! - [`rod3d`]: the same rod in space (positions + unit quaternions, rotation-vector
-//!   increments), the reference that the planar reduction and the uniform-state shortcuts are
-//!   checked against (cantilever table, a bent-and-twisted helix, clamped torsion and tension).
+//! - [`spatial`]: the same rod in space (positions + unit quaternions, multiplicative
+//!   rotation-vector increments, analytic consistent tangent, block-tridiagonal Newton solve,
+//!   load and displacement control with step cutting): the 3D rod against which the planar
+//!   reduction and the uniform-state shortcuts of [`drivers`] are checked (`tests/spatial.rs`:
+//!   cantilever table, planar agreement, helices, clamped tension and torsion cycles).
 //! - [`scenarios`]: the classical verification problems (cantilever with a dead tip load, Euler
 //!   elastica) as functions, used by the tests and the benchmark.
 //!
@@ -17,13 +19,13 @@
 //!
 //! Measured (release, one core, CPU time): the cyclic elastoplastic three-point run with 100
 //! elements and 1,000 load steps takes ≈ 64 ms; cost per step scales with the element count with
-//! exponent ≈ 1.0 (benches/rod.rs). Verification against SPEC.md lives in `verification.rs`.
+//! exponent ≈ 1.0 (benches/rod.rs). Verification against SPEC.md lives in `verification.rs` (planar
+//! rod, drivers) and `tests/spatial.rs` (3D rod).
 
 #![warn(missing_docs)]
 
 pub mod drivers;
 pub mod planar;
-pub mod rod3d;
 pub mod scenarios;
 pub mod spatial;
 
@@ -35,7 +37,6 @@ mod verification;
 
 pub use drivers::{deformed_shape, simulate_history, simulate_path, SimCurve, TestSetup};
 pub use planar::{PlanarRod, Punch, SolverOptions, Support};
-pub use rod3d::Rod3d;
 
 use thiserror::Error;
 

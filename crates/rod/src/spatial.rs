@@ -568,9 +568,12 @@ impl<'a> SpatialRod<'a> {
 
     /// Evaluate strains, stresses and the residual at the current configuration and the controls
     /// of the last converged state (trial law update from the committed state, dt = 0).
-    pub fn evaluate(&mut self) {
+    /// Fails only when `x`, `rot` or `fixed` no longer have one entry per node.
+    pub fn evaluate(&mut self) -> Result<(), RodError> {
+        self.check_controls(&self.controls)?;
         self.current = self.controls.clone();
         let _ = self.assemble(0.0, false);
+        Ok(())
     }
 
     /// Rigid motion of the whole problem: positions x ← g x + shift, frames R ← g R, dead forces,
@@ -711,7 +714,15 @@ impl<'a> SpatialRod<'a> {
 
     /// Check that a set of controls fits the rod and its constraints.
     fn check_controls(&self, c: &Controls) -> Result<(), RodError> {
-        let n = self.nodes();
+        let n = self.l0.len() + 1;
+        if self.x.len() != n || self.rot.len() != n || self.fixed.len() != n {
+            return Err(RodError::InvalidSetup(format!(
+                "positions, frames and fixities need one entry per node ({n} nodes; got {}, {}, {})",
+                self.x.len(),
+                self.rot.len(),
+                self.fixed.len()
+            )));
+        }
         if c.force.len() != n
             || c.moment.len() != n
             || c.follower_moment.len() != n

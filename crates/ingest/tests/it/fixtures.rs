@@ -288,9 +288,17 @@ fn units_inside_names_and_space_separator() {
         b"Zeit [s] Kraft [N] Weg [mm]\n0 1 2\n1 2 3.5\n",
         "s.txt",
         &ReadOptions::default(),
-    );
-    // A space separator splits "Zeit [s]" into two cells; such files need another separator or a units row.
-    assert!(r.is_ok() || r.is_err());
+    )
+    .unwrap();
+    // The space separator splits "Zeit [s]" into two cells; the reader joins them back.
+    let u: Vec<(&str, &str)> = r
+        .channels
+        .iter()
+        .map(|c| (c.name.as_str(), c.unit.as_str()))
+        .collect();
+    assert_eq!(u, [("Zeit", "s"), ("Kraft", "N"), ("Weg", "mm")]);
+    assert!(rel(val(&r, "Weg", 2), 3.5e-3));
+    assert!(r.warnings.is_empty(), "{:?}", r.warnings);
     let r = read_bytes(
         b"Zeit  Kraft  Weg\ns  N  mm\n  0.0   1.0   2.0\n  1.0   2.0   3.5\n",
         "s.txt",
@@ -407,4 +415,21 @@ fn writes_parquet_and_csv_atomically_and_round_trips() {
         .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
         .collect();
     assert_eq!(names.len(), 2, "{names:?}");
+}
+
+#[test]
+fn german_torsion_units_in_brackets_sets_kind() {
+    let text = "Zeit [s]\tDrehwinkel [°]\tMoment [N*m]\tSteifigkeit\n\t\t\tN/mm\n0,0\t0,0\t0,0\t1\n0,5\t90,0\t1,5\t2\n";
+    let r = read_bytes(text.as_bytes(), "torsion.txt", &ReadOptions::default()).unwrap();
+    assert_eq!(r.blocks[0].units_line, Some(2));
+    assert_eq!(role_name(&r, Role::Time), Some("Zeit"));
+    assert_eq!(role_name(&r, Role::Control), Some("Drehwinkel"));
+    assert_eq!(role_name(&r, Role::Response), Some("Moment"));
+    assert_eq!(r.kind, TestKind::Torsion);
+    assert!(rel(val(&r, "Drehwinkel", 2), std::f64::consts::FRAC_PI_2));
+    assert_eq!(r.channels[2].si_unit, "N m");
+    assert!(r
+        .warnings
+        .iter()
+        .any(|w| w.message.contains("unknown unit 'N/mm'")));
 }

@@ -301,4 +301,5 @@ fn real_logs_match_manifest() {
         errs.len(),
         errs.join("\n")
     );
+    println!("real logs: all {} files match MANIFEST.toml", files.len());
 }
