@@ -5,6 +5,7 @@
 //! [`cablab_rod`] → [`cablab_diagnose`] → [`cablab_report`], with [`pipeline`] orchestrating.
 //! See ARCHITECTURE.md for the code map and the invariants.
 
+pub mod blind;
 pub mod bridge;
 pub mod cli;
 pub mod commands;

@@ -16,10 +16,12 @@ pub fn diag_test(
 ) -> Result<DiagTest, CliError> {
     let opts = crate::bridge::read_options(&a.reader, Some(kind)).map_err(CliError::input)?;
     let rec = cablab_ingest::read_path(path, &opts).map_err(CliError::input)?;
-    let geom = crate::bridge::geometry(&rec, kind, a.length_mm, a.diameter_mm).map_err(CliError::input)?;
+    let geom =
+        crate::bridge::geometry(&rec, kind, a.length_mm, a.diameter_mm).map_err(CliError::input)?;
     let curve = crate::bridge::curve(&rec).map_err(CliError::input)?;
-    let segments = cablab_measure::segment(curve.time_s.as_deref(), &curve.control, &curve.response)
-        .map_err(|e| CliError::input(anyhow::anyhow!("{}: {e}", path.display())))?;
+    let segments =
+        cablab_measure::segment(curve.time_s.as_deref(), &curve.control, &curve.response)
+            .map_err(|e| CliError::input(anyhow::anyhow!("{}: {e}", path.display())))?;
     let an_labels = cablab_measure::labels(&segments, curve.control.len());
     let labels = an_labels
         .into_iter()
@@ -33,7 +35,9 @@ pub fn diag_test(
         kind,
         free_length_m: geom.free_length_m,
         diameter_m: geom.diameter_m,
-        time_s: curve.time_s.unwrap_or_else(|| (0..n).map(|i| i as f64).collect()),
+        time_s: curve
+            .time_s
+            .unwrap_or_else(|| (0..n).map(|i| i as f64).collect()),
         control: curve.control,
         response: curve.response,
         labels,
@@ -50,11 +54,16 @@ pub fn run(a: DiagnoseArgs) -> CmdResult {
             "--kind: give one of tension, torsion, three-point, pure-bending"
         )));
     }
+    cablab_laws::try_param_specs(kind, &a.baseline)
+        .map_err(|e| CliError::input(anyhow::anyhow!("--baseline: {e}")))?;
     let candidates = match &a.candidates {
         None => None,
         Some(v) => Some(
             v.iter()
-                .map(|s| s.parse().map_err(|e| CliError::input(anyhow::anyhow!("--candidates: {e}"))))
+                .map(|s| {
+                    s.parse()
+                        .map_err(|e| CliError::input(anyhow::anyhow!("--candidates: {e}")))
+                })
                 .collect::<Result<Vec<_>, _>>()?,
         ),
     };
@@ -89,7 +98,10 @@ pub fn run(a: DiagnoseArgs) -> CmdResult {
                 100.0 * e.gap_after_rel
             );
         }
-        println!("noise floor {:.3}% of the largest response", 100.0 * d.verdict.noise_rel);
+        println!(
+            "noise floor {:.3}% of the largest response",
+            100.0 * d.verdict.noise_rel
+        );
     }
     Ok(ExitCode::SUCCESS)
 }

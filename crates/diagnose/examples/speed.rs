@@ -14,8 +14,14 @@ fn main() {
     let args: Vec<String> = std::env::args().collect();
     let registry = Registry;
     let rod = Rod::default();
-    let ctx = Context { catalog: &registry, rod: Some(&rod) };
-    for (kind, truth) in [(TestKind::Tension, Effect::KinematicHardening), (TestKind::PureBending, Effect::None)] {
+    let ctx = Context {
+        catalog: &registry,
+        rod: Some(&rod),
+    };
+    for (kind, truth) in [
+        (TestKind::Tension, Effect::KinematicHardening),
+        (TestKind::PureBending, Effect::None),
+    ] {
         let case = match generate_case_at(kind, truth, 0.003, 1, Layout::TestXpert, 100.0) {
             Ok(c) => c,
             Err(e) => {
@@ -26,7 +32,9 @@ fn main() {
         let n = case.tests[0].control.len();
         // One forward simulation of the baseline over the whole history.
         let model = cablab_diagnose::ModelSpec::law("elastoplastic");
-        if let Ok(fwd) = cablab_diagnose::model::ModelForward::new(&case.tests, &model, &registry, None) {
+        if let Ok(fwd) =
+            cablab_diagnose::model::ModelForward::new(&case.tests, &model, &registry, None)
+        {
             use cablab_diagnose::calibrate::Forward;
             let p: Vec<f64> = fwd.specs().iter().map(|s| s.initial).collect();
             let mut out = vec![0.0; n];
@@ -34,7 +42,10 @@ fn main() {
             for _ in 0..100 {
                 let _ = fwd.simulate(&p, 0, &mut out);
             }
-            println!("{kind}: one baseline simulation of {n} samples: {:.3} ms", t.elapsed().as_secs_f64() * 10.0);
+            println!(
+                "{kind}: one baseline simulation of {n} samples: {:.3} ms",
+                t.elapsed().as_secs_f64() * 10.0
+            );
         }
         let t = Instant::now();
         match diagnose(ctx, &case.tests, &DiagnoseOptions::default()) {
@@ -51,25 +62,50 @@ fn main() {
         return;
     }
     let t = Instant::now();
-    let case = match generate_case_at(TestKind::ThreePoint, Effect::None, 0.003, 1, Layout::TestXpert, 10.0) {
+    let case = match generate_case_at(
+        TestKind::ThreePoint,
+        Effect::None,
+        0.003,
+        1,
+        Layout::TestXpert,
+        10.0,
+    ) {
         Ok(c) => c,
         Err(e) => {
             eprintln!("three_point: {e}");
             return;
         }
     };
-    println!("three_point case generated in {:.2} s ({} samples)", t.elapsed().as_secs_f64(), case.tests[0].control.len());
+    println!(
+        "three_point case generated in {:.2} s ({} samples)",
+        t.elapsed().as_secs_f64(),
+        case.tests[0].control.len()
+    );
     let model = cablab_diagnose::ModelSpec::law("elastoplastic");
-    if let Ok(fwd) = cablab_diagnose::model::ModelForward::new(&case.tests, &model, &registry, Some(&rod)) {
+    if let Ok(fwd) =
+        cablab_diagnose::model::ModelForward::new(&case.tests, &model, &registry, Some(&rod))
+    {
         use cablab_diagnose::calibrate::Forward;
         let p: Vec<f64> = fwd.specs().iter().map(|s| s.initial).collect();
         let mut out = vec![0.0; case.tests[0].control.len()];
         let t = Instant::now();
         let r = fwd.simulate(&p, 0, &mut out);
-        let (lo, hi) = case.tests[0].response.iter().fold((f64::MAX, f64::MIN), |(a, b), &x| (a.min(x), b.max(x)));
-        let (clo, chi) = case.tests[0].control.iter().fold((f64::MAX, f64::MIN), |(a, b), &x| (a.min(x), b.max(x)));
-        println!("three_point data: response {lo}..{hi}, control {clo}..{chi}; sim max {}", out.iter().fold(f64::MIN, |a, &b| a.max(b)));
-        println!("three_point: one baseline rod simulation: {:.3} s ({r:?})", t.elapsed().as_secs_f64());
+        let (lo, hi) = case.tests[0]
+            .response
+            .iter()
+            .fold((f64::MAX, f64::MIN), |(a, b), &x| (a.min(x), b.max(x)));
+        let (clo, chi) = case.tests[0]
+            .control
+            .iter()
+            .fold((f64::MAX, f64::MIN), |(a, b), &x| (a.min(x), b.max(x)));
+        println!(
+            "three_point data: response {lo}..{hi}, control {clo}..{chi}; sim max {}",
+            out.iter().fold(f64::MIN, |a, &b| a.max(b))
+        );
+        println!(
+            "three_point: one baseline rod simulation: {:.3} s ({r:?})",
+            t.elapsed().as_secs_f64()
+        );
     }
     if args.iter().any(|a| a == "--per-model") {
         let base = cablab_diagnose::ModelSpec::law("elastoplastic");
@@ -79,13 +115,19 @@ fn main() {
         }
         for m in models {
             let t = Instant::now();
-            let opts = cablab_diagnose::CalibrateOptions { starts: 1, ..Default::default() };
+            let opts = cablab_diagnose::CalibrateOptions {
+                starts: 1,
+                ..Default::default()
+            };
             let r = cablab_diagnose::calibrate(ctx, &case.tests, &m, &opts);
             println!(
                 "three_point: calibrate {} (1 start): {:.2} s, {}",
                 m.label(),
                 t.elapsed().as_secs_f64(),
-                r.map_or_else(|e| e.to_string(), |c| format!("{} evaluations", c.evaluations))
+                r.map_or_else(
+                    |e| e.to_string(),
+                    |c| format!("{} evaluations", c.evaluations)
+                )
             );
         }
     }

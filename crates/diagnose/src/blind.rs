@@ -370,7 +370,11 @@ pub fn generate_case(
     seed: u64,
     layout: Layout,
 ) -> Result<BlindCase, String> {
-    let rate = if kind == TestKind::ThreePoint { 10.0 } else { 60.0 };
+    let rate = if kind == TestKind::ThreePoint {
+        10.0
+    } else {
+        60.0
+    };
     generate_case_at(kind, truth, noise_rel, seed, layout, rate)
 }
 

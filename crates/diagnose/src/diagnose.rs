@@ -556,7 +556,11 @@ fn score(
     opts: &DiagnoseOptions,
 ) -> Result<Scored, DiagError> {
     let copts = CalibrateOptions {
-        starts: if tests[0].kind == TestKind::ThreePoint { opts.rod_starts } else { opts.starts },
+        starts: if tests[0].kind == TestKind::ThreePoint {
+            opts.rod_starts
+        } else {
+            opts.starts
+        },
         seed: opts.seed,
         fit: opts.fit,
         fit_idx: Some(train.to_vec()),

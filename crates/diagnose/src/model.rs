@@ -116,9 +116,18 @@ impl DiagTest {
         match cablab_measure::segment(Some(&self.time_s), &self.control, &self.response) {
             Ok(seg) => cablab_measure::labels(&seg, n)
                 .into_iter()
-                .map(|l| SegLabel { cycle: l.cycle, branch: l.branch })
+                .map(|l| SegLabel {
+                    cycle: l.cycle,
+                    branch: l.branch,
+                })
                 .collect(),
-            Err(_) => vec![SegLabel { cycle: 1, branch: Branch::FirstLoading }; n],
+            Err(_) => vec![
+                SegLabel {
+                    cycle: 1,
+                    branch: Branch::FirstLoading
+                };
+                n
+            ],
         }
     }
 }
@@ -320,7 +329,9 @@ pub fn initial_slope(control: &[f64], response: &[f64]) -> Option<f64> {
             break;
         }
     }
-    let idx: Vec<usize> = (0..=end).filter(|&i| control[i].abs() <= 0.3 * peak).collect();
+    let idx: Vec<usize> = (0..=end)
+        .filter(|&i| control[i].abs() <= 0.3 * peak)
+        .collect();
     if idx.len() < 5 {
         return None;
     }
@@ -490,31 +501,42 @@ impl Forward for ModelForward<'_> {
                 if c == 0.0 {
                     rod.simulate(t, law.as_ref(), &t.control, mu, out)?;
                 } else {
-                    // Relaxed fixed point on the specimen deflection w = u − C F(w) over the
-                    // whole history, scaled by 1/(1 + C k) with k the specimen's elastic
-                    // stiffness estimated from the data (Newton where the rod is elastic,
-                    // contracting where it is softer or has lost contact).
-                    let k_app = initial_slope(&t.control, &t.response).unwrap_or(0.0);
-                    let k_est = if c * k_app < 0.99 { k_app / (1.0 - c * k_app) } else { 100.0 * k_app };
-                    let relax = 1.0 / (1.0 + c * k_est);
+                    // Fixed point on the specimen deflection w = u − C F(w) over the whole
+                    // history, solved per sample by a secant update: w += g / (1 + C k) with k
+                    // the sample's secant stiffness between iterations (first iteration: the
+                    // law's elastic three-point stiffness 48 EI/l³), so that elastic, plastic and
+                    // lost-contact samples all converge fast.
+                    let k_e = 48.0 * law.elastic_tangent()[(3, 3)] / t.free_length_m.powi(3);
                     let umax = t.control.iter().fold(1e-12f64, |m, x| m.max(x.abs()));
+                    let n = t.control.len();
                     let mut w = t.control.clone();
+                    let mut k = vec![k_e; n];
+                    let (mut w_prev, mut f_prev) = (vec![f64::NAN; n], vec![f64::NAN; n]);
                     let mut converged = false;
                     for _ in 0..25 {
                         rod.simulate(t, law.as_ref(), &w, mu, out)?;
                         let mut change = 0.0f64;
-                        for i in 0..w.len() {
+                        for i in 0..n {
+                            let dw = w[i] - w_prev[i];
+                            if dw.abs() > 1e-12 * umax {
+                                k[i] = ((out[i] - f_prev[i]) / dw).clamp(0.0, 2.0 * k_e);
+                            }
+                            w_prev[i] = w[i];
+                            f_prev[i] = out[i];
                             let g = t.control[i] - c * out[i] - w[i];
                             change = change.max(g.abs());
-                            w[i] += relax * g;
+                            w[i] += g / (1.0 + c * k[i]);
                         }
-                        if change <= 1e-5 * umax {
+                        if change <= 1e-6 * umax {
                             converged = true;
                             break;
                         }
                     }
                     if !converged {
-                        return Err("machine compliance: the deflection fixed point did not converge".into());
+                        return Err(
+                            "machine compliance: the deflection fixed point did not converge"
+                                .into(),
+                        );
                     }
                 }
             }

@@ -205,7 +205,9 @@ impl RodSimulator for Rod {
             .clone()
             .unwrap_or_else(|| cablab_rod::TestSetup::new(test.kind, test.free_length_m));
         setup.support_friction = mu;
-        let idx = decimate(control, self.max_points);
+        // Indices from the measured history, so that replays of nearby histories (the machine
+        // compliance fixed point) sample the same points.
+        let idx = decimate(&test.control, self.max_points);
         let c: Vec<f64> = idx.iter().map(|&i| control[i]).collect();
         let t: Vec<f64> = idx.iter().map(|&i| test.time_s[i]).collect();
         let curve = cablab_rod::simulate_history(&setup, law, &c, &t).map_err(|e| e.to_string())?;

@@ -79,5 +79,4 @@ mod tests {
         );
         assert_eq!(effective_sample_size(100, -0.5), 100.0);
     }
-
 }

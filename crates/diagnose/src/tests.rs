@@ -16,26 +16,47 @@ const REG: Registry = Registry;
 const ROD: Rod = Rod { max_points: 240 };
 
 fn ctx() -> Context<'static> {
-    Context { catalog: &REG, rod: Some(&ROD) }
+    Context {
+        catalog: &REG,
+        rod: Some(&ROD),
+    }
 }
 
 /// A tension test of the chapter's cable (l₀ = 32 mm): four cycles to 0.6…3.6 × the yield
 /// elongation with 2 s dwells, 30 Hz, through the virtual lab.
-fn tension(law: &str, params: &[(&str, f64)], ext: Option<(&str, Vec<(&str, f64)>)>, artefacts: Artefacts) -> DiagTest {
+fn tension(
+    law: &str,
+    params: &[(&str, f64)],
+    ext: Option<(&str, Vec<(&str, f64)>)>,
+    artefacts: Artefacts,
+) -> DiagTest {
     let l0 = 0.032;
     let p: BTreeMap<String, f64> = params.iter().map(|(k, v)| (k.to_string(), *v)).collect();
     let u_y = 54.0 / 7.96e4 * l0;
     let spec = SynthSpec {
         kind: TestKind::Tension,
-        specimen: Specimen { label: Some("t".into()), diameter_m: Some(2.8e-3), free_length_m: Some(l0) },
+        specimen: Specimen {
+            label: Some("t".into()),
+            diameter_m: Some(2.8e-3),
+            free_length_m: Some(l0),
+        },
         law: law.into(),
         params: p,
-        extension: ext.map(|(n, kv)| Extension { name: n.into(), params: kv.into_iter().map(|(k, v)| (k.to_string(), v)).collect() }),
+        extension: ext.map(|(n, kv)| Extension {
+            name: n.into(),
+            params: kv.into_iter().map(|(k, v)| (k.to_string(), v)).collect(),
+        }),
         rig: Default::default(),
         protocol: Protocol {
             steps: [0.6, 1.6, 2.6, 3.6]
                 .iter()
-                .map(|&a| Step::Cycles { lower: 0.0, upper: a * u_y, rate: u_y / 2.0, count: 1, dwell_s: 2.0 })
+                .map(|&a| Step::Cycles {
+                    lower: 0.0,
+                    upper: a * u_y,
+                    rate: u_y / 2.0,
+                    count: 1,
+                    dwell_s: 2.0,
+                })
                 .collect(),
         },
         artefacts,
@@ -60,7 +81,12 @@ fn tension(law: &str, params: &[(&str, f64)], ext: Option<(&str, Vec<(&str, f64)
 }
 
 fn clean() -> Artefacts {
-    Artefacts { noise_rel: 0.0, adc_bits: 0, control_quantum: Some(0.0), ..Artefacts::default() }
+    Artefacts {
+        noise_rel: 0.0,
+        adc_bits: 0,
+        control_quantum: Some(0.0),
+        ..Artefacts::default()
+    }
 }
 
 const TRUTH: [(&str, f64); 3] = [("EA", 7.96e4), ("F_y", 54.0), ("H", 2400.0)];
@@ -68,7 +94,13 @@ const TRUTH: [(&str, f64); 3] = [("EA", 7.96e4), ("F_y", 54.0), ("H", 2400.0)];
 #[test]
 fn calibration_recovers_elastoplastic_parameters_without_noise() {
     let t = tension("elastoplastic", &TRUTH, None, clean());
-    let cal = calibrate(ctx(), &[t], &ModelSpec::law("elastoplastic"), &CalibrateOptions::default()).unwrap();
+    let cal = calibrate(
+        ctx(),
+        &[t],
+        &ModelSpec::law("elastoplastic"),
+        &CalibrateOptions::default(),
+    )
+    .unwrap();
     for (name, truth) in TRUTH {
         let p = cal.get(name).unwrap();
         assert!((p / truth - 1.0).abs() < 2e-3, "{name}: {p} vs {truth}");
@@ -77,14 +109,30 @@ fn calibration_recovers_elastoplastic_parameters_without_noise() {
 
 #[test]
 fn noisy_calibration_uncertainty_covers_the_truth() {
-    let a = Artefacts { noise_rel: 0.003, adc_bits: 0, control_quantum: Some(0.0), ..Artefacts::default() };
+    let a = Artefacts {
+        noise_rel: 0.003,
+        adc_bits: 0,
+        control_quantum: Some(0.0),
+        ..Artefacts::default()
+    };
     let t = tension("elastoplastic", &TRUTH, None, a);
-    let cal = calibrate(ctx(), &[t], &ModelSpec::law("elastoplastic"), &CalibrateOptions::default()).unwrap();
+    let cal = calibrate(
+        ctx(),
+        &[t],
+        &ModelSpec::law("elastoplastic"),
+        &CalibrateOptions::default(),
+    )
+    .unwrap();
     for (name, truth) in TRUTH {
         let p = cal.get(name).unwrap();
-        let se = cal.std_err_of(name).unwrap_or_else(|| panic!("{name} not identified"));
+        let se = cal
+            .std_err_of(name)
+            .unwrap_or_else(|| panic!("{name} not identified"));
         // Three standard errors, and the error itself small (< 1 % for EA and F_y, 5 % for H).
-        assert!((p - truth).abs() <= 3.0 * se, "{name}: {p} ± {se} vs {truth}");
+        assert!(
+            (p - truth).abs() <= 3.0 * se,
+            "{name}: {p} ± {se} vs {truth}"
+        );
         let tol = if name == "H" { 0.05 } else { 0.01 };
         assert!((p / truth - 1.0).abs() < tol, "{name}: {p} vs {truth}");
     }
@@ -92,7 +140,15 @@ fn noisy_calibration_uncertainty_covers_the_truth() {
 }
 
 fn case(truth: Effect, seed: u64) -> BlindCase {
-    generate_case_at(TestKind::Tension, truth, 0.003, seed, Layout::BluehillCsv, 30.0).unwrap()
+    generate_case_at(
+        TestKind::Tension,
+        truth,
+        0.003,
+        seed,
+        Layout::BluehillCsv,
+        30.0,
+    )
+    .unwrap()
 }
 
 fn verdict_of(c: &BlindCase) -> crate::diagnose::Diagnosis {
@@ -102,17 +158,43 @@ fn verdict_of(c: &BlindCase) -> crate::diagnose::Diagnosis {
 #[test]
 fn null_case_gives_none() {
     let d = verdict_of(&case(Effect::None, 1));
-    assert_eq!(d.verdict.effect, Effect::None, "{:?}", d.effects.iter().map(|e| (e.effect, e.delta_ic)).collect::<Vec<_>>());
+    assert_eq!(
+        d.verdict.effect,
+        Effect::None,
+        "{:?}",
+        d.effects
+            .iter()
+            .map(|e| (e.effect, e.delta_ic))
+            .collect::<Vec<_>>()
+    );
     assert!(d.verdict.equivalent.is_empty());
     // The baseline's held-out gap is at the noise floor.
-    assert!(d.baseline.gap_heldout_rel < 1.2 * d.verdict.noise_rel, "{} vs {}", d.baseline.gap_heldout_rel, d.verdict.noise_rel);
+    assert!(
+        d.baseline.gap_heldout_rel < 1.2 * d.verdict.noise_rel,
+        "{} vs {}",
+        d.baseline.gap_heldout_rel,
+        d.verdict.noise_rel
+    );
 }
 
 fn found(truth: Effect) {
     let d = verdict_of(&case(truth, 2));
-    assert_eq!(d.verdict.effect, truth, "effects {:?}", d.effects.iter().map(|e| (e.effect, e.gap_after_noise, e.delta_ic)).collect::<Vec<_>>());
+    assert_eq!(
+        d.verdict.effect,
+        truth,
+        "effects {:?}",
+        d.effects
+            .iter()
+            .map(|e| (e.effect, e.gap_after_noise, e.delta_ic))
+            .collect::<Vec<_>>()
+    );
     let e = d.effects.iter().find(|e| e.effect == truth).unwrap();
-    assert!(e.gap_after <= 1.5 * d.verdict.noise, "gap after {} vs noise {}", e.gap_after, d.verdict.noise);
+    assert!(
+        e.gap_after <= 1.5 * d.verdict.noise,
+        "gap after {} vs noise {}",
+        e.gap_after,
+        d.verdict.noise
+    );
     assert!(e.gap_before_rel > 1.2 * e.gap_after_rel);
 }
 
@@ -123,8 +205,17 @@ fn finds_kinematic_hardening_and_reports_the_maxwell_degeneracy() {
     // model and reports viscoelasticity as equivalent, with the experiment that separates them.
     let d = verdict_of(&case(Effect::KinematicHardening, 2));
     assert_eq!(d.verdict.effect, Effect::KinematicHardening);
-    assert!(d.verdict.equivalent.contains(&Effect::Viscoelasticity), "{:?}", d.verdict.equivalent);
-    let sep = d.verdict.separating.iter().find(|s| s.effects.contains(&Effect::Viscoelasticity)).unwrap();
+    assert!(
+        d.verdict.equivalent.contains(&Effect::Viscoelasticity),
+        "{:?}",
+        d.verdict.equivalent
+    );
+    let sep = d
+        .verdict
+        .separating
+        .iter()
+        .find(|s| s.effects.contains(&Effect::Viscoelasticity))
+        .unwrap();
     assert!(sep.experiment.contains("hold"), "{}", sep.experiment);
 }
 
@@ -135,13 +226,24 @@ fn maxwell_branch_with_huge_relaxation_time_is_not_called_viscoelastic_alone() {
         "elastoplastic",
         &TRUTH,
         Some(("viscoelasticity", vec![("EA_v1", 2.4e4), ("tau_v1", 1e7)])),
-        Artefacts { noise_rel: 0.003, ..Artefacts::default() },
+        Artefacts {
+            noise_rel: 0.003,
+            ..Artefacts::default()
+        },
     );
     let d = diagnose(ctx(), &[t], &DiagnoseOptions::default()).unwrap();
     let mut named = d.verdict.equivalent.clone();
     named.push(d.verdict.effect);
-    assert!(named.contains(&Effect::KinematicHardening) && named.contains(&Effect::Viscoelasticity), "verdict {:?}", d.verdict);
-    assert_eq!(d.verdict.effect, Effect::KinematicHardening, "the simpler of two equivalent explanations");
+    assert!(
+        named.contains(&Effect::KinematicHardening) && named.contains(&Effect::Viscoelasticity),
+        "verdict {:?}",
+        d.verdict
+    );
+    assert_eq!(
+        d.verdict.effect,
+        Effect::KinematicHardening,
+        "the simpler of two equivalent explanations"
+    );
 }
 
 #[test]
@@ -187,11 +289,18 @@ fn diagnosis_json_has_the_contract_keys() {
     for l in located {
         assert!(l["where"].is_string() && l["share"].is_f64());
     }
-    let shares: Vec<f64> = located.iter().map(|l| l["share"].as_f64().unwrap()).collect();
+    let shares: Vec<f64> = located
+        .iter()
+        .map(|l| l["share"].as_f64().unwrap())
+        .collect();
     assert!(shares.windows(2).all(|w| w[0] >= w[1]), "largest first");
     // Each breakdown sums to 1.
     for by in ["cycle_branch", "control_range"] {
-        let s: f64 = located.iter().filter(|l| l["by"] == by).map(|l| l["share"].as_f64().unwrap()).sum();
+        let s: f64 = located
+            .iter()
+            .filter(|l| l["by"] == by)
+            .map(|l| l["share"].as_f64().unwrap())
+            .sum();
         assert!((s - 1.0).abs() < 1e-9, "{by}: {s}");
     }
     let effects = v["effects"].as_array().unwrap();
@@ -210,15 +319,25 @@ fn diagnosis_json_has_the_contract_keys() {
 #[test]
 fn ladder_climbs_from_linear_elasticity_to_the_noise_floor() {
     let c = case(Effect::KinematicHardening, 2);
-    let opts = DiagnoseOptions { ladder: true, ..Default::default() };
+    let opts = DiagnoseOptions {
+        ladder: true,
+        ..Default::default()
+    };
     let d = diagnose(ctx(), &c.tests, &opts).unwrap();
     let l = d.ladder.expect("ladder asked for");
     assert_eq!(l[0].effect, Effect::Plasticity, "{l:?}");
     assert_eq!(l[0].model, "elastoplastic");
-    assert!(l.iter().any(|r| r.effect == Effect::KinematicHardening), "{l:?}");
+    assert!(
+        l.iter().any(|r| r.effect == Effect::KinematicHardening),
+        "{l:?}"
+    );
     for r in &l {
         assert!(r.gap_after_rel < r.gap_before_rel, "{r:?}");
     }
     let last = l.last().unwrap();
-    assert!(last.gap_after_rel <= 1.5 * d.verdict.noise_rel, "{l:?} noise {}", d.verdict.noise_rel);
+    assert!(
+        last.gap_after_rel <= 1.5 * d.verdict.noise_rel,
+        "{l:?} noise {}",
+        d.verdict.noise_rel
+    );
 }

@@ -12,12 +12,12 @@ use thiserror::Error;
 #[derive(Debug, Error)]
 pub enum IngestError {
     /// The file could not be opened or read.
-    #[error("{path}: cannot read file: {source}")]
+    #[error("{path}: cannot read file: {reason}")]
     Io {
         /// The path that was read.
         path: PathBuf,
-        /// The operating-system error.
-        source: std::io::Error,
+        /// The operating-system error, as text (not a chained source: the message says it once).
+        reason: String,
     },
     /// The input has no bytes (or only a byte-order mark / whitespace).
     #[error("{file}: the file is empty (expected a machine export with a header and data rows)")]

@@ -52,7 +52,7 @@ pub struct ReadOptions {
 pub fn read_path(path: &Path, opts: &ReadOptions) -> Result<TestRecord, IngestError> {
     let bytes = std::fs::read(path).map_err(|e| IngestError::Io {
         path: path.to_path_buf(),
-        source: e,
+        reason: e.to_string(),
     })?;
     let source = path.display().to_string();
     let sha = sha256_hex(&bytes);

@@ -657,6 +657,14 @@ fn atomic_write(
         })?;
     write(tmp.as_file_mut()).map_err(err)?;
     tmp.as_file().sync_all().map_err(|e| err(e.to_string()))?;
+    // Temporary files are created private (0600); an output is an ordinary file.
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        tmp.as_file()
+            .set_permissions(std::fs::Permissions::from_mode(0o644))
+            .map_err(|e| err(e.to_string()))?;
+    }
     tmp.persist(path).map_err(|e| err(e.error.to_string()))?;
     Ok(())
 }

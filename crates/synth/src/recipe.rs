@@ -197,7 +197,8 @@ pub struct WrittenFile {
     pub kind: TestKind,
     /// Layout.
     pub layout: Layout,
-    /// Noise seed.
+    /// Noise seed (written as a string: TOML integers are signed 64-bit, seeds use all 64 bits).
+    #[serde(with = "seed_text")]
     pub seed: u64,
     /// Baseline law.
     pub law: String,
@@ -209,6 +210,28 @@ pub struct WrittenFile {
     pub rows: usize,
     /// Bytes written.
     pub bytes: usize,
+}
+
+/// Seeds as decimal strings in TOML (whose integers stop at i64::MAX); integers are accepted back.
+mod seed_text {
+    use serde::{de, Deserialize, Deserializer, Serializer};
+
+    pub fn serialize<S: Serializer>(v: &u64, s: S) -> Result<S::Ok, S::Error> {
+        s.serialize_str(&v.to_string())
+    }
+
+    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<u64, D::Error> {
+        #[derive(Deserialize)]
+        #[serde(untagged)]
+        enum Seed {
+            Text(String),
+            Int(u64),
+        }
+        match Seed::deserialize(d)? {
+            Seed::Text(t) => t.parse().map_err(de::Error::custom),
+            Seed::Int(i) => Ok(i),
+        }
+    }
 }
 
 /// Runs a recipe: generates every file and writes it into `out_dir` (created if missing), plus
