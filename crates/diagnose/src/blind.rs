@@ -477,7 +477,7 @@ pub fn generate_case_at(
             };
             artefacts.machine_compliance = draw(0.33, 0.66) / k_spec;
         }
-        Effect::SupportFriction => rig.support_friction = draw(0.2, 0.35),
+        Effect::SupportFriction => rig.support_friction = draw(0.1, 0.2),
         _ => {}
     }
     // Protocol: four cycles to 0.6, 1.6, 2.6, 3.6 × first-yield control, dwell 2 s at the turns.
@@ -502,19 +502,23 @@ pub fn generate_case_at(
         artefacts.drift_per_s = r_y * draw(0.06, 0.1) / duration;
     }
     let lengths: Vec<f64> = if truth == Effect::MachineCompliance {
-        vec![l0, 2.0 * l0]
+        // Three-point: a 1.5× span (twice would let the punch push the rod off its supports).
+        vec![
+            l0,
+            if kind == TestKind::ThreePoint {
+                1.5 * l0
+            } else {
+                2.0 * l0
+            },
+        ]
     } else {
         vec![l0]
     };
     let mut tests = Vec::new();
     for (i, &len) in lengths.iter().enumerate() {
-        // The longer specimen runs the same strain history (control scaled with its length).
-        let scale = len / l0
-            * if kind == TestKind::ThreePoint {
-                len / l0
-            } else {
-                1.0
-            };
+        // The longer specimen runs the same strain history (control scaled with its length);
+        // three-point keeps w/l₀ instead (the same shape; curvatures fall as 1/l₀).
+        let scale = len / l0;
         let steps_i: Vec<Step> = steps
             .iter()
             .map(|st| match *st {

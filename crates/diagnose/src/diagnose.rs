@@ -51,6 +51,19 @@ pub struct Context<'a> {
     pub rod: Option<&'a dyn RodSimulator>,
 }
 
+static PROJECT_REGISTRY: crate::registry::Registry = crate::registry::Registry;
+static PROJECT_ROD: crate::registry::Rod = crate::registry::Rod { max_points: 120 };
+
+impl Context<'static> {
+    /// The project's law registry (`cablab-laws`) and rod (`cablab-rod`).
+    pub fn project() -> Self {
+        Context {
+            catalog: &PROJECT_REGISTRY,
+            rod: Some(&PROJECT_ROD),
+        }
+    }
+}
+
 /// Settings of calibration and diagnosis.
 #[derive(Debug, Clone)]
 pub struct DiagnoseOptions {

@@ -316,7 +316,8 @@ pub fn data_scales(tests: &[DiagTest]) -> DataScales {
 }
 
 /// Slope response/control of the first loading, fitted over its lower 30 % (where a cable is
-/// still elastic); `None` if the first loading is too short.
+/// still elastic; wider if that holds fewer than 5 samples); `None` if the first loading is too
+/// short.
 pub fn initial_slope(control: &[f64], response: &[f64]) -> Option<f64> {
     // First loading: until |control| stops growing.
     let mut end = 0;
@@ -329,12 +330,15 @@ pub fn initial_slope(control: &[f64], response: &[f64]) -> Option<f64> {
             break;
         }
     }
-    let idx: Vec<usize> = (0..=end)
-        .filter(|&i| control[i].abs() <= 0.3 * peak)
-        .collect();
-    if idx.len() < 5 {
-        return None;
-    }
+    // Lower 30 % of the first loading; widened when the logger sampled it too coarsely.
+    let idx = [0.3, 0.6, 1.0]
+        .iter()
+        .map(|f| {
+            (0..=end)
+                .filter(|&i| control[i].abs() <= f * peak)
+                .collect::<Vec<usize>>()
+        })
+        .find(|v| v.len() >= 5)?;
     let x: Vec<f64> = idx.iter().map(|&i| control[i]).collect();
     let y: Vec<f64> = idx.iter().map(|&i| response[i]).collect();
     let k = cablab_measure::linear_fit(&x, &y).ok()?.slope;

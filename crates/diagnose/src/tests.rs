@@ -7,19 +7,12 @@
 use crate::blind::{generate_case_at, BlindCase};
 use crate::diagnose::{calibrate, diagnose, CalibrateOptions, Context, DiagnoseOptions};
 use crate::model::{DiagTest, ModelSpec};
-use crate::registry::{Registry, Rod};
 use cablab_core::{Effect, Specimen, TestKind};
 use cablab_synth::{Artefacts, Extension, Layout, Protocol, Step, SynthSpec};
 use std::collections::BTreeMap;
 
-const REG: Registry = Registry;
-const ROD: Rod = Rod { max_points: 240 };
-
 fn ctx() -> Context<'static> {
-    Context {
-        catalog: &REG,
-        rod: Some(&ROD),
-    }
+    Context::project()
 }
 
 /// A tension test of the chapter's cable (l₀ = 32 mm): four cycles to 0.6…3.6 × the yield
