@@ -249,7 +249,14 @@ fn stages(
     let mut simulated: Option<Vec<f64>> = None;
     if c.file.model.calibrate {
         let model = ModelSpec::law(&c.file.model.baseline);
-        let cal = cablab_diagnose::calibrate(ctx, tests, &model, &Default::default())
+        // The characterisation gives good starting values (stiffness, yield): one warm start
+        // plus one spread start instead of several blind ones.
+        let copts = cablab_diagnose::CalibrateOptions {
+            starts: 2,
+            warm: warm_start(t.kind, &c.file.model.baseline, &an),
+            ..Default::default()
+        };
+        let cal = cablab_diagnose::calibrate(ctx, tests, &model, &copts)
             .context("calibrating the baseline")?;
         let fwd = cablab_diagnose::model::ModelForward::new(tests, &model, &Registry, Some(&rod))?;
         let sim = fwd.simulate_all(cal.values())?.pop().unwrap_or_default();
@@ -328,6 +335,35 @@ fn stages(
     }
     done(4);
     Ok(())
+}
+
+/// Starting values for the baseline from the characterisation: the elastic stiffness and, for
+/// the elastoplastic law, the yield force or moment (three-point: the peak moment F l/4).
+fn warm_start(
+    kind: TestKind,
+    baseline: &str,
+    an: &Analysis,
+) -> Option<cablab_diagnose::diagnose::ParamMap> {
+    let st = an.stiffness.as_ref()?.value;
+    let (k, y) = match kind {
+        TestKind::Tension => ("EA", "F_y"),
+        TestKind::Torsion => ("GJ", "M_y"),
+        _ => ("EI", "M_y"),
+    };
+    let mut v = vec![(k.to_string(), st)];
+    if baseline == "elastoplastic" {
+        if let Some(yp) = &an.yield_point {
+            let r = if kind == TestKind::ThreePoint {
+                yp.peak_moment
+            } else {
+                Some(yp.response)
+            };
+            if let Some(r) = r.filter(|r| r.is_finite() && *r > 0.0) {
+                v.push((y.to_string(), r));
+            }
+        }
+    }
+    Some(cablab_diagnose::diagnose::ParamMap(v))
 }
 
 fn fill_analysis(out: &mut TestOutcome, an: &Analysis) {

@@ -498,11 +498,11 @@ pub struct HoldoutSummary {
     pub n_train: usize,
 }
 
+/// Training and held-out sample indices, per test.
+pub type Split = (Vec<Vec<usize>>, Vec<Vec<usize>>);
+
 /// Split every test's samples into training and held-out indices.
-pub fn split(
-    tests: &[DiagTest],
-    policy: &HoldoutPolicy,
-) -> Result<(Vec<Vec<usize>>, Vec<Vec<usize>>), DiagError> {
+pub fn split(tests: &[DiagTest], policy: &HoldoutPolicy) -> Result<Split, DiagError> {
     let mut train = Vec::new();
     let mut held = Vec::new();
     for (ti, t) in tests.iter().enumerate() {
@@ -557,6 +557,7 @@ struct Scored {
     n_held: usize,
 }
 
+#[allow(clippy::too_many_arguments)]
 fn score(
     ctx: Context,
     tests: &[DiagTest],

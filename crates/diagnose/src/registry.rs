@@ -217,9 +217,9 @@ impl RodSimulator for Rod {
             out[a] = ra;
             if w + 1 < idx.len() {
                 let (b, rb) = (idx[w + 1], curve.response[w + 1]);
-                for i in a + 1..b {
-                    let f = (i - a) as f64 / (b - a) as f64;
-                    out[i] = ra + f * (rb - ra);
+                for (j, o) in out[a + 1..b].iter_mut().enumerate() {
+                    let f = (j + 1) as f64 / (b - a) as f64;
+                    *o = ra + f * (rb - ra);
                 }
             }
         }

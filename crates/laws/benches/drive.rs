@@ -1,0 +1,114 @@
+//! Speed of the uniform-state driver, the calibration's inner loop: every registry law driven
+//! through 20,000 samples of a 5-cycle timed history in the loaded component of each kind.
+//!
+//! Run: `cargo bench -p cablab-laws`. Does not assert anything; the tests check the physics.
+
+use cablab_core::TestKind;
+use cablab_laws::{build, drive_uniform_into, loaded_component, param_specs, Law};
+use std::collections::BTreeMap;
+
+fn main() {
+    divan::main();
+}
+
+/// The laws benchmarked: the registry's names and two compositions.
+const LAWS: [&str; 9] = [
+    "linear",
+    "piecewise_linear",
+    "elastoplastic",
+    "kinematic_hardening",
+    "stiffness_degradation",
+    "viscoelasticity",
+    "friction_hysteresis",
+    "linear+viscoelasticity",
+    "piecewise_linear+friction_hysteresis",
+];
+
+/// Loaded stiffness and strength of the chapter's cable per kind (yield strain y/k).
+fn scale(kind: TestKind) -> (f64, f64) {
+    match kind {
+        TestKind::Tension => (7.96e4, 54.0),
+        TestKind::Torsion => (2.02e-3, 0.02),
+        _ => (1.37e-3, 0.01),
+    }
+}
+
+/// `law` for `kind` with plausible parameters (every required one set from the kind's scale).
+fn law(kind: TestKind, name: &str) -> Box<dyn Law> {
+    let (k, y) = scale(kind);
+    let ey = y / k;
+    let mut params = BTreeMap::new();
+    for sp in param_specs(kind, name)
+        .into_iter()
+        .filter(|s| s.default.is_none())
+    {
+        let n = sp.name.as_str();
+        let v = match n {
+            "D_inf" => 0.3,
+            "alpha_D" => 2.0 * ey,
+            "tau_v1" => 0.5,
+            _ if n.ends_with("_y") => y,
+            _ if n.ends_with("_kin") => 0.3 * k,
+            _ if n.ends_with("_v1") => 0.4 * k,
+            _ if n.ends_with("_t") => ey,
+            _ if n.ends_with('1') => k,
+            _ if n.ends_with('2') => 0.2 * k,
+            _ if n.starts_with("F_") || n.starts_with("M_") => 0.3 * y,
+            _ if n.ends_with("_f") => 0.3 * k,
+            _ => k,
+        };
+        params.insert(sp.name.clone(), v);
+    }
+    build(kind, name, &params).expect("law")
+}
+
+/// 20,000 samples, 5 triangular cycles 0 → 4 ε_y → −2 ε_y → 0, sampled every 10 ms.
+fn history(kind: TestKind) -> (Vec<f64>, Vec<f64>) {
+    let (k, y) = scale(kind);
+    let ey = y / k;
+    let n = 20_000;
+    let per = n / 5;
+    let e = (0..n)
+        .map(|i| {
+            let p = (i % per) as f64 / per as f64 * 4.0;
+            ey * if p < 1.0 {
+                4.0 * p
+            } else if p < 3.0 {
+                4.0 - 3.0 * (p - 1.0)
+            } else {
+                -2.0 + 2.0 * (p - 3.0)
+            }
+        })
+        .collect();
+    let t = (0..n).map(|i| 0.01 * i as f64).collect();
+    (e, t)
+}
+
+fn run(bencher: divan::Bencher, kind: TestKind, name: &str) {
+    let law = law(kind, name);
+    let comp = loaded_component(kind);
+    let (e, t) = history(kind);
+    let mut out = Vec::with_capacity(e.len());
+    bencher.bench_local(|| {
+        drive_uniform_into(law.as_ref(), comp, divan::black_box(&e), &t, &mut out);
+        out.last().copied()
+    });
+}
+
+/// Tension (Γ₃), 20,000 samples.
+#[divan::bench(args = LAWS, sample_count = 20)]
+fn tension_20k(bencher: divan::Bencher, name: &str) {
+    run(bencher, TestKind::Tension, name);
+}
+
+/// Torsion (K₃), 20,000 samples.
+#[divan::bench(args = LAWS, sample_count = 20)]
+fn torsion_20k(bencher: divan::Bencher, name: &str) {
+    run(bencher, TestKind::Torsion, name);
+}
+
+/// Pure bending (K₁, a 2-vector channel), 20,000 samples.
+#[divan::bench(args = LAWS, sample_count = 20)]
+fn bending_20k(bencher: divan::Bencher, name: &str) {
+    run(bencher, TestKind::PureBending, name);
+}
