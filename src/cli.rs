@@ -135,7 +135,12 @@ pub struct AnalyzeArgs {
     pub diameter_mm: Option<f64>,
     /// Elastic fit window in the kind's sectional control variable (strain, twist 1/m,
     /// deflection m or curvature 1/m), as FROM,TO. Default: found automatically.
-    #[arg(long, value_name = "FROM,TO", value_delimiter = ',', num_args = 2)]
+    #[arg(
+        long,
+        value_name = "FROM,TO",
+        value_delimiter = ',',
+        allow_hyphen_values = true
+    )]
     pub fit_window: Option<Vec<f64>>,
     /// Machine compliance to subtract from the control channel, in SI (m/N or rad/(N m)).
     #[arg(long, value_name = "C")]

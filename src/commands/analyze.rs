@@ -27,7 +27,16 @@ pub fn analyze_file(
         ..Default::default()
     };
     if let Some(w) = &a.fit_window {
-        ao.fit_window = Some((w[0], w[1]));
+        match w.as_slice() {
+            [from, to] if from.is_finite() && to.is_finite() && to > from => {
+                ao.fit_window = Some((*from, *to))
+            }
+            _ => {
+                return Err(CliError::input(anyhow::anyhow!(
+                    "--fit-window: give FROM,TO with TO > FROM, e.g. 0,0.0005 (got {w:?})"
+                )))
+            }
+        }
     }
     let an = cablab_measure::analyze(
         kind,

@@ -65,9 +65,10 @@ pub fn verify(a: VerifyArgs) -> CmdResult {
     let rep = ver::verify(&a.manifest, a.jobs).map_err(CliError::input)?;
     if rep.differences.is_empty() {
         println!(
-            "verified: {} files match {}",
+            "verified: {} files match {} ({} regenerated outputs are not kept on disk)",
             rep.compared,
-            a.manifest.display()
+            a.manifest.display(),
+            rep.not_on_disk
         );
         Ok(ExitCode::SUCCESS)
     } else {

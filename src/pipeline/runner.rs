@@ -89,6 +89,21 @@ fn bars(n: usize, quiet: bool) -> Bars {
     }
 }
 
+/// Identity of the running build: cablab's version plus the SHA-256 of its executable. The cache
+/// is only served to the build that wrote it (kept in `.cache`, outside the outputs, so that
+/// the outputs themselves do not depend on which build made them).
+fn build_id() -> &'static str {
+    static ID: std::sync::OnceLock<String> = std::sync::OnceLock::new();
+    ID.get_or_init(|| {
+        let exe = std::env::current_exe()
+            .ok()
+            .and_then(|p| std::fs::read(p).ok())
+            .map(|b| sha256_hex(&b))
+            .unwrap_or_default();
+        format!("{VERSION}+{exe}")
+    })
+}
+
 /// The cache key of one test: everything its result depends on.
 fn cache_key(c: &Campaign, t: &PlannedTest, input_sha: &str, diagnosis: bool) -> Result<String> {
     #[derive(Serialize)]
@@ -118,9 +133,16 @@ fn cache_key(c: &Campaign, t: &PlannedTest, input_sha: &str, diagnosis: bool) ->
     Ok(sha256_hex(serde_json::to_string(&v)?.as_bytes()))
 }
 
+/// Name of the file that records which build wrote a test's folder.
+const CACHE_STAMP: &str = ".cache";
+
 /// A cached outcome is valid when its key matches and every file it lists is present with its
 /// recorded hash.
 fn cached(test_dir: &Path, key: &str) -> Option<TestOutcome> {
+    let stamp = std::fs::read_to_string(test_dir.join(CACHE_STAMP)).ok()?;
+    if stamp.trim() != sha256_hex(format!("{key}{}", build_id()).as_bytes()) {
+        return None;
+    }
     let bytes = std::fs::read(test_dir.join("outcome.json")).ok()?;
     let o: TestOutcome = serde_json::from_slice(&bytes).ok()?;
     // Failures are not served from the cache: a rerun tries them again.
@@ -209,7 +231,10 @@ fn one_test(
     if let Ok(rd) = std::fs::read_dir(&test_dir) {
         for e in rd.flatten() {
             let name = e.file_name().to_string_lossy().to_string();
-            if name != "outcome.json" && !files.iter().any(|(n, _)| n == &name) {
+            if name != "outcome.json"
+                && name != CACHE_STAMP
+                && !files.iter().any(|(n, _)| n == &name)
+            {
                 let _ = std::fs::remove_file(e.path());
             }
         }
@@ -228,6 +253,9 @@ fn one_test(
                 outcome
                     .error
                     .get_or_insert(format!("report: cannot write outcome.json: {e}"));
+            } else {
+                let stamp = sha256_hex(format!("{key}{}", build_id()).as_bytes());
+                let _ = write_atomic(&test_dir.join(CACHE_STAMP), stamp.as_bytes());
             }
         }
         Err(e) => {

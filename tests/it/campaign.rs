@@ -302,3 +302,76 @@ fn a_bad_pipeline_is_refused_before_any_work() {
         );
     }
 }
+
+/// A browser, where one is installed (Debian's chromium in CI images that have it).
+fn chromium() -> Option<PathBuf> {
+    [
+        "/usr/bin/chromium",
+        "/usr/bin/chromium-browser",
+        "/usr/bin/google-chrome",
+    ]
+    .iter()
+    .map(PathBuf::from)
+    .find(|p| p.exists())
+}
+
+#[test]
+fn the_committed_demo_report_shows_in_a_browser() {
+    let index = root().join("reports/demo/index.html");
+    let html = std::fs::read_to_string(&index).expect("reports/demo/index.html is committed");
+    // Self-contained: no external resources, every test has a section.
+    assert!(
+        !html.contains("http://") || html.contains("http://www.w3.org"),
+        "external link"
+    );
+    assert!(!html.contains("<script"), "no scripts in the report");
+    let Some(browser) = chromium() else {
+        println!("SKIPPED: no chromium installed; the report was only checked as text");
+        return;
+    };
+    let profile = tempfile::tempdir().unwrap();
+    let out = std::process::Command::new(browser)
+        .args([
+            "--headless",
+            "--no-sandbox",
+            "--disable-gpu",
+            "--disable-quic",
+            "--no-first-run",
+            "--disable-background-networking",
+            "--disable-component-update",
+            "--disable-sync",
+        ])
+        .arg(format!("--user-data-dir={}", profile.path().display()))
+        .arg("--dump-dom")
+        .arg(format!("file://{}", index.display()))
+        .output()
+        .unwrap();
+    let dom = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        dom.contains("cablab campaign report: demo"),
+        "title missing from the rendered page"
+    );
+    assert!(dom.contains("Table 1 style"));
+    assert!(dom.contains("Table 2 style"));
+    assert!(
+        dom.matches("<svg").count() >= 30,
+        "every test shows its curve"
+    );
+    assert!(dom.contains("raw_data/cable/torsion_360deg_1.dat"));
+}
+
+#[test]
+fn the_committed_demo_report_is_current() {
+    // `.ci/run`'s verification of the demo campaign: rerun from the committed manifest and
+    // compare every output hash (a stale committed report fails here).
+    let v = cablab()
+        .args(["verify", "reports/demo/manifest.json", "--jobs", "2"])
+        .output()
+        .unwrap();
+    assert!(
+        v.status.success(),
+        "reports/demo is stale: rerun `cablab run` and commit it\n{}{}",
+        String::from_utf8_lossy(&v.stdout),
+        String::from_utf8_lossy(&v.stderr)
+    );
+}

@@ -41,6 +41,17 @@ impl Channel {
         }
     }
 
+    /// Position of the 6-vector `component` within the channel (0 or 1), `None` if the channel
+    /// does not contain it.
+    #[inline]
+    pub fn position(self, component: usize) -> Option<usize> {
+        match (self, component) {
+            (Channel::Axial, 2) | (Channel::Twist, 5) | (Channel::Bending, 3) => Some(0),
+            (Channel::Bending, 4) => Some(1),
+            _ => None,
+        }
+    }
+
     /// Number of components (1 or 2).
     pub fn dim(self) -> usize {
         self.components().len()
@@ -93,6 +104,14 @@ impl Channel {
             state[at + 1] = v[1];
         }
     }
+}
+
+/// The magnitude of a scalar channel value, computed as the 2-vector norm of `(v, 0)` is
+/// (√(v² + 0)), so that the scalar fast paths reproduce the vector code bit for bit (`|v|` would
+/// differ where v² under- or overflows).
+#[inline]
+pub(crate) fn norm1(v: f64) -> f64 {
+    (v * v).sqrt()
 }
 
 /// Identity restricted to the channel's dimension (the 2×2 identity for bending, diag(1, 0) for a

@@ -2,10 +2,11 @@
 //! (other strain components held at 0). Exact for tension, torsion and pure bending, whose section
 //! state is uniform along the rod; for three-point bending it is only the section at the punch.
 //!
-//! No allocation per step: two state buffers are swapped, so 5,000 samples cost a few hundred
-//! microseconds with any law.
+//! No allocation per step: two state buffers are swapped, and each step is the law's uniaxial
+//! [`Law::update_component`] (a scalar return mapping, no 6×6 work), so 20,000 samples cost
+//! 0.1–1 ms with any registry law (release build).
 
-use crate::law::{Law, Strain6};
+use crate::law::Law;
 
 /// Response in `component` (0..6) of `law` driven from the virgin state through `strain` at times
 /// `time_s` (s). The first sample is reached from the unloaded state in zero time; `dt` of later
@@ -30,19 +31,18 @@ pub fn drive_uniform_into(
     if component > 5 {
         return;
     }
+    out.reserve(strain.len());
     let n = law.n_state();
     let mut old = vec![0.0; n];
     law.init_state(&mut old);
     let mut new = old.clone();
-    let mut eps = Strain6::zeros();
     let mut t_prev = time_s.first().copied().unwrap_or(0.0);
     for (i, &e) in strain.iter().enumerate() {
         let t = time_s.get(i).copied().unwrap_or(t_prev);
         let dt = if t > t_prev { t - t_prev } else { 0.0 };
         t_prev = t.max(t_prev);
-        eps[component] = e;
-        let r = law.update(&eps, dt, &old, &mut new);
-        out.push(r.stress[component]);
+        let (s, _) = law.update_component(component, e, dt, &old, &mut new);
+        out.push(s);
         std::mem::swap(&mut old, &mut new);
     }
 }

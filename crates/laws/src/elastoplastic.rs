@@ -16,7 +16,7 @@
 //!
 //! Rate-independent: `dt` is ignored.
 
-use crate::channel::{eye, Channel};
+use crate::channel::{eye, norm1, Channel};
 use crate::law::{Law, LawResponse, Strain6, Tangent6};
 use crate::linear::SectionStiffness;
 use nalgebra::{Matrix2, Vector2};
@@ -203,6 +203,112 @@ impl PlasticChannel {
             k * id + (dk * (e_tr - g * n) - k * n) * dg.transpose() - (k * g / na) * p * da;
         (stress, tangent, new)
     }
+
+    /// [`PlasticChannel::return_map`] along one axis: the channel strain and the committed plastic
+    /// strain and back stress have only the entry `e`, `plastic_strain`, `back_stress` on that
+    /// axis (a scalar channel, or bending with no history off the loaded axis). The same
+    /// mathematics written for scalars, each operation in the order of the vector code, so the
+    /// result is the vector code's (stress, tangent entry on the axis, new `[ε_pl, x, α]`).
+    pub fn return_map_axis(
+        &self,
+        e: f64,
+        plastic_strain: f64,
+        back_stress: f64,
+        alpha_n: f64,
+    ) -> (f64, f64, [f64; 3]) {
+        let (ep, x) = (plastic_strain, back_stress);
+        let e_tr = e - ep;
+        let k_n = self.stiffness_at(alpha_n);
+        let a0 = k_n * e_tr - x;
+        let f_tr = norm1(a0) - (self.yield_strength + self.iso_hardening * alpha_n);
+        if f_tr <= 0.0 {
+            return (k_n * e_tr, k_n, [ep, x, alpha_n]);
+        }
+        let c = self.kin_hardening;
+        let b = self.kin_recovery;
+        let h = self.iso_hardening;
+        // φ(Δγ) as in `return_map`: value, derivative, n, |a|, ∂a/∂Δγ.
+        let phi = |g: f64| -> (f64, f64, f64, f64, f64) {
+            let alpha = alpha_n + g;
+            let k = self.stiffness_at(alpha);
+            let dk = self.stiffness_rate(alpha);
+            let r = 1.0 / (1.0 + b * g);
+            let a = k * e_tr - r * x;
+            let a_g = dk * e_tr + (b * r * r) * x;
+            let beta = k + c * r;
+            let beta_g = dk - c * b * r * r;
+            let na = norm1(a);
+            let n = if na > 0.0 { a / na } else { a0 / norm1(a0) };
+            let val = na - beta * g - self.yield_strength - h * alpha;
+            let der = n * a_g - beta - beta_g * g - h;
+            (val, der, n, na, a_g)
+        };
+        let mut g = f_tr / (k_n + c + h);
+        if self.degradation.is_some() || b > 0.0 {
+            let k_min = self.stiffness_at(f64::INFINITY);
+            let mut lo = 0.0;
+            let mut hi = (self.stiffness * norm1(e_tr) + norm1(x)) / (k_min + h);
+            g = g.clamp(lo, hi);
+            let tol = 1e-14
+                * (self.yield_strength + h * alpha_n + self.stiffness * norm1(e_tr) + norm1(x));
+            for _ in 0..100 {
+                let (v, d, ..) = phi(g);
+                if v.abs() <= tol {
+                    break;
+                }
+                if v > 0.0 {
+                    lo = g;
+                } else {
+                    hi = g;
+                }
+                let mut next = if d < 0.0 { g - v / d } else { f64::NAN };
+                if !(next > lo && next < hi) {
+                    next = 0.5 * (lo + hi);
+                }
+                if next == g || hi - lo <= f64::EPSILON * hi {
+                    break;
+                }
+                g = next;
+            }
+        }
+        let alpha = alpha_n + g;
+        let k = self.stiffness_at(alpha);
+        let dk = self.stiffness_rate(alpha);
+        let (_, dphi, n, na, a_g) = phi(g);
+        let stress = k * (e_tr - g * n);
+        let new = [ep + g * n, (x + c * g * n) / (1.0 + b * g), alpha];
+        // The axis entry of the vector tangent; the projector P = I − n nᵀ has P = 1 − n² there.
+        let dg = -(k / dphi) * n;
+        let p = 1.0 - n * n;
+        let da = k + a_g * dg;
+        let tangent = k + (dk * (e_tr - g * n) - k * n) * dg - (k * g / na) * p * da;
+        (stress, tangent, new)
+    }
+
+    /// Uniaxial update of this channel's state slice (`old`, `new`: [`PlasticChannel::n_state`]
+    /// entries) at strain `e` in the channel's axis `pos` (0, or 1 for K₂ in bending): stress and
+    /// tangent on that axis. Scalar path when the history is on that axis, else the vector one.
+    fn update_axis(&self, pos: usize, e: f64, old: &[f64], new: &mut [f64]) -> (f64, f64) {
+        let d = self.channel.dim();
+        let off_axis_virgin = d == 1 || (old[1 - pos] == 0.0 && old[d + 1 - pos] == 0.0);
+        if off_axis_virgin {
+            let (s, t, st) = self.return_map_axis(e, old[pos], old[d + pos], old[2 * d]);
+            new[pos] = st[0];
+            new[d + pos] = st[1];
+            new[2 * d] = st[2];
+            if d == 2 {
+                // The vector code writes 0 + Δγ·0 and (0 + c Δγ·0)/(1 + b Δγ) off the axis.
+                new[1 - pos] = 0.0;
+                new[d + 1 - pos] = 0.0;
+            }
+            return (s, t);
+        }
+        let mut ev = Vector2::zeros();
+        ev[pos] = e;
+        let (s, c, st) = self.return_map(&ev, &self.read(old));
+        self.write(&st, new);
+        (s[pos], c[(pos, pos)])
+    }
 }
 
 /// Elastoplastic section: linear elastic in every component, with yield in the listed channels.
@@ -295,6 +401,38 @@ impl Law for Elastoplastic {
             p.channel.add_block(&(p.stiffness * eye(p.channel)), &mut t);
         }
         t
+    }
+    fn update_component(
+        &self,
+        component: usize,
+        strain: f64,
+        _dt: f64,
+        state_old: &[f64],
+        state_new: &mut [f64],
+    ) -> (f64, f64) {
+        if component > 5 {
+            return (f64::NAN, f64::NAN);
+        }
+        let mut out = None;
+        let mut off = 0;
+        for p in &self.plastic {
+            let n = p.n_state();
+            let (old, new) = (&state_old[off..off + n], &mut state_new[off..off + n]);
+            match p.channel.position(component) {
+                Some(pos) => out = Some(p.update_axis(pos, strain, old, new)),
+                None => {
+                    // An unloaded plastic channel still returns from its committed state at
+                    // zero strain, as in `update`.
+                    let (_, _, st) = p.return_map(&Vector2::zeros(), &p.read(old));
+                    p.write(&st, new);
+                }
+            }
+            off += n;
+        }
+        out.unwrap_or_else(|| {
+            let k = self.elastic.diagonal()[component];
+            (k * strain, k)
+        })
     }
 }
 

@@ -7,7 +7,7 @@
 //! [`crate::elastoplastic`] with zero hardening). This law carries only the friction stress:
 //! compose it with a baseline through [`crate::Parallel`].
 
-use crate::channel::{eye, Channel};
+use crate::channel::{eye, norm1, Channel};
 use crate::law::{Law, LawResponse, Strain6, Stress6, Tangent6};
 use nalgebra::{Matrix2, Vector2};
 
@@ -112,6 +112,53 @@ impl Law for IwanElements {
         let k: f64 = self.elements.iter().map(|e| e.stiffness).sum();
         self.channel.add_block(&(k * eye(self.channel)), &mut t);
         t
+    }
+    /// Scalar radial return per element when every slip lies on the loaded axis (a scalar
+    /// channel, or bending without slip off the axis), the same operations as `update`; the
+    /// vector update otherwise.
+    fn update_component(
+        &self,
+        component: usize,
+        strain: f64,
+        dt: f64,
+        state_old: &[f64],
+        state_new: &mut [f64],
+    ) -> (f64, f64) {
+        let ch = self.channel;
+        let d = ch.dim();
+        let Some(pos) = ch.position(component) else {
+            return crate::law::update_component_via_full(
+                self, component, strain, dt, state_old, state_new,
+            );
+        };
+        let on_axis = d == 1 || state_old.iter().skip(1 - pos).step_by(2).all(|&v| v == 0.0);
+        if !on_axis {
+            return crate::law::update_component_via_full(
+                self, component, strain, dt, state_old, state_new,
+            );
+        }
+        let mut s = 0.0;
+        let mut c = 0.0;
+        for (i, el) in self.elements.iter().enumerate() {
+            let at = d * i;
+            let p = state_old[at + pos];
+            let tr = el.stiffness * (strain - p);
+            let ntr = norm1(tr);
+            if ntr <= el.threshold {
+                state_new[at + pos] = p;
+                s += tr;
+                c += el.stiffness * 1.0;
+            } else {
+                let n = tr / ntr;
+                state_new[at + pos] = p + ((ntr - el.threshold) / el.stiffness) * n;
+                s += el.threshold * n;
+                c += (el.stiffness * el.threshold / ntr) * (1.0 - n * n);
+            }
+            if d == 2 {
+                state_new[at + 1 - pos] = 0.0;
+            }
+        }
+        (s, c)
     }
 }
 

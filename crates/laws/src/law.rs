@@ -54,4 +54,42 @@ pub trait Law: Send + Sync + std::fmt::Debug {
 
     /// The elastic (initial) tangent, used by solvers for predictors and by fits for starting values.
     fn elastic_tangent(&self) -> Tangent6;
+
+    /// Uniaxial update: [`Law::update`] at the strain whose only non-zero entry is `strain` in
+    /// `component` (0..6), returning that component's stress and its diagonal tangent entry
+    /// `∂σ_c/∂ε_c`; `state_new` is written exactly as `update` writes it. This is the
+    /// uniform-state driver's inner step (tension Γ₃, torsion K₃, bending K₁), which laws
+    /// override with a scalar return mapping of the same mathematics (no 6×6 work); the default
+    /// goes through `update`. A `component` > 5 gives `(NaN, NaN)` and leaves `state_new` as it
+    /// is.
+    fn update_component(
+        &self,
+        component: usize,
+        strain: f64,
+        dt: f64,
+        state_old: &[f64],
+        state_new: &mut [f64],
+    ) -> (f64, f64) {
+        update_component_via_full(self, component, strain, dt, state_old, state_new)
+    }
+}
+
+/// [`Law::update_component`] through the full [`Law::update`]: the reference the scalar fast
+/// paths must reproduce, and their fallback for states they do not specialise (a bending state
+/// with history off the loaded axis).
+pub fn update_component_via_full<L: Law + ?Sized>(
+    law: &L,
+    component: usize,
+    strain: f64,
+    dt: f64,
+    state_old: &[f64],
+    state_new: &mut [f64],
+) -> (f64, f64) {
+    if component > 5 {
+        return (f64::NAN, f64::NAN);
+    }
+    let mut eps = Strain6::zeros();
+    eps[component] = strain;
+    let r = law.update(&eps, dt, state_old, state_new);
+    (r.stress[component], r.tangent[(component, component)])
 }

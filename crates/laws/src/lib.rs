@@ -33,6 +33,8 @@ pub mod piecewise;
 pub mod registry;
 #[cfg(test)]
 mod testutil;
+#[cfg(test)]
+mod uniaxial_tests;
 pub mod viscoelastic;
 
 pub use channel::Channel;
@@ -40,7 +42,7 @@ pub use driver::{drive_uniform, drive_uniform_into};
 pub use elastoplastic::{ChannelState, Degradation, Elastoplastic, PlasticChannel};
 pub use error::LawError;
 pub use friction::{IwanElements, JenkinsElement};
-pub use law::{Law, LawResponse, Strain6, Stress6, Tangent6};
+pub use law::{update_component_via_full, Law, LawResponse, Strain6, Stress6, Tangent6};
 pub use linear::{LinearElastic, SectionStiffness};
 pub use parallel::Parallel;
 pub use piecewise::PiecewiseLinear;

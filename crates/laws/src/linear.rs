@@ -111,6 +111,20 @@ impl Law for LinearElastic {
     fn elastic_tangent(&self) -> Tangent6 {
         Tangent6::from_diagonal(&self.stiffness.diagonal())
     }
+
+    fn update_component(
+        &self,
+        component: usize,
+        strain: f64,
+        _dt: f64,
+        _old: &[f64],
+        _new: &mut [f64],
+    ) -> (f64, f64) {
+        match self.stiffness.diagonal().get(component) {
+            Some(&k) => (k * strain, k),
+            None => (f64::NAN, f64::NAN),
+        }
+    }
 }
 
 #[cfg(test)]

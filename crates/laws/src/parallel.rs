@@ -66,6 +66,23 @@ impl Law for Parallel {
     fn elastic_tangent(&self) -> Tangent6 {
         self.base.elastic_tangent() + self.extension.elastic_tangent()
     }
+    fn update_component(
+        &self,
+        component: usize,
+        strain: f64,
+        dt: f64,
+        state_old: &[f64],
+        state_new: &mut [f64],
+    ) -> (f64, f64) {
+        let nb = self.base.n_state();
+        let (bo, eo) = state_old.split_at(nb);
+        let (bn, en) = state_new.split_at_mut(nb);
+        let (sb, tb) = self.base.update_component(component, strain, dt, bo, bn);
+        let (se, te) = self
+            .extension
+            .update_component(component, strain, dt, eo, en);
+        (sb + se, tb + te)
+    }
 }
 
 #[cfg(test)]

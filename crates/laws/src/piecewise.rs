@@ -5,7 +5,7 @@
 //! In bending the law acts on the curvature vector (K₁, K₂): |M| = m(|K|), M ∥ K, so the
 //! response is isotropic in the bending plane. Other components are linear elastic. No history.
 
-use crate::channel::{eye, Channel};
+use crate::channel::{eye, norm1, Channel};
 use crate::law::{Law, LawResponse, Strain6, Tangent6};
 use crate::linear::SectionStiffness;
 use nalgebra::{Matrix2, Vector2};
@@ -72,6 +72,32 @@ impl Law for PiecewiseLinear {
         self.channel
             .add_block(&(self.k1 * eye(self.channel)), &mut t);
         t
+    }
+    /// On the channel's axis the response vector is parallel to the strain, so the scalar form
+    /// of `channel_response` (same operations, |ε| as the norm of (ε, 0)) gives the same entry.
+    fn update_component(
+        &self,
+        component: usize,
+        strain: f64,
+        _dt: f64,
+        _old: &[f64],
+        _new: &mut [f64],
+    ) -> (f64, f64) {
+        if component > 5 {
+            return (f64::NAN, f64::NAN);
+        }
+        if self.channel.position(component).is_none() {
+            let k = self.elastic.diagonal()[component];
+            return (k * strain, k);
+        }
+        let r = norm1(strain);
+        if r < self.threshold || r == 0.0 {
+            return (self.k1 * strain, self.k1);
+        }
+        let n = strain / r;
+        let m = self.magnitude(r);
+        let nn = n * n;
+        (m * n, self.k2 * nn + (m / r) * (1.0 - nn))
     }
 }
 

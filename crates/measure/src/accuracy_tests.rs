@@ -1098,3 +1098,107 @@ fn bad_input_errors() {
     .to_string();
     assert_eq!(msg, "non-finite value in response at sample 7");
 }
+
+#[test]
+fn zz_dump_for_perf_check() {
+    let dump_path = std::env::var("DUMP_PATH").unwrap_or_else(|_| "/tmp/measure_dump.json".into());
+    let mut out: Vec<serde_json::Value> = Vec::new();
+    let mut push = |kind, geom: &Geometry, t: Option<&[f64]>, c: &[f64], r: &[f64]| {
+        let a = analyze(kind, geom, t, c, r, &AnalyzeOptions::default());
+        out.push(match a {
+            Ok(a) => serde_json::to_value(&a).unwrap(),
+            Err(e) => serde_json::Value::String(e.to_string()),
+        });
+        let h = crate::condition::reversal_threshold(c);
+        out.push(serde_json::to_value(crate::condition::holds(t, c, h)).unwrap());
+        out.push(serde_json::to_value(crate::condition::holds(None, c, 3.0 * h)).unwrap());
+    };
+    let gt = Geometry {
+        free_length_m: 0.032,
+        diameter_m: Some(2.8e-3),
+    };
+    let (ea, fy, h, l0) = (7.96e4, 54.0, 1.5e4, 0.032);
+    let ep_max = (100.0 - fy) / h;
+    let peak = l0 * (100.0 / ea + ep_max);
+    let zero = l0 * ep_max;
+    for dwell in [0usize, 30, 400, 1000] {
+        for seed in 0..3 {
+            let mut law = Law1D::plastic(ea, fy, h, 0.3 * h);
+            let (c, r) = drive(
+                &[
+                    0.0, peak, zero, peak, zero, peak, zero, peak, zero, peak, zero,
+                ],
+                1500,
+                dwell,
+                1.0 / l0,
+                &mut law,
+            );
+            let (c, r) = noisy(&c, &r, 0.003, 90 + seed);
+            let t: Vec<f64> = (0..c.len())
+                .map(|i| i as f64 * 0.01 + (i as f64 * 0.37).sin() * 1e-3)
+                .collect();
+            push(TestKind::Tension, &gt, Some(&t), &c, &r);
+            push(TestKind::Tension, &gt, None, &c, &r);
+        }
+    }
+    // quantised preload
+    let q = 1e-7;
+    let load = l0 * (100.0 / ea + (100.0 - fy) / 2e4);
+    let pre = l0 * (2.0 / ea + (100.0 - fy) / 2e4);
+    let mut path = vec![0.0, load];
+    for _ in 0..4 {
+        path.extend([pre, load]);
+    }
+    path.push(pre);
+    let mut law = Law1D::plastic(ea, fy, 2e4, 0.0);
+    let (c, r) = drive(&path, (load / q).round() as usize, 20, 1.0 / l0, &mut law);
+    let c: Vec<f64> = c.iter().map(|v| (v / q).round() * q).collect();
+    push(TestKind::Tension, &gt, None, &c, &r);
+    // bending piecewise, reversed, three-point
+    let gb = Geometry {
+        free_length_m: 0.32,
+        diameter_m: Some(7.8e-3),
+    };
+    let th = 60f64.to_radians();
+    let mut law = Law1D::bilinear(1.4, 0.19, 0.18);
+    let (c, r) = drive(&[0.0, th, 0.0, th, 0.0], 3000, 0, 1.0 / 0.32, &mut law);
+    let (c, r) = noisy(&c, &r, 0.01, 5);
+    push(TestKind::PureBending, &gb, None, &c, &r);
+    let mut law = Law1D::plastic(0.55, 0.2, 0.05, 0.1);
+    let (c, r) = drive(
+        &[0.0, th, -th, th, -th, 0.0],
+        1500,
+        50,
+        1.0 / 0.41,
+        &mut law,
+    );
+    let (c, r) = noisy(&c, &r, 0.003, 6);
+    push(TestKind::PureBending, &gb, None, &c, &r);
+    push(TestKind::Torsion, &gb, None, &c, &r);
+    let g3 = Geometry {
+        free_length_m: 0.056,
+        diameter_m: Some(2.8e-3),
+    };
+    let mut law = Law1D::plastic(400.0, 0.6, 80.0, 0.0);
+    let (c, r) = drive(&[0.0, 6e-3, 0.0, 6e-3, 0.0], 2000, 100, 1.0, &mut law);
+    let (c, r) = noisy(&c, &r, 0.003, 8);
+    push(TestKind::ThreePoint, &g3, None, &c, &r);
+    // the bench record, 20k samples, with time
+    for dwell in [0usize, 1000] {
+        let mut law = Law1D::plastic(ea, fy, h, 0.0);
+        let per_leg = (20_000 - 50) / 10 - dwell;
+        let (c, r) = drive(
+            &[
+                0.0, peak, zero, peak, zero, peak, zero, peak, zero, peak, zero,
+            ],
+            per_leg,
+            dwell,
+            1.0 / l0,
+            &mut law,
+        );
+        let (c, r) = noisy(&c, &r, 0.003, 77);
+        let t: Vec<f64> = (0..c.len()).map(|i| i as f64 * 0.01).collect();
+        push(TestKind::Tension, &gt, Some(&t), &c, &r);
+    }
+    std::fs::write(dump_path, serde_json::to_string_pretty(&out).unwrap()).unwrap();
+}

@@ -1,0 +1,244 @@
+//! The uniaxial fast path ([`Law::update_component`], used by [`crate::drive_uniform`]) against
+//! the full 6×6 [`Law::update`]: every registry law for every kind along random cyclic timed
+//! histories, stress, tangent entry and state at every step, so the fast path cannot drift
+//! from the reference.
+
+use crate::law::{update_component_via_full, Law, Strain6};
+use crate::registry::{build, loaded_component, param_specs};
+use cablab_core::TestKind;
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use std::collections::BTreeMap;
+
+/// Laws checked: the registry's names, compositions with every base, and kinematic hardening
+/// with Armstrong–Frederick recovery (Newton-solved return map).
+const LAWS: [&str; 12] = [
+    "linear",
+    "piecewise_linear",
+    "elastoplastic",
+    "kinematic_hardening",
+    "kinematic_hardening+b",
+    "stiffness_degradation",
+    "viscoelasticity",
+    "friction_hysteresis",
+    "linear+viscoelasticity",
+    "linear+friction_hysteresis",
+    "piecewise_linear+viscoelasticity",
+    "piecewise_linear+friction_hysteresis",
+];
+
+/// Loaded stiffness and strength per kind (the chapter's cable).
+fn scale(kind: TestKind) -> (f64, f64) {
+    match kind {
+        TestKind::Tension => (7.96e4, 54.0),
+        TestKind::Torsion => (2.02e-3, 0.02),
+        _ => (1.37e-3, 0.01),
+    }
+}
+
+fn law(kind: TestKind, name: &str) -> Box<dyn Law> {
+    let (k, y) = scale(kind);
+    let ey = y / k;
+    let (name, recovery) = match name.strip_suffix("+b") {
+        Some(n) => (n, true),
+        None => (name, false),
+    };
+    let mut params = BTreeMap::new();
+    for sp in param_specs(kind, name)
+        .into_iter()
+        .filter(|s| s.default.is_none())
+    {
+        let n = sp.name.as_str();
+        let v = match n {
+            "D_inf" => 0.3,
+            "alpha_D" => 2.0 * ey,
+            "tau_v1" => 0.5,
+            _ if n.ends_with("_y") => y,
+            _ if n.ends_with("_kin") => 0.3 * k,
+            _ if n.ends_with("_v1") => 0.4 * k,
+            _ if n.ends_with("_t") => ey,
+            _ if n.ends_with('1') => k,
+            _ if n.ends_with('2') => 0.2 * k,
+            _ if n.starts_with("F_") || n.starts_with("M_") => 0.3 * y,
+            _ if n.ends_with("_f") => 0.3 * k,
+            _ => k,
+        };
+        params.insert(sp.name.clone(), v);
+    }
+    if recovery {
+        params.insert("b_kin".into(), 0.5 / ey);
+    }
+    // A second, slower Maxwell branch where the law has one (the optional `S_v2`).
+    if let Some(sp) = param_specs(kind, name)
+        .into_iter()
+        .find(|s| s.name.ends_with("_v2") && !s.name.starts_with("tau"))
+    {
+        params.insert(sp.name, 0.1 * k);
+    }
+    build(kind, name, &params).unwrap_or_else(|e| panic!("{kind} {name}: {e}"))
+}
+
+/// A random cyclic history of `n` samples: ramps between random targets within ±5 ε_y, random
+/// step times (zero steps and long holds included).
+fn history(ey: f64, n: usize, seed: u64) -> (Vec<f64>, Vec<f64>) {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let (mut e, mut t) = (Vec::with_capacity(n), Vec::with_capacity(n));
+    let (mut x, mut time) = (0.0, 0.0);
+    while e.len() < n {
+        let target = ey * rng.random_range(-5.0..5.0);
+        let steps = rng.random_range(1..120usize);
+        let hold = if rng.random_bool(0.2) {
+            rng.random_range(1..40usize)
+        } else {
+            0
+        };
+        let from = x;
+        for i in 1..=steps + hold {
+            x = from + (target - from) * (i.min(steps) as f64 / steps as f64);
+            time += match rng.random_range(0..10) {
+                0 => 0.0,
+                1 => rng.random_range(1.0..20.0),
+                _ => rng.random_range(1e-3..0.1),
+            };
+            e.push(x);
+            t.push(time);
+        }
+    }
+    e.truncate(n);
+    t.truncate(n);
+    (e, t)
+}
+
+/// Largest |a − b| / max(|a|, |b|) over pairs (0 for two zeros).
+fn rel(a: f64, b: f64) -> f64 {
+    let m = a.abs().max(b.abs());
+    if m == 0.0 {
+        0.0
+    } else {
+        (a - b).abs() / m
+    }
+}
+
+/// Drives `law` in `component` from `start` with both paths; returns the largest relative
+/// differences of stress, tangent and state over the history.
+fn compare(
+    law: &dyn Law,
+    component: usize,
+    start: &[f64],
+    strain: &[f64],
+    time: &[f64],
+) -> (f64, f64, f64) {
+    let n = law.n_state();
+    let (mut ro, mut rn) = (start.to_vec(), vec![0.0; n]);
+    let (mut fo, mut fnew) = (start.to_vec(), vec![0.0; n]);
+    let (mut ds, mut dt_, mut dst) = (0.0f64, 0.0f64, 0.0f64);
+    let mut t_prev = time[0];
+    for (&e, &t) in strain.iter().zip(time) {
+        let dt = (t - t_prev).max(0.0);
+        t_prev = t;
+        let mut eps = Strain6::zeros();
+        eps[component] = e;
+        let r = law.update(&eps, dt, &ro, &mut rn);
+        let (s, k) = law.update_component(component, e, dt, &fo, &mut fnew);
+        ds = ds.max(rel(r.stress[component], s));
+        dt_ = dt_.max(rel(r.tangent[(component, component)], k));
+        for (a, b) in rn.iter().zip(&fnew) {
+            dst = dst.max(rel(*a, *b));
+        }
+        std::mem::swap(&mut ro, &mut rn);
+        std::mem::swap(&mut fo, &mut fnew);
+    }
+    (ds, dt_, dst)
+}
+
+/// Every law, every kind, three random histories of 3,000 samples: the fast path equals the
+/// full update (stress, tangent entry, state) to 1e-12 relative at every step, and
+/// `drive_uniform` equals a driver built on the full update.
+#[test]
+fn fast_path_equals_full_update_for_every_law_and_kind() {
+    for kind in TestKind::ALL
+        .into_iter()
+        .filter(|k| *k != TestKind::Unknown)
+    {
+        let (k, y) = scale(kind);
+        let comp = loaded_component(kind);
+        for name in LAWS {
+            let law = law(kind, name);
+            let mut virgin = vec![0.0; law.n_state()];
+            law.init_state(&mut virgin);
+            for seed in 0..3 {
+                let (e, t) = history(y / k, 3000, seed);
+                let (ds, dk, dst) = compare(law.as_ref(), comp, &virgin, &e, &t);
+                assert!(
+                    ds < 1e-12 && dk < 1e-12 && dst < 1e-12,
+                    "{kind} {name} seed {seed}: stress {ds:e}, tangent {dk:e}, state {dst:e}"
+                );
+                // The driver against a reference driver on `update`.
+                let fast = crate::drive_uniform(law.as_ref(), comp, &e, &t);
+                let mut old = virgin.clone();
+                let mut new = virgin.clone();
+                let mut t_prev = t[0];
+                for (i, (&ei, &ti)) in e.iter().zip(&t).enumerate() {
+                    let dt = if ti > t_prev { ti - t_prev } else { 0.0 };
+                    t_prev = ti.max(t_prev);
+                    let mut eps = Strain6::zeros();
+                    eps[comp] = ei;
+                    let s = law.update(&eps, dt, &old, &mut new).stress[comp];
+                    assert!(rel(s, fast[i]) < 1e-12, "{kind} {name} step {i}");
+                    std::mem::swap(&mut old, &mut new);
+                }
+            }
+        }
+    }
+}
+
+/// Bending off the first axis: the second bending component (K₂), and K₁ from a state with
+/// history off the K₁ axis (which the scalar paths hand to the vector code), and the
+/// unloaded components (stress from the elastic diagonal, the plastic state still returned).
+#[test]
+fn fast_path_off_axis_states_and_other_components() {
+    let kind = TestKind::PureBending;
+    let (k, y) = scale(kind);
+    let ey = y / k;
+    for name in LAWS {
+        let law = law(kind, name);
+        let mut virgin = vec![0.0; law.n_state()];
+        law.init_state(&mut virgin);
+        let (e, t) = history(ey, 1500, 11);
+        let (ds, dk, dst) = compare(law.as_ref(), 4, &virgin, &e, &t);
+        assert!(ds < 1e-12 && dk < 1e-12 && dst < 1e-12, "{name} K2");
+        // History along K₂ first (full update), then K₁ through both paths.
+        let mut s0 = virgin.clone();
+        let mut s1 = virgin.clone();
+        for x in [3.0, -2.0, 4.0] {
+            let eps = Strain6::new(0., 0., 0., 0.5 * ey, x * ey, 0.);
+            law.update(&eps, 0.3, &s0, &mut s1);
+            s0.copy_from_slice(&s1);
+        }
+        let (ds, dk, dst) = compare(law.as_ref(), 3, &s0, &e, &t);
+        assert!(
+            ds < 1e-12 && dk < 1e-12 && dst < 1e-12,
+            "{name} K1 after K2"
+        );
+        // Other components from that state: tension, torsion, shear.
+        for comp in [0, 2, 5] {
+            let (ds, dk, dst) = compare(law.as_ref(), comp, &s0, &e, &t);
+            assert!(
+                ds < 1e-12 && dk < 1e-12 && dst < 1e-12,
+                "{name} component {comp}"
+            );
+        }
+    }
+}
+
+/// The reference helper and the fast paths agree on out-of-range components: NaN, no panic.
+#[test]
+fn out_of_range_component_is_nan() {
+    let law = law(TestKind::Tension, "friction_hysteresis");
+    let old = vec![0.0; law.n_state()];
+    let mut new = old.clone();
+    let (s, k) = law.update_component(6, 1.0, 0.0, &old, &mut new);
+    assert!(s.is_nan() && k.is_nan());
+    let (s, k) = update_component_via_full(law.as_ref(), 9, 1.0, 0.0, &old, &mut new);
+    assert!(s.is_nan() && k.is_nan());
+}
