@@ -11,7 +11,7 @@
 //! at which its effect vanishes, does not count. That settles nested and degenerate candidates on
 //! principle (a Maxwell branch whose relaxation time runs to its bound is a parallel spring and
 //! costs no more than linear kinematic hardening; an extension whose magnitude fits to zero is
-//! the baseline). The verdict is the simplest model among those within ΔIC ≤ ln(n_eff) + 2 of the
+//! the baseline). The verdict is the simplest model among those within ΔIC ≤ 2 ln(n_eff) + 2 of the
 //! best (fewest effective, then fewest nominal parameters); the others in that set are reported
 //! as equivalent with the experiment that would separate them. `none` when the baseline is in
 //! that set or already fits to the noise floor.
@@ -485,6 +485,17 @@ pub struct Diagnosis {
     pub ladder: Option<Vec<Rung>>,
     /// Held-out samples and how they were chosen.
     pub holdout: HoldoutSummary,
+    /// Candidates that could not be fitted (model not in the registry, simulation failed).
+    pub failed: Vec<Failed>,
+}
+
+/// A candidate that could not be scored, and why.
+#[derive(Debug, Clone, Serialize)]
+pub struct Failed {
+    /// The effect.
+    pub effect: Effect,
+    /// The error.
+    pub why: String,
 }
 
 /// What was held out.
@@ -721,7 +732,7 @@ pub fn diagnose(
             .collect(),
         None => applicable(ctx, kind, &base_model),
     };
-    let (scored, best_k) = compare(ctx, tests, &base, &cands, &train, &held, &noise, opts);
+    let (scored, failed) = compare(ctx, tests, &base, &cands, &train, &held, &noise, opts);
     let choice = choose(&base, &scored);
 
     let abs_rms = |r: &[Vec<f64>]| {
@@ -750,7 +761,6 @@ pub fn diagnose(
         })
         .collect();
     effects.sort_by(|a, b| a.delta_ic.total_cmp(&b.delta_ic));
-    let _ = best_k;
 
     let separating = choice
         .equivalent
@@ -793,6 +803,7 @@ pub fn diagnose(
             n_heldout: n_held,
             n_train,
         },
+        failed,
     })
 }
 
@@ -807,15 +818,13 @@ fn compare(
     held: &[Vec<usize>],
     noise: &[f64],
     opts: &DiagnoseOptions,
-) -> (Vec<Scored>, usize) {
-    let scored: Vec<Scored> = cands
+) -> (Vec<Scored>, Vec<Failed>) {
+    let results: Vec<(Effect, Result<Scored, DiagError>)> = cands
         .par_iter()
-        .filter_map(|&e| {
+        .filter(|&&e| base.model.with(e) != base.model)
+        .map(|&e| {
             let m = base.model.with(e);
-            if m == base.model {
-                return None;
-            }
-            score(
+            let r = score(
                 ctx,
                 tests,
                 &m,
@@ -825,12 +834,22 @@ fn compare(
                 noise,
                 Some(&base.cal.params),
                 opts,
-            )
-            .ok()
+            );
+            (e, r)
         })
         .collect();
-    let k = base.cal.effective_params();
-    (scored, k)
+    let mut scored = Vec::new();
+    let mut failed = Vec::new();
+    for (e, r) in results {
+        match r {
+            Ok(s) => scored.push(s),
+            Err(err) => failed.push(Failed {
+                effect: e,
+                why: err.to_string(),
+            }),
+        }
+    }
+    (scored, failed)
 }
 
 /// A held-out gap (RMS in noise units) at or below this "fits to the noise floor": the
@@ -873,7 +892,9 @@ fn choose(base: &Scored, scored: &[Scored]) -> Choice {
     let all: Vec<&Scored> = std::iter::once(base).chain(scored.iter()).collect();
     let ics: Vec<f64> = all.iter().map(|s| ic(s, n_eff, n_held)).collect();
     let ic_best = ics.iter().copied().fold(f64::INFINITY, f64::min);
-    let tol = n_eff.max(2.0).ln() + 2.0;
+    // Indistinguishable: within twice the price of one parameter (plus 2) of the best. Twice,
+    // because the AR(1) n_eff and the estimated noise floor both flatter small improvements.
+    let tol = 2.0 * n_eff.max(2.0).ln() + 2.0;
     let g0 = (base.rss_noise / n_held as f64).sqrt();
     // The set of models indistinguishable from the best.
     let mut set: Vec<usize> = (0..all.len())

@@ -38,8 +38,7 @@ pub fn registry_name(model: &ModelSpec) -> Result<String, String> {
 }
 
 impl LawCatalog for Registry {
-    fn law_effects(&self, kind: TestKind, law: &str) -> Vec<Effect> {
-        let _ = kind;
+    fn law_effects(&self, _kind: TestKind, law: &str) -> Vec<Effect> {
         let mut v = match law {
             "elastoplastic" => vec![
                 Effect::KinematicHardening,

@@ -4,7 +4,7 @@
 //! Run: `cargo bench -p cablab-laws`. Does not assert anything; the tests check the physics.
 
 use cablab_core::TestKind;
-use cablab_laws::{build, drive_uniform_into, loaded_component, param_specs, Law};
+use cablab_laws::{build, drive_uniform_into, loaded_component, param_specs, Law, Strain6};
 use std::collections::BTreeMap;
 
 fn main() {
@@ -93,6 +93,44 @@ fn run(bencher: divan::Bencher, kind: TestKind, name: &str) {
         drive_uniform_into(law.as_ref(), comp, divan::black_box(&e), &t, &mut out);
         out.last().copied()
     });
+}
+
+/// The same loop through the full 6×6 `Law::update` (what `drive_uniform` did before the
+/// uniaxial fast path, and what callers with their own uniaxial loops still do).
+fn run_full(bencher: divan::Bencher, kind: TestKind, name: &str) {
+    let law = law(kind, name);
+    let comp = loaded_component(kind);
+    let (e, t) = history(kind);
+    let mut out = Vec::with_capacity(e.len());
+    let n = law.n_state();
+    bencher.bench_local(|| {
+        out.clear();
+        let mut old = vec![0.0; n];
+        law.init_state(&mut old);
+        let mut new = old.clone();
+        let mut eps = Strain6::zeros();
+        let mut t_prev = t[0];
+        for (&ei, &ti) in divan::black_box(&e).iter().zip(&t) {
+            let dt = (ti - t_prev).max(0.0);
+            t_prev = ti;
+            eps[comp] = ei;
+            out.push(law.update(&eps, dt, &old, &mut new).stress[comp]);
+            std::mem::swap(&mut old, &mut new);
+        }
+        out.last().copied()
+    });
+}
+
+/// Tension through the full update, 20,000 samples.
+#[divan::bench(args = LAWS, sample_count = 20)]
+fn full_update_tension_20k(bencher: divan::Bencher, name: &str) {
+    run_full(bencher, TestKind::Tension, name);
+}
+
+/// Bending through the full update, 20,000 samples.
+#[divan::bench(args = LAWS, sample_count = 20)]
+fn full_update_bending_20k(bencher: divan::Bencher, name: &str) {
+    run_full(bencher, TestKind::PureBending, name);
 }
 
 /// Tension (Γ₃), 20,000 samples.

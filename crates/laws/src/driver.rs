@@ -3,8 +3,9 @@
 //! state is uniform along the rod; for three-point bending it is only the section at the punch.
 //!
 //! No allocation per step: two state buffers are swapped, and each step is the law's uniaxial
-//! [`Law::update_component`] (a scalar return mapping, no 6×6 work), so 20,000 samples cost
-//! 0.1–1 ms with any registry law (release build).
+//! [`Law::update_component`] (a scalar return mapping, no 6×6 work): 20,000 samples cost about
+//! 0.07 ms (linear), 0.5 ms (elastoplastic) and 1.9 ms (stiffness degradation, whose return map
+//! is a Newton solve) on the project's 2-core machine (`cargo bench -p cablab-laws`).
 
 use crate::law::Law;
 

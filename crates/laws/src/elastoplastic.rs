@@ -15,6 +15,11 @@
 //!   consistency equation by safeguarded Newton and the tangent is its exact linearisation.
 //!
 //! Rate-independent: `dt` is ignored.
+//!
+//! Speed: when a channel's strain and history lie on one axis (always in tension and torsion;
+//! bending about one axis), the return mapping runs in a scalar form of the same code
+//! (`return_map_axis`, each operation in the vector code's order; the tests in
+//! `uniaxial_tests` hold it to the vector code at 1e-12, in practice bit for bit).
 
 use crate::channel::{eye, norm1, Channel};
 use crate::law::{Law, LawResponse, Strain6, Tangent6};
@@ -74,6 +79,19 @@ pub struct ChannelState {
     pub back_stress: Vector2<f64>,
     /// Accumulated plastic deformation α (eq. (31)).
     pub alpha: f64,
+}
+
+/// What [`PlasticChannel::return_map_axis`] returns.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct AxisReturn {
+    /// Stress on the axis.
+    pub stress: f64,
+    /// Consistent tangent on the axis.
+    pub tangent: f64,
+    /// Consistent tangent across the axis (bending's other diagonal entry).
+    pub tangent_across: f64,
+    /// New plastic strain, back stress (on the axis) and α.
+    pub state: [f64; 3],
 }
 
 impl PlasticChannel {
@@ -206,23 +224,30 @@ impl PlasticChannel {
 
     /// [`PlasticChannel::return_map`] along one axis: the channel strain and the committed plastic
     /// strain and back stress have only the entry `e`, `plastic_strain`, `back_stress` on that
-    /// axis (a scalar channel, or bending with no history off the loaded axis). The same
-    /// mathematics written for scalars, each operation in the order of the vector code, so the
-    /// result is the vector code's (stress, tangent entry on the axis, new `[ε_pl, x, α]`).
-    pub fn return_map_axis(
+    /// axis (a scalar channel, or bending with no strain and no history off the loaded axis).
+    /// The same mathematics written for scalars, each operation in the order of the vector code,
+    /// so the result is the vector code's: the stress and tangent on the axis, the tangent across
+    /// it (bending: the other diagonal entry; the off-diagonal entries and the stress across are
+    /// zero) and the new `[ε_pl, x, α]` on the axis.
+    pub(crate) fn return_map_axis(
         &self,
         e: f64,
         plastic_strain: f64,
         back_stress: f64,
         alpha_n: f64,
-    ) -> (f64, f64, [f64; 3]) {
+    ) -> AxisReturn {
         let (ep, x) = (plastic_strain, back_stress);
         let e_tr = e - ep;
         let k_n = self.stiffness_at(alpha_n);
         let a0 = k_n * e_tr - x;
         let f_tr = norm1(a0) - (self.yield_strength + self.iso_hardening * alpha_n);
         if f_tr <= 0.0 {
-            return (k_n * e_tr, k_n, [ep, x, alpha_n]);
+            return AxisReturn {
+                stress: k_n * e_tr,
+                tangent: k_n,
+                tangent_across: k_n,
+                state: [ep, x, alpha_n],
+            };
         }
         let c = self.kin_hardening;
         let b = self.kin_recovery;
@@ -282,7 +307,52 @@ impl PlasticChannel {
         let p = 1.0 - n * n;
         let da = k + a_g * dg;
         let tangent = k + (dk * (e_tr - g * n) - k * n) * dg - (k * g / na) * p * da;
-        (stress, tangent, new)
+        // Across the axis n has no entry, so P = 1 there and ∂a/∂ε = k.
+        let tangent_across = k - (k * g / na) * 1.0 * k;
+        AxisReturn {
+            stress,
+            tangent,
+            tangent_across,
+            state: new,
+        }
+    }
+
+    /// [`PlasticChannel::return_map`] through the scalar path when the strain and the history lie
+    /// on one axis of the channel (always for a scalar channel; in bending when the other axis
+    /// has no strain, plastic strain or back stress), the vector code otherwise. The results are
+    /// the vector code's (up to the sign of zero entries).
+    fn return_map_fast(
+        &self,
+        e: &Vector2<f64>,
+        old: &ChannelState,
+    ) -> (Vector2<f64>, Matrix2<f64>, ChannelState) {
+        let quiet =
+            |o: usize| e[o] == 0.0 && old.plastic_strain[o] == 0.0 && old.back_stress[o] == 0.0;
+        let pos = if self.channel.dim() == 1 || quiet(1) {
+            0
+        } else if quiet(0) {
+            1
+        } else {
+            return self.return_map(e, old);
+        };
+        let r = self.return_map_axis(
+            e[pos],
+            old.plastic_strain[pos],
+            old.back_stress[pos],
+            old.alpha,
+        );
+        let mut stress = Vector2::zeros();
+        stress[pos] = r.stress;
+        let mut tangent = Matrix2::zeros();
+        tangent[(pos, pos)] = r.tangent;
+        tangent[(1 - pos, 1 - pos)] = r.tangent_across;
+        let mut st = ChannelState {
+            alpha: r.state[2],
+            ..ChannelState::default()
+        };
+        st.plastic_strain[pos] = r.state[0];
+        st.back_stress[pos] = r.state[1];
+        (stress, tangent, st)
     }
 
     /// Uniaxial update of this channel's state slice (`old`, `new`: [`PlasticChannel::n_state`]
@@ -292,7 +362,8 @@ impl PlasticChannel {
         let d = self.channel.dim();
         let off_axis_virgin = d == 1 || (old[1 - pos] == 0.0 && old[d + 1 - pos] == 0.0);
         if off_axis_virgin {
-            let (s, t, st) = self.return_map_axis(e, old[pos], old[d + pos], old[2 * d]);
+            let r = self.return_map_axis(e, old[pos], old[d + pos], old[2 * d]);
+            let (s, t, st) = (r.stress, r.tangent, r.state);
             new[pos] = st[0];
             new[d + pos] = st[1];
             new[2 * d] = st[2];
@@ -384,7 +455,7 @@ impl Law for Elastoplastic {
         for p in &self.plastic {
             let n = p.n_state();
             let old = p.read(&state_old[off..off + n]);
-            let (s, c, new) = p.return_map(&p.channel.get(eps), &old);
+            let (s, c, new) = p.return_map_fast(&p.channel.get(eps), &old);
             p.write(&new, &mut state_new[off..off + n]);
             p.channel.add_to(&s, &mut stress);
             p.channel.add_block(&c, &mut tangent);
@@ -423,7 +494,7 @@ impl Law for Elastoplastic {
                 None => {
                     // An unloaded plastic channel still returns from its committed state at
                     // zero strain, as in `update`.
-                    let (_, _, st) = p.return_map(&Vector2::zeros(), &p.read(old));
+                    let (_, _, st) = p.return_map_fast(&Vector2::zeros(), &p.read(old));
                     p.write(&st, new);
                 }
             }

@@ -17,7 +17,9 @@
 //! - [`friction`]: Iwan (parallel Jenkins) elements, Masing loops.
 //! - [`parallel`]: baseline + extension in parallel.
 //! - [`registry`]: names, parameter specs and bounds, [`build`].
-//! - [`driver`]: drive one integration point through a strain history.
+//! - [`driver`]: drive one integration point through a strain history, through each law's
+//!   uniaxial fast path [`Law::update_component`] (a scalar return mapping; a test checks it
+//!   against the full 6×6 [`Law::update`] for every law and kind).
 
 #![warn(missing_docs)]
 

@@ -654,7 +654,7 @@ fn hold_relaxation(segments: &[Segment], control: &[f64], response: &[f64]) -> V
             let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len() as f64;
             let change = mean(&y[y.len() - b..]) - mean(&y[..b]);
             let idx: Vec<f64> = (0..y.len()).map(|i| i as f64).collect();
-            let significant = match linear_fit(&idx, y) {
+            let significant = match crate::stats::line_fit(&idx, y) {
                 Ok(f) if f.slope_se > 0.0 => {
                     let t =
                         crate::stats::student_t_quantile(1.0 - alpha / 2.0, (y.len() - 2) as f64);

@@ -16,7 +16,8 @@
 //!   plateau therefore never makes a reversal.
 //! * Holds: a hold is a stretch where the control stays within one reversal threshold for at
 //!   least three times as long as the neighbouring ramps need to cross that band (see
-//!   [`holds`]); time stamps are used when given, sample indices otherwise.
+//!   [`holds`]); time stamps are used when given, sample indices otherwise. The band that starts
+//!   at each sample is found for all samples at once in O(n) (running max/min queues).
 //! * Branches: between turning points the control is monotone. Moving away from zero in the
 //!   direction of the first motion it is first loading (the first time) or reloading; moving
 //!   towards zero it is unloading; moving away from zero on the other side it is reversed
@@ -258,6 +259,10 @@ pub fn holds(time_s: Option<&[f64]>, control: &[f64], threshold: f64) -> Vec<(us
         return vec![(0, n)];
     }
     let run_of = |i: usize| pts.partition_point(|&p| p <= i).clamp(1, pts.len() - 1) - 1;
+    // Where the band starting at each sample ends, and the run of each sample: the same for
+    // both passes.
+    let ends = band_ends(control, threshold);
+    let run: Vec<usize> = (0..n).map(run_of).collect();
     let mut found: Vec<(usize, usize)> = Vec::new();
     for _pass in 0..2 {
         let rates: Vec<f64> = pts
@@ -273,36 +278,87 @@ pub fn holds(time_s: Option<&[f64]>, control: &[f64], threshold: f64) -> Vec<(us
                 ((control[w[1]] - control[w[0]]).abs() / moving).max(f64::MIN_POSITIVE)
             })
             .collect();
-        let min_duration = |i: usize, j: usize| {
-            1.5 * threshold * (1.0 / rates[run_of(i)] + 1.0 / rates[run_of(j)])
-        };
-        found = hold_runs(control, threshold, &min_duration, &t);
+        let min_duration =
+            |i: usize, j: usize| 1.5 * threshold * (1.0 / rates[run[i]] + 1.0 / rates[run[j]]);
+        found = hold_runs(&ends, &min_duration, &t);
     }
     found
 }
 
+/// For every start `i`, the end (exclusive) of the longest stretch `i..j` whose range
+/// max − min stays within `threshold` (NaN samples are ignored, as `f64::min`/`max` ignore
+/// them). Two pointers with monotone queues of the running maximum and minimum: O(n) in all,
+/// where growing each stretch from its start costs O(n × stretch length), quadratic on a long
+/// dwell that is too short to be a hold.
+fn band_ends(control: &[f64], threshold: f64) -> Vec<usize> {
+    let n = control.len();
+    let mut ends = vec![n; n];
+    // Candidates for the window's maximum (values decreasing) and minimum (values increasing),
+    // as (index, value); the live part of each queue is `[head..]` (indices only grow, so a
+    // plain vector with a moving head serves as the deque).
+    let mut maxq: Vec<(usize, f64)> = Vec::with_capacity(n);
+    let mut minq: Vec<(usize, f64)> = Vec::with_capacity(n);
+    let (mut hmax, mut hmin) = (0usize, 0usize);
+    let mut j = 0; // the window is i..j
+    for (i, end) in ends.iter_mut().enumerate() {
+        while hmax < maxq.len() && maxq[hmax].0 < i {
+            hmax += 1;
+        }
+        while hmin < minq.len() && minq[hmin].0 < i {
+            hmin += 1;
+        }
+        // The start itself is always inside its band (j == i: push it unchecked).
+        let mut check = j > i;
+        if !check {
+            j = i;
+        }
+        while j < n {
+            let v = control[j];
+            if !v.is_nan() {
+                if check {
+                    let hi = if hmax < maxq.len() {
+                        maxq[hmax].1.max(v)
+                    } else {
+                        v
+                    };
+                    let lo = if hmin < minq.len() {
+                        minq[hmin].1.min(v)
+                    } else {
+                        v
+                    };
+                    if hi - lo > threshold {
+                        break;
+                    }
+                }
+                while maxq.len() > hmax && maxq[maxq.len() - 1].1 <= v {
+                    maxq.pop();
+                }
+                maxq.push((j, v));
+                while minq.len() > hmin && minq[minq.len() - 1].1 >= v {
+                    minq.pop();
+                }
+                minq.push((j, v));
+            }
+            check = true;
+            j += 1;
+        }
+        *end = j;
+    }
+    ends
+}
+
+/// Greedy left-to-right hold runs: a stretch `i..ends[i]` is a hold when it has at least three
+/// samples and lasts at least `min_duration`; the scan then continues after it.
 fn hold_runs(
-    control: &[f64],
-    threshold: f64,
+    ends: &[usize],
     min_duration: &dyn Fn(usize, usize) -> f64,
     t: &dyn Fn(usize) -> f64,
 ) -> Vec<(usize, usize)> {
-    let n = control.len();
+    let n = ends.len();
     let mut out = Vec::new();
     let mut i = 0;
     while i < n {
-        let (mut lo, mut hi) = (control[i], control[i]);
-        let mut j = i + 1;
-        while j < n {
-            let v = control[j];
-            let (nlo, nhi) = (lo.min(v), hi.max(v));
-            if nhi - nlo > threshold {
-                break;
-            }
-            lo = nlo;
-            hi = nhi;
-            j += 1;
-        }
+        let j = ends[i];
         if j - i >= 3 && t(j - 1) - t(i) >= min_duration(i, j - 1) {
             out.push((i, j));
             i = j;
@@ -524,7 +580,7 @@ pub fn zero_offsets(control: &mut [f64], response: &mut [f64]) -> Offsets {
     } else {
         let m = (n / 100).max(5).min(n);
         let idx: Vec<f64> = (0..m).map(|i| i as f64).collect();
-        let at0 = |v: &[f64]| crate::stats::linear_fit(&idx, &v[..m]).map_or(v[0], |f| f.intercept);
+        let at0 = |v: &[f64]| crate::stats::line_fit(&idx, &v[..m]).map_or(v[0], |f| f.intercept);
         (at0(control), at0(response))
     };
     control.iter_mut().for_each(|c| *c -= oc);
@@ -708,6 +764,174 @@ mod tests {
         assert!(resolution(&n) < 1e-2 * 0.01, "{}", resolution(&n));
         assert_eq!(resolution(&[1.0, 1.0, 1.0]), 0.0);
         assert_eq!(resolution(&[]), 0.0);
+    }
+
+    /// The band end of the original hold scan (the stretch grown sample by sample from its
+    /// start): the reference [`band_ends`] must reproduce.
+    fn band_end_by_growing(control: &[f64], threshold: f64, i: usize) -> usize {
+        let (mut lo, mut hi) = (control[i], control[i]);
+        let mut j = i + 1;
+        while j < control.len() {
+            let v = control[j];
+            let (nlo, nhi) = (lo.min(v), hi.max(v));
+            if nhi - nlo > threshold {
+                break;
+            }
+            lo = nlo;
+            hi = nhi;
+            j += 1;
+        }
+        j
+    }
+
+    /// The O(n) band ends equal the original O(n × band) scan on noisy dwell cycles, a noisy
+    /// ramp, quantised steps, and signals with NaN, infinities and signed zeros, for several
+    /// thresholds.
+    #[test]
+    fn band_ends_equal_the_growing_scan() {
+        let mut signals = vec![
+            dwell_triangle(0.01, 3),
+            noisy(
+                &(0..3000).map(|i| i as f64 * 1e-3).collect::<Vec<_>>(),
+                0.02,
+                4,
+            ),
+            (0..2000)
+                .map(|i| ((i as f64 * 0.01).sin() * 50.0).round())
+                .collect(),
+            vec![
+                0.0,
+                -0.0,
+                0.0,
+                1.0,
+                f64::NAN,
+                1.0,
+                2.0,
+                f64::NAN,
+                f64::NAN,
+                0.5,
+                -0.0,
+            ],
+            vec![
+                f64::NAN,
+                f64::NAN,
+                1.0,
+                1.0,
+                f64::INFINITY,
+                f64::INFINITY,
+                3.0,
+                -1.0,
+            ],
+            vec![
+                f64::NEG_INFINITY,
+                0.0,
+                f64::NEG_INFINITY,
+                f64::NEG_INFINITY,
+                2.0,
+            ],
+            vec![1.0],
+        ];
+        signals.push(noisy(&vec![0.0; 500], 1.0, 9));
+        for v in &signals {
+            let h = reversal_threshold(v);
+            for thr in [0.0, 0.5 * h, h, 3.0 * h, 1.0, f64::INFINITY, f64::NAN] {
+                let ends = band_ends(v, thr);
+                for (i, &e) in ends.iter().enumerate() {
+                    assert_eq!(
+                        e,
+                        band_end_by_growing(v, thr, i),
+                        "start {i}, threshold {thr}"
+                    );
+                }
+            }
+        }
+    }
+
+    /// The original two-pass `holds` (band grown from every start), kept as the reference.
+    fn holds_by_growing(
+        time_s: Option<&[f64]>,
+        control: &[f64],
+        threshold: f64,
+    ) -> Vec<(usize, usize)> {
+        let n = control.len();
+        let t = |i: usize| time_s.map_or(i as f64, |t| t[i]);
+        let mut pts: Vec<usize> = vec![0];
+        pts.extend(turning_points(control, threshold).iter().map(|p| p.index));
+        pts.push(n - 1);
+        pts.dedup();
+        let travel: f64 = pts
+            .windows(2)
+            .map(|w| (control[w[1]] - control[w[0]]).abs())
+            .sum();
+        if travel <= threshold || t(n - 1) <= t(0) {
+            return vec![(0, n)];
+        }
+        let run_of = |i: usize| pts.partition_point(|&p| p <= i).clamp(1, pts.len() - 1) - 1;
+        let mut found: Vec<(usize, usize)> = Vec::new();
+        for _pass in 0..2 {
+            let rates: Vec<f64> = pts
+                .windows(2)
+                .map(|w| {
+                    let held: f64 = found
+                        .iter()
+                        .map(|&(a, b)| (a.max(w[0]), (b - 1).min(w[1])))
+                        .filter(|(a, b)| b > a)
+                        .map(|(a, b)| t(b) - t(a))
+                        .sum();
+                    let moving = (t(w[1]) - t(w[0]) - held).max(f64::MIN_POSITIVE);
+                    ((control[w[1]] - control[w[0]]).abs() / moving).max(f64::MIN_POSITIVE)
+                })
+                .collect();
+            let mut out = Vec::new();
+            let mut i = 0;
+            while i < n {
+                let j = band_end_by_growing(control, threshold, i);
+                let min_d = 1.5 * threshold * (1.0 / rates[run_of(i)] + 1.0 / rates[run_of(j - 1)]);
+                if j - i >= 3 && t(j - 1) - t(i) >= min_d {
+                    out.push((i, j));
+                    i = j;
+                } else {
+                    i += 1;
+                }
+            }
+            found = out;
+        }
+        found
+    }
+
+    /// `holds` finds the same runs as the original scan, with and without time stamps, on dwell
+    /// cycles of several dwell lengths and noise levels (holds found and not found).
+    #[test]
+    fn holds_equal_the_original_scan() {
+        let mut found_some = false;
+        for (dwell, sigma) in [
+            (0usize, 0.01),
+            (5, 0.01),
+            (40, 0.003),
+            (200, 0.01),
+            (200, 0.05),
+        ] {
+            let mut v = vec![0.0; 30];
+            for _ in 0..3 {
+                v.extend((0..300).map(|i| i as f64 / 300.0));
+                v.extend(std::iter::repeat_n(1.0, dwell));
+                v.extend((0..300).map(|i| 1.0 - i as f64 / 300.0));
+                v.extend(std::iter::repeat_n(0.0, dwell));
+            }
+            let v = noisy(&v, sigma, dwell as u64);
+            let t: Vec<f64> = (0..v.len())
+                .map(|i| 0.01 * i as f64 + 1e-3 * (i as f64).sin())
+                .collect();
+            let h = reversal_threshold(&v);
+            for thr in [h, 2.0 * h] {
+                for time in [None, Some(t.as_slice())] {
+                    let new = holds(time, &v, thr);
+                    assert_eq!(new, holds_by_growing(time, &v, thr), "dwell {dwell}");
+                    found_some |= new.len() > 3;
+                }
+            }
+        }
+        assert!(found_some, "the scenarios include dwells that are holds");
     }
 
     #[test]

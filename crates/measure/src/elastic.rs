@@ -26,7 +26,7 @@
 //! see [`crate::hysteresis`]), or convert slopes to stiffnesses (see [`crate::sectional`]).
 
 use crate::condition::noise_level;
-use crate::stats::{linear_fit, Fit};
+use crate::stats::{line_fit, linear_fit, Fit, Line};
 use crate::MeasureError;
 use nalgebra::{Matrix3, Vector3};
 use serde::Serialize;
@@ -59,7 +59,7 @@ impl Prefix {
     /// (SSE, slope) of the straight-line fit over `a..b`.
     fn fit(&self, a: usize, b: usize) -> (f64, f64) {
         let m = (b - a) as f64;
-        let d: Vec<f64> = (0..5).map(|k| self.s[b][k] - self.s[a][k]).collect();
+        let d: [f64; 5] = std::array::from_fn(|k| self.s[b][k] - self.s[a][k]);
         let sxx = d[2] - d[0] * d[0] / m;
         let sxy = d[3] - d[0] * d[1] / m;
         let syy = d[4] - d[1] * d[1] / m;
@@ -143,7 +143,7 @@ fn mean(v: &[f64]) -> f64 {
 /// Noise σ of y about a straight line through (x, y), taken in sample order (floored at 1e-5
 /// of the range of y).
 pub fn residual_noise(x: &[f64], y: &[f64]) -> f64 {
-    let r = match linear_fit(x, y) {
+    let r = match line_fit(x, y) {
         Ok(f) => x
             .iter()
             .zip(y)
@@ -417,7 +417,7 @@ fn trim_window(
     let n0 = b - a;
     let block = (n0 / 20).max(5);
     while b - a >= 3 * block && (b - a) * 2 > n0 {
-        let fit = linear_fit(&x[a..b], &y[a..b])?;
+        let fit = line_fit(&x[a..b], &y[a..b])?;
         let se = 3.0 * fit.residual_sd / (block as f64).sqrt();
         let mean_res =
             |p: usize, q: usize| (p..q).map(|i| y[i] - fit.at(x[i])).sum::<f64>() / (q - p) as f64;
@@ -487,14 +487,25 @@ fn straighten(x: &[f64], y: &[f64], mut a: usize, mut b: usize, sigma: f64) -> (
 /// Initial straight part of a branch that starts at a turning point (unloading, reloading):
 /// the first of at most two segments (module doc, step 2), trimmed like the elastic window.
 pub fn initial_slope(x: &[f64], y: &[f64]) -> Option<Fit> {
+    let (a, b) = initial_window(x, y)?;
+    linear_fit(&x[a..b], &y[a..b]).ok()
+}
+
+/// [`initial_slope`] without the slope interval (the per-cycle stiffnesses need only the line).
+pub(crate) fn initial_line(x: &[f64], y: &[f64]) -> Option<Line> {
+    let (a, b) = initial_window(x, y)?;
+    line_fit(&x[a..b], &y[a..b]).ok()
+}
+
+/// The index window of [`initial_slope`].
+fn initial_window(x: &[f64], y: &[f64]) -> Option<(usize, usize)> {
     let n = x.len();
     if n < 5 {
         return None;
     }
     let seg = segment_lines(x, y, 2);
     let end = seg.breaks.first().copied().unwrap_or(n);
-    let (a, b) = trim_window(x, y, 0, end).ok()?;
-    linear_fit(&x[a..b], &y[a..b]).ok()
+    trim_window(x, y, 0, end).ok()
 }
 
 #[cfg(test)]

@@ -23,8 +23,8 @@
 //! It does not fit laws or classify.
 
 use crate::condition::{noise_level, Branch, Segment};
-use crate::elastic::{initial_slope, residual_noise};
-use crate::stats::{linear_fit, normal_quantile};
+use crate::elastic::{initial_line, residual_noise};
+use crate::stats::{line_fit, normal_quantile};
 use serde::Serialize;
 use std::collections::BTreeMap;
 
@@ -180,7 +180,7 @@ pub fn cycles(inp: &CycleInputs) -> Vec<CycleResult> {
             let uy = &inp.response[ua..ub];
             // Unloading stiffness: initial straight part, while the response is still positive.
             let pos_end = uy.iter().position(|&v| v <= 0.0).unwrap_or(uy.len());
-            let fit = initial_slope(&ux[..pos_end], &uy[..pos_end]);
+            let fit = initial_line(&ux[..pos_end], &uy[..pos_end]);
             match fit {
                 Some(f) => r.unloading_stiffness = Some(f.slope * inp.stiffness_factor),
                 None => {
@@ -214,7 +214,7 @@ pub fn cycles(inp: &CycleInputs) -> Vec<CycleResult> {
                         (i..uy.len()).find(|&k| uy[k] < -hi).unwrap_or(uy.len())
                     };
                     if i2 > i1 + 5 {
-                        if let Ok(f) = linear_fit(&ux[i1..i2], &uy[i1..i2]) {
+                        if let Ok(f) = line_fit(&ux[i1..i2], &uy[i1..i2]) {
                             if f.slope > 0.0 {
                                 if let Some(x) = f.x_intercept() {
                                     xr = x;
@@ -307,7 +307,7 @@ pub fn cycles(inp: &CycleInputs) -> Vec<CycleResult> {
         }
         if c > 1 {
             match first_run(inp.segments, c, Branch::Reloading)
-                .and_then(|(a, b)| initial_slope(&inp.sectional[a..b], &inp.response[a..b]))
+                .and_then(|(a, b)| initial_line(&inp.sectional[a..b], &inp.response[a..b]))
             {
                 Some(f) => r.reloading_stiffness = Some(f.slope * inp.stiffness_factor),
                 None => {
@@ -351,7 +351,7 @@ fn extrapolated_residual(
         return Err("too few unloading samples near the preload to extrapolate the residual");
     }
     let (x, y) = (&ux[i1..], &uy[i1..]);
-    let f = linear_fit(x, y).map_err(|_| "the unloading near the preload is degenerate")?;
+    let f = line_fit(x, y).map_err(|_| "the unloading near the preload is degenerate")?;
     match f.x_intercept() {
         Some(x0) if f.slope > 0.0 => {
             // se of the zero of a fitted line: (s/b)·√(1/n + (x0 − x̄)²/Sxx), Sxx = (s/se_b)².

@@ -43,6 +43,52 @@ impl Fit {
 /// Errors when the lengths differ, fewer than 3 points are given, a value is not finite or all
 /// x are equal.
 pub fn linear_fit(x: &[f64], y: &[f64]) -> Result<Fit, MeasureError> {
+    let l = line_fit(x, y)?;
+    let t = student_t_quantile(0.975, l.n as f64 - 2.0);
+    Ok(Fit {
+        slope: l.slope,
+        intercept: l.intercept,
+        slope_se: l.slope_se,
+        slope_ci95: [l.slope - t * l.slope_se, l.slope + t * l.slope_se],
+        r2: l.r2,
+        residual_sd: l.residual_sd,
+        n: l.n,
+    })
+}
+
+/// [`linear_fit`] without the slope interval: the same sums and numbers, for the callers that
+/// need only the line and its scatter (noise estimates, window trimming, zero crossings). The
+/// Student-t quantile (a bisection on the incomplete beta function) costs far more than the
+/// sums, and those callers run it many times per test.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct Line {
+    /// Slope dy/dx.
+    pub slope: f64,
+    /// Intercept (y at x = 0).
+    pub intercept: f64,
+    /// Standard error of the slope.
+    pub slope_se: f64,
+    /// Coefficient of determination (0 when y is constant).
+    pub r2: f64,
+    /// Residual standard deviation sqrt(SSE/(n − 2)).
+    pub residual_sd: f64,
+    /// Number of points fitted.
+    pub n: usize,
+}
+
+impl Line {
+    /// x where the line crosses y = 0 (None for a zero slope); as [`Fit::x_intercept`].
+    pub fn x_intercept(&self) -> Option<f64> {
+        (self.slope != 0.0).then(|| -self.intercept / self.slope)
+    }
+    /// Value at `x`; as [`Fit::at`].
+    pub fn at(&self, x: f64) -> f64 {
+        self.intercept + self.slope * x
+    }
+}
+
+/// The least-squares line of [`linear_fit`] without its interval (see [`Line`]); same errors.
+pub(crate) fn line_fit(x: &[f64], y: &[f64]) -> Result<Line, MeasureError> {
     if x.len() != y.len() {
         return Err(MeasureError::LengthMismatch {
             what: "linear fit x and y",
@@ -83,13 +129,11 @@ pub fn linear_fit(x: &[f64], y: &[f64]) -> Result<Fit, MeasureError> {
     let dof = nf - 2.0;
     let residual_sd = (sse / dof).sqrt();
     let slope_se = residual_sd / sxx.sqrt();
-    let t = student_t_quantile(0.975, dof);
     let r2 = if syy > 0.0 { 1.0 - sse / syy } else { 0.0 };
-    Ok(Fit {
+    Ok(Line {
         slope,
         intercept,
         slope_se,
-        slope_ci95: [slope - t * slope_se, slope + t * slope_se],
         r2,
         residual_sd,
         n,
@@ -107,18 +151,27 @@ pub fn mean_sd(values: &[f64]) -> (f64, f64) {
     (mean, var.sqrt())
 }
 
-/// Median of a slice (NaN for an empty slice); non-finite values are ignored.
+/// Median of a slice (NaN for an empty slice); non-finite values are ignored. O(n): a selection,
+/// not a sort (the same value: elements equal in the total order are the same number).
 pub fn median(values: &[f64]) -> f64 {
     let mut v: Vec<f64> = values.iter().copied().filter(|x| x.is_finite()).collect();
     if v.is_empty() {
         return f64::NAN;
     }
-    v.sort_by(|a, b| a.total_cmp(b));
     let m = v.len() / 2;
-    if v.len() % 2 == 1 {
-        v[m]
+    let odd = v.len() % 2 == 1;
+    let (lower, mid, _) = v.select_nth_unstable_by(m, |a, b| a.total_cmp(b));
+    let mid = *mid;
+    if odd {
+        mid
     } else {
-        0.5 * (v[m - 1] + v[m])
+        // The element just below the middle of the sorted order: the largest of the lower part.
+        let below = lower
+            .iter()
+            .copied()
+            .max_by(|a, b| a.total_cmp(b))
+            .unwrap_or(mid);
+        0.5 * (below + mid)
     }
 }
 
@@ -386,6 +439,75 @@ mod tests {
         assert!(linear_fit(&[1.0, 2.0], &[1.0, 2.0]).is_err());
         assert!(linear_fit(&[1.0, 2.0, 3.0], &[1.0, f64::NAN, 3.0]).is_err());
         assert!(linear_fit(&[1.0, 2.0, 3.0], &[1.0, 3.0]).is_err());
+    }
+
+    /// The selection median equals the sorted-middle median on random samples of odd and even
+    /// length, with ties, signed zeros and non-finite values mixed in.
+    #[test]
+    fn median_by_selection_equals_sorted_middle() {
+        fn by_sorting(values: &[f64]) -> f64 {
+            let mut v: Vec<f64> = values.iter().copied().filter(|x| x.is_finite()).collect();
+            if v.is_empty() {
+                return f64::NAN;
+            }
+            v.sort_by(|a, b| a.total_cmp(b));
+            let m = v.len() / 2;
+            if v.len() % 2 == 1 {
+                v[m]
+            } else {
+                0.5 * (v[m - 1] + v[m])
+            }
+        }
+        let mut state = 0x2545_f491_4f6c_dd1du64;
+        let mut next = move || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            state
+        };
+        for len in 1..200usize {
+            let v: Vec<f64> = (0..len)
+                .map(|_| match next() % 13 {
+                    0 => 0.0,
+                    1 => -0.0,
+                    2 => f64::NAN,
+                    3 => f64::INFINITY,
+                    4 => 1.5,
+                    _ => (next() % 1000) as f64 / 7.0 - 70.0,
+                })
+                .collect();
+            let (a, b) = (median(&v), by_sorting(&v));
+            assert!(
+                a.to_bits() == b.to_bits() || (a.is_nan() && b.is_nan()),
+                "len {len}: {a} vs {b}"
+            );
+        }
+        assert!(median(&[f64::NAN]).is_nan());
+    }
+
+    /// The line without interval is the interval fit's line, number for number.
+    #[test]
+    fn line_fit_is_linear_fit_without_the_interval() {
+        let x: Vec<f64> = (0..57)
+            .map(|i| (i as f64 * 0.37).sin() + 0.1 * i as f64)
+            .collect();
+        let y: Vec<f64> = x
+            .iter()
+            .enumerate()
+            .map(|(i, v)| 2.0 * v + (i as f64 * 1.3).cos())
+            .collect();
+        let (f, l) = (linear_fit(&x, &y).unwrap(), line_fit(&x, &y).unwrap());
+        assert_eq!(
+            (f.slope, f.intercept, f.slope_se, f.r2, f.residual_sd, f.n),
+            (l.slope, l.intercept, l.slope_se, l.r2, l.residual_sd, l.n)
+        );
+        assert_eq!(f.x_intercept(), l.x_intercept());
+        assert_eq!(f.at(0.3), l.at(0.3));
+        assert!(matches!(
+            line_fit(&[1.0, 1.0, 1.0], &[1.0, 2.0, 3.0]),
+            Err(MeasureError::DegenerateFit)
+        ));
+        assert!(line_fit(&[1.0, 2.0], &[1.0, 2.0]).is_err());
     }
 
     #[test]
