@@ -193,12 +193,18 @@ pub fn write_campaign_outputs(
         }
     }
     outputs.sort();
+    // Inputs were hashed when they were read (a test that could not be read is hashed here).
     let mut inputs: Vec<Hashed> = Vec::new();
-    for t in &c.tests {
-        let b = std::fs::read(&t.path).with_context(|| format!("cannot read {}", t.id))?;
+    for (t, o) in c.tests.iter().zip(outcomes) {
+        let sha = if o.input_sha256.is_empty() {
+            let b = std::fs::read(&t.path).with_context(|| format!("cannot read {}", t.id))?;
+            sha256_hex(&b)
+        } else {
+            o.input_sha256.clone()
+        };
         inputs.push(Hashed {
             path: t.id.clone(),
-            sha256: sha256_hex(&b),
+            sha256: sha,
         });
     }
     let pipeline_rel = rel(&abs(&c.root), &abs(&c.pipeline_path));

@@ -89,18 +89,29 @@ fn bars(n: usize, quiet: bool) -> Bars {
     }
 }
 
-/// Identity of the running build: cablab's version plus the SHA-256 of its executable. The cache
-/// is only served to the build that wrote it (kept in `.cache`, outside the outputs, so that
-/// the outputs themselves do not depend on which build made them).
+/// Identity of the running build: cablab's version plus the executable's path, size and
+/// modification time (a rebuilt binary differs). The cache is only served to the build that
+/// wrote it (kept in `.cache`, outside the outputs, so that the outputs themselves do not depend
+/// on which build made them).
 fn build_id() -> &'static str {
     static ID: std::sync::OnceLock<String> = std::sync::OnceLock::new();
     ID.get_or_init(|| {
-        let exe = std::env::current_exe()
-            .ok()
-            .and_then(|p| std::fs::read(p).ok())
-            .map(|b| sha256_hex(&b))
-            .unwrap_or_default();
-        format!("{VERSION}+{exe}")
+        let exe = std::env::current_exe().ok();
+        let meta = exe.as_ref().and_then(|p| std::fs::metadata(p).ok());
+        let stamp = meta.map(|m| {
+            let mtime = m
+                .modified()
+                .ok()
+                .and_then(|t| t.duration_since(std::time::UNIX_EPOCH).ok())
+                .map_or(0, |d| d.as_nanos());
+            format!(
+                "{}:{}:{mtime}",
+                exe.as_ref()
+                    .map_or(String::new(), |p| p.display().to_string()),
+                m.len()
+            )
+        });
+        format!("{VERSION}+{}", stamp.unwrap_or_default())
     })
 }
 
