@@ -73,6 +73,40 @@ pub struct TestOutcome {
     pub files: Vec<(String, String)>,
 }
 
+impl TestOutcome {
+    /// An outcome with nothing evaluated yet.
+    pub fn new(t: &PlannedTest, cache_key: &str, input_sha256: &str) -> Self {
+        TestOutcome {
+            id: t.id.clone(),
+            slug: slug(&t.id),
+            specimen: t.specimen.clone(),
+            diameter_m: t.diameter_m,
+            kind: t.kind,
+            cache_key: cache_key.to_string(),
+            input_sha256: input_sha256.to_string(),
+            error: None,
+            format: None,
+            free_length_m: t.free_length_m,
+            rows: None,
+            stiffness: None,
+            stiffness_ci95: None,
+            stiffness_unit: t.kind.stiffness_unit().to_string(),
+            modulus_pa: None,
+            behaviour: None,
+            yield_point: None,
+            piecewise: None,
+            cycles: 0,
+            calibration: None,
+            baseline_gap_rel: None,
+            verdict: None,
+            diagnosis_words: None,
+            why: vec![],
+            warnings: vec![],
+            files: vec![],
+        }
+    }
+}
+
 /// Stage hooks the runner passes in (progress bars); called after each stage.
 pub trait StageObserver: Sync {
     /// `stage` (index into [`STAGES`]) finished for one test.
@@ -109,34 +143,7 @@ pub fn evaluate(
     diagnosis_enabled: bool,
     obs: &dyn StageObserver,
 ) -> (TestOutcome, Files) {
-    let mut out = TestOutcome {
-        id: t.id.clone(),
-        slug: slug(&t.id),
-        specimen: t.specimen.clone(),
-        diameter_m: t.diameter_m,
-        kind: t.kind,
-        cache_key: key.to_string(),
-        input_sha256: crate::output::sha256_hex(bytes),
-        error: None,
-        format: None,
-        free_length_m: t.free_length_m,
-        rows: None,
-        stiffness: None,
-        stiffness_ci95: None,
-        stiffness_unit: t.kind.stiffness_unit().to_string(),
-        modulus_pa: None,
-        behaviour: None,
-        yield_point: None,
-        piecewise: None,
-        cycles: 0,
-        calibration: None,
-        baseline_gap_rel: None,
-        verdict: None,
-        diagnosis_words: None,
-        why: vec![],
-        warnings: vec![],
-        files: vec![],
-    };
+    let mut out = TestOutcome::new(t, key, &crate::output::sha256_hex(bytes));
     let mut files = Files::new();
     let mut stage_done = 0usize;
     let r = stages(

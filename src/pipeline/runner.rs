@@ -277,32 +277,7 @@ fn one_test(
 }
 
 fn failed_outcome(t: &PlannedTest, error: String) -> TestOutcome {
-    TestOutcome {
-        id: t.id.clone(),
-        slug: super::evaluate::slug(&t.id),
-        specimen: t.specimen.clone(),
-        diameter_m: t.diameter_m,
-        kind: t.kind,
-        cache_key: String::new(),
-        input_sha256: String::new(),
-        error: Some(error),
-        format: None,
-        free_length_m: t.free_length_m,
-        rows: None,
-        stiffness: None,
-        stiffness_ci95: None,
-        stiffness_unit: t.kind.stiffness_unit().to_string(),
-        modulus_pa: None,
-        behaviour: None,
-        yield_point: None,
-        piecewise: None,
-        cycles: 0,
-        calibration: None,
-        baseline_gap_rel: None,
-        verdict: None,
-        diagnosis_words: None,
-        why: vec![],
-        warnings: vec![],
-        files: vec![],
-    }
+    let mut o = TestOutcome::new(t, "", "");
+    o.error = Some(error);
+    o
 }
