@@ -217,9 +217,7 @@ fn one_test(
             for s in 0..STAGES.len() {
                 obs.done(s);
             }
-            let mut o = failed_outcome(t, format!("ingest: cannot read {}: {e}", t.id));
-            o.slug = super::evaluate::slug(&t.id);
-            return (o, false);
+            return (failed_outcome(t, format!("ingest: cannot read {}: {e}", t.id)), false);
         }
     };
     let input_sha = sha256_hex(&bytes);
