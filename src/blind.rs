@@ -1,6 +1,73 @@
-//! The blind check of the diagnosis through real file layouts (being wired).
+//! The blind check of the gap diagnosis, end to end through real file layouts: the virtual lab
+//! writes each case's logs (testXpert, Bluehill, MTS 793 layouts in turn) with one effect
+//! withheld, the readers ingest the bytes as they would a lab's files, the characterisation
+//! segments them, and the diagnosis — not told the truth — gives its verdict. Prints (and can
+//! write) the confusion matrix, the share of right verdicts, false claims on null cases and
+//! the gap shrink.
+//!
+//! The case design (truth effects per kind, parameter draws, protocols) is the diagnosis crate's
+//! (`cablab_diagnose::blind`); this module adds the write → read leg and the report.
+
 use crate::commands::{CliError, CmdResult};
-/// Run the blind benchmark.
-pub fn bench(_seeds: u64, _out: Option<&std::path::Path>) -> CmdResult {
-    Err(CliError::failed(anyhow::anyhow!("not wired yet")))
+use cablab_core::TestKind;
+use cablab_diagnose::blind::{self, BlindCase};
+use cablab_diagnose::registry::{Registry, Rod};
+use std::process::ExitCode;
+
+/// Replace each test by what the readers get back from its written file (conditioned and
+/// segmented as every measured test is: [`crate::bridge::diag_test`]).
+fn through_readers(case: &mut BlindCase) -> Result<(), String> {
+    for (i, (name, bytes)) in case.files.iter().enumerate() {
+        let rec = cablab_ingest::read_bytes(bytes, name, &Default::default())
+            .map_err(|e| format!("{}: {e}", case.name))?;
+        let old = &case.tests[i];
+        if rec.kind != old.kind {
+            return Err(format!("{}: the reader found kind {} in {name}", case.name, rec.kind));
+        }
+        let curve = crate::bridge::curve(&rec).map_err(|e| format!("{}: {e:#}", case.name))?;
+        let geom = cablab_measure::Geometry {
+            free_length_m: rec.specimen.free_length_m.unwrap_or(old.free_length_m),
+            diameter_m: rec.specimen.diameter_m,
+        };
+        let (t, _) = crate::bridge::diag_test(
+            old.kind,
+            &geom,
+            &curve,
+            old.specimen.clone(),
+            old.rod_setup.clone(),
+        )
+        .map_err(|e| format!("{}: {e:#}", case.name))?;
+        case.tests[i] = t;
+    }
+    Ok(())
+}
+
+/// `cablab bench blind`.
+pub fn bench(seeds: u64, out: Option<&std::path::Path>) -> CmdResult {
+    let kinds = [TestKind::Tension, TestKind::Torsion, TestKind::PureBending];
+    let seed_list: Vec<u64> = (1..=seeds).collect();
+    let (mut cases, gen_errors) = blind::standard_matrix(&kinds, &[0.003, 0.01], &seed_list);
+    let mut errors = gen_errors;
+    cases.retain_mut(|c| match through_readers(c) {
+        Ok(()) => true,
+        Err(e) => {
+            errors.push(e);
+            false
+        }
+    });
+    let rod = Rod::default();
+    let ctx = cablab_diagnose::Context { catalog: &Registry, rod: Some(&rod) };
+    let report = blind::run_matrix(ctx, &cases, &Default::default());
+    let mut text = blind::render(&report);
+    if !errors.is_empty() {
+        text.push_str(&format!("\n{} cases could not be generated or read:\n", errors.len()));
+        for e in &errors {
+            text.push_str(&format!("- {e}\n"));
+        }
+    }
+    print!("{text}");
+    if let Some(p) = out {
+        crate::output::write_atomic(p, text.as_bytes()).map_err(CliError::failed)?;
+    }
+    Ok(ExitCode::SUCCESS)
 }

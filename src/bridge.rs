@@ -103,3 +103,46 @@ pub fn read_options(r: &crate::cli::ReaderArgs, kind: Option<TestKind>) -> Resul
         kind,
     })
 }
+
+/// A measured test as the calibration and the diagnosis see it: zero offsets removed (as the
+/// characterisation does: an untared load cell is conditioning, not an unmodelled effect),
+/// cycle/branch labels from the one segmenter, time stamps (sample index when the file has
+/// none). Returns the test and the offsets taken off.
+pub fn diag_test(
+    kind: TestKind,
+    geom: &cablab_measure::Geometry,
+    curve: &Curve,
+    specimen: Option<String>,
+    rod_setup: Option<cablab_rod::TestSetup>,
+) -> Result<(cablab_diagnose::DiagTest, cablab_measure::Offsets)> {
+    let n = curve.control.len();
+    let mut control = curve.control.clone();
+    let mut response = curve.response.clone();
+    let offsets = cablab_measure::zero_offsets(&mut control, &mut response);
+    let time_s = curve
+        .time_s
+        .clone()
+        .unwrap_or_else(|| (0..n).map(|i| i as f64).collect());
+    let segments = cablab_measure::segment(Some(&time_s), &control, &response)?;
+    let labels = cablab_measure::labels(&segments, n)
+        .into_iter()
+        .map(|l| cablab_diagnose::SegLabel {
+            cycle: l.cycle,
+            branch: l.branch,
+        })
+        .collect();
+    Ok((
+        cablab_diagnose::DiagTest {
+            kind,
+            free_length_m: geom.free_length_m,
+            diameter_m: geom.diameter_m,
+            time_s,
+            control,
+            response,
+            labels,
+            specimen,
+            rod_setup,
+        },
+        offsets,
+    ))
+}

@@ -19,31 +19,9 @@ pub fn diag_test(
     let geom =
         crate::bridge::geometry(&rec, kind, a.length_mm, a.diameter_mm).map_err(CliError::input)?;
     let curve = crate::bridge::curve(&rec).map_err(CliError::input)?;
-    let segments =
-        cablab_measure::segment(curve.time_s.as_deref(), &curve.control, &curve.response)
-            .map_err(|e| CliError::input(anyhow::anyhow!("{}: {e}", path.display())))?;
-    let an_labels = cablab_measure::labels(&segments, curve.control.len());
-    let labels = an_labels
-        .into_iter()
-        .map(|l| cablab_diagnose::SegLabel {
-            cycle: l.cycle,
-            branch: crate::pipeline::evaluate::diag_branch(l.branch),
-        })
-        .collect();
-    let n = curve.control.len();
-    Ok(DiagTest {
-        kind,
-        free_length_m: geom.free_length_m,
-        diameter_m: geom.diameter_m,
-        time_s: curve
-            .time_s
-            .unwrap_or_else(|| (0..n).map(|i| i as f64).collect()),
-        control: curve.control,
-        response: curve.response,
-        labels,
-        specimen: rec.specimen.label.clone(),
-        rod_setup: None,
-    })
+    let (t, _) = crate::bridge::diag_test(kind, &geom, &curve, rec.specimen.label.clone(), None)
+        .map_err(|e| CliError::input(anyhow::anyhow!("{}: {e:#}", path.display())))?;
+    Ok(t)
 }
 
 /// Run `cablab diagnose`.

@@ -9,7 +9,7 @@ use crate::bridge::Curve;
 use anyhow::{anyhow, Context as _, Result};
 use cablab_core::{Effect, TestKind};
 use cablab_diagnose::registry::{Registry, Rod};
-use cablab_diagnose::{DiagTest, ModelSpec, SegLabel};
+use cablab_diagnose::ModelSpec;
 use cablab_measure::{Analysis, Branch};
 use serde::{Deserialize, Serialize};
 
@@ -229,24 +229,15 @@ fn stages(
     done(1);
 
     // 3. calibrate and simulate the baseline
-    let time_s = curve
-        .time_s
-        .clone()
-        .unwrap_or_else(|| (0..curve.control.len()).map(|i| i as f64).collect());
-    let labels = seg_labels(&an, curve.control.len());
     let mut rod_setup = cablab_rod::TestSetup::new(t.kind, geom.free_length_m);
     rod_setup.elements = c.file.model.elements;
-    let dtest = DiagTest {
-        kind: t.kind,
-        free_length_m: geom.free_length_m,
-        diameter_m: geom.diameter_m,
-        time_s,
-        control: curve.control.clone(),
-        response: curve.response.clone(),
-        labels,
-        specimen: Some(t.specimen.clone()),
-        rod_setup: Some(rod_setup),
-    };
+    let (dtest, offsets) = crate::bridge::diag_test(
+        t.kind,
+        &geom,
+        &curve,
+        Some(t.specimen.clone()),
+        Some(rod_setup),
+    )?;
     let tests = std::slice::from_ref(&dtest);
     let rod = Rod::default();
     let ctx = cablab_diagnose::Context {
@@ -266,7 +257,14 @@ fn stages(
         let cal = cablab_diagnose::calibrate(ctx, tests, &model, &copts)
             .context("calibrating the baseline")?;
         let fwd = cablab_diagnose::model::ModelForward::new(tests, &model, &Registry, Some(&rod))?;
-        let sim = fwd.simulate_all(cal.values())?.pop().unwrap_or_default();
+        // The model of the measurement: the simulated response plus the offset taken off.
+        let sim: Vec<f64> = fwd
+            .simulate_all(cal.values())?
+            .pop()
+            .unwrap_or_default()
+            .into_iter()
+            .map(|v| v + offsets.response)
+            .collect();
         let scale = curve.response.iter().fold(0.0f64, |m, v| m.max(v.abs()));
         let rms = (sim
             .iter()
@@ -389,29 +387,6 @@ fn fill_analysis(out: &mut TestOutcome, an: &Analysis) {
     out.warnings.extend(an.warnings.iter().cloned());
     for (k, v) in &an.why_by_key {
         out.why.push(format!("{k}: {v}"));
-    }
-}
-
-/// Per-sample cycle/branch labels from the characterisation's segments (the one segmenter).
-pub fn seg_labels(an: &Analysis, n: usize) -> Vec<SegLabel> {
-    cablab_measure::labels(&an.segments, n)
-        .into_iter()
-        .map(|l| SegLabel {
-            cycle: l.cycle,
-            branch: diag_branch(l.branch),
-        })
-        .collect()
-}
-
-/// measure's branch as the diagnosis names it.
-pub fn diag_branch(b: Branch) -> cablab_diagnose::model::Branch {
-    use cablab_diagnose::model::Branch as D;
-    match b {
-        Branch::FirstLoading => D::FirstLoading,
-        Branch::Unloading => D::Unloading,
-        Branch::Reloading => D::Reloading,
-        Branch::ReversedLoading => D::ReversedLoading,
-        Branch::Hold => D::Hold,
     }
 }
 

@@ -41,7 +41,11 @@ fn main() {
     let registry = Registry;
     if let Some(pat) = get("--show") {
         // Print the full diagnosis of the cases whose name contains the pattern.
-        let rod = Rod::default();
+        let rod = Rod {
+            max_points: get("--rod-points")
+                .and_then(|v| v.parse().ok())
+                .unwrap_or(Rod::default().max_points),
+        };
         let ctx = Context {
             catalog: &registry,
             rod: Some(&rod),
@@ -58,7 +62,11 @@ fn main() {
         }
         return;
     }
-    let rod = Rod::default();
+    let rod = Rod {
+        max_points: get("--rod-points")
+            .and_then(|v| v.parse().ok())
+            .unwrap_or(Rod::default().max_points),
+    };
     let ctx = Context {
         catalog: &registry,
         rod: Some(&rod),

@@ -238,7 +238,14 @@ pub fn noise_floor(tests: &[DiagTest]) -> Vec<f64> {
         .iter()
         .map(|t| {
             let s = cablab_measure::noise_level(&t.response);
-            // Never below a part in 10⁶ of the range (noise-free synthetic data, quantisation).
+            // The control is measured too: its noise, or the rounding of a quantised encoder
+            // (uniform over one count: σ = q/√12), reaches the simulated response through the
+            // stiffness. A 0.1 µm encoder on a 32 mm cable is ~0.25 N per count.
+            let q = cablab_measure::resolution(&t.control);
+            let sc = cablab_measure::noise_level(&t.control).max(q / 12f64.sqrt());
+            let k = crate::model::initial_slope(&t.control, &t.response).unwrap_or(0.0);
+            let s = (s * s + (k * sc).powi(2)).sqrt();
+            // Never below a part in 10⁶ of the range (noise-free synthetic data).
             s.max(1e-6 * t.response_scale())
         })
         .collect()
