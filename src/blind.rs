@@ -22,7 +22,10 @@ fn through_readers(case: &mut BlindCase) -> Result<(), String> {
             .map_err(|e| format!("{}: {e}", case.name))?;
         let old = &case.tests[i];
         if rec.kind != old.kind {
-            return Err(format!("{}: the reader found kind {} in {name}", case.name, rec.kind));
+            return Err(format!(
+                "{}: the reader found kind {} in {name}",
+                case.name, rec.kind
+            ));
         }
         let curve = crate::bridge::curve(&rec).map_err(|e| format!("{}: {e:#}", case.name))?;
         let geom = cablab_measure::Geometry {
@@ -56,11 +59,17 @@ pub fn bench(seeds: u64, out: Option<&std::path::Path>) -> CmdResult {
         }
     });
     let rod = Rod::default();
-    let ctx = cablab_diagnose::Context { catalog: &Registry, rod: Some(&rod) };
+    let ctx = cablab_diagnose::Context {
+        catalog: &Registry,
+        rod: Some(&rod),
+    };
     let report = blind::run_matrix(ctx, &cases, &Default::default());
     let mut text = blind::render(&report);
     if !errors.is_empty() {
-        text.push_str(&format!("\n{} cases could not be generated or read:\n", errors.len()));
+        text.push_str(&format!(
+            "\n{} cases could not be generated or read:\n",
+            errors.len()
+        ));
         for e in &errors {
             text.push_str(&format!("- {e}\n"));
         }

@@ -9,7 +9,6 @@ use super::evaluate::{evaluate, StageObserver, TestOutcome, STAGES};
 use crate::output::{sha256_hex, to_json_bytes, write_atomic};
 use anyhow::{anyhow, Context, Result};
 use indicatif::{MultiProgress, ProgressBar, ProgressDrawTarget, ProgressStyle};
-use rayon::prelude::*;
 use serde::Serialize;
 use std::path::{Path, PathBuf};
 
@@ -47,6 +46,9 @@ impl RunReport {
         self.outcomes.iter().filter(|o| o.error.is_some()).count()
     }
 }
+
+/// Stack of each worker thread: deep enough for the rod solver and the fits of one test.
+const WORKER_STACK_BYTES: usize = 16 << 20;
 
 /// The cablab version written into manifests and cache keys.
 pub const VERSION: &str = env!("CARGO_PKG_VERSION");
@@ -176,17 +178,57 @@ pub fn run_campaign(c: &Campaign, o: &RunOptions) -> Result<RunReport> {
     std::fs::create_dir_all(out_dir.join("tests"))
         .with_context(|| format!("cannot create {}", out_dir.display()))?;
     let diagnosis = c.file.diagnosis.enabled && !o.no_diagnosis;
+    let jobs = o
+        .jobs
+        .filter(|&j| j > 0)
+        .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
+    // The physics parallelises inside a test too (calibration Jacobians on rayon). Tests are
+    // therefore handed out by `jobs` plain threads that each `install` their test into one
+    // shared rayon pool: a worker waiting inside a test can only pick up work of that kind,
+    // never start another whole test on top of its stack (nested work-stealing across 1,000
+    // tests overflows the stack).
     let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(o.jobs.unwrap_or(0))
+        .num_threads(jobs)
+        .stack_size(WORKER_STACK_BYTES)
         .build()
-        .map_err(|e| anyhow!("cannot start {} worker threads: {e}", o.jobs.unwrap_or(0)))?;
+        .map_err(|e| anyhow!("cannot start {jobs} worker threads: {e}"))?;
     let progress = bars(c.tests.len(), o.quiet);
-    let results: Vec<(TestOutcome, bool)> = pool.install(|| {
-        c.tests
-            .par_iter()
-            .map(|t| one_test(c, t, &out_dir, diagnosis, o.no_cache, &progress))
-            .collect()
-    });
+    let next = std::sync::atomic::AtomicUsize::new(0);
+    let slots: Vec<std::sync::Mutex<Option<(TestOutcome, bool)>>> = c
+        .tests
+        .iter()
+        .map(|_| std::sync::Mutex::new(None))
+        .collect();
+    std::thread::scope(|scope| -> Result<()> {
+        for w in 0..jobs.min(c.tests.len()).max(1) {
+            std::thread::Builder::new()
+                .name(format!("cablab-test-{w}"))
+                .stack_size(WORKER_STACK_BYTES)
+                .spawn_scoped(scope, || loop {
+                    let i = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                    let Some(t) = c.tests.get(i) else { break };
+                    let r =
+                        pool.install(|| one_test(c, t, &out_dir, diagnosis, o.no_cache, &progress));
+                    if let Ok(mut slot) = slots[i].lock() {
+                        *slot = Some(r);
+                    }
+                })
+                .map_err(|e| anyhow!("cannot start a worker thread: {e}"))?;
+        }
+        Ok(())
+    })?;
+    let results: Vec<(TestOutcome, bool)> = slots
+        .into_iter()
+        .zip(&c.tests)
+        .map(|(s, t)| {
+            s.into_inner().ok().flatten().unwrap_or_else(|| {
+                (
+                    failed_outcome(t, "a worker thread stopped on this test".into()),
+                    false,
+                )
+            })
+        })
+        .collect();
     for b in &progress.bars {
         b.finish();
     }
@@ -217,7 +259,10 @@ fn one_test(
             for s in 0..STAGES.len() {
                 obs.done(s);
             }
-            return (failed_outcome(t, format!("ingest: cannot read {}: {e}", t.id)), false);
+            return (
+                failed_outcome(t, format!("ingest: cannot read {}: {e}", t.id)),
+                false,
+            );
         }
     };
     let input_sha = sha256_hex(&bytes);

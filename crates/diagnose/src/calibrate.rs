@@ -99,6 +99,69 @@ pub struct Fit {
     pub evaluations: usize,
 }
 
+/// A forward model with some parameters held at given values (a profile: the fit moves only the
+/// others). Its specs are the free parameters, in the inner model's order.
+pub struct Pinned<'a> {
+    inner: &'a dyn Forward,
+    specs: Vec<ParamSpec>,
+    free: Vec<usize>,
+    full: Vec<f64>,
+}
+
+impl<'a> Pinned<'a> {
+    /// Hold the named parameters of `inner` at their values (clamped into their bounds); the
+    /// others start from their specs' initial values. Errors name a parameter `inner` lacks.
+    pub fn new(inner: &'a dyn Forward, pinned: &[(String, f64)]) -> Result<Self, String> {
+        let all = inner.specs();
+        let mut full: Vec<f64> = all.iter().map(|s| s.initial).collect();
+        let mut is_pinned = vec![false; all.len()];
+        for (name, v) in pinned {
+            let j = all
+                .iter()
+                .position(|s| &s.name == name)
+                .ok_or_else(|| format!("cannot pin '{name}': the model has no such parameter"))?;
+            full[j] = v.clamp(all[j].lower, all[j].upper);
+            is_pinned[j] = true;
+        }
+        let free: Vec<usize> = (0..all.len()).filter(|&j| !is_pinned[j]).collect();
+        Ok(Pinned {
+            inner,
+            specs: free.iter().map(|&j| all[j].clone()).collect(),
+            free,
+            full,
+        })
+    }
+
+    /// The inner model's full parameter vector for free parameters `p`.
+    pub fn expand(&self, p: &[f64]) -> Vec<f64> {
+        let mut full = self.full.clone();
+        for (&j, &v) in self.free.iter().zip(p) {
+            full[j] = v;
+        }
+        full
+    }
+
+    /// Indices (in the inner model's order) of the free parameters.
+    pub fn free(&self) -> &[usize] {
+        &self.free
+    }
+}
+
+impl Forward for Pinned<'_> {
+    fn specs(&self) -> &[ParamSpec] {
+        &self.specs
+    }
+    fn n_tests(&self) -> usize {
+        self.inner.n_tests()
+    }
+    fn n_samples(&self, test: usize) -> usize {
+        self.inner.n_samples(test)
+    }
+    fn simulate(&self, params: &[f64], test: usize, out: &mut [f64]) -> Result<(), String> {
+        self.inner.simulate(&self.expand(params), test, out)
+    }
+}
+
 /// Cost of parameter vectors that the model cannot simulate (per residual, in noise units).
 const INFEASIBLE: f64 = 1e6;
 
@@ -432,6 +495,34 @@ mod tests {
         }
         // 2σ intervals on three parameters jointly: expect ~ 0.95³ ≈ 86 % coverage.
         assert!(covered >= 14, "covered {covered}/{trials}");
+    }
+
+    #[test]
+    fn pinned_parameter_stays_and_the_others_recover() {
+        let m = relax();
+        let truth = [3.0, 0.7, 0.2];
+        let mut y = vec![0.0; m.t.len()];
+        m.simulate(&truth, 0, &mut y).unwrap();
+        let data = FitData {
+            measured: vec![&y],
+            weight: vec![1.0],
+            fit_idx: vec![(0..y.len()).collect()],
+        };
+        let p = Pinned::new(&m, &[("tau".to_string(), 0.7)]).unwrap();
+        assert_eq!(p.specs().len(), 2);
+        assert_eq!(p.free(), [0, 2]);
+        let f = fit(&p, &data, &[vec![1.0, 0.0]], &FitOptions::default());
+        let full = p.expand(&f.params);
+        assert_eq!(full[1], 0.7);
+        assert!(
+            (full[0] - 3.0).abs() < 1e-6 && (full[2] - 0.2).abs() < 1e-6,
+            "{full:?}"
+        );
+        // Pinned away from the truth, the fit is worse; an unknown name is an error.
+        let q = Pinned::new(&m, &[("tau".to_string(), 2.0)]).unwrap();
+        let g = fit(&q, &data, &[vec![1.0, 0.0]], &FitOptions::default());
+        assert!(g.cost > 1.0, "cost {}", g.cost);
+        assert!(Pinned::new(&m, &[("nope".to_string(), 1.0)]).is_err());
     }
 
     #[test]

@@ -15,6 +15,23 @@
 //! best (fewest effective, then fewest nominal parameters); the others in that set are reported
 //! as equivalent with the experiment that would separate them. `none` when the baseline is in
 //! that set or already fits to the noise floor.
+//!
+//! Resolution. A candidate whose held-out prediction stays within the measurement resolution of
+//! the baseline's ([`resolution_floor`]: the rounding of the control's encoder through the
+//! stiffness and of the response's ADC) cannot be told from the baseline by the instrument and
+//! takes no part in the verdict (`below_resolution`). This matters when the control moves a
+//! whole number of counts per sample: the rounding error is then constant along each branch, a
+//! loading/unloading loop of a fraction of a count that friction or a fast Maxwell branch fits
+//! "below the noise floor" although the material has none (the demo's elastic-range tension
+//! tests). The AR(1) n_eff cannot see this: the rounding error is one number per branch, so a
+//! held-out cycle carries two such numbers, not hundreds of independent ones. Likewise the
+//! baseline: with a yield parameter, its elastic limit (yield pinned out of the data's reach)
+//! replaces the free fit when it fits as well or within the resolution (`yield_out_of_reach`):
+//! a yield the data never engage is not identified, and a free fit parks it at the peak,
+//! predicting spurious plastic flow.
+//!
+//! Where. The baseline's residual by test, by cycle and branch, by range of the control, and for
+//! three-point tests along the span ([`locate_span`]).
 //! What it does not do: read files or print (the CLI does), or simulate (see `model`).
 
 use crate::calibrate::{self, FitData, FitOptions, Forward};
@@ -216,6 +233,8 @@ pub struct CalibrateOptions {
     pub noise: Option<Vec<f64>>,
     /// Warm start: named values to start from (others from the specs).
     pub warm: Option<ParamMap>,
+    /// Parameters held at given values (not fitted; reported without a standard error).
+    pub pinned: Option<ParamMap>,
 }
 
 impl Default for CalibrateOptions {
@@ -227,6 +246,7 @@ impl Default for CalibrateOptions {
             fit_idx: None,
             noise: None,
             warm: None,
+            pinned: None,
         }
     }
 }
@@ -251,6 +271,114 @@ pub fn noise_floor(tests: &[DiagTest]) -> Vec<f64> {
         .collect()
 }
 
+/// Measurement resolution per test, in response units: the rounding of the control's encoder
+/// carried through the initial stiffness, and the rounding of the response's ADC, each as the
+/// RMS error of rounding to its quantum (q/√12), combined in quadrature. The quanta are read from
+/// the data (`cablab_measure::resolution`: the smallest step between samples; for unquantised
+/// channels a tiny fraction of the noise).
+///
+/// Why it matters beyond the noise floor: when the control moves a whole number of counts per
+/// sample (a 0.1 µm encoder at 2 µm/s and 20 Hz), the rounding error is not noise but a
+/// constant along each branch, set by where the branch started between two counts. Loading
+/// and unloading branches then sit a fraction of a count apart: a loop of up to k·q wide that
+/// any loading/unloading-dependent law (friction, a fast Maxwell branch) can fit, although the
+/// material has none. Two models whose predictions differ by less than this resolution cannot be
+/// told apart by the instrument.
+pub fn resolution_floor(tests: &[DiagTest]) -> Vec<f64> {
+    tests
+        .iter()
+        .map(|t| {
+            let qc = cablab_measure::resolution(&t.control);
+            let qr = cablab_measure::resolution(&t.response);
+            let k = crate::model::initial_slope(&t.control, &t.response).unwrap_or(0.0);
+            ((k * qc).powi(2) + qr * qr).sqrt() / 12f64.sqrt()
+        })
+        .collect()
+}
+
+/// RMS over the samples `idx` of the difference of two residual histories (per test, all
+/// samples), in units of each test's `resolution`: how far apart two models' predictions are,
+/// measured in what the instrument can resolve. Infinite where a test's resolution is 0 and the
+/// predictions differ.
+pub fn shift_in_resolution(
+    a: &[Vec<f64>],
+    b: &[Vec<f64>],
+    idx: &[Vec<usize>],
+    resolution: &[f64],
+) -> f64 {
+    let (mut ss, mut n) = (0.0, 0usize);
+    for (((ra, rb), ix), &q) in a.iter().zip(b).zip(idx).zip(resolution) {
+        for &i in ix {
+            let d = ra[i] - rb[i];
+            ss += if d == 0.0 { 0.0 } else { (d / q).powi(2) };
+            n += 1;
+        }
+    }
+    if n == 0 {
+        0.0
+    } else {
+        (ss / n as f64).sqrt()
+    }
+}
+
+/// Yield parameters of the project's elastoplastic laws (tension; torsion and bending): above
+/// the data's reach the law never leaves its elastic range.
+pub const YIELD_PARAMS: [&str; 2] = ["F_y", "M_y"];
+
+/// The baseline's elastic limit: when the baseline has a yield parameter, refit it with the
+/// yield pinned at its upper bound (three times the largest measured stress resultant: out of
+/// the data's reach). Data that stay elastic leave the yield unidentifiable and a free fit parks
+/// it just under the peak, where a trace of spurious plastic flow fits a few counts of the
+/// readings' rounding; that is not evidence of yield. The elastic limit replaces the free fit when
+/// it fits the training samples at least as well, or when the two predict the training samples
+/// within the measurement resolution ([`resolution_floor`]): parsimony, a yield that never
+/// engages costs nothing. Returns the baseline to use and whether it is the elastic limit.
+#[allow(clippy::too_many_arguments)]
+fn elastic_limit(
+    ctx: Context,
+    tests: &[DiagTest],
+    base: Scored,
+    train: &[Vec<usize>],
+    held: &[Vec<usize>],
+    noise: &[f64],
+    resolution: &[f64],
+    opts: &DiagnoseOptions,
+) -> (Scored, bool) {
+    let Some(j) = base
+        .cal
+        .specs
+        .iter()
+        .position(|s| YIELD_PARAMS.contains(&s.name.as_str()))
+    else {
+        return (base, false);
+    };
+    let spec = &base.cal.specs[j];
+    if spec.which_bound(base.cal.values[j], 1e-3) == Some("upper") {
+        return (base, true);
+    }
+    let pinned = ParamMap(vec![(spec.name.clone(), spec.upper)]);
+    let Ok(el) = score(
+        ctx,
+        tests,
+        &base.model,
+        Effect::None,
+        train,
+        held,
+        noise,
+        Some(&base.cal.params),
+        Some(&pinned),
+        opts,
+    ) else {
+        return (base, false);
+    };
+    let shift = shift_in_resolution(&base.all_resid, &el.all_resid, train, resolution);
+    if el.cal.chi2 <= base.cal.chi2 || shift <= 1.0 {
+        (el, true)
+    } else {
+        (base, false)
+    }
+}
+
 /// Calibrate `model` to `tests` jointly (shared parameters), replaying each measured control
 /// history: bounded Levenberg–Marquardt from several starts, with standard errors.
 pub fn calibrate(
@@ -262,7 +390,20 @@ pub fn calibrate(
     for (i, t) in tests.iter().enumerate() {
         t.validate(i)?;
     }
-    let fwd = ModelForward::new(tests, model, ctx.catalog, ctx.rod)?;
+    let full = ModelForward::new(tests, model, ctx.catalog, ctx.rod)?;
+    let pinned = match &opts.pinned {
+        Some(p) => Some(
+            calibrate::Pinned::new(&full, &p.0).map_err(|why| DiagError::Model {
+                model: model.label(),
+                why,
+            })?,
+        ),
+        None => None,
+    };
+    let fwd: &dyn Forward = match &pinned {
+        Some(p) => p,
+        None => &full,
+    };
     let noise = opts.noise.clone().unwrap_or_else(|| noise_floor(tests));
     let fit_idx = opts.fit_idx.clone().unwrap_or_else(|| {
         tests
@@ -286,8 +427,27 @@ pub fn calibrate(
         fit_idx,
     };
     let starts = make_starts(fwd.specs(), opts.warm.as_ref(), opts.starts, opts.seed);
-    let f = calibrate::fit(&fwd, &data, &starts, &opts.fit);
-    let sims = fwd.simulate_all(&f.params)?;
+    let mut f = calibrate::fit(fwd, &data, &starts, &opts.fit);
+    if let Some(p) = &pinned {
+        // Back to the whole model: pinned parameters carry no standard error; one pinned at a
+        // bound is reported there.
+        let specs = full.specs();
+        let mut std_err = vec![None; specs.len()];
+        let mut at_bound: Vec<Option<&'static str>> = specs
+            .iter()
+            .zip(p.expand(&f.params))
+            .map(|(s, v)| s.which_bound(v, 1e-3))
+            .collect();
+        for (c, &j) in p.free().iter().enumerate() {
+            std_err[j] = f.std_err[c];
+            at_bound[j] = f.at_bound[c];
+        }
+        f.params = p.expand(&f.params);
+        f.names = specs.iter().map(|s| s.name.clone()).collect();
+        f.std_err = std_err;
+        f.at_bound = at_bound;
+    }
+    let sims = full.simulate_all(&f.params)?;
     let gap_rms = tests
         .iter()
         .zip(&sims)
@@ -325,7 +485,7 @@ pub fn calibrate(
         n_eff: f.n_eff,
         evaluations: f.evaluations,
         values: f.params,
-        specs: fwd.specs().to_vec(),
+        specs: full.specs().to_vec(),
         std: f.std_err,
         k_eff: f.k_eff,
     })
@@ -387,7 +547,23 @@ pub struct Located {
     pub by: &'static str,
     /// Samples in the group.
     pub n: usize,
+    /// `by: "span"` only: the positions of the group and the share attributed to each.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub span: Option<SpanShares>,
 }
+
+/// The residual along the span of a three-point test, per rod element (see [`locate_span`]).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct SpanShares {
+    /// Distance of each element's midpoint from mid-span (the punch), m; the rod is symmetric,
+    /// so a position stands for both sides.
+    pub position_m: Vec<f64>,
+    /// Share of the total squared residual attributed to each element.
+    pub share: Vec<f64>,
+}
+
+/// Groups of the half-span in the span breakdown (20 % each).
+pub const SPAN_GROUPS: usize = 5;
 
 /// The baseline as calibrated.
 #[derive(Debug, Clone, Serialize)]
@@ -404,6 +580,10 @@ pub struct Baseline {
     pub gap: f64,
     /// RMS gap on the held-out samples / largest |measured response|.
     pub gap_heldout_rel: f64,
+    /// The data are explained as well with the yield out of their reach: the baseline is its
+    /// elastic limit (yield parameter pinned at its upper bound, three times the largest
+    /// measured stress resultant; the hardening is then not identified).
+    pub yield_out_of_reach: bool,
 }
 
 /// One candidate effect as scored on held-out data.
@@ -431,8 +611,16 @@ pub struct EffectScore {
     pub at_bound: Vec<(String, &'static str)>,
     /// Effective parameter count.
     pub k_eff: usize,
-    /// IC − IC(best).
+    /// IC − IC(best), the best among the models that take part in the verdict (negative for a
+    /// model below the resolution that scores better on the held-out data).
     pub delta_ic: f64,
+    /// RMS over the held-out samples of (this model − baseline) prediction, in units of the
+    /// measurement resolution ([`resolution_floor`]).
+    pub shift_res: f64,
+    /// The model predicts the held-out data within the measurement resolution of the baseline
+    /// (`shift_res` ≤ 1): the instrument cannot tell it from the baseline, so it takes no part
+    /// in the verdict (listed after the others).
+    pub below_resolution: bool,
 }
 
 /// A pair of explanations the data cannot tell apart, and the experiment that would.
@@ -483,7 +671,7 @@ pub struct Diagnosis {
     pub baseline: Baseline,
     /// Where the baseline's residual lies, largest share first.
     pub located: Vec<Located>,
-    /// Candidates, best first.
+    /// Candidates, best first (those below the measurement resolution last).
     pub effects: Vec<EffectScore>,
     /// The verdict.
     pub verdict: Verdict,
@@ -585,6 +773,7 @@ fn score(
     held: &[Vec<usize>],
     noise: &[f64],
     warm: Option<&ParamMap>,
+    pinned: Option<&ParamMap>,
     opts: &DiagnoseOptions,
 ) -> Result<Scored, DiagError> {
     let copts = CalibrateOptions {
@@ -598,6 +787,7 @@ fn score(
         fit_idx: Some(train.to_vec()),
         noise: Some(noise.to_vec()),
         warm: warm.cloned(),
+        pinned: pinned.cloned(),
     };
     let cal = calibrate(ctx, tests, model, &copts)?;
     let fwd = ModelForward::new(tests, model, ctx.catalog, ctx.rod)?;
@@ -729,8 +919,20 @@ pub fn diagnose(
         &held,
         &noise,
         None,
+        None,
         &base_opts,
     )?;
+    let resolution = resolution_floor(tests);
+    let (base, yield_out_of_reach) = elastic_limit(
+        ctx,
+        tests,
+        base,
+        &train,
+        &held,
+        &noise,
+        &resolution,
+        &base_opts,
+    );
     let cands: Vec<Effect> = match &opts.candidates {
         Some(c) => c
             .iter()
@@ -740,7 +942,12 @@ pub fn diagnose(
         None => applicable(ctx, kind, &base_model),
     };
     let (scored, failed) = compare(ctx, tests, &base, &cands, &train, &held, &noise, opts);
-    let choice = choose(&base, &scored);
+    let shifts: Vec<f64> = scored
+        .iter()
+        .map(|c| shift_in_resolution(&base.all_resid, &c.all_resid, &held, &resolution))
+        .collect();
+    let resolved: Vec<bool> = shifts.iter().map(|&d| d > 1.0).collect();
+    let choice = choose(&base, &scored, &resolved);
 
     let abs_rms = |r: &[Vec<f64>]| {
         let n: usize = r.iter().map(Vec::len).sum();
@@ -749,7 +956,8 @@ pub fn diagnose(
     let gap_before = abs_rms(&base.held_resid);
     let mut effects: Vec<EffectScore> = scored
         .iter()
-        .map(|s| {
+        .zip(&shifts)
+        .map(|(s, &shift)| {
             let ga = abs_rms(&s.held_resid);
             EffectScore {
                 effect: s.effect,
@@ -764,10 +972,16 @@ pub fn diagnose(
                 at_bound: s.cal.at_bound.clone(),
                 k_eff: s.cal.effective_params(),
                 delta_ic: choice.ic_of(s) - choice.ic_best,
+                shift_res: shift,
+                below_resolution: shift <= 1.0,
             }
         })
         .collect();
-    effects.sort_by(|a, b| a.delta_ic.total_cmp(&b.delta_ic));
+    effects.sort_by(|a, b| {
+        a.below_resolution
+            .cmp(&b.below_resolution)
+            .then(a.delta_ic.total_cmp(&b.delta_ic))
+    });
 
     let separating = choice
         .equivalent
@@ -777,7 +991,11 @@ pub fn diagnose(
             experiment: separating_experiment(choice.effect, e),
         })
         .collect();
-    let located = locate(tests, &base.all_resid);
+    let mut located = locate(tests, &base.all_resid);
+    if let (TestKind::ThreePoint, Some(rod)) = (kind, ctx.rod) {
+        located.extend(span_of_baseline(ctx.catalog, rod, tests, &base));
+        located.sort_by(|a, b| b.share.total_cmp(&a.share));
+    }
     let all_gap = abs_rms(&base.all_resid);
     let ladder = if opts.ladder {
         Some(ladder(ctx, tests, &train, &held, &noise, opts, scale)?)
@@ -793,6 +1011,7 @@ pub fn diagnose(
             gap_rel: all_gap / scale,
             gap: all_gap,
             gap_heldout_rel: gap_before / scale,
+            yield_out_of_reach,
         },
         located,
         effects,
@@ -840,6 +1059,7 @@ fn compare(
                 held,
                 noise,
                 Some(&base.cal.params),
+                None,
                 opts,
             );
             (e, r)
@@ -884,19 +1104,29 @@ fn ic(s: &Scored, n_eff: f64, n_held: usize) -> f64 {
         + n_eff.max(2.0).ln() * s.cal.effective_params() as f64
 }
 
-/// Parsimony on the held-out data (module doc).
-fn choose(base: &Scored, scored: &[Scored]) -> Choice {
+/// Parsimony on the held-out data (module doc), among the baseline and the candidates the
+/// instrument can tell from it (`resolved`, one flag per candidate).
+fn choose(base: &Scored, scored: &[Scored], resolved: &[bool]) -> Choice {
     let n_held = base.n_held;
+    let scored: Vec<&Scored> = scored
+        .iter()
+        .zip(resolved)
+        .filter(|(_, &r)| r)
+        .map(|(s, _)| s)
+        .collect();
     // n_eff from the residuals of the best-fitting model: those closest to white noise.
     let best = scored
         .iter()
+        .copied()
         .chain(std::iter::once(base))
         .min_by(|a, b| a.rss_noise.total_cmp(&b.rss_noise))
         .unwrap_or(base);
     let series: Vec<&[f64]> = best.held_resid.iter().map(Vec::as_slice).collect();
     let rho = stats::pooled_lag1(&series);
     let n_eff = stats::effective_sample_size(n_held, rho);
-    let all: Vec<&Scored> = std::iter::once(base).chain(scored.iter()).collect();
+    let all: Vec<&Scored> = std::iter::once(base)
+        .chain(scored.iter().copied())
+        .collect();
     let ics: Vec<f64> = all.iter().map(|s| ic(s, n_eff, n_held)).collect();
     let ic_best = ics.iter().copied().fold(f64::INFINITY, f64::min);
     // Indistinguishable: within twice the price of one parameter (plus 2) of the best. Twice,
@@ -957,6 +1187,7 @@ pub fn locate(tests: &[DiagTest], resid: &[Vec<f64>]) -> Vec<Located> {
                 share: s / total,
                 by: "test",
                 n: r.len(),
+                span: None,
             });
         }
     }
@@ -992,6 +1223,7 @@ pub fn locate(tests: &[DiagTest], resid: &[Vec<f64>]) -> Vec<Located> {
             share: s / total,
             by: "cycle_branch",
             n,
+            span: None,
         });
     }
     for (bin, (s, n)) in cr {
@@ -1000,8 +1232,147 @@ pub fn locate(tests: &[DiagTest], resid: &[Vec<f64>]) -> Vec<Located> {
             share: s / total,
             by: "control_range",
             n,
+            span: None,
         });
     }
+    out.sort_by(|a, b| b.share.total_cmp(&a.share));
+    out
+}
+
+/// The span breakdown of the baseline's residual for three-point tests (empty if the rod cannot
+/// record the span or the baseline cannot be rebuilt).
+fn span_of_baseline(
+    catalog: &dyn crate::model::LawCatalog,
+    rod: &dyn crate::model::RodSimulator,
+    tests: &[DiagTest],
+    base: &Scored,
+) -> Vec<Located> {
+    let test_level = ["compliance", "drift_per_s", "support_friction"];
+    let (names, values): (Vec<String>, Vec<f64>) = base
+        .cal
+        .params
+        .0
+        .iter()
+        .filter(|(n, _)| !test_level.contains(&n.as_str()))
+        .cloned()
+        .unzip();
+    let mu = base.cal.get("support_friction").unwrap_or(0.0);
+    let total: f64 = base
+        .all_resid
+        .iter()
+        .flatten()
+        .map(|v| v * v)
+        .sum::<f64>()
+        .max(f64::MIN_POSITIVE);
+    let multi = tests.len() > 1;
+    let mut out = Vec::new();
+    for (ti, (t, r)) in tests.iter().zip(&base.all_resid).enumerate() {
+        let Ok(law) = catalog.build(t.kind, &base.model, &names, &values) else {
+            continue;
+        };
+        if let Ok(Some(h)) = rod.span_history(t, law.as_ref(), mu) {
+            let prefix = if multi {
+                format!("test {ti} ")
+            } else {
+                String::new()
+            };
+            out.extend(locate_span(&prefix, t.free_length_m, r, &h, total));
+        }
+    }
+    out
+}
+
+/// The squared residual of a three-point test along the span. Between two replayed samples the
+/// punch moves by δw = ∫ m(s) δκ(s) ds (unit-load method, m(s) = (l/2 − s)/2 the moment of a unit
+/// punch force at distance s from mid-span, zero beyond the supports): each element takes the
+/// share m(s)|δκ|l_e of that motion, and the squared residual of the samples in between is
+/// attributed to the elements in those proportions. So the residual lands where the specimen
+/// deformed when it arose: at mid-span for a plastic hinge, spread along the triangle while it
+/// is elastic, nowhere while the punch has lost contact (those samples are left unattributed, and
+/// the shares sum to less than 1). Groups of 20 % of the half-span, largest share first; each
+/// carries its elements' positions and shares (`span`) for a plot. `total` normalises the shares
+/// (the squared residual over all tests). What it does not do: say *why* the model errs there.
+pub fn locate_span(
+    prefix: &str,
+    span_m: f64,
+    resid: &[f64],
+    h: &crate::model::SpanHistory,
+    total: f64,
+) -> Vec<Located> {
+    let ne = h.position_m.len();
+    let half = 0.5 * span_m;
+    if ne == 0 || h.samples.is_empty() || half <= 0.0 {
+        return vec![];
+    }
+    let len: Vec<f64> = (0..ne)
+        .map(|e| {
+            let (a, b) = if e + 1 < ne {
+                (e, e + 1)
+            } else {
+                (e.saturating_sub(1), e)
+            };
+            (h.position_m[b] - h.position_m[a]).abs()
+        })
+        .collect();
+    let unit_moment: Vec<f64> = h
+        .position_m
+        .iter()
+        .map(|&s| 0.5 * (half - s.abs()).max(0.0))
+        .collect();
+    let mut acc = vec![0.0; ne];
+    let mut n_attr = 0usize;
+    let mut prev_sample: Option<usize> = None;
+    let zero = vec![0.0; ne];
+    for (w, &si) in h.samples.iter().enumerate() {
+        let first = prev_sample.map_or(0, |p| p + 1);
+        prev_sample = Some(si);
+        let k_prev = if w == 0 {
+            &zero
+        } else {
+            &h.curvature_per_m[w - 1]
+        };
+        let k_now = &h.curvature_per_m[w];
+        let weights: Vec<f64> = (0..ne)
+            .map(|e| unit_moment[e] * (k_now[e] - k_prev[e]).abs() * len[e])
+            .collect();
+        let wsum: f64 = weights.iter().sum();
+        let hi = si.min(resid.len().saturating_sub(1));
+        if wsum <= 0.0 || !wsum.is_finite() || first > hi {
+            continue;
+        }
+        let r2: f64 = resid[first..=hi].iter().map(|v| v * v).sum();
+        n_attr += hi + 1 - first;
+        for (a, wgt) in acc.iter_mut().zip(&weights) {
+            *a += r2 * wgt / wsum;
+        }
+    }
+    let mut groups: Vec<(Vec<f64>, Vec<f64>)> = vec![(vec![], vec![]); SPAN_GROUPS];
+    for (&s, a) in h.position_m.iter().zip(&acc) {
+        let x = s.abs() / half;
+        if x >= 1.0 {
+            continue;
+        }
+        let g = ((x * SPAN_GROUPS as f64).floor() as usize).min(SPAN_GROUPS - 1);
+        groups[g].0.push(s);
+        groups[g].1.push(a / total);
+    }
+    let step = 100 / SPAN_GROUPS;
+    let mut out: Vec<Located> = groups
+        .into_iter()
+        .enumerate()
+        .filter(|(_, (p, _))| !p.is_empty())
+        .map(|(g, (position_m, share))| Located {
+            where_: format!(
+                "{prefix}span {}–{} % of the half-span from mid-span",
+                g * step,
+                g * step + step
+            ),
+            share: share.iter().sum(),
+            by: "span",
+            n: n_attr,
+            span: Some(SpanShares { position_m, share }),
+        })
+        .collect();
     out.sort_by(|a, b| b.share.total_cmp(&a.share));
     out
 }
@@ -1018,6 +1389,7 @@ fn ladder(
     scale: f64,
 ) -> Result<Vec<Rung>, DiagError> {
     let kind = tests[0].kind;
+    let resolution = resolution_floor(tests);
     let mut cur = score(
         ctx,
         tests,
@@ -1026,6 +1398,7 @@ fn ladder(
         train,
         held,
         noise,
+        None,
         None,
         opts,
     )?;
@@ -1040,7 +1413,11 @@ fn ladder(
         }
         let cands = applicable(ctx, kind, &cur.model);
         let (scored, _) = compare(ctx, tests, &cur, &cands, train, held, noise, opts);
-        let choice = choose(&cur, &scored);
+        let resolved: Vec<bool> = scored
+            .iter()
+            .map(|c| shift_in_resolution(&cur.all_resid, &c.all_resid, held, &resolution) > 1.0)
+            .collect();
+        let choice = choose(&cur, &scored, &resolved);
         if choice.effect == Effect::None {
             break;
         }

@@ -262,6 +262,30 @@ pub trait RodSimulator: Sync {
         mu: f64,
         out: &mut [f64],
     ) -> Result<(), String>;
+
+    /// The bending curvature along the span over `test`'s measured control history with `law`
+    /// and support friction `mu`, at the samples the rod replays; `Ok(None)` when the simulator
+    /// does not record it.
+    fn span_history(
+        &self,
+        _test: &DiagTest,
+        _law: &dyn Law,
+        _mu: f64,
+    ) -> Result<Option<SpanHistory>, String> {
+        Ok(None)
+    }
+}
+
+/// Bending curvature per element over a replayed history (three-point: the half rod from the
+/// punch at mid-span outwards, by symmetry).
+#[derive(Debug, Clone, PartialEq)]
+pub struct SpanHistory {
+    /// Distance of each element's midpoint from mid-span, m (increasing).
+    pub position_m: Vec<f64>,
+    /// Indices of the test's samples that were replayed (increasing; the others lie between).
+    pub samples: Vec<usize>,
+    /// Curvature per element (1/m) at each replayed sample.
+    pub curvature_per_m: Vec<Vec<f64>>,
 }
 
 /// Index of the strain/stress component a uniformly loaded test drives, `None` for three-point.
@@ -586,7 +610,8 @@ pub fn drive_uniform_compliant(
         let s;
         if c == 0.0 {
             eps[comp] = u / l0;
-            s = law.update(&eps, dt, &old, &mut new).stress[comp];
+            // One loaded component: the laws' scalar fast path (identical to `update`).
+            s = law.update_component(comp, eps[comp], dt, &old, &mut new).0;
             k_prev = 0.0;
         } else {
             // Predictor with the last tangent, then Newton on g(ε) = l₀ε + cσ(ε) − u.
@@ -594,9 +619,8 @@ pub fn drive_uniform_compliant(
             let mut converged = false;
             let mut sigma = 0.0;
             for _ in 0..30 {
-                let r = law.update(&eps, dt, &old, &mut new);
-                sigma = r.stress[comp];
-                let k = r.tangent[(comp, comp)];
+                let (sg, k) = law.update_component(comp, eps[comp], dt, &old, &mut new);
+                sigma = sg;
                 let g = l0 * eps[comp] + c * sigma - u;
                 let dg = l0 + c * k.max(0.0);
                 k_prev = k.max(0.0);

@@ -8,7 +8,7 @@
 //! do: implement any law or solver.
 
 use crate::error::DiagError;
-use crate::model::{DataScales, DiagTest, LawCatalog, ModelSpec, RodSimulator};
+use crate::model::{DataScales, DiagTest, LawCatalog, ModelSpec, RodSimulator, SpanHistory};
 use crate::params::ParamSpec;
 use cablab_core::{Effect, TestKind};
 use cablab_laws::Law;
@@ -210,19 +210,50 @@ impl RodSimulator for Rod {
         let c: Vec<f64> = idx.iter().map(|&i| control[i]).collect();
         let t: Vec<f64> = idx.iter().map(|&i| test.time_s[i]).collect();
         let curve = cablab_rod::simulate_history(&setup, law, &c, &t).map_err(|e| e.to_string())?;
-        // Linear interpolation by sample index between replayed samples.
-        for w in 0..idx.len() {
-            let (a, ra) = (idx[w], curve.response[w]);
-            out[a] = ra;
-            if w + 1 < idx.len() {
-                let (b, rb) = (idx[w + 1], curve.response[w + 1]);
-                for (j, o) in out[a + 1..b].iter_mut().enumerate() {
-                    let f = (j + 1) as f64 / (b - a) as f64;
-                    *o = ra + f * (rb - ra);
-                }
+        interpolate(&idx, &curve.response, out);
+        Ok(())
+    }
+
+    fn span_history(
+        &self,
+        test: &DiagTest,
+        law: &dyn Law,
+        mu: f64,
+    ) -> Result<Option<SpanHistory>, String> {
+        let mut setup = test
+            .rod_setup
+            .clone()
+            .unwrap_or_else(|| cablab_rod::TestSetup::new(test.kind, test.free_length_m));
+        setup.support_friction = mu;
+        setup.record_span = true;
+        let idx = decimate(&test.control, self.max_points);
+        let c: Vec<f64> = idx.iter().map(|&i| test.control[i]).collect();
+        let t: Vec<f64> = idx.iter().map(|&i| test.time_s[i]).collect();
+        let curve = cablab_rod::simulate_history(&setup, law, &c, &t).map_err(|e| e.to_string())?;
+        if curve.span_s_m.is_empty() || curve.span_curvature_per_m.len() != idx.len() {
+            return Ok(None);
+        }
+        Ok(Some(SpanHistory {
+            position_m: curve.span_s_m,
+            samples: idx,
+            curvature_per_m: curve.span_curvature_per_m,
+        }))
+    }
+}
+
+/// Fill `out` from the responses at the replayed samples `idx`, linearly by sample index between
+/// them.
+fn interpolate(idx: &[usize], response: &[f64], out: &mut [f64]) {
+    for w in 0..idx.len() {
+        let (a, ra) = (idx[w], response[w]);
+        out[a] = ra;
+        if w + 1 < idx.len() {
+            let (b, rb) = (idx[w + 1], response[w + 1]);
+            for (j, o) in out[a + 1..b].iter_mut().enumerate() {
+                let f = (j + 1) as f64 / (b - a) as f64;
+                *o = ra + f * (rb - ra);
             }
         }
-        Ok(())
     }
 }
 
