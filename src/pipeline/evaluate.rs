@@ -410,6 +410,12 @@ pub fn words(d: &cablab_diagnose::Diagnosis) -> String {
             .iter()
             .map(|e| e.as_str().to_string())
             .collect(),
+        separating: d
+            .verdict
+            .separating
+            .iter()
+            .map(|s| s.experiment.to_string())
+            .collect(),
         noise_rel: d.verdict.noise_rel,
         top_location: top,
     })

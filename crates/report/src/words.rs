@@ -20,11 +20,16 @@ pub struct DiagnosisSummary {
     pub gap_after_rel: Option<f64>,
     /// Effects that explain the data as well as the verdict.
     pub equivalent: Vec<String>,
+    /// The experiments that would separate them (the diagnosis names them).
+    pub separating: Vec<String>,
     /// Noise floor, relative.
     pub noise_rel: f64,
     /// The location with the largest residual share and that share (`cycle 3 unloading`, 0.41).
     pub top_location: Option<(String, f64)>,
 }
+
+/// A held-out gap within this factor of the noise floor counts as "at the noise floor" in words.
+const NEAR_NOISE: f64 = 1.5;
 
 /// What an effect of the vocabulary means, in words (unknown names are returned as given).
 pub fn effect_words(effect: &str) -> String {
@@ -61,56 +66,6 @@ pub fn effect_words(effect: &str) -> String {
     }
 }
 
-/// The experiment that would separate a set of equally good explanations, or `None` when no
-/// rule applies.
-pub fn separating_experiment(effects: &[&str]) -> Option<String> {
-    let has = |e: &str| effects.contains(&e);
-    let mut out = Vec::new();
-    if has("viscoelasticity") && effects.len() > 1 {
-        out.push(
-            "a hold at constant control (relaxation) or a second loading rate separates \
-             viscoelasticity from the rate-independent explanations",
-        );
-    }
-    if has("machine_compliance") && effects.len() > 1 {
-        out.push(
-            "a second specimen length separates machine compliance, which does not scale with \
-             the length, from the material's own behaviour",
-        );
-    }
-    if has("sensor_drift") && effects.len() > 1 {
-        out.push("a hold at zero load shows sensor drift directly");
-    }
-    if has("support_friction") && effects.len() > 1 {
-        out.push("a second span or lubricated supports separate support friction");
-    }
-    if (has("kinematic_hardening") || has("stiffness_degradation") || has("plasticity"))
-        && (has("kinematic_hardening") as u8
-            + has("stiffness_degradation") as u8
-            + has("plasticity") as u8)
-            > 1
-    {
-        out.push(
-            "cycles with reversed loading and growing amplitude separate kinematic hardening \
-             (early reverse yield) from stiffness degradation (softer unloading)",
-        );
-    }
-    if has("friction_hysteresis") && has("piecewise_elasticity") {
-        out.push(
-            "small cycles inside the first branch show whether loops open below the threshold",
-        );
-    }
-    if out.is_empty() {
-        None
-    } else {
-        let mut s = out.join("; ");
-        if let Some(first) = s.get(..1) {
-            s = first.to_uppercase() + &s[1..];
-        }
-        Some(s + ".")
-    }
-}
-
 /// Writes the diagnosis as plain-text paragraphs: where, which and how far, then the
 /// equivalent explanations and the experiment that would separate them.
 pub fn diagnosis_words(s: &DiagnosisSummary) -> String {
@@ -128,10 +83,21 @@ pub fn diagnosis_words(s: &DiagnosisSummary) -> String {
         ));
     }
     match (s.verdict_effect.as_str(), s.gap_after_rel) {
-        ("none", _) | ("", _) => paras.push(format!(
+        ("none", _) | ("", _) if s.gap_before_rel <= NEAR_NOISE * s.noise_rel => {
+            paras.push(format!(
             "Which: none. The {baseline} already fits to the noise floor: its held-out gap is {} \
              of the largest measured response, against a noise level of {}. No unmodelled effect \
              is needed to explain these tests.",
+            fmt_percent(s.gap_before_rel, 1),
+            fmt_percent(s.noise_rel, 1)
+        ))
+        }
+        ("none", _) | ("", _) => paras.push(format!(
+            "Which: none of the candidates. The {baseline}'s held-out gap is {} of the largest \
+             measured response, above the noise level of {}, but no effect of the vocabulary \
+             closes it better than the baseline does. Look for what the candidates do not cover: \
+             scatter between specimens diagnosed together (diagnose them one by one), a fixture \
+             or data problem, or an effect outside the vocabulary.",
             fmt_percent(s.gap_before_rel, 1),
             fmt_percent(s.noise_rel, 1)
         )),
@@ -174,11 +140,8 @@ pub fn diagnosis_words(s: &DiagnosisSummary) -> String {
             "Equally good on the held-out data: {}. These tests cannot tell them apart.",
             names.join(", ")
         );
-        let mut all = equivalent.clone();
-        all.push(s.verdict_effect.as_str());
-        if let Some(exp) = separating_experiment(&all) {
-            p.push(' ');
-            p.push_str(&exp);
+        for exp in &s.separating {
+            p.push_str(&format!(" To separate them: {exp}."));
         }
         paras.push(p);
     }
@@ -188,6 +151,20 @@ pub fn diagnosis_words(s: &DiagnosisSummary) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn unexplained_gap_is_not_called_noise() {
+        let s = DiagnosisSummary {
+            baseline_law: "elastoplastic".into(),
+            gap_before_rel: 0.011,
+            verdict_effect: "none".into(),
+            noise_rel: 0.002,
+            ..Default::default()
+        };
+        let w = diagnosis_words(&s);
+        assert!(w.starts_with("Which: none of the candidates."), "{w}");
+        assert!(!w.contains("already fits"), "{w}");
+    }
 
     #[test]
     fn null_case_says_no_effect_is_needed() {
@@ -215,6 +192,7 @@ mod tests {
             verdict_effect: "kinematic_hardening".into(),
             gap_after_rel: Some(0.011),
             equivalent: vec!["stiffness_degradation".into()],
+            separating: vec!["cycles with reversed loading and growing amplitude".into()],
             noise_rel: 0.009,
             top_location: Some(("cycle 3 unloading".into(), 0.41)),
         };
@@ -233,7 +211,12 @@ mod tests {
             paras[1]
         );
         assert!(paras[2].starts_with("Equally good on the held-out data: stiffness degradation."));
-        assert!(paras[2].contains("reversed loading"), "{}", paras[2]);
+        assert!(
+            paras[2]
+                .ends_with("To separate them: cycles with reversed loading and growing amplitude."),
+            "{}",
+            paras[2]
+        );
     }
 
     #[test]
@@ -244,6 +227,9 @@ mod tests {
             verdict_effect: "viscoelasticity".into(),
             gap_after_rel: Some(0.04),
             equivalent: vec!["friction_hysteresis".into()],
+            separating: vec![
+                "a hold at constant control (relaxation) or a second loading rate".into(),
+            ],
             noise_rel: 0.01,
             top_location: None,
         };
@@ -253,22 +239,8 @@ mod tests {
             "{w}"
         );
         assert!(
-            w.contains("A hold at constant control (relaxation) or a second loading rate"),
+            w.contains("To separate them: a hold at constant control (relaxation) or a second loading rate."),
             "{w}"
-        );
-    }
-
-    #[test]
-    fn separating_experiments_for_known_pairs_only() {
-        assert!(
-            separating_experiment(&["machine_compliance", "stiffness_degradation"])
-                .unwrap()
-                .contains("second specimen length")
-        );
-        assert_eq!(separating_experiment(&["plasticity"]), None);
-        assert_eq!(
-            separating_experiment(&["piecewise_elasticity", "plasticity"]),
-            None
         );
     }
 }

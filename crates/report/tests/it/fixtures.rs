@@ -328,6 +328,7 @@ pub fn demo_doc(hostile: bool) -> ReportDoc {
                 verdict_effect: "kinematic_hardening".into(),
                 gap_after_rel: Some(0.011),
                 equivalent: vec!["stiffness_degradation".into()],
+                separating: vec!["cycles with reversed loading and growing amplitude".into()],
                 noise_rel: 0.009,
                 top_location: Some(("cycle 3 unloading".into(), 0.41)),
             })
