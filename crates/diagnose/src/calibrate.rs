@@ -40,6 +40,10 @@ pub struct FitData<'a> {
     pub weight: Vec<f64>,
     /// Sample indices per test that enter the fit (the training part).
     pub fit_idx: Vec<Vec<usize>>,
+    /// Profile out a constant response offset per test: the residuals of each test are taken
+    /// about their mean (the least-squares offset), so every model is compared with the best
+    /// zero of the response it allows (see [`offsets`]).
+    pub free_offset: bool,
 }
 
 impl FitData<'_> {
@@ -165,6 +169,30 @@ impl Forward for Pinned<'_> {
 /// Cost of parameter vectors that the model cannot simulate (per residual, in noise units).
 const INFEASIBLE: f64 = 1e6;
 
+/// The least-squares constant response offset of a simulation against measurements over the
+/// samples `idx`: mean(measured − simulated) (0 without samples).
+pub fn offset_of(measured: &[f64], simulated: &[f64], idx: &[usize]) -> f64 {
+    if idx.is_empty() {
+        return 0.0;
+    }
+    idx.iter().map(|&i| measured[i] - simulated[i]).sum::<f64>() / idx.len() as f64
+}
+
+/// The per-test response offsets that [`FitData::free_offset`] profiles out, for simulations
+/// `sims` (zeros when the offset is not free).
+pub fn offsets(data: &FitData, sims: &[Vec<f64>]) -> Vec<f64> {
+    sims.iter()
+        .enumerate()
+        .map(|(t, s)| {
+            if data.free_offset {
+                offset_of(data.measured[t], s, &data.fit_idx[t])
+            } else {
+                0.0
+            }
+        })
+        .collect()
+}
+
 /// Weighted residuals at physical parameters `p` (simulated − measured, fitted samples only).
 pub fn residuals(fwd: &dyn Forward, data: &FitData, p: &[f64]) -> Option<DVector<f64>> {
     let sims: Vec<Option<Vec<f64>>> = (0..fwd.n_tests())
@@ -178,8 +206,13 @@ pub fn residuals(fwd: &dyn Forward, data: &FitData, p: &[f64]) -> Option<DVector
     let mut k = 0;
     for (t, sim) in sims.iter().enumerate() {
         let sim = sim.as_ref()?;
+        let c = if data.free_offset {
+            offset_of(data.measured[t], sim, &data.fit_idx[t])
+        } else {
+            0.0
+        };
         for &i in &data.fit_idx[t] {
-            r[k] = data.weight[t] * (sim[i] - data.measured[t][i]);
+            r[k] = data.weight[t] * (sim[i] + c - data.measured[t][i]);
             k += 1;
         }
     }
@@ -449,6 +482,7 @@ mod tests {
             measured: vec![&y],
             weight: vec![1.0],
             fit_idx: vec![(0..y.len()).collect()],
+            free_offset: false,
         };
         let f = fit(
             &m,
@@ -479,6 +513,7 @@ mod tests {
                 measured: vec![&y],
                 weight: vec![1.0 / sigma],
                 fit_idx: vec![(0..y.len()).collect()],
+            free_offset: false,
             };
             let f = fit(&m, &data, &[vec![1.0, 5.0, 0.0]], &FitOptions::default());
             // χ²/n close to 1 when the weights are the true noise.
@@ -507,6 +542,7 @@ mod tests {
             measured: vec![&y],
             weight: vec![1.0],
             fit_idx: vec![(0..y.len()).collect()],
+            free_offset: false,
         };
         let p = Pinned::new(&m, &[("tau".to_string(), 0.7)]).unwrap();
         assert_eq!(p.specs().len(), 2);
@@ -535,6 +571,7 @@ mod tests {
             measured: vec![&y],
             weight: vec![1.0],
             fit_idx: vec![(0..y.len()).collect()],
+            free_offset: false,
         };
         let f = fit(&m, &data, &[vec![1.0, 1.0, 2.0]], &FitOptions::default());
         assert_eq!(f.at_bound[2], Some("lower"), "{:?}", f.params);

@@ -102,6 +102,11 @@ pub struct DiagnoseOptions {
     pub fit: FitOptions,
     /// Noise floor per test (response units) if known; `None`: estimated from the data.
     pub noise: Option<Vec<f64>>,
+    /// Profile out a constant response offset per test in every model (default on): the zero
+    /// a caller removed is an estimate from a few samples (≈ 0.2–0.4 σ off without a rest at
+    /// the start), and a model that cannot shift its response would otherwise pay for it on
+    /// the held-out cycle while a trend (sensor drift) absorbs part of it.
+    pub free_offset: bool,
 }
 
 impl Default for DiagnoseOptions {
@@ -116,6 +121,7 @@ impl Default for DiagnoseOptions {
             seed: 1,
             fit: FitOptions::default(),
             noise: None,
+            free_offset: true,
         }
     }
 }
@@ -177,6 +183,9 @@ pub struct Calibration {
     std: Vec<Option<f64>>,
     /// Directions of parameter space the data determine.
     pub k_eff: usize,
+    /// Constant response offset per test added to the simulation (response units; zeros unless
+    /// the offset was profiled out, [`CalibrateOptions::free_offset`]).
+    pub response_offset: Vec<f64>,
 }
 
 impl Calibration {
@@ -235,6 +244,8 @@ pub struct CalibrateOptions {
     pub warm: Option<ParamMap>,
     /// Parameters held at given values (not fitted; reported without a standard error).
     pub pinned: Option<ParamMap>,
+    /// Profile out a constant response offset per test (the residual error of the zeroing).
+    pub free_offset: bool,
 }
 
 impl Default for CalibrateOptions {
@@ -247,6 +258,7 @@ impl Default for CalibrateOptions {
             noise: None,
             warm: None,
             pinned: None,
+            free_offset: false,
         }
     }
 }
@@ -425,6 +437,7 @@ pub fn calibrate(
             .map(|s| 1.0 / s.max(f64::MIN_POSITIVE))
             .collect(),
         fit_idx,
+        free_offset: opts.free_offset,
     };
     let starts = make_starts(fwd.specs(), opts.warm.as_ref(), opts.starts, opts.seed);
     let mut f = calibrate::fit(fwd, &data, &starts, &opts.fit);
@@ -447,7 +460,11 @@ pub fn calibrate(
         f.std_err = std_err;
         f.at_bound = at_bound;
     }
-    let sims = full.simulate_all(&f.params)?;
+    let mut sims = full.simulate_all(&f.params)?;
+    let response_offset = calibrate::offsets(&data, &sims);
+    for (s, c) in sims.iter_mut().zip(&response_offset) {
+        s.iter_mut().for_each(|v| *v += c);
+    }
     let gap_rms = tests
         .iter()
         .zip(&sims)
@@ -488,6 +505,7 @@ pub fn calibrate(
         specs: full.specs().to_vec(),
         std: f.std_err,
         k_eff: f.k_eff,
+        response_offset,
     })
 }
 
@@ -788,6 +806,7 @@ fn score(
         noise: Some(noise.to_vec()),
         warm: warm.cloned(),
         pinned: pinned.cloned(),
+        free_offset: opts.free_offset,
     };
     let cal = calibrate(ctx, tests, model, &copts)?;
     let fwd = ModelForward::new(tests, model, ctx.catalog, ctx.rod)?;
@@ -795,7 +814,8 @@ fn score(
     let all_resid: Vec<Vec<f64>> = tests
         .iter()
         .zip(&sims)
-        .map(|(t, s)| t.response.iter().zip(s).map(|(m, s)| m - s).collect())
+        .zip(&cal.response_offset)
+        .map(|((t, s), c)| t.response.iter().zip(s).map(|(m, s)| m - s - c).collect())
         .collect();
     let held_resid: Vec<Vec<f64>> = all_resid
         .iter()

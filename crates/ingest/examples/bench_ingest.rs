@@ -122,7 +122,7 @@ fn main() {
     let mb: usize = args.get(1).and_then(|s| s.parse().ok()).unwrap_or(100);
     let dir = tempfile::tempdir().expect("tempdir");
     let me = std::env::current_exe().unwrap();
-    println!("profile: dev (cablab-ingest opt-level 2, dependencies opt-level 0); file size {mb} MB; best of 3");
+    println!("profile: dev (cablab-ingest opt-level 2, sha2 and encoding_rs at opt-level 3, polars at 0); file size {mb} MB; best of 3");
     // Baseline: the same child on a tiny file (executable pages, allocator, polars statics).
     let tiny = dir.path().join("tiny.csv");
     std::fs::write(&tiny, "Time (s),Force (N),Extension (mm)\n0,1,2\n1,2,3\n").unwrap();
