@@ -39,6 +39,12 @@ fn main() {
         eprintln!("case not generated: {e}");
     }
     let registry = Registry;
+    // `--fixed-offset`: take the callers' zero as exact (no response offset profiled out).
+    let dopts = DiagnoseOptions {
+        free_offset: !args.iter().any(|a| a == "--fixed-offset"),
+        elastic_limit: !args.iter().any(|a| a == "--no-elastic-limit"),
+        ..DiagnoseOptions::default()
+    };
     if let Some(pat) = get("--show") {
         // Print the full diagnosis of the cases whose name contains the pattern.
         let rod = Rod {
@@ -51,7 +57,7 @@ fn main() {
             rod: Some(&rod),
         };
         for c in cases.iter().filter(|c| c.name.contains(&pat)) {
-            match cablab_diagnose::diagnose(ctx, &c.tests, &DiagnoseOptions::default()) {
+            match cablab_diagnose::diagnose(ctx, &c.tests, &dopts) {
                 Ok(d) => println!(
                     "{}\n{}",
                     c.name,
@@ -71,7 +77,7 @@ fn main() {
         catalog: &registry,
         rod: Some(&rod),
     };
-    let report = run_matrix(ctx, &cases, &DiagnoseOptions::default());
+    let report = run_matrix(ctx, &cases, &dopts);
     print!("{}", render(&report));
     if let Some(path) = get("--json") {
         match serde_json::to_string_pretty(&report) {

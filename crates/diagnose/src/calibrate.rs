@@ -513,7 +513,7 @@ mod tests {
                 measured: vec![&y],
                 weight: vec![1.0 / sigma],
                 fit_idx: vec![(0..y.len()).collect()],
-            free_offset: false,
+                free_offset: false,
             };
             let f = fit(&m, &data, &[vec![1.0, 5.0, 0.0]], &FitOptions::default());
             // χ²/n close to 1 when the weights are the true noise.

@@ -16,10 +16,11 @@
 //! as equivalent with the experiment that would separate them. `none` when the baseline is in
 //! that set or already fits to the noise floor.
 //!
-//! Resolution. A candidate whose held-out prediction stays within the measurement resolution of
-//! the baseline's ([`resolution_floor`]: the rounding of the control's encoder through the
-//! stiffness and of the response's ADC) cannot be told from the baseline by the instrument and
-//! takes no part in the verdict (`below_resolution`). This matters when the control moves a
+//! Resolution. A candidate whose held-out prediction differs from the baseline's only as the
+//! readings' rounding can ([`rounding_like`]: by a constant per branch within half a count of
+//! [`resolution_floor`], the control's encoder through the stiffness and the response's ADC)
+//! cannot be told from the baseline by the instrument and takes no part in the verdict
+//! (`below_resolution`). This matters when the control moves a
 //! whole number of counts per sample: the rounding error is then constant along each branch, a
 //! loading/unloading loop of a fraction of a count that friction or a fast Maxwell branch fits
 //! "below the noise floor" although the material has none (the demo's elastic-range tension
@@ -107,6 +108,8 @@ pub struct DiagnoseOptions {
     /// the start), and a model that cannot shift its response would otherwise pay for it on
     /// the held-out cycle while a trend (sensor drift) absorbs part of it.
     pub free_offset: bool,
+    /// Try the baseline's elastic limit (yield out of the data's reach, see `elastic_limit`).
+    pub elastic_limit: bool,
 }
 
 impl Default for DiagnoseOptions {
@@ -122,6 +125,7 @@ impl Default for DiagnoseOptions {
             fit: FitOptions::default(),
             noise: None,
             free_offset: true,
+            elastic_limit: true,
         }
     }
 }
@@ -333,6 +337,43 @@ pub fn shift_in_resolution(
     }
 }
 
+/// Whether two models' held-out predictions differ only as the readings' rounding can make
+/// them differ: by a constant along each branch (cycle and branch of [`SegLabel`]) of at most
+/// half a count (√3 × the RMS `resolution`), with what varies within the branches below half
+/// the RMS resolution. A commensurate encoder leaves exactly such a pattern (one rounding error
+/// per branch); a material effect of that size varies along the branch with the load.
+pub fn rounding_like(
+    tests: &[DiagTest],
+    a: &[Vec<f64>],
+    b: &[Vec<f64>],
+    idx: &[Vec<usize>],
+    resolution: &[f64],
+) -> bool {
+    use std::collections::BTreeMap;
+    let (mut within, mut n) = (0.0, 0usize);
+    for (ti, t) in tests.iter().enumerate() {
+        let q = resolution[ti];
+        let labels = t.labels_or_derived();
+        let mut groups: BTreeMap<(usize, &'static str), Vec<f64>> = BTreeMap::new();
+        for &i in &idx[ti] {
+            let l = labels[i];
+            groups
+                .entry((l.cycle, l.branch.as_str()))
+                .or_default()
+                .push(a[ti][i] - b[ti][i]);
+        }
+        for d in groups.values() {
+            let m = d.iter().sum::<f64>() / d.len() as f64;
+            if m.abs() > 3f64.sqrt() * q {
+                return false;
+            }
+            within += d.iter().map(|v| ((v - m) / q).powi(2)).sum::<f64>();
+            n += d.len();
+        }
+    }
+    n == 0 || (within / n as f64).sqrt() <= 0.5
+}
+
 /// Yield parameters of the project's elastoplastic laws (tension; torsion and bending): above
 /// the data's reach the law never leaves its elastic range.
 pub const YIELD_PARAMS: [&str; 2] = ["F_y", "M_y"];
@@ -356,6 +397,9 @@ fn elastic_limit(
     resolution: &[f64],
     opts: &DiagnoseOptions,
 ) -> (Scored, bool) {
+    if !opts.elastic_limit {
+        return (base, false);
+    }
     let Some(j) = base
         .cal
         .specs
@@ -635,9 +679,10 @@ pub struct EffectScore {
     /// RMS over the held-out samples of (this model − baseline) prediction, in units of the
     /// measurement resolution ([`resolution_floor`]).
     pub shift_res: f64,
-    /// The model predicts the held-out data within the measurement resolution of the baseline
-    /// (`shift_res` ≤ 1): the instrument cannot tell it from the baseline, so it takes no part
-    /// in the verdict (listed after the others).
+    /// The model's held-out prediction differs from the baseline's only as the readings'
+    /// rounding can ([`rounding_like`]: a constant per branch within half a count): the
+    /// instrument cannot tell it from the baseline, so it takes no part in the verdict (listed
+    /// after the others).
     pub below_resolution: bool,
 }
 
@@ -966,7 +1011,10 @@ pub fn diagnose(
         .iter()
         .map(|c| shift_in_resolution(&base.all_resid, &c.all_resid, &held, &resolution))
         .collect();
-    let resolved: Vec<bool> = shifts.iter().map(|&d| d > 1.0).collect();
+    let resolved: Vec<bool> = scored
+        .iter()
+        .map(|c| !rounding_like(tests, &base.all_resid, &c.all_resid, &held, &resolution))
+        .collect();
     let choice = choose(&base, &scored, &resolved);
 
     let abs_rms = |r: &[Vec<f64>]| {
@@ -976,8 +1024,8 @@ pub fn diagnose(
     let gap_before = abs_rms(&base.held_resid);
     let mut effects: Vec<EffectScore> = scored
         .iter()
-        .zip(&shifts)
-        .map(|(s, &shift)| {
+        .zip(shifts.iter().zip(&resolved))
+        .map(|(s, (&shift, &res))| {
             let ga = abs_rms(&s.held_resid);
             EffectScore {
                 effect: s.effect,
@@ -993,7 +1041,7 @@ pub fn diagnose(
                 k_eff: s.cal.effective_params(),
                 delta_ic: choice.ic_of(s) - choice.ic_best,
                 shift_res: shift,
-                below_resolution: shift <= 1.0,
+                below_resolution: !res,
             }
         })
         .collect();
@@ -1435,7 +1483,7 @@ fn ladder(
         let (scored, _) = compare(ctx, tests, &cur, &cands, train, held, noise, opts);
         let resolved: Vec<bool> = scored
             .iter()
-            .map(|c| shift_in_resolution(&cur.all_resid, &c.all_resid, held, &resolution) > 1.0)
+            .map(|c| !rounding_like(tests, &cur.all_resid, &c.all_resid, held, &resolution))
             .collect();
         let choice = choose(&cur, &scored, &resolved);
         if choice.effect == Effect::None {
