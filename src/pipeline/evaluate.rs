@@ -333,7 +333,10 @@ fn stages(
             super::views::curve_svg(t, &geom, &curve, &an, simulated.as_deref())?.into_bytes(),
         ));
         if let Some(d) = &diagnosis {
-            for (name, svg) in super::views::gap_svgs(d)? {
+            for (name, svg) in super::views::gap_svgs(
+                d,
+                (t.kind == TestKind::ThreePoint).then_some(geom.free_length_m),
+            )? {
                 files.push((name, svg.into_bytes()));
             }
         }

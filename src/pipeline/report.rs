@@ -238,6 +238,7 @@ fn section(out_dir: &Path, o: &TestOutcome) -> TestSection {
         "gap_where.svg" => "where the gap lies: share of the squared residual".to_string(),
         "gap_which.svg" => "which effect: held-out gap before and after adding each candidate".to_string(),
         "gap_waterfall.svg" => "how far the gap shrinks, down to the noise floor".to_string(),
+        "gap_span.svg" => "where along the span: share of the squared residual (three-point)".to_string(),
         other => other.to_string(),
     }
     };

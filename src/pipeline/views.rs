@@ -176,12 +176,15 @@ fn decimate_simulated(
 
 /// The gap views of one diagnosis: where (shares), which (candidates before/after), how far
 /// (waterfall to the noise floor).
-pub fn gap_svgs(d: &cablab_diagnose::Diagnosis) -> Result<Vec<(String, String)>> {
+pub fn gap_svgs(
+    d: &cablab_diagnose::Diagnosis,
+    span_m: Option<f64>,
+) -> Result<Vec<(String, String)>> {
     let mut out = Vec::new();
     let shares: Vec<(String, f64)> = d
         .located
         .iter()
-        .filter(|l| l.by != "test")
+        .filter(|l| l.by != "test" && l.by != "span")
         .take(12)
         .map(|l| (l.where_.clone(), l.share))
         .collect();
@@ -189,6 +192,44 @@ pub fn gap_svgs(d: &cablab_diagnose::Diagnosis) -> Result<Vec<(String, String)>>
         out.push((
             "gap_where.svg".to_string(),
             cablab_report::gap::gap_where_svg(&shares)?,
+        ));
+    }
+    // Three-point: the residual along the span. The rod is a half model (distance from the
+    // punch), so each element is drawn on both sides of mid-span, from the left support.
+    let mut pos = Vec::new();
+    let mut val = Vec::new();
+    let mut half_span: Option<f64> = None;
+    for l in d.located.iter().filter(|l| l.by == "span") {
+        if let Some(sp) = &l.span {
+            for (p, v) in sp.position_m.iter().zip(&sp.share) {
+                pos.push(*p);
+                val.push(*v);
+            }
+        }
+    }
+    if !pos.is_empty() {
+        if let Some(span) = span_m {
+            half_span = Some(0.5 * span);
+        }
+        let h = half_span.unwrap_or_else(|| pos.iter().cloned().fold(0.0, f64::max));
+        let mut pts: Vec<(f64, f64)> = pos
+            .iter()
+            .zip(&val)
+            .flat_map(|(p, v)| [(h - p, *v), (h + p, *v)])
+            .filter(|(x, _)| *x >= 0.0 && *x <= 2.0 * h)
+            .collect();
+        pts.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let view = cablab_report::gap::SpanResidual {
+            title: "Where along the span: share of the squared residual".into(),
+            y_label: "share of squared residual [-]".into(),
+            position_m: pts.iter().map(|p| p.0).collect(),
+            value: pts.iter().map(|p| p.1).collect(),
+            supports_m: vec![0.0, 2.0 * h],
+            punch_m: Some(h),
+        };
+        out.push((
+            "gap_span.svg".to_string(),
+            cablab_report::gap::span_residual_svg(&view)?,
         ));
     }
     let bars: Vec<cablab_report::gap::CandidateBar> = d
