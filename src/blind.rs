@@ -64,7 +64,18 @@ pub fn bench(seeds: u64, out: Option<&std::path::Path>) -> CmdResult {
         rod: Some(&rod),
     };
     let report = blind::run_matrix(ctx, &cases, &Default::default());
-    let mut text = blind::render(&report);
+    let mut text = format!(
+        "# Blind check of the gap diagnosis, through the real readers\n\n\
+         `cablab bench blind --seeds {seeds}`: kinds tension, torsion, pure bending; every effect \
+         that applies to the kind, withheld, plus null cases; noise 0.3 % and 1 % of full scale; \
+         {seeds} parameter draws each; layouts testXpert II, Bluehill CSV and MTS 793 in turn, \
+         written by the virtual lab and read back by cablab-ingest; the diagnosis is not told the \
+         truth. (Three-point bending runs through the rod at ~10 s a case and is checked by \
+         `cargo run --release -p cablab-diagnose --example blind -- --kinds three_point`; see \
+         crates/diagnose/BLIND_REPORT.md.)\n\n```\n"
+    );
+    text.push_str(&blind::render(&report));
+    text.push_str("```\n");
     if !errors.is_empty() {
         text.push_str(&format!(
             "\n{} cases could not be generated or read:\n",
