@@ -277,7 +277,7 @@ pub fn noise_floor(tests: &[DiagTest]) -> Vec<f64> {
             // The control is measured too: its noise, or the rounding of a quantised encoder
             // (uniform over one count: σ = q/√12), reaches the simulated response through the
             // stiffness. A 0.1 µm encoder on a 32 mm cable is ~0.25 N per count.
-            let q = cablab_measure::resolution(&t.control);
+            let q = cablab_measure::quantum(&t.control);
             let sc = cablab_measure::noise_level(&t.control).max(q / 12f64.sqrt());
             let k = crate::model::initial_slope(&t.control, &t.response).unwrap_or(0.0);
             let s = (s * s + (k * sc).powi(2)).sqrt();
@@ -304,8 +304,8 @@ pub fn resolution_floor(tests: &[DiagTest]) -> Vec<f64> {
     tests
         .iter()
         .map(|t| {
-            let qc = cablab_measure::resolution(&t.control);
-            let qr = cablab_measure::resolution(&t.response);
+            let qc = cablab_measure::quantum(&t.control);
+            let qr = cablab_measure::quantum(&t.response);
             let k = crate::model::initial_slope(&t.control, &t.response).unwrap_or(0.0);
             ((k * qc).powi(2) + qr * qr).sqrt() / 12f64.sqrt()
         })

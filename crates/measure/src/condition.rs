@@ -67,6 +67,27 @@ pub fn resolution(signal: &[f64]) -> f64 {
         .max(0.0)
 }
 
+/// The count of a quantised channel, from the values it takes rather than from its steps: the
+/// smallest gap between distinct values (gaps below 1e-9 of the range ignored). A channel that
+/// moves several counts per sample still visits values one count apart over a cyclic test, where
+/// [`resolution`] only sees the per-sample step. For an unquantised channel it is a tiny
+/// fraction of the noise. Returns 0 for a constant signal or fewer than 2 finite samples.
+pub fn quantum(signal: &[f64]) -> f64 {
+    let mut v: Vec<f64> = signal.iter().copied().filter(|x| x.is_finite()).collect();
+    if v.len() < 2 {
+        return 0.0;
+    }
+    v.sort_by(f64::total_cmp);
+    let range = v[v.len() - 1] - v[0];
+    let floor = 1e-9 * range;
+    v.windows(2)
+        .map(|w| w[1] - w[0])
+        .filter(|d| *d > floor)
+        .fold(f64::INFINITY, f64::min)
+        .min(range)
+        .max(0.0)
+}
+
 /// The smallest retreat that counts as a reversal: 1.5 · 2σ√(2 ln N) with σ = [`noise_level`],
 /// floored at [`MIN_REVERSAL_FRACTION`] of the signal's range: a servo holding a position
 /// wanders smoothly (a real WaveMatrix torsion export wanders by 0.01° while the axial step
@@ -748,6 +769,26 @@ mod tests {
         let cycles = segs.iter().map(|s| s.cycle).max().unwrap();
         assert_eq!(cycles, 10, "{segs:?}");
         assert_eq!(segs[0].branch, Branch::Hold, "{segs:?}");
+    }
+
+    #[test]
+    fn quantum_sees_the_count_when_the_channel_moves_several_counts_per_sample() {
+        // 0.001-count encoder, moving 7 counts per sample, over cycles with shifted phases.
+        let q = 0.001;
+        let mut v = Vec::new();
+        for cycle in 0..4 {
+            for i in 0..200 {
+                let x = ((i * 7 + cycle) as f64 * q * 1e6).round() / 1e6;
+                v.push(x);
+            }
+        }
+        assert!((quantum(&v) - q).abs() < 1e-9, "{}", quantum(&v));
+        assert!(
+            resolution(&v) > 5.0 * q,
+            "the per-sample step is what resolution sees"
+        );
+        assert_eq!(quantum(&[1.0, 1.0]), 0.0);
+        assert_eq!(quantum(&[]), 0.0);
     }
 
     #[test]

@@ -29,7 +29,7 @@ pub use analysis::{
     Piecewise, Stiffness, Toe, YieldPoint, THREE_POINT_GEOMETRY_LIMIT,
 };
 pub use condition::{
-    correct_compliance, labels, noise_level, resolution, reversal_threshold, segment,
+    correct_compliance, labels, noise_level, quantum, resolution, reversal_threshold, segment,
     turning_points, zero_offsets, Branch, Extremum, Label, Offsets, Segment, TurningPoint,
 };
 pub use elastic::{auto_elastic_range, hinge_fit, user_elastic_range, ElasticRange, Hinge};
