@@ -30,6 +30,7 @@ pub mod scenarios;
 pub mod spatial;
 
 mod blocktri;
+mod linesearch;
 #[cfg(test)]
 mod test_laws;
 #[cfg(test)]

@@ -876,22 +876,10 @@ impl<'a> PlanarRod<'a> {
                 for _ in 0..8 {
                     let r1 = self.free_residual_norm();
                     let s1 = self.directional(&dq);
-                    if r1.is_finite()
-                        && s1.is_finite()
-                        && (s1.abs() <= 0.8 * s0.abs() || r1 < 0.9 * r0)
-                    {
+                    if crate::linesearch::accept(s0, s1, r0, r1) {
                         break;
                     }
-                    let secant = if s1.is_finite() && s0 != s1 {
-                        alpha * s0 / (s0 - s1)
-                    } else {
-                        f64::NAN
-                    };
-                    alpha = if secant.is_finite() && secant > 0.0 {
-                        secant.clamp(0.1 * alpha, 0.9 * alpha)
-                    } else {
-                        0.5 * alpha
-                    };
+                    alpha = crate::linesearch::next_alpha(alpha, s0, s1, true);
                     self.move_from(&q0, &dq, alpha);
                     self.assemble(dt, true);
                 }
