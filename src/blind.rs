@@ -46,8 +46,18 @@ fn through_readers(case: &mut BlindCase) -> Result<(), String> {
 }
 
 /// `cablab bench blind`.
-pub fn bench(seeds: u64, out: Option<&std::path::Path>) -> CmdResult {
-    let kinds = [TestKind::Tension, TestKind::Torsion, TestKind::PureBending];
+pub fn bench(seeds: u64, kind_names: &[String], out: Option<&std::path::Path>) -> CmdResult {
+    let mut kinds = Vec::new();
+    for k in kind_names {
+        match k.parse::<TestKind>() {
+            Ok(TestKind::Unknown) | Err(_) => {
+                return Err(CliError::input(anyhow::anyhow!(
+                    "--kinds: unknown kind `{k}` (expected tension, torsion, pure_bending, three_point)"
+                )))
+            }
+            Ok(kind) => kinds.push(kind),
+        }
+    }
     let seed_list: Vec<u64> = (1..=seeds).collect();
     let (mut cases, gen_errors) = blind::standard_matrix(&kinds, &[0.003, 0.01], &seed_list);
     let mut errors = gen_errors;
@@ -63,16 +73,33 @@ pub fn bench(seeds: u64, out: Option<&std::path::Path>) -> CmdResult {
         catalog: &Registry,
         rod: Some(&rod),
     };
-    let report = blind::run_matrix(ctx, &cases, &Default::default());
+    let bar = indicatif::ProgressBar::new(cases.len() as u64);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template(
+            "blind cases [{bar:30}] {pos:>4}/{len:4} {elapsed:>4} {msg}",
+        )
+        .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar())
+        .progress_chars("=> "),
+    );
+    let wrong = std::sync::atomic::AtomicUsize::new(0);
+    let report = blind::run_matrix_observed(ctx, &cases, &Default::default(), &|o| {
+        if !o.right {
+            let n = wrong.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
+            bar.set_message(format!("{n} not right"));
+        }
+        bar.inc(1);
+    });
+    bar.finish_and_clear();
+    let kinds_text: Vec<&str> = kinds.iter().map(|k| k.as_str()).collect();
     let mut text = format!(
         "# Blind check of the gap diagnosis, through the real readers\n\n\
-         `cablab bench blind --seeds {seeds}`: kinds tension, torsion, pure bending; every effect \
-         that applies to the kind, withheld, plus null cases; noise 0.3 % and 1 % of full scale; \
-         {seeds} parameter draws each; layouts testXpert II, Bluehill CSV and MTS 793 in turn, \
-         written by the virtual lab and read back by cablab-ingest; the diagnosis is not told the \
-         truth. (Three-point bending runs through the rod at ~10 s a case and is checked by \
-         `cargo run --release -p cablab-diagnose --example blind -- --kinds three_point`; see \
-         crates/diagnose/BLIND_REPORT.md.)\n\n```\n"
+         `cablab bench blind --seeds {seeds} --kinds {}`: every effect that applies to the kind, \
+         withheld, plus null cases; noise 0.3 % and 1 % of full scale; {seeds} parameter draws \
+         each; layouts testXpert II, Bluehill CSV and MTS 793 in turn, written by the virtual lab \
+         and read back by cablab-ingest; the diagnosis is not told the truth. Three-point cases \
+         replay the rod at up to {} points per history.\n\n```\n",
+        kinds_text.join(","),
+        rod.max_points
     );
     text.push_str(&blind::render(&report));
     text.push_str("```\n");

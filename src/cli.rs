@@ -224,8 +224,8 @@ pub struct DiagnoseArgs {
     /// Only try these effects (comma-separated vocabulary names).
     #[arg(long, value_name = "EFFECTS", value_delimiter = ',')]
     pub candidates: Option<Vec<String>>,
-    /// Also climb the ladder: from linear elasticity, add one effect at a time until the
-    /// held-out gap reaches the noise floor.
+    /// Also climb the ladder: from linear elasticity, add one effect at a time (the laws stack)
+    /// until the held-out gap reaches the noise floor, then drop any the final model does not need.
     #[arg(long)]
     pub ladder: bool,
     /// Print JSON (the keys of the scripted contract).
@@ -290,6 +290,13 @@ pub enum BenchWhat {
         /// Seeds per cell of the matrix.
         #[arg(long, default_value_t = 3)]
         seeds: u64,
+        /// Kinds to check, comma-separated (three-point cases replay the rod: ~10–25 s each).
+        #[arg(
+            long,
+            value_delimiter = ',',
+            default_value = "tension,torsion,pure_bending,three_point"
+        )]
+        kinds: Vec<String>,
         /// Write the report (Markdown) here as well as to stdout.
         #[arg(long, short = 'o')]
         output: Option<PathBuf>,

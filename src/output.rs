@@ -52,6 +52,17 @@ pub fn sha256_hex(bytes: &[u8]) -> String {
     hex::encode(Sha256::digest(bytes))
 }
 
+/// Write a DataFrame as Parquet to `path` atomically (zstd-free default compression, no
+/// timestamps: identical frames give identical bytes).
+pub fn write_parquet(path: &Path, mut df: polars::prelude::DataFrame) -> anyhow::Result<()> {
+    use polars_io::parquet::write::ParquetWriter;
+    let mut buf: Vec<u8> = Vec::new();
+    ParquetWriter::new(&mut buf)
+        .finish(&mut df)
+        .map_err(|e| anyhow::anyhow!("cannot encode {} as Parquet: {e}", path.display()))?;
+    write_atomic(path, &buf).map_err(|e| anyhow::anyhow!("cannot write {}: {e}", path.display()))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -77,15 +88,4 @@ mod tests {
             "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad"
         );
     }
-}
-
-/// Write a DataFrame as Parquet to `path` atomically (zstd-free default compression, no
-/// timestamps: identical frames give identical bytes).
-pub fn write_parquet(path: &Path, mut df: polars::prelude::DataFrame) -> anyhow::Result<()> {
-    use polars_io::parquet::write::ParquetWriter;
-    let mut buf: Vec<u8> = Vec::new();
-    ParquetWriter::new(&mut buf)
-        .finish(&mut df)
-        .map_err(|e| anyhow::anyhow!("cannot encode {} as Parquet: {e}", path.display()))?;
-    write_atomic(path, &buf).map_err(|e| anyhow::anyhow!("cannot write {}: {e}", path.display()))
 }

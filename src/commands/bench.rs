@@ -19,7 +19,11 @@ pub fn run(a: BenchArgs) -> CmdResult {
             jobs,
             keep,
         } => scale(tests, samples, jobs, keep.as_deref()),
-        BenchWhat::Blind { seeds, output } => crate::blind::bench(seeds, output.as_deref()),
+        BenchWhat::Blind {
+            seeds,
+            kinds,
+            output,
+        } => crate::blind::bench(seeds, &kinds, output.as_deref()),
     }
 }
 

@@ -80,6 +80,27 @@ pub fn run(a: DiagnoseArgs) -> CmdResult {
             "noise floor {:.3}% of the largest response",
             100.0 * d.verdict.noise_rel
         );
+        if let Some(rungs) = &d.ladder {
+            println!();
+            println!("ladder (from linear elasticity)");
+            println!(
+                "{:<6} {:<24} {:>12} {:>12}  model",
+                "step", "effect", "gap before", "gap after"
+            );
+            for r in rungs {
+                println!(
+                    "{:<6} {:<24} {:>11.3}% {:>11.3}%  {}",
+                    r.step,
+                    r.effect.as_str(),
+                    100.0 * r.gap_before_rel,
+                    100.0 * r.gap_after_rel,
+                    r.model
+                );
+            }
+            if rungs.is_empty() {
+                println!("linear elasticity already fits to the noise floor");
+            }
+        }
     }
     Ok(ExitCode::SUCCESS)
 }

@@ -134,16 +134,19 @@ pub fn slug(id: &str) -> String {
 /// Files produced by one test: (relative name, bytes).
 pub type Files = Vec<(String, Vec<u8>)>;
 
-/// Evaluate one test. Never panics on bad data: errors become `outcome.error`.
+/// Evaluate one test (`bytes` the input file, `input_sha256` their digest, already computed for
+/// the cache key). Never panics on bad data: errors become `outcome.error`.
+#[allow(clippy::too_many_arguments)]
 pub fn evaluate(
     c: &Campaign,
     t: &PlannedTest,
     bytes: &[u8],
+    input_sha256: &str,
     key: &str,
     diagnosis_enabled: bool,
     obs: &dyn StageObserver,
 ) -> (TestOutcome, Files) {
-    let mut out = TestOutcome::new(t, key, &crate::output::sha256_hex(bytes));
+    let mut out = TestOutcome::new(t, key, input_sha256);
     let mut files = Files::new();
     let mut stage_done = 0usize;
     let r = stages(

@@ -278,7 +278,7 @@ fn one_test(
             return (o, true);
         }
     }
-    let (mut outcome, files) = evaluate(c, t, &bytes, &key, diagnosis, obs);
+    let (mut outcome, files) = evaluate(c, t, &bytes, &input_sha, &key, diagnosis, obs);
     drop(bytes);
     // Remove files of an earlier run that this run does not produce (e.g. gap plots of a test
     // that is no longer diagnosed), then write the new ones.

@@ -247,17 +247,21 @@ pub fn gap_svgs(
             cablab_report::gap::gap_which_svg(&bars)?,
         ));
     }
-    let mut steps = vec![(
-        format!("baseline ({})", d.baseline.law),
-        d.baseline.gap_heldout_rel,
-    )];
-    match &d.ladder {
-        Some(rungs) => steps.extend(
-            rungs
-                .iter()
-                .map(|r| (r.effect.as_str().to_string(), r.gap_after_rel)),
-        ),
-        None => {
+    let mut steps = Vec::new();
+    match d.ladder.as_deref() {
+        // The ladder starts from linear elasticity: its rungs, added (+) or dropped (−).
+        Some(rungs @ [first, ..]) => {
+            steps.push(("linear".to_string(), first.gap_before_rel));
+            steps.extend(rungs.iter().map(|r| {
+                let sign = if r.step == "drop" { "−" } else { "+" };
+                (format!("{sign}{}", r.effect.as_str()), r.gap_after_rel)
+            }));
+        }
+        _ => {
+            steps.push((
+                format!("baseline ({})", d.baseline.law),
+                d.baseline.gap_heldout_rel,
+            ));
             if let Some(e) = d.effects.iter().find(|e| e.effect == d.verdict.effect) {
                 steps.push((e.effect.as_str().to_string(), e.gap_after_rel));
             }

@@ -110,6 +110,17 @@ fn median(v: &mut [f64]) -> f64 {
 
 /// Diagnose every case (in parallel) and score the verdicts against the truths.
 pub fn run_matrix(ctx: Context, cases: &[BlindCase], opts: &DiagnoseOptions) -> BlindReport {
+    run_matrix_observed(ctx, cases, opts, &|_| {})
+}
+
+/// [`run_matrix`], calling `on_case` as each case is done (from the worker threads, in the
+/// order they finish): for a progress display.
+pub fn run_matrix_observed(
+    ctx: Context,
+    cases: &[BlindCase],
+    opts: &DiagnoseOptions,
+    on_case: &(dyn Fn(&CaseOutcome) + Sync),
+) -> BlindReport {
     let t0 = Instant::now();
     let outcomes: Vec<CaseOutcome> = cases
         .par_iter()
@@ -153,6 +164,7 @@ pub fn run_matrix(ctx: Context, cases: &[BlindCase], opts: &DiagnoseOptions) -> 
                 Err(e) => o.error = Some(e.to_string()),
             }
             o.seconds = t.elapsed().as_secs_f64();
+            on_case(&o);
             o
         })
         .collect();
@@ -277,6 +289,39 @@ pub fn render(r: &BlindReport) -> String {
         "gap shrink where the right effect was found ({} cases): held-out gap / noise floor median {:.2} -> {:.2}, max after {:.2}, within 1.5x noise: {:.1} %",
         sh.n, sh.median_before_over_noise, sh.median_after_over_noise, sh.max_after_over_noise, 100.0 * sh.within_1_5
     );
+    let mut kinds: Vec<TestKind> = r.outcomes.iter().map(|o| o.kind).collect();
+    kinds.sort_by_key(|k| TestKind::ALL.iter().position(|a| a == k));
+    kinds.dedup();
+    if kinds.len() > 1 {
+        let _ = writeln!(s, "by kind:");
+        for k in kinds {
+            let of: Vec<&CaseOutcome> = r.outcomes.iter().filter(|o| o.kind == k).collect();
+            let right = of.iter().filter(|o| o.right).count();
+            let nulls: Vec<&&CaseOutcome> = of.iter().filter(|o| o.truth == Effect::None).collect();
+            let claimed = nulls
+                .iter()
+                .filter(|o| o.verdict != Some(Effect::None))
+                .count();
+            let after = of
+                .iter()
+                .filter(|o| o.right && o.truth != Effect::None)
+                .filter_map(|o| o.gap_after_over_noise)
+                .fold(f64::NAN, f64::max);
+            let secs = of.iter().map(|o| o.seconds).fold(0.0, f64::max);
+            let _ = writeln!(
+                s,
+                "  {:<13} {:>4}/{:<4} right ({:.1} %), null claimed {}/{}, max gap after {:.2}, slowest case {:.1} s",
+                k.as_str(),
+                right,
+                of.len(),
+                100.0 * right as f64 / of.len().max(1) as f64,
+                claimed,
+                nulls.len(),
+                after,
+                secs
+            );
+        }
+    }
     let wrong: Vec<&CaseOutcome> = r.outcomes.iter().filter(|o| !o.right).collect();
     if !wrong.is_empty() {
         let _ = writeln!(s, "cases not right:");

@@ -6,7 +6,10 @@
 //! test, by default) and scored on the held-out samples in noise units (residual / σ, σ the
 //! test's noise floor estimated from the data). Models are compared by an information criterion
 //! on the effective sample size of the held-out residuals, IC = n_eff ln(RSS/n) + ln(n_eff) k_eff,
-//! where n_eff = n(1−ρ₁)/(1+ρ₁) accounts for autocorrelated residuals and k_eff counts only the
+//! where n_eff = n(1−ρ₁)/(1+ρ₁) accounts for autocorrelated noise (ρ₁ of the noise, read from the
+//! first differences of the best model's residuals, which a smooth misfit barely reaches: a model
+//! far from the data would otherwise give ρ₁ → 1, n_eff → 1 and make every candidate look
+//! equivalent to it, however much it closes the gap) and k_eff counts only the
 //! parameters the data determine: a parameter at a bound, or whose 2σ interval reaches the value
 //! at which its effect vanishes, does not count. That settles nested and degenerate candidates on
 //! principle (a Maxwell branch whose relaxation time runs to its bound is a parallel spring and
@@ -70,7 +73,9 @@ pub struct Context<'a> {
 }
 
 static PROJECT_REGISTRY: crate::registry::Registry = crate::registry::Registry;
-static PROJECT_ROD: crate::registry::Rod = crate::registry::Rod { max_points: 120 };
+static PROJECT_ROD: crate::registry::Rod = crate::registry::Rod {
+    max_points: crate::registry::DEFAULT_ROD_POINTS,
+};
 
 impl Context<'static> {
     /// The project's law registry (`cablab-laws`) and rod (`cablab-rod`).
@@ -715,7 +720,9 @@ pub struct Verdict {
 /// One rung of the ladder.
 #[derive(Debug, Clone, Serialize)]
 pub struct Rung {
-    /// Effect added at this rung.
+    /// `add` (forward step) or `drop` (an earlier rung's effect the final model does not need).
+    pub step: &'static str,
+    /// Effect added (or dropped) at this rung.
     pub effect: Effect,
     /// The model after adding it.
     pub model: String,
@@ -814,6 +821,7 @@ pub fn split(tests: &[DiagTest], policy: &HoldoutPolicy) -> Result<Split, DiagEr
 }
 
 /// A model scored on held-out data.
+#[derive(Clone)]
 struct Scored {
     effect: Effect,
     model: ModelSpec,
@@ -1182,7 +1190,8 @@ fn choose(base: &Scored, scored: &[Scored], resolved: &[bool]) -> Choice {
         .filter(|(_, &r)| r)
         .map(|(s, _)| s)
         .collect();
-    // n_eff from the residuals of the best-fitting model: those closest to white noise.
+    // n_eff from the residuals of the best-fitting model (closest to white noise), with the
+    // noise's correlation read from their differences (`stats::noise_lag1_from_differences`).
     let best = scored
         .iter()
         .copied()
@@ -1190,7 +1199,7 @@ fn choose(base: &Scored, scored: &[Scored], resolved: &[bool]) -> Choice {
         .min_by(|a, b| a.rss_noise.total_cmp(&b.rss_noise))
         .unwrap_or(base);
     let series: Vec<&[f64]> = best.held_resid.iter().map(Vec::as_slice).collect();
-    let rho = stats::pooled_lag1(&series);
+    let rho = stats::noise_lag1_from_differences(&series);
     let n_eff = stats::effective_sample_size(n_held, rho);
     let all: Vec<&Scored> = std::iter::once(base)
         .chain(scored.iter().copied())
@@ -1493,6 +1502,7 @@ fn ladder(
             break;
         };
         rungs.push(Rung {
+            step: "add",
             effect: next.effect,
             model: next.model.label(),
             gap_before_rel: rms_abs(&cur) / scale,
@@ -1502,6 +1512,58 @@ fn ladder(
             effect: Effect::None,
             ..next
         };
+    }
+    // Backward elimination: a greedy path can take an effect early that later ones make
+    // redundant (friction elements standing in for hardening until the hardening is added).
+    // Drop, one at a time, an effect whose removal the same parsimony rule prefers.
+    for _ in 0..rungs.len() {
+        let reduced: Vec<(Effect, ModelSpec)> = rungs
+            .iter()
+            .filter(|r| r.step == "add" && cur.model.has(r.effect))
+            .filter_map(|r| cur.model.without(r.effect).map(|m| (r.effect, m)))
+            .collect();
+        let tried: Vec<(Effect, Scored)> = reduced
+            .par_iter()
+            .filter_map(|(e, m)| {
+                score(
+                    ctx,
+                    tests,
+                    m,
+                    Effect::None,
+                    train,
+                    held,
+                    noise,
+                    Some(&cur.cal.params),
+                    None,
+                    opts,
+                )
+                .ok()
+                .map(|s| (*e, s))
+            })
+            .collect();
+        // The reduced model that fits the held-out data best, if the rule prefers it to the
+        // current one (the current model scored as its candidate).
+        let Some((e, smaller)) = tried
+            .into_iter()
+            .min_by(|a, b| a.1.rss_noise.total_cmp(&b.1.rss_noise))
+        else {
+            break;
+        };
+        let full = Scored {
+            effect: e,
+            ..cur.clone()
+        };
+        if choose(&smaller, std::slice::from_ref(&full), &[true]).effect != Effect::None {
+            break;
+        }
+        rungs.push(Rung {
+            step: "drop",
+            effect: e,
+            model: smaller.model.label(),
+            gap_before_rel: rms_abs(&cur) / scale,
+            gap_after_rel: rms_abs(&smaller) / scale,
+        });
+        cur = smaller;
     }
     Ok(rungs)
 }

@@ -152,10 +152,42 @@ pub const TEST_LEVEL: [Effect; 3] = [
 ];
 
 impl ModelSpec {
-    /// The bare law.
+    /// The model a registry law name stands for: the base law and its extensions as effects
+    /// (`kinematic_hardening` → elastoplastic + kinematic hardening; `linear+viscoelasticity`),
+    /// so that candidates are not added twice. A name the vocabulary does not know is kept as the
+    /// law (the registry reports it when the model is built).
     pub fn law(name: &str) -> Self {
-        ModelSpec {
+        let norm = name.trim().to_ascii_lowercase().replace('-', "_");
+        let bare = ModelSpec {
             law: name.to_string(),
+            law_effects: vec![],
+            test_effects: vec![],
+        };
+        let mut tokens = norm.split('+').map(str::trim);
+        let first = tokens.next().unwrap_or("");
+        let mut m = match first {
+            "linear" | "linear_elastic" => ModelSpec::bare("linear"),
+            "elastoplastic" | "plasticity" => ModelSpec::bare("elastoplastic"),
+            "piecewise_linear" | "piecewise_elasticity" => ModelSpec::bare("piecewise_linear"),
+            other => match other.parse::<Effect>() {
+                Ok(e) if !TEST_LEVEL.contains(&e) && e != Effect::None => {
+                    ModelSpec::bare("elastoplastic").with(e)
+                }
+                _ => return bare,
+            },
+        };
+        for t in tokens {
+            match t.parse::<Effect>() {
+                Ok(e) if e != Effect::None && !m.has(e) => m = m.with(e),
+                _ => return bare,
+            }
+        }
+        m
+    }
+
+    fn bare(law: &str) -> Self {
+        ModelSpec {
+            law: law.to_string(),
             law_effects: vec![],
             test_effects: vec![],
         }
@@ -172,12 +204,36 @@ impl ModelSpec {
             m.law = "elastoplastic".into();
         } else if effect == Effect::PiecewiseElasticity {
             // Reversible slope change: the piecewise linear elastic law replaces the base law
-            // (a Bowden cable does not yield, it stiffens or softens reversibly).
+            // (a Bowden cable does not yield, it stiffens or softens reversibly); the hardening
+            // rules of its yield go with it.
             m.law = "piecewise_linear".into();
+            m.law_effects.retain(|e| {
+                !matches!(e, Effect::KinematicHardening | Effect::StiffnessDegradation)
+            });
         } else if effect != Effect::None && !m.law_effects.contains(&effect) {
             m.law_effects.push(effect);
         }
         m
+    }
+
+    /// The same model without `effect`, if it has it and the rest stands alone (`plasticity`
+    /// leaves a linear law; `piecewise_elasticity` replaces the base law and has no removal).
+    pub fn without(&self, effect: Effect) -> Option<ModelSpec> {
+        let mut m = self.clone();
+        if TEST_LEVEL.contains(&effect) {
+            m.test_effects.retain(|e| *e != effect);
+        } else if effect == Effect::Plasticity && m.law == "elastoplastic" {
+            if m.law_effects
+                .iter()
+                .any(|e| matches!(e, Effect::KinematicHardening | Effect::StiffnessDegradation))
+            {
+                return None;
+            }
+            m.law = "linear".into();
+        } else if effect != Effect::PiecewiseElasticity {
+            m.law_effects.retain(|e| *e != effect);
+        }
+        (m != *self).then_some(m)
     }
 
     /// Every effect the model has beyond a linear elastic section.

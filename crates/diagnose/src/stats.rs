@@ -56,6 +56,21 @@ pub fn pooled_lag1(series: &[&[f64]]) -> f64 {
     }
 }
 
+/// Lag-1 autocorrelation of the noise in residual series that may still hold a smooth misfit,
+/// from their first differences: for AR(1) noise with coefficient ρ the differences have lag-1
+/// correlation −(1 − ρ)/2, so ρ = 1 + 2 corr(Δr). A misfit that changes little from one sample
+/// to the next barely reaches the differences, where it dominates the raw residual (a model far
+/// from the data leaves a residual with ρ → 1 and an effective sample size of 1 whatever the
+/// noise). Pooled over the series like [`pooled_lag1`]; clamped to [−0.99, 0.99].
+pub fn noise_lag1_from_differences(series: &[&[f64]]) -> f64 {
+    let diffs: Vec<Vec<f64>> = series
+        .iter()
+        .map(|x| x.windows(2).map(|w| w[1] - w[0]).collect())
+        .collect();
+    let refs: Vec<&[f64]> = diffs.iter().map(Vec::as_slice).collect();
+    (1.0 + 2.0 * pooled_lag1(&refs)).clamp(-0.99, 0.99)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -78,5 +93,21 @@ mod tests {
             "n_eff = {ne}"
         );
         assert_eq!(effective_sample_size(100, -0.5), 100.0);
+        // From the differences, the same series gives the same ρ, and so does the series with
+        // a smooth misfit of ten times its noise added (the raw estimate goes to ~1).
+        let r = noise_lag1_from_differences(&[&x]);
+        assert!((r - 0.8).abs() < 0.03, "rho1 from differences = {r}");
+        let sd = (1.0f64 / (1.0 - 0.64)).sqrt();
+        let with_misfit: Vec<f64> = x
+            .iter()
+            .enumerate()
+            .map(|(i, v)| v + 10.0 * sd * (i as f64 * 0.002).sin())
+            .collect();
+        assert!(lag1_autocorrelation(&with_misfit) > 0.95);
+        let r = noise_lag1_from_differences(&[&with_misfit]);
+        assert!((r - 0.8).abs() < 0.03, "with a misfit: {r}");
+        // White noise: 0.
+        let w: Vec<f64> = (0..20_000).map(|_| n.sample(&mut rng)).collect();
+        assert!(noise_lag1_from_differences(&[&w]).abs() < 0.03);
     }
 }

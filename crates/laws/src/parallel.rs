@@ -1,6 +1,7 @@
-//! Composition "baseline + one extension": two laws side by side (same strain, stresses and
+//! Composition "baseline + extension": two laws side by side (same strain, stresses and
 //! tangents add, states concatenated: the baseline's first). This is how `viscoelasticity`
-//! (Maxwell branches) and `friction_hysteresis` (Iwan elements) are added to a baseline.
+//! (Maxwell branches) and `friction_hysteresis` (Iwan elements) are added to a baseline;
+//! nesting stacks several.
 //!
 //! Kinematic hardening and stiffness degradation modify the plastic flow itself and are options
 //! of [`crate::Elastoplastic`] instead.

@@ -18,9 +18,12 @@
 //!   branches 2 and 3 (`S_v2`, `tau_v2`, `S_v3`, `tau_v3`; stiffness default 0 = absent).
 //! - `friction_hysteresis`: elastoplastic + Iwan elements of total stiffness `S_f` (e.g. `EI_f`)
 //!   saturating at the friction strength `M_f` (`F_f` in tension), `n_f` elements (default 10).
-//! - `BASE+EXT`: `viscoelasticity` or `friction_hysteresis` added to `linear`, `piecewise_linear`
-//!   or `elastoplastic` (e.g. `linear+viscoelasticity`); the extension names alone mean
-//!   `elastoplastic+…`.
+//! - `BASE+EXT+…`: extensions stacked, each at most once: `viscoelasticity` and
+//!   `friction_hysteresis` (parallel branches) on `linear`, `piecewise_linear` or `elastoplastic`;
+//!   `kinematic_hardening` and `stiffness_degradation` (hardening rules of the one return
+//!   mapping) on `elastoplastic` only. The extension names alone mean `elastoplastic+…`
+//!   (`kinematic_hardening+viscoelasticity`); the canonical name lists the extensions in the
+//!   order above, whatever the order given, and the parameters follow in that order.
 //!
 //! Every law is complete in all six components: stiffnesses a test does not load default to the
 //! chapter's cable (Table 1: EA = 7.96·10⁴ N, GJ = 2.02·10⁻³ N m², EI = 1.37·10⁻³ N m²) and
@@ -108,7 +111,7 @@ enum Base {
     Elastoplastic,
 }
 
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
 enum Ext {
     Kinematic,
     Degradation,
@@ -116,13 +119,13 @@ enum Ext {
     Friction,
 }
 
-/// Canonical name, base and extension of a law name.
-fn parse(law: &str) -> Result<(String, Base, Option<Ext>), LawError> {
+/// Canonical name, base and extensions (in canonical order) of a law name.
+fn parse(law: &str) -> Result<(String, Base, Vec<Ext>), LawError> {
     let unknown = || {
         LawError::UnknownLaw {
         given: law.to_string(),
         known: format!(
-            "{} (aliases plasticity, piecewise_elasticity; compositions BASE+viscoelasticity, BASE+friction_hysteresis with BASE linear, piecewise_linear or elastoplastic)",
+            "{} (aliases plasticity, piecewise_elasticity; compositions BASE+EXT+…: viscoelasticity and friction_hysteresis on linear, piecewise_linear or elastoplastic, kinematic_hardening and stiffness_degradation on elastoplastic, each extension once)",
             LAW_NAMES.join(", ")
         ),
     }
@@ -141,37 +144,57 @@ fn parse(law: &str) -> Result<(String, Base, Option<Ext>), LawError> {
         "friction_hysteresis" => Some(Ext::Friction),
         _ => None,
     };
-    let base_name = |b: Base| match b {
+    let mut tokens = norm.split('+').map(str::trim);
+    let first = tokens.next().unwrap_or("");
+    let (base, mut exts) = match (base_of(first), ext_of(first)) {
+        (Some(b), _) => (b, Vec::new()),
+        (None, Some(e)) => (Base::Elastoplastic, vec![e]),
+        (None, None) => return Err(unknown()),
+    };
+    for t in tokens {
+        let e = ext_of(t).ok_or_else(unknown)?;
+        if exts.contains(&e) {
+            return Err(unknown());
+        }
+        exts.push(e);
+    }
+    if base != Base::Elastoplastic
+        && exts
+            .iter()
+            .any(|e| matches!(e, Ext::Kinematic | Ext::Degradation))
+    {
+        return Err(unknown());
+    }
+    exts.sort();
+    Ok((canonical_name(base, &exts), base, exts))
+}
+
+fn base_name(b: Base) -> &'static str {
+    match b {
         Base::Linear => "linear",
         Base::Piecewise => "piecewise_linear",
         Base::Elastoplastic => "elastoplastic",
-    };
-    let ext_name = |e: Ext| match e {
+    }
+}
+
+fn ext_name(e: Ext) -> &'static str {
+    match e {
         Ext::Kinematic => "kinematic_hardening",
         Ext::Degradation => "stiffness_degradation",
         Ext::Viscoelastic => "viscoelasticity",
         Ext::Friction => "friction_hysteresis",
-    };
-    if let Some((b, e)) = norm.split_once('+') {
-        let base = base_of(b.trim()).ok_or_else(unknown)?;
-        let ext = ext_of(e.trim()).ok_or_else(unknown)?;
-        if matches!(ext, Ext::Kinematic | Ext::Degradation) && base != Base::Elastoplastic {
-            return Err(unknown());
-        }
-        let name = if base == Base::Elastoplastic {
-            ext_name(ext).to_string()
-        } else {
-            format!("{}+{}", base_name(base), ext_name(ext))
-        };
-        return Ok((name, base, Some(ext)));
     }
-    if let Some(b) = base_of(&norm) {
-        return Ok((base_name(b).to_string(), b, None));
+}
+
+/// `elastoplastic` with extensions is named by its extensions alone (`kinematic_hardening`,
+/// `kinematic_hardening+viscoelasticity`); other bases lead (`linear+friction_hysteresis`).
+fn canonical_name(base: Base, exts: &[Ext]) -> String {
+    let mut parts: Vec<&str> = Vec::new();
+    if base != Base::Elastoplastic || exts.is_empty() {
+        parts.push(base_name(base));
     }
-    if let Some(e) = ext_of(&norm) {
-        return Ok((ext_name(e).to_string(), Base::Elastoplastic, Some(e)));
-    }
-    Err(unknown())
+    parts.extend(exts.iter().map(|&e| ext_name(e)));
+    parts.join("+")
 }
 
 /// Names and units of a channel's quantities.
@@ -248,7 +271,7 @@ fn spec(
     }
 }
 
-fn specs_for(kind: TestKind, base: Base, ext: Option<Ext>) -> Result<Vec<ParamSpec>, String> {
+fn specs_for(kind: TestKind, base: Base, exts: &[Ext]) -> Result<Vec<ParamSpec>, String> {
     let ch = Channel::of_kind(kind)
         .ok_or_else(|| "the kind decides which component the law loads".to_string())?;
     let n = names(ch);
@@ -322,87 +345,88 @@ fn specs_for(kind: TestKind, base: Base, ext: Option<Ext>) -> Result<Vec<ParamSp
             ));
         }
     }
-    match ext {
-        None => {}
-        Some(Ext::Kinematic) => {
-            v.push(spec(
-                format!("{}_kin", n.hard),
-                n.stiff_unit,
-                None,
-                0.0,
-                n.stiff_max,
-                "Prager kinematic hardening modulus c of the back stress".into(),
-                true,
-            ));
-            let inv = if n.strain_unit == "1" { "1" } else { "m" };
-            v.push(spec("b_kin".into(), inv, Some(0.0), 0.0, 1e9, "Armstrong-Frederick recovery b (back stress saturates at c/b); 0 = linear Prager rule".into(), false));
-        }
-        Some(Ext::Degradation) => {
-            v.push(spec("D_inf".into(), "1", None, 0.0, 0.99, "asymptotic loss of elastic stiffness, k = k0 (1 - D_inf (1 - exp(-alpha/alpha_D)))".into(), true));
-            v.push(spec(
-                "alpha_D".into(),
-                n.strain_unit,
-                None,
-                1e-12,
-                1e6,
-                "accumulated plastic deformation at which 63 % of D_inf is reached".into(),
-                true,
-            ));
-        }
-        Some(Ext::Viscoelastic) => {
-            for (i, tau) in [(1, None), (2, Some(10.0)), (3, Some(100.0))] {
-                let first = i == 1;
+    for &ext in exts {
+        match ext {
+            Ext::Kinematic => {
                 v.push(spec(
-                    format!("{}_v{i}", n.stiff),
+                    format!("{}_kin", n.hard),
                     n.stiff_unit,
-                    if first { None } else { Some(0.0) },
+                    None,
                     0.0,
                     n.stiff_max,
-                    format!(
-                        "spring stiffness of Maxwell branch {i}{}",
-                        if first { "" } else { " (0: no branch)" }
-                    ),
-                    first,
+                    "Prager kinematic hardening modulus c of the back stress".into(),
+                    true,
                 ));
+                let inv = if n.strain_unit == "1" { "1" } else { "m" };
+                v.push(spec("b_kin".into(), inv, Some(0.0), 0.0, 1e9, "Armstrong-Frederick recovery b (back stress saturates at c/b); 0 = linear Prager rule".into(), false));
+            }
+            Ext::Degradation => {
+                v.push(spec("D_inf".into(), "1", None, 0.0, 0.99, "asymptotic loss of elastic stiffness, k = k0 (1 - D_inf (1 - exp(-alpha/alpha_D)))".into(), true));
                 v.push(spec(
-                    format!("tau_v{i}"),
-                    "s",
-                    tau,
-                    1e-9,
-                    1e15,
-                    format!("relaxation time of Maxwell branch {i}"),
-                    first,
+                    "alpha_D".into(),
+                    n.strain_unit,
+                    None,
+                    1e-12,
+                    1e6,
+                    "accumulated plastic deformation at which 63 % of D_inf is reached".into(),
+                    true,
                 ));
             }
-        }
-        Some(Ext::Friction) => {
-            v.push(spec(
-                format!("{}_f", n.stiff),
-                n.stiff_unit,
-                None,
-                STIFF_MIN,
-                n.stiff_max,
-                "total stiffness of the Jenkins (spring + slider) elements".into(),
-                true,
-            ));
-            v.push(spec(
-                format!("{}_f", n.strength),
-                n.strength_unit,
-                None,
-                0.0,
-                n.strength_max,
-                "friction strength reached when every element slips".into(),
-                true,
-            ));
-            v.push(spec(
-                "n_f".into(),
-                "1",
-                Some(10.0),
-                1.0,
-                200.0,
-                "number of Jenkins elements (integer)".into(),
-                false,
-            ));
+            Ext::Viscoelastic => {
+                for (i, tau) in [(1, None), (2, Some(10.0)), (3, Some(100.0))] {
+                    let first = i == 1;
+                    v.push(spec(
+                        format!("{}_v{i}", n.stiff),
+                        n.stiff_unit,
+                        if first { None } else { Some(0.0) },
+                        0.0,
+                        n.stiff_max,
+                        format!(
+                            "spring stiffness of Maxwell branch {i}{}",
+                            if first { "" } else { " (0: no branch)" }
+                        ),
+                        first,
+                    ));
+                    v.push(spec(
+                        format!("tau_v{i}"),
+                        "s",
+                        tau,
+                        1e-9,
+                        1e15,
+                        format!("relaxation time of Maxwell branch {i}"),
+                        first,
+                    ));
+                }
+            }
+            Ext::Friction => {
+                v.push(spec(
+                    format!("{}_f", n.stiff),
+                    n.stiff_unit,
+                    None,
+                    STIFF_MIN,
+                    n.stiff_max,
+                    "total stiffness of the Jenkins (spring + slider) elements".into(),
+                    true,
+                ));
+                v.push(spec(
+                    format!("{}_f", n.strength),
+                    n.strength_unit,
+                    None,
+                    0.0,
+                    n.strength_max,
+                    "friction strength reached when every element slips".into(),
+                    true,
+                ));
+                v.push(spec(
+                    "n_f".into(),
+                    "1",
+                    Some(10.0),
+                    1.0,
+                    200.0,
+                    "number of Jenkins elements (integer)".into(),
+                    false,
+                ));
+            }
         }
     }
     let d = SectionStiffness::CHAPTER_CABLE;
@@ -435,11 +459,17 @@ fn specs_for(kind: TestKind, base: Base, ext: Option<Ext>) -> Result<Vec<ParamSp
     Ok(v)
 }
 
+/// The canonical name of a law name or composition (`elastoplastic+viscoelasticity+kinematic_hardening`
+/// → `kinematic_hardening+viscoelasticity`), or why it names no law.
+pub fn canonical_law_name(law: &str) -> Result<String, LawError> {
+    parse(law).map(|(name, ..)| name)
+}
+
 /// The parameters of `law` for tests of `kind`, in order (loaded parameters first), or an error
 /// naming an unknown law or an unsupported kind.
 pub fn try_param_specs(kind: TestKind, law: &str) -> Result<Vec<ParamSpec>, LawError> {
-    let (name, base, ext) = parse(law)?;
-    specs_for(kind, base, ext).map_err(|why| LawError::UnsupportedKind {
+    let (name, base, exts) = parse(law)?;
+    specs_for(kind, base, &exts).map_err(|why| LawError::UnsupportedKind {
         law: name,
         kind: kind.to_string(),
         why,
@@ -460,7 +490,7 @@ pub fn build(
     law: &str,
     params: &BTreeMap<String, f64>,
 ) -> Result<Box<dyn Law>, LawError> {
-    let (name, base, ext) = parse(law)?;
+    let (name, base, exts) = parse(law)?;
     let specs = try_param_specs(kind, law)?;
     for given in params.keys() {
         if !specs.iter().any(|s| &s.name == given) {
@@ -549,55 +579,75 @@ pub fn build(
                 get(&format!("{}_y", n.strength)),
                 get(n.hard),
             );
-            match ext {
-                Some(Ext::Kinematic) => {
-                    ep.label = name.clone();
-                    ep.plastic[0].kin_hardening = get(&format!("{}_kin", n.hard));
-                    ep.plastic[0].kin_recovery = get("b_kin");
+            if exts
+                .iter()
+                .any(|e| matches!(e, Ext::Kinematic | Ext::Degradation))
+            {
+                ep.label = canonical_name(
+                    base,
+                    &exts
+                        .iter()
+                        .copied()
+                        .filter(|e| matches!(e, Ext::Kinematic | Ext::Degradation))
+                        .collect::<Vec<_>>(),
+                );
+            }
+            for &e in &exts {
+                match e {
+                    Ext::Kinematic => {
+                        ep.plastic[0].kin_hardening = get(&format!("{}_kin", n.hard));
+                        ep.plastic[0].kin_recovery = get("b_kin");
+                    }
+                    Ext::Degradation => {
+                        ep.plastic[0].degradation = Some(Degradation {
+                            d_inf: get("D_inf"),
+                            alpha_d: get("alpha_D"),
+                        });
+                    }
+                    _ => {}
                 }
-                Some(Ext::Degradation) => {
-                    ep.label = name.clone();
-                    ep.plastic[0].degradation = Some(Degradation {
-                        d_inf: get("D_inf"),
-                        alpha_d: get("alpha_D"),
-                    });
-                }
-                _ => {}
             }
             Box::new(ep)
         }
     };
-    Ok(match ext {
-        Some(Ext::Viscoelastic) => {
-            let branches = (1..=3)
-                .map(|i| MaxwellBranch {
-                    stiffness: get(&format!("{}_v{i}", n.stiff)),
-                    tau_s: get(&format!("tau_v{i}")),
-                })
-                .enumerate()
-                .filter(|(i, b)| *i == 0 || b.stiffness > 0.0)
-                .map(|(_, b)| b)
-                .collect();
-            Box::new(Parallel::new(
-                name,
-                base_law,
+    // Parallel branches (Maxwell, Iwan) wrap the section law one at a time; each composite is
+    // named by the extensions it holds so far.
+    let mut law = base_law;
+    let mut held: Vec<Ext> = exts
+        .iter()
+        .copied()
+        .filter(|e| matches!(e, Ext::Kinematic | Ext::Degradation))
+        .collect();
+    for &e in &exts {
+        let branch: Box<dyn Law> = match e {
+            Ext::Viscoelastic => {
+                let branches = (1..=3)
+                    .map(|i| MaxwellBranch {
+                        stiffness: get(&format!("{}_v{i}", n.stiff)),
+                        tau_s: get(&format!("tau_v{i}")),
+                    })
+                    .enumerate()
+                    .filter(|(i, b)| *i == 0 || b.stiffness > 0.0)
+                    .map(|(_, b)| b)
+                    .collect();
                 Box::new(MaxwellBranches {
                     channel: ch,
                     branches,
-                }),
-            ))
-        }
-        Some(Ext::Friction) => {
-            let iwan = IwanElements::uniform(
+                })
+            }
+            Ext::Friction => Box::new(IwanElements::uniform(
                 ch,
                 get(&format!("{}_f", n.stiff)),
                 get(&format!("{}_f", n.strength)),
                 get("n_f") as usize,
-            );
-            Box::new(Parallel::new(name, base_law, Box::new(iwan)))
-        }
-        _ => base_law,
-    })
+            )),
+            Ext::Kinematic | Ext::Degradation => continue,
+        };
+        held.push(e);
+        law = Box::new(Parallel::new(canonical_name(base, &held), law, branch));
+    }
+    debug_assert_eq!(law.name(), name);
+    Ok(law)
 }
 
 #[cfg(test)]
@@ -689,6 +739,81 @@ mod tests {
         }
         assert_eq!(law_for_effect(Effect::Plasticity), Some("elastoplastic"));
         assert_eq!(law_for_effect(Effect::SupportFriction), None);
+    }
+
+    #[test]
+    fn extensions_stack_and_their_branches_add() {
+        // Names are canonical whatever the order given; parameters concatenate.
+        let names = |l| {
+            param_specs(TestKind::PureBending, l)
+                .into_iter()
+                .filter(|s| s.fitted)
+                .map(|s| s.name)
+                .collect::<Vec<_>>()
+        };
+        assert_eq!(
+            names("viscoelasticity+kinematic_hardening"),
+            ["EI", "M_y", "HI", "HI_kin", "EI_v1", "tau_v1"]
+        );
+        assert_eq!(
+            names("linear+friction_hysteresis+viscoelasticity"),
+            ["EI", "EI_v1", "tau_v1", "EI_f", "M_f"]
+        );
+        let (canonical, ..) =
+            parse("elastoplastic+friction_hysteresis+stiffness_degradation").unwrap();
+        assert_eq!(canonical, "stiffness_degradation+friction_hysteresis");
+        // Each extension once; hardening rules only on a yielding base.
+        assert!(parse("viscoelasticity+viscoelasticity").is_err());
+        assert!(parse("linear+kinematic_hardening").is_err());
+        assert!(parse("linear+nonsense").is_err());
+
+        // Parallel branches: the stacked law's moment is the sum of its parts', sample by sample,
+        // over a cyclic history with a hold (the Maxwell branch relaxes, the Iwan elements slip).
+        let strain: Vec<f64> = (0..400)
+            .map(|i| {
+                let t = i as f64 * 0.05;
+                if (8.0..10.0).contains(&t) {
+                    2.0
+                } else {
+                    2.0 * (t * 0.8).sin() + 1.0 * (t * 0.31).sin()
+                }
+            })
+            .collect();
+        let time: Vec<f64> = (0..400).map(|i| i as f64 * 0.05).collect();
+        let base = p(&[("EI", 1.0), ("M_y", 1.5), ("HI", 0.2)]);
+        let visco = [("EI_v1", 0.4), ("tau_v1", 1.5)];
+        let fric = [("EI_f", 0.3), ("M_f", 0.1)];
+        let run = |law: &str, extra: &[(&str, f64)]| {
+            let mut params = base.clone();
+            params.extend(extra.iter().map(|(k, v)| (k.to_string(), *v)));
+            let law = build(TestKind::PureBending, law, &params).unwrap();
+            drive_uniform(law.as_ref(), 3, &strain, &time)
+        };
+        let ep = run("elastoplastic", &[]);
+        let v = run("viscoelasticity", &visco);
+        let f = run("friction_hysteresis", &fric);
+        let both: Vec<(&str, f64)> = visco.iter().chain(&fric).copied().collect();
+        let vf = run("friction_hysteresis+viscoelasticity", &both);
+        let mut hyst = 0.0f64;
+        for i in 0..strain.len() {
+            let sum = v[i] + f[i] - ep[i];
+            assert!((vf[i] - sum).abs() < 1e-12, "{i}: {} vs {sum}", vf[i]);
+            hyst = hyst.max((f[i] - ep[i]).abs());
+        }
+        assert!(hyst > 0.05, "the friction branch carries load: {hyst}");
+        // Hardening rules combine in one return mapping: with no degradation the stack is the
+        // kinematic law, and degradation changes it once plastic flow accumulates.
+        let kin = run("kinematic_hardening", &[("HI_kin", 0.3)]);
+        let kd0 = run(
+            "kinematic_hardening+stiffness_degradation",
+            &[("HI_kin", 0.3), ("D_inf", 0.0), ("alpha_D", 1.0)],
+        );
+        assert_eq!(kin, kd0);
+        let kd = run(
+            "kinematic_hardening+stiffness_degradation",
+            &[("HI_kin", 0.3), ("D_inf", 0.3), ("alpha_D", 0.5)],
+        );
+        assert!(kin.iter().zip(&kd).any(|(a, b)| (a - b).abs() > 1e-2));
     }
 
     #[test]

@@ -68,10 +68,14 @@ pub fn resolution(signal: &[f64]) -> f64 {
 }
 
 /// The count of a quantised channel, from the values it takes rather than from its steps: the
-/// smallest gap between distinct values (gaps below 1e-9 of the range ignored). A channel that
-/// moves several counts per sample still visits values one count apart over a cyclic test, where
-/// [`resolution`] only sees the per-sample step. For an unquantised channel it is a tiny
-/// fraction of the noise. Returns 0 for a constant signal or fewer than 2 finite samples.
+/// largest step of which every gap between distinct values is a whole multiple (an approximate
+/// greatest common divisor, to 1e-9 of the range; gaps below that are ignored). A channel that
+/// moves several counts per sample still visits values a few counts apart over a cyclic test,
+/// where [`resolution`] only sees the per-sample step; and a deterministic ramp that lands on a
+/// coarse lattice (the same step per sample on every cycle: 76.2345 µm per sample read by a
+/// 0.1 µm encoder) is not mistaken for a 76 µm count, as the smallest gap between values would
+/// be. For an unquantised channel it is a tiny fraction of the noise. Returns 0 for a constant
+/// signal or fewer than 2 finite samples.
 pub fn quantum(signal: &[f64]) -> f64 {
     let mut v: Vec<f64> = signal.iter().copied().filter(|x| x.is_finite()).collect();
     if v.len() < 2 {
@@ -79,13 +83,35 @@ pub fn quantum(signal: &[f64]) -> f64 {
     }
     v.sort_by(f64::total_cmp);
     let range = v[v.len() - 1] - v[0];
-    let floor = 1e-9 * range;
-    v.windows(2)
-        .map(|w| w[1] - w[0])
-        .filter(|d| *d > floor)
-        .fold(f64::INFINITY, f64::min)
-        .min(range)
-        .max(0.0)
+    let tol = 1e-9 * range;
+    let mut q = f64::NAN;
+    for w in v.windows(2) {
+        let g = w[1] - w[0];
+        if g <= tol {
+            continue;
+        }
+        q = if q.is_nan() { g } else { approx_gcd(q, g, tol) };
+        if q <= tol {
+            return tol;
+        }
+    }
+    if q.is_nan() {
+        0.0
+    } else {
+        q.min(range)
+    }
+}
+
+/// Euclid's algorithm with nearest-multiple remainders, stopping when the remainder is within
+/// `tol` of a multiple (both arguments positive).
+fn approx_gcd(a: f64, b: f64, tol: f64) -> f64 {
+    let (mut a, mut b) = if a >= b { (a, b) } else { (b, a) };
+    while b > tol {
+        let r = (a - b * (a / b).round()).abs();
+        a = b;
+        b = r;
+    }
+    a
 }
 
 /// The smallest retreat that counts as a reversal: 1.5 · 2σ√(2 ln N) with σ = [`noise_level`],
@@ -789,6 +815,29 @@ mod tests {
         );
         assert_eq!(quantum(&[1.0, 1.0]), 0.0);
         assert_eq!(quantum(&[]), 0.0);
+    }
+
+    #[test]
+    fn quantum_is_not_fooled_by_a_ramp_on_a_coarse_lattice() {
+        // A 0.1 µm encoder reading a ramp of 76.2345 µm per sample that restarts from zero on
+        // every cycle: the values sit about 76 µm apart, the count is 0.1 µm.
+        let q = 1e-7;
+        let step = 76.2345e-6;
+        let mut v = Vec::new();
+        for n in [12, 32, 52, 72] {
+            v.extend((0..=n).map(|i| (i as f64 * step / q).round() * q));
+            v.extend((0..n).rev().map(|i| (i as f64 * step / q).round() * q));
+        }
+        let got = quantum(&v);
+        assert!((got - q).abs() < 1e-3 * q, "{got}");
+        // Shifted by an arbitrary zero offset, as after `zero_offsets`.
+        let shifted: Vec<f64> = v.iter().map(|x| x - 3.3e-6).collect();
+        assert!((quantum(&shifted) - q).abs() < 1e-3 * q);
+        // An unquantised noisy channel: far below its noise.
+        let noisy: Vec<f64> = (0..500)
+            .map(|i| (i as f64 * 0.37).sin() * 1e-3 + (i as f64 * 12.9898).sin() * 1e-5)
+            .collect();
+        assert!(quantum(&noisy) < 1e-8, "{}", quantum(&noisy));
     }
 
     #[test]
