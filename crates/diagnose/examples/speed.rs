@@ -62,9 +62,16 @@ fn main() {
         return;
     }
     let t = Instant::now();
+    // `--truth EFFECT`: the three-point case's withheld effect (default none).
+    let truth: Effect = args
+        .iter()
+        .position(|a| a == "--truth")
+        .and_then(|i| args.get(i + 1))
+        .and_then(|t| t.parse().ok())
+        .unwrap_or(Effect::None);
     let case = match generate_case_at(
         TestKind::ThreePoint,
-        Effect::None,
+        truth,
         0.003,
         1,
         Layout::TestXpert,
@@ -134,7 +141,7 @@ fn main() {
     let t = Instant::now();
     match diagnose(ctx, &case.tests, &DiagnoseOptions::default()) {
         Ok(d) => println!(
-            "three_point ({} samples): verdict {} in {:.2} s ({} candidates)",
+            "three_point ({} samples, truth {truth}): verdict {} in {:.2} s ({} candidates)",
             case.tests[0].control.len(),
             d.verdict.effect,
             t.elapsed().as_secs_f64(),

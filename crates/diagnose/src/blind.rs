@@ -531,7 +531,8 @@ pub fn generate_case_at(
             };
             artefacts.machine_compliance = draw(0.33, 0.66) / k_spec;
         }
-        Effect::SupportFriction => rig.support_friction = draw(0.1, 0.2),
+        // Steel rollers on a polymer sheath: μ 0.15–0.3 (at 0.1 a 1 % load cell barely sees it).
+        Effect::SupportFriction => rig.support_friction = draw(0.15, 0.3),
         _ => {}
     }
     // Protocol: four cycles to 0.6, 1.6, 2.6, 3.6 × first-yield control, dwell 2 s at the turns.

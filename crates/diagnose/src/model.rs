@@ -5,7 +5,7 @@
 //! Test-level effects are implemented here, on top of whatever the law and rod give:
 //! - `machine_compliance`: the machine reads control = specimen deformation + C·response; each
 //!   sample solves that implicit relation (Newton on the sectional strain with the law's tangent
-//!   for uniformly loaded sections; a fixed point over the history for the rod);
+//!   for uniformly loaded sections; inside each rod step for three-point, by the rod's driver);
 //! - `sensor_drift`: the response sensor adds d·(t − t₀);
 //! - `support_friction`: the rod's support friction coefficient μ (three-point only).
 //!
@@ -308,14 +308,17 @@ pub trait LawCatalog: Sync {
 /// The rod side of the diagnosis, for tests that do not load the section uniformly
 /// (three-point bending): replay a control history through the rod with a given law.
 pub trait RodSimulator: Sync {
-    /// Simulate `test`'s control history (specimen deformation, SI) with `law` and support
-    /// friction `mu`, writing the response (N) per sample into `out`.
+    /// Simulate `test`'s control history (the machine's reading, SI) with `law`, support
+    /// friction `mu` and machine compliance `compliance` in series (control per response unit;
+    /// 0: the control is the specimen's deformation), writing the response (N) per sample into
+    /// `out`.
     fn simulate(
         &self,
         test: &DiagTest,
         law: &dyn Law,
         control: &[f64],
         mu: f64,
+        compliance: f64,
         out: &mut [f64],
     ) -> Result<(), String>;
 
@@ -582,47 +585,7 @@ impl Forward for ModelForward<'_> {
             None => {
                 let rod = self.rod.ok_or("no rod solver")?;
                 let mu = self.i_friction.map_or(0.0, |i| p[i]);
-                if c == 0.0 {
-                    rod.simulate(t, law.as_ref(), &t.control, mu, out)?;
-                } else {
-                    // Fixed point on the specimen deflection w = u − C F(w) over the whole
-                    // history, solved per sample by a secant update: w += g / (1 + C k) with k
-                    // the sample's secant stiffness between iterations (first iteration: the
-                    // law's elastic three-point stiffness 48 EI/l³), so that elastic, plastic and
-                    // lost-contact samples all converge fast.
-                    let k_e = 48.0 * law.elastic_tangent()[(3, 3)] / t.free_length_m.powi(3);
-                    let umax = t.control.iter().fold(1e-12f64, |m, x| m.max(x.abs()));
-                    let n = t.control.len();
-                    let mut w = t.control.clone();
-                    let mut k = vec![k_e; n];
-                    let (mut w_prev, mut f_prev) = (vec![f64::NAN; n], vec![f64::NAN; n]);
-                    let mut converged = false;
-                    for _ in 0..25 {
-                        rod.simulate(t, law.as_ref(), &w, mu, out)?;
-                        let mut change = 0.0f64;
-                        for i in 0..n {
-                            let dw = w[i] - w_prev[i];
-                            if dw.abs() > 1e-12 * umax {
-                                k[i] = ((out[i] - f_prev[i]) / dw).clamp(0.0, 2.0 * k_e);
-                            }
-                            w_prev[i] = w[i];
-                            f_prev[i] = out[i];
-                            let g = t.control[i] - c * out[i] - w[i];
-                            change = change.max(g.abs());
-                            w[i] += g / (1.0 + c * k[i]);
-                        }
-                        if change <= 1e-6 * umax {
-                            converged = true;
-                            break;
-                        }
-                    }
-                    if !converged {
-                        return Err(
-                            "machine compliance: the deflection fixed point did not converge"
-                                .into(),
-                        );
-                    }
-                }
+                rod.simulate(t, law.as_ref(), &t.control, mu, c, out)?;
             }
         }
         if let Some(i) = self.i_drift {

@@ -195,6 +195,7 @@ impl RodSimulator for Rod {
         law: &dyn Law,
         control: &[f64],
         mu: f64,
+        compliance: f64,
         out: &mut [f64],
     ) -> Result<(), String> {
         let mut setup = test
@@ -202,6 +203,7 @@ impl RodSimulator for Rod {
             .clone()
             .unwrap_or_else(|| cablab_rod::TestSetup::new(test.kind, test.free_length_m));
         setup.support_friction = mu;
+        setup.machine_compliance = compliance;
         // Indices from the measured history, so that replays of nearby histories (the machine
         // compliance fixed point) sample the same points.
         let idx = decimate(&test.control, self.max_points);

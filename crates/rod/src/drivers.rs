@@ -44,6 +44,10 @@ pub struct TestSetup {
     pub support_radius_m: f64,
     /// Coulomb friction coefficient at the supports (0 = frictionless).
     pub support_friction: f64,
+    /// Machine compliance in series with the specimen (control per response unit: m/N for
+    /// three-point, rad/(N m) for pure bending; 0 = a rigid machine). The control is then the
+    /// machine's reading u = w + C·R(w): each step solves for the specimen's own deflection w.
+    pub machine_compliance: f64,
     /// Rod (cable) radius, m: offsets the contact surfaces from the centreline (0 = centreline contact).
     pub rod_radius_m: f64,
     /// Rod length beyond each support (three-point), m; None = 0.15 × span.
@@ -71,6 +75,7 @@ impl TestSetup {
             punch_radius_m: 0.0,
             support_radius_m: 0.0,
             support_friction: 0.0,
+            machine_compliance: 0.0,
             rod_radius_m: 0.0,
             overhang_m: None,
             penalty_factor: 1e7,
@@ -95,6 +100,7 @@ impl TestSetup {
             ("punch radius", self.punch_radius_m),
             ("support radius", self.support_radius_m),
             ("support friction", self.support_friction),
+            ("machine compliance", self.machine_compliance),
             ("rod radius", self.rod_radius_m),
             ("overhang", self.overhang_m.unwrap_or(0.0)),
         ] {
@@ -175,8 +181,17 @@ enum Driver<'a> {
     Rod {
         rod: Box<PlanarRod<'a>>,
         kind: TestKind,
+        /// Control reached (the machine's reading).
         current: f64,
         max_substep: f64,
+        /// Machine compliance (see [`TestSetup::machine_compliance`]).
+        compliance: f64,
+        /// The specimen's own control and the response at the last committed step.
+        specimen: f64,
+        response: f64,
+        /// Secant stiffness of the last step (response per specimen control), the compliance
+        /// iteration's first guess.
+        stiffness: f64,
     },
 }
 
@@ -214,6 +229,10 @@ impl<'a> Driver<'a> {
                     kind: setup.kind,
                     current: 0.0,
                     max_substep: max_substep.or(setup.max_substep).unwrap_or(0.05),
+                    compliance: setup.machine_compliance,
+                    specimen: 0.0,
+                    response: 0.0,
+                    stiffness: ei / l,
                 })
             }
             TestKind::ThreePoint => {
@@ -244,6 +263,10 @@ impl<'a> Driver<'a> {
                     kind: setup.kind,
                     current: 0.0,
                     max_substep: max_substep.or(setup.max_substep).unwrap_or(0.005 * l),
+                    compliance: setup.machine_compliance,
+                    specimen: 0.0,
+                    response: 0.0,
+                    stiffness: 48.0 * ei / (l * l * l),
                 })
             }
             other => Err(RodError::UnsupportedKind(other)),
@@ -299,7 +322,10 @@ impl<'a> Driver<'a> {
                 kind,
                 current,
                 max_substep,
-                ..
+                compliance,
+                specimen,
+                response,
+                stiffness,
             } => {
                 let from = *current;
                 let total = target - from;
@@ -314,16 +340,37 @@ impl<'a> Driver<'a> {
                     let last = remaining.abs() <= h.abs() + tiny;
                     let next = if last { target } else { c + h };
                     let saved = rod.q.clone();
-                    Self::apply_control(rod, *kind, next);
                     let frac = if total != 0.0 {
                         (next - c) / total
                     } else {
                         1.0
                     };
-                    match rod.solve(dt * frac, step) {
-                        Ok(it) => {
+                    let solved = if *compliance > 0.0 {
+                        Self::solve_compliant(
+                            rod,
+                            *kind,
+                            next - c,
+                            dt * frac,
+                            step,
+                            (*compliance, *specimen, *response, *stiffness),
+                        )
+                    } else {
+                        Self::apply_control(rod, *kind, next);
+                        rod.solve(dt * frac, step).map(|it| (it, next))
+                    };
+                    match solved {
+                        Ok((it, w)) => {
                             *iterations += it;
                             rod.commit();
+                            let r = Self::response(rod, *kind);
+                            if (w - *specimen).abs() > 1e-12 * max_substep.abs() {
+                                let k = (r - *response) / (w - *specimen);
+                                if k.is_finite() && k > 0.0 {
+                                    *stiffness = k;
+                                }
+                            }
+                            *specimen = w;
+                            *response = r;
                             c = next;
                             if last {
                                 break;
@@ -331,7 +378,7 @@ impl<'a> Driver<'a> {
                         }
                         Err(e) => {
                             rod.q = saved;
-                            Self::apply_control(rod, *kind, c);
+                            Self::apply_control(rod, *kind, *specimen);
                             cuts += 1;
                             if cuts > max_cuts || total == 0.0 {
                                 return Err(e);
@@ -344,6 +391,50 @@ impl<'a> Driver<'a> {
                 Ok(Self::response(rod, *kind))
             }
         }
+    }
+
+    /// One step of the machine's control by `du` with compliance `C` in series: find the
+    /// specimen's control w with w + C·R(w) = u by a secant iteration on the uncommitted step
+    /// (every trial re-solves from the committed state, so history-dependent laws see one step).
+    /// Returns the Newton iterations and w.
+    fn solve_compliant(
+        rod: &mut PlanarRod<'_>,
+        kind: TestKind,
+        du: f64,
+        dt: f64,
+        step: usize,
+        (c, w0, r0, k0): (f64, f64, f64, f64),
+    ) -> Result<(usize, f64), RodError> {
+        let u = w0 + c * r0 + du;
+        let tol = (1e-8 * (u.abs() + du.abs())).max(f64::MIN_POSITIVE);
+        let (mut wa, mut ra) = (w0, r0);
+        let mut k = k0.max(0.0);
+        let mut w = w0 + du / (1.0 + c * k);
+        let mut total = 0;
+        for _ in 0..40 {
+            Self::apply_control(rod, kind, w);
+            total += rod.solve(dt, step)?;
+            let r = Self::response(rod, kind);
+            let g = u - c * r - w;
+            if g.abs() <= tol {
+                return Ok((total, w));
+            }
+            if (w - wa).abs() > 0.0 {
+                let ks = (r - ra) / (w - wa);
+                if ks.is_finite() {
+                    k = ks.max(0.0);
+                }
+            }
+            wa = w;
+            ra = r;
+            w += g / (1.0 + c * k);
+        }
+        Err(RodError::NotConverged {
+            step,
+            iterations: total,
+            residual: f64::NAN,
+            reason: "machine compliance: the specimen's deflection did not converge".into(),
+        })
     }
 
     fn response(rod: &PlanarRod<'_>, kind: TestKind) -> f64 {
