@@ -46,7 +46,12 @@ fn through_readers(case: &mut BlindCase) -> Result<(), String> {
 }
 
 /// `cablab bench blind`.
-pub fn bench(seeds: u64, kind_names: &[String], out: Option<&std::path::Path>) -> CmdResult {
+pub fn bench(
+    seeds: u64,
+    kind_names: &[String],
+    out: Option<&std::path::Path>,
+    json: Option<&std::path::Path>,
+) -> CmdResult {
     let mut kinds = Vec::new();
     for k in kind_names {
         match k.parse::<TestKind>() {
@@ -115,6 +120,10 @@ pub fn bench(seeds: u64, kind_names: &[String], out: Option<&std::path::Path>) -
     print!("{text}");
     if let Some(p) = out {
         crate::output::write_atomic(p, text.as_bytes()).map_err(CliError::failed)?;
+    }
+    if let Some(p) = json {
+        let bytes = crate::output::to_json_bytes(&report).map_err(CliError::failed)?;
+        crate::output::write_atomic(p, &bytes).map_err(CliError::failed)?;
     }
     Ok(ExitCode::SUCCESS)
 }

@@ -300,5 +300,8 @@ pub enum BenchWhat {
         /// Write the report (Markdown) here as well as to stdout.
         #[arg(long, short = 'o')]
         output: Option<PathBuf>,
+        /// Also write every case's outcome (verdict, gaps, seconds) as JSON here.
+        #[arg(long, value_name = "PATH")]
+        json: Option<PathBuf>,
     },
 }

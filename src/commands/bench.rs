@@ -23,7 +23,8 @@ pub fn run(a: BenchArgs) -> CmdResult {
             seeds,
             kinds,
             output,
-        } => crate::blind::bench(seeds, &kinds, output.as_deref()),
+            json,
+        } => crate::blind::bench(seeds, &kinds, output.as_deref(), json.as_deref()),
     }
 }
 

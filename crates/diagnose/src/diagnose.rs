@@ -19,6 +19,11 @@
 //! as equivalent with the experiment that would separate them. `none` when the baseline is in
 //! that set or already fits to the noise floor.
 //!
+//! Materiality. An explanation must remove at least [`MIN_EXPLAINED_SHARE`] of the baseline's
+//! squared held-out gap above the noise floor (`excess_explained`); with the noise's n_eff a
+//! model far from the data would otherwise let any candidate that shaves a percent off its gap
+//! count as significant.
+//!
 //! Resolution. A candidate whose held-out prediction differs from the baseline's only as the
 //! readings' rounding can ([`rounding_like`]: by a constant per branch within half a count of
 //! [`resolution_floor`], the control's encoder through the stiffness and the response's ADC)
@@ -689,6 +694,27 @@ pub struct EffectScore {
     /// instrument cannot tell it from the baseline, so it takes no part in the verdict (listed
     /// after the others).
     pub below_resolution: bool,
+    /// Share of the baseline's held-out squared gap above the noise floor that the effect
+    /// removes, 1 − (g² − 1)/(g₀² − 1) with g in noise units (above 1 when it fits below the
+    /// estimated floor; 0 when the baseline has no excess). Below [`MIN_EXPLAINED_SHARE`] the
+    /// effect takes no part in the verdict: however significant, it is not an explanation.
+    pub excess_explained: f64,
+}
+
+/// The smallest share of the baseline's excess gap (squared, above the noise floor) an effect
+/// must remove to be an explanation. A model far from the data leaves a gap of many noise
+/// units; with hundreds of held-out samples a candidate that removes 1 % of it is still
+/// "significant", and naming it would be wrong (a real MTS 793 export: 16.1 % → 16.1 %).
+pub const MIN_EXPLAINED_SHARE: f64 = 0.25;
+
+/// [`EffectScore::excess_explained`] from held-out gaps in noise units.
+pub(crate) fn excess_explained(g_base: f64, g: f64) -> f64 {
+    let excess = g_base * g_base - 1.0;
+    if excess <= 0.0 {
+        0.0
+    } else {
+        1.0 - (g * g - 1.0) / excess
+    }
 }
 
 /// A pair of explanations the data cannot tell apart, and the experiment that would.
@@ -1050,6 +1076,10 @@ pub fn diagnose(
                 delta_ic: choice.ic_of(s) - choice.ic_best,
                 shift_res: shift,
                 below_resolution: !res,
+                excess_explained: excess_explained(
+                    (base.rss_noise / base.n_held as f64).sqrt(),
+                    (s.rss_noise / s.n_held as f64).sqrt(),
+                ),
             }
         })
         .collect();
@@ -1181,13 +1211,15 @@ fn ic(s: &Scored, n_eff: f64, n_held: usize) -> f64 {
 }
 
 /// Parsimony on the held-out data (module doc), among the baseline and the candidates the
-/// instrument can tell from it (`resolved`, one flag per candidate).
+/// instrument can tell from it (`resolved`, one flag per candidate) that remove at least
+/// [`MIN_EXPLAINED_SHARE`] of its excess gap.
 fn choose(base: &Scored, scored: &[Scored], resolved: &[bool]) -> Choice {
     let n_held = base.n_held;
+    let g = |s: &Scored| (s.rss_noise / s.n_held.max(1) as f64).sqrt();
     let scored: Vec<&Scored> = scored
         .iter()
         .zip(resolved)
-        .filter(|(_, &r)| r)
+        .filter(|(s, &r)| r && excess_explained(g(base), g(s)) >= MIN_EXPLAINED_SHARE)
         .map(|(s, _)| s)
         .collect();
     // n_eff from the residuals of the best-fitting model (closest to white noise), with the

@@ -578,3 +578,20 @@ fn span_breakdown_follows_the_unit_load_moment_and_skips_holds() {
         out[0].where_
     );
 }
+
+#[test]
+fn excess_explained_is_the_share_of_the_gap_above_the_floor() {
+    use crate::diagnose::excess_explained;
+    // Baseline 3 noise units (excess 8), effect 2 units (excess 3): 5/8 removed.
+    assert!((excess_explained(3.0, 2.0) - 0.625).abs() < 1e-12);
+    assert_eq!(excess_explained(2.0, 1.0), 1.0);
+    assert_eq!(excess_explained(2.0, 2.0), 0.0);
+    assert!(
+        excess_explained(2.0, 0.9) > 1.0,
+        "below the estimated floor"
+    );
+    // A baseline at the floor has nothing to explain.
+    assert_eq!(excess_explained(0.95, 0.9), 0.0);
+    // 16.1 % → 16.1 % of the response at a 0.4 % floor is no explanation.
+    assert!(excess_explained(16.1 / 0.4, 16.05 / 0.4) < 0.01);
+}
