@@ -374,8 +374,16 @@ pub fn data_scales(tests: &[DiagTest]) -> DataScales {
         }
         smax = smax.max(t.response_scale() * to_stress);
         emax = emax.max(t.control.iter().fold(0.0f64, |m, c| m.max(c.abs())) * to_strain);
-        if let (Some(a), Some(b)) = (t.time_s.first(), t.time_s.last()) {
-            dur = dur.max(b - a);
+        // The time span, not last − first: some exports restart or reorder their clock.
+        let (t0, t1) = t
+            .time_s
+            .iter()
+            .filter(|v| v.is_finite())
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
+                (a.min(v), b.max(v))
+            });
+        if t1 > t0 {
+            dur = dur.max(t1 - t0);
         }
         for w in t.time_s.windows(2) {
             let dt = w[1] - w[0];

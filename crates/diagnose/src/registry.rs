@@ -62,11 +62,16 @@ impl LawCatalog for Registry {
             model: model.label(),
             why: e.to_string(),
         })?;
-        Ok(specs
+        specs
             .into_iter()
             .filter(|s| s.fitted)
-            .map(|s| scaled(&s, sc))
-            .collect())
+            .map(|s| {
+                scaled(&s, sc).map_err(|why| DiagError::Model {
+                    model: model.label(),
+                    why,
+                })
+            })
+            .collect()
     }
 
     fn build(
@@ -90,16 +95,32 @@ impl LawCatalog for Registry {
 }
 
 /// Fit bounds and start of a registry parameter from its role and the data scales.
-fn scaled(s: &cablab_laws::ParamSpec, sc: &DataScales) -> ParamSpec {
+fn scaled(s: &cablab_laws::ParamSpec, sc: &DataScales) -> Result<ParamSpec, String> {
     let k = sc.stiffness;
     let m = sc.stress_max;
     let e = sc.strain_max;
     let n = s.name.as_str();
-    let clamp = |p: ParamSpec| ParamSpec {
-        lower: p.lower.max(s.lower),
-        upper: p.upper.min(s.upper),
-        initial: p.initial.clamp(p.lower.max(s.lower), p.upper.min(s.upper)),
-        ..p
+    // The data's range, within the registry's admissible one; empty when the data give no
+    // scale for the parameter (a relaxation time in a record without a time column).
+    let clamp = |p: ParamSpec| {
+        let (lo, hi) = (p.lower.max(s.lower), p.upper.min(s.upper));
+        if lo.partial_cmp(&hi).is_none_or(|o| o.is_gt()) {
+            let hint = if s.unit == "s" {
+                " (a record whose clock does not advance cannot fix a time constant)"
+            } else {
+                ""
+            };
+            return Err(format!(
+                "the data give no range for {n}: [{:e}, {:e}] {} from the data lies outside the admissible [{:e}, {:e}]{hint}",
+                p.lower, p.upper, s.unit, s.lower, s.upper
+            ));
+        }
+        Ok(ParamSpec {
+            lower: lo,
+            upper: hi,
+            initial: p.initial.clamp(lo, hi),
+            ..p
+        })
     };
     let is_stiff = matches!(n, "EA" | "GJ" | "EI" | "EA1" | "GJ1" | "EI1");
     let p = if is_stiff {
@@ -320,6 +341,21 @@ mod tests {
             duration_s: 100.0,
             dt_min_s: 0.01,
         };
+        // A record whose clock does not advance gives no range for a relaxation time: an
+        // error naming it, not a panic (a real testXpert export with a scrambled time column).
+        let frozen = DataScales {
+            duration_s: f64::MIN_POSITIVE,
+            dt_min_s: 2.8e-4,
+            ..sc
+        };
+        let e = Registry
+            .specs(
+                TestKind::Tension,
+                &ep.with(Effect::Viscoelasticity),
+                &frozen,
+            )
+            .unwrap_err();
+        assert!(e.to_string().contains("tau_v1"), "{e}");
         let specs = Registry.specs(TestKind::Tension, &ep, &sc).unwrap();
         let names: Vec<&str> = specs.iter().map(|s| s.name.as_str()).collect();
         assert_eq!(names, ["EA", "F_y", "H"]);
