@@ -4,8 +4,7 @@
 //! Run: `cargo bench -p cablab-laws`. Does not assert anything; the tests check the physics.
 
 use cablab_core::TestKind;
-use cablab_laws::{build, drive_uniform_into, loaded_component, param_specs, Law, Strain6};
-use std::collections::BTreeMap;
+use cablab_laws::{build, drive_uniform_into, example_params, loaded_component, Law, Strain6};
 
 fn main() {
     divan::main();
@@ -36,29 +35,7 @@ fn scale(kind: TestKind) -> (f64, f64) {
 /// `law` for `kind` with plausible parameters (every required one set from the kind's scale).
 fn law(kind: TestKind, name: &str) -> Box<dyn Law> {
     let (k, y) = scale(kind);
-    let ey = y / k;
-    let mut params = BTreeMap::new();
-    for sp in param_specs(kind, name)
-        .into_iter()
-        .filter(|s| s.default.is_none())
-    {
-        let n = sp.name.as_str();
-        let v = match n {
-            "D_inf" => 0.3,
-            "alpha_D" => 2.0 * ey,
-            "tau_v1" => 0.5,
-            _ if n.ends_with("_y") => y,
-            _ if n.ends_with("_kin") => 0.3 * k,
-            _ if n.ends_with("_v1") => 0.4 * k,
-            _ if n.ends_with("_t") => ey,
-            _ if n.ends_with('1') => k,
-            _ if n.ends_with('2') => 0.2 * k,
-            _ if n.starts_with("F_") || n.starts_with("M_") => 0.3 * y,
-            _ if n.ends_with("_f") => 0.3 * k,
-            _ => k,
-        };
-        params.insert(sp.name.clone(), v);
-    }
+    let params = example_params(kind, name, k, y).expect("a law of the registry");
     build(kind, name, &params).expect("law")
 }
 

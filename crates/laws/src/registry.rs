@@ -482,6 +482,42 @@ pub fn param_specs(kind: TestKind, law: &str) -> Vec<ParamSpec> {
     try_param_specs(kind, law).unwrap_or_default()
 }
 
+/// Plausible values for every required parameter of `law` for tests of `kind`, scaled to a
+/// loaded `stiffness` and `strength` (yield strain strength/stiffness): for examples, benchmarks
+/// and tests that need "some" law of each name. Optional parameters keep their defaults.
+pub fn example_params(
+    kind: TestKind,
+    law: &str,
+    stiffness: f64,
+    strength: f64,
+) -> Result<BTreeMap<String, f64>, LawError> {
+    let (k, y) = (stiffness, strength);
+    let ey = y / k;
+    let mut params = BTreeMap::new();
+    for sp in try_param_specs(kind, law)?
+        .into_iter()
+        .filter(|s| s.default.is_none())
+    {
+        let n = sp.name.as_str();
+        let v = match n {
+            "D_inf" => 0.3,
+            "alpha_D" => 2.0 * ey,
+            "tau_v1" => 0.5,
+            _ if n.ends_with("_y") => y,
+            _ if n.ends_with("_kin") => 0.3 * k,
+            _ if n.ends_with("_v1") => 0.4 * k,
+            _ if n.ends_with("_t") => ey,
+            _ if n.ends_with('1') => k,
+            _ if n.ends_with('2') => 0.2 * k,
+            _ if n.starts_with("F_") || n.starts_with("M_") => 0.3 * y,
+            _ if n.ends_with("_f") => 0.3 * k,
+            _ => k,
+        };
+        params.insert(sp.name, v);
+    }
+    Ok(params)
+}
+
 /// Build `law` for tests of `kind` from SI parameter values (`params` by [`ParamSpec::name`]).
 /// Unknown laws and parameter names, missing required values and values that are not finite or
 /// outside their bounds are errors that name the culprit.
@@ -999,28 +1035,7 @@ mod tests {
             let ey = y / k;
             let comp = loaded_component(kind);
             for law in &laws {
-                let mut params = BTreeMap::new();
-                for sp in param_specs(kind, law)
-                    .into_iter()
-                    .filter(|s| s.default.is_none())
-                {
-                    let n = sp.name.as_str();
-                    let v = match n {
-                        "D_inf" => 0.3,
-                        "alpha_D" => 2.0 * ey,
-                        "tau_v1" => 0.5,
-                        _ if n.ends_with("_y") => y,
-                        _ if n.ends_with("_kin") => 0.3 * k,
-                        _ if n.ends_with("_v1") => 0.4 * k,
-                        _ if n.ends_with("_t") => ey,
-                        _ if n.ends_with('1') => k,
-                        _ if n.ends_with('2') => 0.2 * k,
-                        _ if n.starts_with("F_") || n.starts_with("M_") => 0.3 * y,
-                        _ if n.ends_with("_f") => 0.3 * k,
-                        _ => k,
-                    };
-                    params.insert(sp.name.clone(), v);
-                }
+                let mut params = example_params(kind, law, k, y).unwrap();
                 if law == "kinematic_hardening" {
                     params.insert("b_kin".into(), 0.5 / ey);
                 }

@@ -4,11 +4,10 @@
 //! from the reference.
 
 use crate::law::{update_component_via_full, Law, Strain6};
-use crate::registry::{build, loaded_component, param_specs};
+use crate::registry::{build, example_params, loaded_component, param_specs};
 use cablab_core::TestKind;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use std::collections::BTreeMap;
 
 /// Laws checked: the registry's names, compositions with every base, and kinematic hardening
 /// with Armstrong–Frederick recovery (Newton-solved return map).
@@ -43,28 +42,7 @@ fn law(kind: TestKind, name: &str) -> Box<dyn Law> {
         Some(n) => (n, true),
         None => (name, false),
     };
-    let mut params = BTreeMap::new();
-    for sp in param_specs(kind, name)
-        .into_iter()
-        .filter(|s| s.default.is_none())
-    {
-        let n = sp.name.as_str();
-        let v = match n {
-            "D_inf" => 0.3,
-            "alpha_D" => 2.0 * ey,
-            "tau_v1" => 0.5,
-            _ if n.ends_with("_y") => y,
-            _ if n.ends_with("_kin") => 0.3 * k,
-            _ if n.ends_with("_v1") => 0.4 * k,
-            _ if n.ends_with("_t") => ey,
-            _ if n.ends_with('1') => k,
-            _ if n.ends_with('2') => 0.2 * k,
-            _ if n.starts_with("F_") || n.starts_with("M_") => 0.3 * y,
-            _ if n.ends_with("_f") => 0.3 * k,
-            _ => k,
-        };
-        params.insert(sp.name.clone(), v);
-    }
+    let mut params = example_params(kind, name, k, y).expect("a law of the registry");
     if recovery {
         params.insert("b_kin".into(), 0.5 / ey);
     }
