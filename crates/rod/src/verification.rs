@@ -770,3 +770,25 @@ fn machine_compliance_replay_inverts_the_series_spring() {
         "viscoelastic: worst {worst} of {rmax}"
     );
 }
+
+/// Pure bending through a rotary compliance C in series: the end moment of a linear rod under the
+/// machine's rotation u is M = (EI/L) u / (1 + C EI/L), the two springs in series.
+#[test]
+fn machine_compliance_in_pure_bending_is_a_spring_in_series() {
+    let (l, ei) = (0.05, 1.37e-3);
+    let lin = law(TestKind::PureBending, "linear", &[("EI", ei)]);
+    let mut setup = TestSetup::new(TestKind::PureBending, l);
+    setup.elements = 20;
+    let k = ei / l;
+    setup.machine_compliance = 0.6 / k;
+    let u: Vec<f64> = (1..=10).map(|i| 0.1 * i as f64).collect();
+    let c = simulate_path(&setup, lin.as_ref(), &u, None).unwrap();
+    assert!(c.control.len() >= u.len());
+    for (&ui, &m) in c.control.iter().zip(&c.response) {
+        let expected = k * ui / 1.6;
+        assert!(
+            (m - expected).abs() <= 1e-6 * k,
+            "u {ui}: M {m} vs {expected}"
+        );
+    }
+}
