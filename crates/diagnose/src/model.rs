@@ -469,8 +469,52 @@ pub fn test_effect_specs(effects: &[Effect], tests: &[DiagTest]) -> Vec<ParamSpe
         .collect()
 }
 
+/// Replicates: a test whose free length equals (to a part in 10⁶) that of an earlier test is a
+/// replicate specimen, with its own elastic stiffness and yield strength: a stiffness factor
+/// (`stiffness_factor_N`, N the 1-based test number) on the law's elastic stiffnesses
+/// ([`is_elastic_stiffness`]) and a strength factor (`strength_factor_N`) on its yield
+/// strength ([`is_yield_strength`]), the quantities a lab reports per specimen with their
+/// scatter. The rest of the law (hardening, the effect's parameters) and the test-level effects
+/// stay shared. Without the factors a joint fit pays for specimen scatter as a gap no effect
+/// closes. The first test of each length anchors the shared law, so specimens of different
+/// lengths still share it exactly: what identifies a machine compliance.
+fn specimen_factor_specs(tests: &[DiagTest]) -> Vec<(usize, [ParamSpec; 2])> {
+    let mut out = Vec::new();
+    for (i, t) in tests.iter().enumerate() {
+        let replicate = tests[..i]
+            .iter()
+            .any(|u| (u.free_length_m - t.free_length_m).abs() <= 1e-6 * t.free_length_m.abs());
+        if replicate {
+            out.push((
+                i,
+                [
+                    ParamSpec::log(&format!("stiffness_factor_{}", i + 1), 0.7, 1.4, 1.0),
+                    ParamSpec::log(&format!("strength_factor_{}", i + 1), 0.7, 1.4, 1.0),
+                ],
+            ));
+        }
+    }
+    out
+}
+
+/// Elastic stiffness parameters of the registry's laws (`EA`, `GJ`, `EI` and the piecewise
+/// law's `EI1`, `EI2`, …), which a replicate's stiffness factor scales.
+pub fn is_elastic_stiffness(name: &str) -> bool {
+    matches!(
+        name,
+        "EA" | "GJ" | "EI" | "EA1" | "GJ1" | "EI1" | "EA2" | "GJ2" | "EI2"
+    )
+}
+
+/// Yield strength parameters of the registry's laws (`F_y`, `M_y`), which a replicate's
+/// strength factor scales.
+pub fn is_yield_strength(name: &str) -> bool {
+    matches!(name, "F_y" | "M_y")
+}
+
 /// The forward model of one [`ModelSpec`] over a set of tests: law parameters first (shared by
-/// all tests), then the test-level effect parameters (shared too: one machine, one sensor).
+/// all tests), then the test-level effect parameters (shared too: one machine, one sensor), then
+/// the replicates' specimen factors ([`specimen_factor_specs`]).
 pub struct ModelForward<'a> {
     tests: &'a [DiagTest],
     catalog: &'a dyn LawCatalog,
@@ -482,6 +526,9 @@ pub struct ModelForward<'a> {
     i_compliance: Option<usize>,
     i_drift: Option<usize>,
     i_friction: Option<usize>,
+    /// Per test: the index of its stiffness factor (its strength factor follows), if it is a
+    /// replicate.
+    i_factor: Vec<Option<usize>>,
 }
 
 impl<'a> ModelForward<'a> {
@@ -515,6 +562,12 @@ impl<'a> ModelForward<'a> {
         let mut specs = catalog.specs(kind, model, &scales)?;
         let n_law = specs.len();
         specs.extend(test_effect_specs(&model.test_effects, tests));
+        let mut i_factor = vec![None; tests.len()];
+        for (t, [stiff, strength]) in specimen_factor_specs(tests) {
+            i_factor[t] = Some(specs.len());
+            specs.push(stiff);
+            specs.push(strength);
+        }
         let find = |n: &str| specs.iter().position(|s| s.name == n);
         let (i_compliance, i_drift, i_friction) = (
             find("compliance"),
@@ -533,6 +586,7 @@ impl<'a> ModelForward<'a> {
             i_compliance,
             i_drift,
             i_friction,
+            i_factor,
         })
     }
 
@@ -570,30 +624,41 @@ impl Forward for ModelForward<'_> {
     }
     fn simulate(&self, p: &[f64], test: usize, out: &mut [f64]) -> Result<(), String> {
         let t = &self.tests[test];
+        // A replicate's own stiffness and strength (see `specimen_factor_specs`).
+        let own;
+        let law_values: &[f64] = match self.i_factor[test] {
+            Some(i) => {
+                own = self.names[..self.n_law]
+                    .iter()
+                    .zip(&p[..self.n_law])
+                    .map(|(n, &v)| {
+                        if is_elastic_stiffness(n) {
+                            v * p[i]
+                        } else if is_yield_strength(n) {
+                            v * p[i + 1]
+                        } else {
+                            v
+                        }
+                    })
+                    .collect::<Vec<f64>>();
+                &own
+            }
+            None => &p[..self.n_law],
+        };
         let law = self
             .catalog
-            .build(
-                t.kind,
-                &self.model,
-                &self.names[..self.n_law],
-                &p[..self.n_law],
-            )
+            .build(t.kind, &self.model, &self.names[..self.n_law], law_values)
             .map_err(|e| e.to_string())?;
+        let law: &dyn Law = law.as_ref();
         let c = self.i_compliance.map_or(0.0, |i| p[i]);
         match uniform_component(t.kind) {
-            Some(comp) => drive_uniform_compliant(
-                law.as_ref(),
-                comp,
-                t.free_length_m,
-                c,
-                &t.time_s,
-                &t.control,
-                out,
-            )?,
+            Some(comp) => {
+                drive_uniform_compliant(law, comp, t.free_length_m, c, &t.time_s, &t.control, out)?
+            }
             None => {
                 let rod = self.rod.ok_or("no rod solver")?;
                 let mu = self.i_friction.map_or(0.0, |i| p[i]);
-                rod.simulate(t, law.as_ref(), &t.control, mu, c, out)?;
+                rod.simulate(t, law, &t.control, mu, c, out)?;
             }
         }
         if let Some(i) = self.i_drift {

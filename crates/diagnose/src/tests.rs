@@ -595,3 +595,49 @@ fn excess_explained_is_the_share_of_the_gap_above_the_floor() {
     // 16.1 % → 16.1 % of the response at a 0.4 % floor is no explanation.
     assert!(excess_explained(16.1 / 0.4, 16.05 / 0.4) < 0.01);
 }
+
+#[test]
+fn replicate_scatter_is_a_specimen_factor_not_an_effect() {
+    // Three replicates of the elastoplastic cable whose stiffness differs by −4 % and +5 % and
+    // whose yield by +3 % and −3 % from the first, hardening shared, 0.3 % noise. Diagnosed
+    // jointly they share the law; each replicate after the first gets its stiffness and strength
+    // factors, so the baseline fits to the noise floor and no effect is claimed.
+    let art = || Artefacts {
+        noise_rel: 0.003,
+        ..Artefacts::default()
+    };
+    let scatter = [(1.0, 1.0), (0.96, 1.03), (1.05, 0.97)];
+    let tests: Vec<DiagTest> = scatter
+        .iter()
+        .map(|&(fk, fs)| {
+            let p = [
+                ("EA", TRUTH[0].1 * fk),
+                ("F_y", TRUTH[1].1 * fs),
+                ("H", TRUTH[2].1),
+            ];
+            tension("elastoplastic", &p, None, art())
+        })
+        .collect();
+    let d = diagnose(ctx(), &tests, &DiagnoseOptions::default()).unwrap();
+    assert_eq!(d.verdict.effect, Effect::None, "{:?}", d.verdict);
+    assert!(
+        d.baseline.gap_heldout_rel <= crate::diagnose::NOISE_FLOOR_FIT * d.verdict.noise_rel,
+        "{} vs floor {}",
+        d.baseline.gap_heldout_rel,
+        d.verdict.noise_rel
+    );
+    let params = &d.baseline.params;
+    let get = |n: &str| params.0.iter().find(|(k, _)| k == n).map(|(_, v)| *v);
+    for (i, &(fk, fs)) in scatter.iter().enumerate().skip(1) {
+        for (name, f) in [
+            (format!("stiffness_factor_{}", i + 1), fk),
+            (format!("strength_factor_{}", i + 1), fs),
+        ] {
+            let v = get(&name).unwrap_or_else(|| panic!("{name} in {params:?}"));
+            assert!((v - f).abs() < 0.005, "{name} = {v}, truth {f}");
+        }
+    }
+    assert!(get("stiffness_factor_1").is_none());
+    let ea = get("EA").unwrap();
+    assert!((ea / TRUTH[0].1 - 1.0).abs() < 0.01, "EA {ea}");
+}

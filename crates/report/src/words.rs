@@ -96,8 +96,9 @@ pub fn diagnosis_words(s: &DiagnosisSummary) -> String {
             "Which: none of the candidates. The {baseline}'s held-out gap is {} of the largest \
              measured response, above the noise level of {}, but no effect of the vocabulary \
              closes it better than the baseline does. Look for what the candidates do not cover: \
-             scatter between specimens diagnosed together (diagnose them one by one), a fixture \
-             or data problem, or an effect outside the vocabulary.",
+             scatter between specimens diagnosed together beyond their own stiffness and yield \
+             (diagnose them one by one), a fixture or data problem, or an effect outside the \
+             vocabulary.",
             fmt_percent(s.gap_before_rel, 1),
             fmt_percent(s.noise_rel, 1)
         )),
