@@ -175,33 +175,24 @@ impl PlasticChannel {
             // Safeguarded Newton on [0, hi]: φ(0) = f_tr > 0 and, as k(α) ≥ k₀ (1 − D_∞) > 0 and
             // the kinematic term is ≥ 0, φ(hi) ≤ 0 for hi = (k₀|e_tr| + |x_n|)/(k₀(1 − D_∞) + H).
             let k_min = self.stiffness_at(f64::INFINITY);
-            let mut lo = 0.0;
-            let mut hi = (self.stiffness * e_tr.norm() + old.back_stress.norm()) / (k_min + h);
+            let lo = 0.0;
+            let hi = (self.stiffness * e_tr.norm() + old.back_stress.norm()) / (k_min + h);
             g = g.clamp(lo, hi);
             let tol = 1e-14
                 * (self.yield_strength
                     + h * old.alpha
                     + self.stiffness * e_tr.norm()
                     + old.back_stress.norm());
-            for _ in 0..100 {
-                let (v, d, ..) = phi(g);
-                if v.abs() <= tol {
-                    break;
-                }
-                if v > 0.0 {
-                    lo = g;
-                } else {
-                    hi = g;
-                }
-                let mut next = if d < 0.0 { g - v / d } else { f64::NAN };
-                if !(next > lo && next < hi) {
-                    next = 0.5 * (lo + hi);
-                }
-                if next == g || hi - lo <= f64::EPSILON * hi {
-                    break;
-                }
-                g = next;
-            }
+            g = safeguarded_newton(
+                |g| {
+                    let (v, d, ..) = phi(g);
+                    (v, d)
+                },
+                g,
+                lo,
+                hi,
+                tol,
+            );
         }
         let alpha = old.alpha + g;
         let k = self.stiffness_at(alpha);
@@ -271,30 +262,21 @@ impl PlasticChannel {
         let mut g = f_tr / (k_n + c + h);
         if self.degradation.is_some() || b > 0.0 {
             let k_min = self.stiffness_at(f64::INFINITY);
-            let mut lo = 0.0;
-            let mut hi = (self.stiffness * norm1(e_tr) + norm1(x)) / (k_min + h);
+            let lo = 0.0;
+            let hi = (self.stiffness * norm1(e_tr) + norm1(x)) / (k_min + h);
             g = g.clamp(lo, hi);
             let tol = 1e-14
                 * (self.yield_strength + h * alpha_n + self.stiffness * norm1(e_tr) + norm1(x));
-            for _ in 0..100 {
-                let (v, d, ..) = phi(g);
-                if v.abs() <= tol {
-                    break;
-                }
-                if v > 0.0 {
-                    lo = g;
-                } else {
-                    hi = g;
-                }
-                let mut next = if d < 0.0 { g - v / d } else { f64::NAN };
-                if !(next > lo && next < hi) {
-                    next = 0.5 * (lo + hi);
-                }
-                if next == g || hi - lo <= f64::EPSILON * hi {
-                    break;
-                }
-                g = next;
-            }
+            g = safeguarded_newton(
+                |g| {
+                    let (v, d, ..) = phi(g);
+                    (v, d)
+                },
+                g,
+                lo,
+                hi,
+                tol,
+            );
         }
         let alpha = alpha_n + g;
         let k = self.stiffness_at(alpha);
@@ -505,6 +487,39 @@ impl Law for Elastoplastic {
             (k * strain, k)
         })
     }
+}
+
+/// The root of a decreasing φ on [lo, hi] (φ(lo) > 0 ≥ φ(hi)) by Newton's method from `g`,
+/// falling back to bisection whenever a step leaves the bracket: the plastic multiplier of the
+/// return mappings with degradation or Armstrong–Frederick recovery (the vector one and its
+/// scalar fast path). `phi` returns φ and φ'; stops at |φ| ≤ `tol` or a collapsed bracket.
+fn safeguarded_newton(
+    phi: impl Fn(f64) -> (f64, f64),
+    mut g: f64,
+    mut lo: f64,
+    mut hi: f64,
+    tol: f64,
+) -> f64 {
+    for _ in 0..100 {
+        let (v, d) = phi(g);
+        if v.abs() <= tol {
+            break;
+        }
+        if v > 0.0 {
+            lo = g;
+        } else {
+            hi = g;
+        }
+        let mut next = if d < 0.0 { g - v / d } else { f64::NAN };
+        if !(next > lo && next < hi) {
+            next = 0.5 * (lo + hi);
+        }
+        if next == g || hi - lo <= f64::EPSILON * hi {
+            break;
+        }
+        g = next;
+    }
+    g
 }
 
 #[cfg(test)]
