@@ -29,6 +29,8 @@ pub enum Command {
     /// Run a whole campaign (default: the bundled demo, pipelines/demo.toml) and write its report
     /// folder under reports/.
     Run(RunArgs),
+    /// Build a campaign's outputs from the shards of `run --shard I/N` (as one run would).
+    Merge(crate::commands::merge::MergeArgs),
     /// Show what the reader finds in a raw export: layout, encoding, blocks, channels, metadata.
     Inspect(InspectArgs),
     /// Convert a raw export to the canonical record (SI units) as Parquet or CSV.
@@ -86,6 +88,10 @@ pub struct RunArgs {
     /// Skip the gap diagnosis (characterisation, calibration and reports only).
     #[arg(long)]
     pub no_diagnosis: bool,
+    /// Evaluate only share I of N of the tests (I from 1) into reports/<campaign>/shards/;
+    /// `cablab merge` then builds the report. See deploy/ for Slurm, Kubernetes, GNU parallel.
+    #[arg(long, value_name = "I/N")]
+    pub shard: Option<crate::pipeline::shard::Shard>,
 }
 
 /// `cablab inspect`.

@@ -13,6 +13,9 @@ pub mod output;
 pub mod pipeline;
 pub mod text;
 
+/// The cablab version written into manifests, summaries, shard records and cache keys.
+pub const VERSION: &str = env!("CARGO_PKG_VERSION");
+
 pub use cablab_core as core;
 pub use cablab_diagnose as diagnose;
 pub use cablab_ingest as ingest;

@@ -10,6 +10,7 @@ pub mod bench;
 pub mod convert;
 pub mod diagnose;
 pub mod inspect;
+pub mod merge;
 pub mod run;
 pub mod simulate;
 pub mod synth;
@@ -60,6 +61,7 @@ pub fn dispatch(cli: Cli) -> CmdResult {
     match cli.command {
         Command::Run(a) => run::run(a),
         Command::Verify(a) => run::verify(a),
+        Command::Merge(a) => merge::run(a),
         Command::Inspect(a) => inspect::run(a),
         Command::Convert(a) => convert::run(a),
         Command::Analyze(a) => analyze::run(a),

@@ -26,16 +26,17 @@ pub fn run(a: RunArgs) -> CmdResult {
         campaign.tests.len(),
         path.display()
     );
-    let r = runner::run_campaign(
-        &campaign,
-        &runner::RunOptions {
-            jobs: a.jobs,
-            no_cache: a.no_cache,
-            quiet,
-            no_diagnosis: a.no_diagnosis,
-            output_override: None,
-        },
-    )
+    let opts = runner::RunOptions {
+        jobs: a.jobs,
+        no_cache: a.no_cache,
+        quiet,
+        no_diagnosis: a.no_diagnosis,
+        output_override: None,
+    };
+    let r = match a.shard {
+        Some(s) => runner::run_shard(&campaign, &opts, s),
+        None => runner::run_campaign(&campaign, &opts),
+    }
     .map_err(CliError::failed)?;
     for o in &r.outcomes {
         if let Some(e) = &o.error {
@@ -52,7 +53,10 @@ pub fn run(a: RunArgs) -> CmdResult {
         r.seconds,
         r.out_dir.display()
     );
-    eprintln!("cablab: open {}", r.out_dir.join("index.html").display());
+    match a.shard {
+        Some(s) => eprintln!("cablab: shard {s} done; `cablab merge` builds the report once all are"),
+        None => eprintln!("cablab: open {}", r.out_dir.join("index.html").display()),
+    }
     Ok(if failed == 0 {
         ExitCode::SUCCESS
     } else {

@@ -5,7 +5,7 @@
 
 use super::config::Campaign;
 use super::evaluate::TestOutcome;
-use super::runner::VERSION;
+use crate::VERSION;
 use crate::output::{sha256_hex, to_json_bytes, write_atomic};
 use anyhow::{Context, Result};
 use cablab_core::TestKind;

@@ -7,6 +7,7 @@
 //! - [`runner`]: parallel execution, cache, progress, per-test files.
 //! - [`campaign`]: summary, tables, manifest. [`report`]: campaign plots and the HTML report.
 //! - [`views`]: maps stage results onto the report crate's view models.
+//! - [`shard`]: one share of the tests per machine (`run --shard I/N`) and the merge.
 //! - [`verify`]: rerun from a manifest and compare.
 
 pub mod campaign;
@@ -14,5 +15,6 @@ pub mod config;
 pub mod evaluate;
 pub mod report;
 pub mod runner;
+pub mod shard;
 pub mod verify;
 pub mod views;

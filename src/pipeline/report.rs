@@ -157,7 +157,7 @@ pub fn html(
         title: format!("cablab campaign report: {}", c.file.campaign.name),
         generated_by: format!(
             "cablab {}, pipeline {}",
-            super::runner::VERSION,
+            crate::VERSION,
             c.file.campaign.name
         ),
         summary,

@@ -1,12 +1,22 @@
 //! Runs a validated campaign: every test through [`super::evaluate`] in parallel (rayon, a pool of
 //! `--jobs` threads), with a content-hash cache per test, indicatif progress per stage, then the
 //! campaign outputs (tables, summary, report, manifest). Outputs are written atomically and are
-//! byte-identical across runs and thread counts: results are collected in the campaign's fixed
-//! order and nothing time- or thread-dependent is written.
+//! byte-identical across runs, thread counts and shard counts: results are collected in the
+//! campaign's fixed order and nothing time- or thread-dependent is written.
+//!
+//! A run builds its report folder beside the old one and swaps it in only when everything was
+//! written ([`crate::output::StagedDir`]): a run that fails leaves the previous report as it was.
+//! The cache is read from the previous folder and carried over into the new one.
+//!
+//! Does not split a campaign across machines by itself: [`run_shard`] evaluates one share and
+//! [`super::shard::merge`] builds the outputs from all shares; an existing engine (Slurm, a
+//! Kubernetes Indexed Job, GNU parallel; see `deploy/`) starts the shares.
 
 use super::config::{Campaign, PlannedTest};
 use super::evaluate::{evaluate, StageObserver, TestOutcome, STAGES};
-use crate::output::{sha256_hex, to_json_bytes, write_atomic};
+use super::shard::Shard;
+use crate::output::{sha256_hex, to_json_bytes, write_atomic, StagedDir};
+use crate::VERSION;
 use anyhow::{anyhow, Context, Result};
 use indicatif::{MultiProgress, ProgressBar, ProgressDrawTarget, ProgressStyle};
 use serde::Serialize;
@@ -49,9 +59,6 @@ impl RunReport {
 
 /// Stack of each worker thread: deep enough for the rod solver and the fits of one test.
 const WORKER_STACK_BYTES: usize = 16 << 20;
-
-/// The cablab version written into manifests and cache keys.
-pub const VERSION: &str = env!("CARGO_PKG_VERSION");
 
 struct Bars {
     bars: Vec<ProgressBar>,
@@ -171,13 +178,73 @@ fn cached(test_dir: &Path, key: &str) -> Option<TestOutcome> {
     Some(o)
 }
 
-/// Run the campaign.
+/// Run the campaign: every test, then the campaign outputs, swapped into the output folder only
+/// when all of it was written.
 pub fn run_campaign(c: &Campaign, o: &RunOptions) -> Result<RunReport> {
     let start = std::time::Instant::now();
-    let out_dir = o.output_override.clone().unwrap_or_else(|| c.output_dir());
+    let target = o.output_override.clone().unwrap_or_else(|| c.output_dir());
+    let stage = StagedDir::new(&target)?;
+    let tests: Vec<&PlannedTest> = c.tests.iter().collect();
+    let kept = |e: anyhow::Error| {
+        e.context(format!(
+            "the run did not finish; {} is left as it was",
+            target.display()
+        ))
+    };
+    let (outcomes, cached_n) =
+        evaluate_tests(c, &tests, stage.path(), &[target.clone()], o).map_err(kept)?;
+    super::campaign::write_campaign_outputs(c, stage.path(), &outcomes).map_err(kept)?;
+    stage.commit()?;
+    Ok(RunReport {
+        out_dir: target,
+        outcomes,
+        cached: cached_n,
+        seconds: start.elapsed().as_secs_f64(),
+    })
+}
+
+/// Run one share of the campaign ([`Shard`]): its tests' folders and a `shard.json` record go to
+/// `<output>/shards/<I>-of-<N>/` (replaced whole on success); the campaign outputs are left to
+/// [`super::shard::merge`]. The cache is served from an earlier run of this shard or from the
+/// campaign's report folder.
+pub fn run_shard(c: &Campaign, o: &RunOptions, shard: Shard) -> Result<RunReport> {
+    let start = std::time::Instant::now();
+    let base = o.output_override.clone().unwrap_or_else(|| c.output_dir());
+    let target = base.join(super::shard::SHARDS_DIR).join(shard.dir_name());
+    let stage = StagedDir::new(&target)?;
+    let tests = shard.select(&c.tests);
+    let (outcomes, cached_n) =
+        evaluate_tests(c, &tests, stage.path(), &[target.clone(), base], o)?;
+    let record = super::shard::ShardRecord::new(c, shard, diagnosis_on(c, o), outcomes.clone());
+    write_atomic(&stage.path().join(super::shard::RECORD), &to_json_bytes(&record)?)
+        .context("cannot write the shard record")?;
+    stage.commit()?;
+    Ok(RunReport {
+        out_dir: target,
+        outcomes,
+        cached: cached_n,
+        seconds: start.elapsed().as_secs_f64(),
+    })
+}
+
+/// Whether this run diagnoses (the pipeline enables it and `--no-diagnosis` was not given).
+fn diagnosis_on(c: &Campaign, o: &RunOptions) -> bool {
+    c.file.diagnosis.enabled && !o.no_diagnosis
+}
+
+/// Evaluate `tests` (campaign order) into `out_dir/tests/<slug>/`, serving unchanged tests from
+/// the first of `cache_roots` that holds them. Returns the outcomes in the order given and how
+/// many came from the cache.
+fn evaluate_tests(
+    c: &Campaign,
+    tests: &[&PlannedTest],
+    out_dir: &Path,
+    cache_roots: &[PathBuf],
+    o: &RunOptions,
+) -> Result<(Vec<TestOutcome>, usize)> {
     std::fs::create_dir_all(out_dir.join("tests"))
         .with_context(|| format!("cannot create {}", out_dir.display()))?;
-    let diagnosis = c.file.diagnosis.enabled && !o.no_diagnosis;
+    let diagnosis = diagnosis_on(c, o);
     let jobs = o
         .jobs
         .filter(|&j| j > 0)
@@ -192,23 +259,23 @@ pub fn run_campaign(c: &Campaign, o: &RunOptions) -> Result<RunReport> {
         .stack_size(WORKER_STACK_BYTES)
         .build()
         .map_err(|e| anyhow!("cannot start {jobs} worker threads: {e}"))?;
-    let progress = bars(c.tests.len(), o.quiet);
+    let progress = bars(tests.len(), o.quiet);
     let next = std::sync::atomic::AtomicUsize::new(0);
-    let slots: Vec<std::sync::Mutex<Option<(TestOutcome, bool)>>> = c
-        .tests
+    let slots: Vec<std::sync::Mutex<Option<(TestOutcome, bool)>>> = tests
         .iter()
         .map(|_| std::sync::Mutex::new(None))
         .collect();
+    let cache_roots: &[PathBuf] = if o.no_cache { &[] } else { cache_roots };
     std::thread::scope(|scope| -> Result<()> {
-        for w in 0..jobs.min(c.tests.len()).max(1) {
+        for w in 0..jobs.min(tests.len()).max(1) {
             std::thread::Builder::new()
                 .name(format!("cablab-test-{w}"))
                 .stack_size(WORKER_STACK_BYTES)
                 .spawn_scoped(scope, || loop {
                     let i = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-                    let Some(t) = c.tests.get(i) else { break };
-                    let r =
-                        pool.install(|| one_test(c, t, &out_dir, diagnosis, o.no_cache, &progress));
+                    let Some(t) = tests.get(i) else { break };
+                    let r = pool
+                        .install(|| one_test(c, t, out_dir, diagnosis, cache_roots, &progress));
                     if let Ok(mut slot) = slots[i].lock() {
                         *slot = Some(r);
                     }
@@ -219,7 +286,7 @@ pub fn run_campaign(c: &Campaign, o: &RunOptions) -> Result<RunReport> {
     })?;
     let results: Vec<(TestOutcome, bool)> = slots
         .into_iter()
-        .zip(&c.tests)
+        .zip(tests)
         .map(|(s, t)| {
             s.into_inner().ok().flatten().unwrap_or_else(|| {
                 (
@@ -233,23 +300,38 @@ pub fn run_campaign(c: &Campaign, o: &RunOptions) -> Result<RunReport> {
         b.finish();
     }
     let cached_n = results.iter().filter(|r| r.1).count();
-    let outcomes: Vec<TestOutcome> = results.into_iter().map(|r| r.0).collect();
-    super::campaign::write_campaign_outputs(c, &out_dir, &outcomes)?;
-    Ok(RunReport {
-        out_dir,
-        outcomes,
-        cached: cached_n,
-        seconds: start.elapsed().as_secs_f64(),
-    })
+    Ok((results.into_iter().map(|r| r.0).collect(), cached_n))
 }
 
-/// One test: hash the input, serve from the cache or evaluate, write its files atomically.
+/// Copy (hard-link where the file system allows) a test's files from the folder `from` into
+/// `to`: the files its outcome lists (which must be there), `outcome.json` and the cache stamp
+/// (when present). Outputs are only ever replaced by rename, never changed in place, so a link is
+/// as good as a copy.
+pub(crate) fn copy_test_files(from: &Path, to: &Path, o: &TestOutcome) -> std::io::Result<()> {
+    let listed = o.files.iter().map(|(n, _)| (n.as_str(), true));
+    let extra = [("outcome.json", false), (CACHE_STAMP, false)];
+    for (name, required) in listed.chain(extra) {
+        let src = from.join(name);
+        if !required && !src.is_file() {
+            continue;
+        }
+        std::fs::create_dir_all(to)?;
+        let dst = to.join(name);
+        if std::fs::hard_link(&src, &dst).is_err() {
+            std::fs::copy(&src, &dst)?;
+        }
+    }
+    Ok(())
+}
+
+/// One test: hash the input, serve from the cache (carried into `out_dir`) or evaluate, write its
+/// files atomically into `out_dir`'s fresh test folder.
 fn one_test(
     c: &Campaign,
     t: &PlannedTest,
     out_dir: &Path,
     diagnosis: bool,
-    no_cache: bool,
+    cache_roots: &[PathBuf],
     obs: &Bars,
 ) -> (TestOutcome, bool) {
     let test_dir = out_dir.join("tests").join(super::evaluate::slug(&t.id));
@@ -270,29 +352,21 @@ fn one_test(
         Ok(k) => k,
         Err(e) => return (failed_outcome(t, format!("cache key: {e}")), false),
     };
-    if !no_cache {
-        if let Some(o) = cached(&test_dir, &key) {
-            for s in 0..STAGES.len() {
-                obs.done(s);
+    let slug = super::evaluate::slug(&t.id);
+    for root in cache_roots {
+        let from = root.join("tests").join(&slug);
+        if let Some(o) = cached(&from, &key) {
+            if copy_test_files(&from, &test_dir, &o).is_ok() {
+                for s in 0..STAGES.len() {
+                    obs.done(s);
+                }
+                return (o, true);
             }
-            return (o, true);
+            let _ = std::fs::remove_dir_all(&test_dir);
         }
     }
     let (mut outcome, files) = evaluate(c, t, &bytes, &input_sha, &key, diagnosis, obs);
     drop(bytes);
-    // Remove files of an earlier run that this run does not produce (e.g. gap plots of a test
-    // that is no longer diagnosed), then write the new ones.
-    if let Ok(rd) = std::fs::read_dir(&test_dir) {
-        for e in rd.flatten() {
-            let name = e.file_name().to_string_lossy().to_string();
-            if name != "outcome.json"
-                && name != CACHE_STAMP
-                && !files.iter().any(|(n, _)| n == &name)
-            {
-                let _ = std::fs::remove_file(e.path());
-            }
-        }
-    }
     for (name, b) in &files {
         if let Err(e) = write_atomic(&test_dir.join(name), b) {
             outcome

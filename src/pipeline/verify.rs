@@ -28,11 +28,11 @@ pub fn verify(manifest_path: &Path, jobs: Option<usize>) -> Result<VerifyReport>
     let report_dir = manifest_path.parent().unwrap_or(Path::new("."));
     let root = report_dir.join(&m.root_from_report);
     let mut rep = VerifyReport::default();
-    if m.cablab_version != super::runner::VERSION {
+    if m.cablab_version != crate::VERSION {
         rep.differences.push(format!(
             "manifest was written by cablab {}, this is {}",
             m.cablab_version,
-            super::runner::VERSION
+            crate::VERSION
         ));
     }
     let pipeline = root.join(&m.pipeline.path);

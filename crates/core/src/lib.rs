@@ -2,7 +2,10 @@
 //! effect names of the sim-to-real gap diagnosis.
 //!
 //! Everything here is plain data with serde names that are part of the scripted contract
-//! (`../shared/CONTRACT.md`): change a spelling here and scripts break. No I/O, no physics.
+//! (`../shared/CONTRACT.md`): change a spelling here and scripts break. No physics; the only I/O
+//! is [`output::write_atomic`], the one atomic file writer every crate uses.
+
+pub mod output;
 
 use serde::{Deserialize, Serialize};
 use std::fmt;

@@ -633,38 +633,17 @@ impl TestRecord {
     }
 }
 
+/// Encodes with `write` into memory, then hands the bytes to the one atomic writer
+/// ([`cablab_core::output::write_atomic`]): nothing is left behind on error.
 fn atomic_write(
     path: &Path,
-    write: impl FnOnce(&mut std::fs::File) -> Result<(), String>,
+    write: impl FnOnce(&mut Vec<u8>) -> Result<(), String>,
 ) -> Result<(), IngestError> {
     let err = |detail: String| IngestError::Write {
         path: PathBuf::from(path),
         detail,
     };
-    let dir = match path.parent() {
-        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
-        _ => PathBuf::from("."),
-    };
-    let mut tmp = tempfile::Builder::new()
-        .prefix(".cablab-")
-        .suffix(".part")
-        .tempfile_in(&dir)
-        .map_err(|e| {
-            err(format!(
-                "cannot create a temporary file in {}: {e}",
-                dir.display()
-            ))
-        })?;
-    write(tmp.as_file_mut()).map_err(err)?;
-    tmp.as_file().sync_all().map_err(|e| err(e.to_string()))?;
-    // Temporary files are created private (0600); an output is an ordinary file.
-    #[cfg(unix)]
-    {
-        use std::os::unix::fs::PermissionsExt;
-        tmp.as_file()
-            .set_permissions(std::fs::Permissions::from_mode(0o644))
-            .map_err(|e| err(e.to_string()))?;
-    }
-    tmp.persist(path).map_err(|e| err(e.error.to_string()))?;
-    Ok(())
+    let mut bytes = Vec::new();
+    write(&mut bytes).map_err(err)?;
+    cablab_core::output::write_atomic(path, &bytes).map_err(|e| err(e.to_string()))
 }

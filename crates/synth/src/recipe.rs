@@ -8,7 +8,7 @@
 //! series mean makes the series mean equal the nominal value (the chapter's tables report means).
 
 use std::collections::BTreeMap;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use cablab_core::{Specimen, TestKind};
 use rand::{Rng, SeedableRng};
@@ -291,15 +291,10 @@ fn io(p: &Path, source: std::io::Error) -> SynthError {
     }
 }
 
+/// The one atomic writer ([`cablab_core::output::write_atomic`]): temporary in the same folder,
+/// fsync, rename; nothing left behind on failure.
 fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), SynthError> {
-    let mut name = path
-        .file_name()
-        .map(|n| n.to_os_string())
-        .unwrap_or_default();
-    name.push(".partial");
-    let tmp: PathBuf = path.with_file_name(name);
-    std::fs::write(&tmp, bytes).map_err(|e| io(&tmp, e))?;
-    std::fs::rename(&tmp, path).map_err(|e| io(path, e))
+    cablab_core::output::write_atomic(path, bytes).map_err(|e| io(path, e))
 }
 
 #[cfg(test)]
@@ -408,5 +403,18 @@ protocol = { steps = [ { step = "cycles", lower = 0.0, upper = 1.0e-5, rate = 1.
         assert_eq!(std::fs::read(dir.path().join("t_1.dat")).unwrap(), first);
         // 1 cycle of 2 × 10 s at 10 Hz: 201 rows.
         assert_eq!(files[0].rows, 201);
+        // A file that cannot be written (its name is taken by a folder): an error naming it, the
+        // files already there unchanged, no temporary left beside them.
+        std::fs::remove_file(dir.path().join("t_2.csv")).unwrap();
+        std::fs::create_dir_all(dir.path().join("t_2.csv/taken")).unwrap();
+        let e = run_recipe(text, dir.path()).unwrap_err().to_string();
+        assert!(e.contains("t_2.csv"), "{e}");
+        let mut after: Vec<String> = std::fs::read_dir(dir.path())
+            .unwrap()
+            .map(|e| e.unwrap().file_name().into_string().unwrap())
+            .collect();
+        after.sort();
+        assert_eq!(after, vec!["TRUTH.toml", "t_1.dat", "t_2.csv"]);
+        assert_eq!(std::fs::read(dir.path().join("t_1.dat")).unwrap(), first);
     }
 }
