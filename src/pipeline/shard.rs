@@ -231,12 +231,13 @@ pub fn load_shards(c: &Campaign, output: Option<&Path>) -> Result<Shards> {
         }
         if r.pipeline_sha256 != pipeline_sha || r.campaign != c.file.campaign.name {
             problems.push(format!(
-                "shard {name} ran another pipeline (campaign '{}', SHA-256 {}) than {} \
-                 (campaign '{}', SHA-256 {pipeline_sha}): rerun it",
+                "shard {name} ran another pipeline (campaign '{}', SHA-256 {}…) than {} \
+                 (campaign '{}', SHA-256 {}…): rerun it",
                 r.campaign,
-                r.pipeline_sha256,
+                short(&r.pipeline_sha256),
                 c.pipeline_path.display(),
-                c.file.campaign.name
+                c.file.campaign.name,
+                short(&pipeline_sha)
             ));
         }
         let planned: Vec<&str> = s.select(&c.tests).iter().map(|t| t.id.as_str()).collect();
@@ -283,6 +284,10 @@ pub fn load_shards(c: &Campaign, output: Option<&Path>) -> Result<Shards> {
         diagnosis,
         records,
     })
+}
+
+fn short(sha: &str) -> &str {
+    sha.get(..12).unwrap_or(sha)
 }
 
 /// Build the campaign outputs from checked shards into the report folder (or `output`): every

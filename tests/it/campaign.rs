@@ -3,8 +3,7 @@
 //! only what an edit touches, a bad file is reported without losing the others, and a bad
 //! pipeline is refused before any work.
 
-use crate::common::{cablab, root};
-use std::collections::BTreeMap;
+use crate::common::{cablab, copy_dir, root, tree};
 use std::path::{Path, PathBuf};
 
 /// Copy the demo campaign (pipeline + raw data) into a fresh folder.
@@ -18,39 +17,6 @@ fn demo_copy() -> tempfile::TempDir {
     )
     .unwrap();
     d
-}
-
-fn copy_dir(from: &Path, to: &Path) {
-    std::fs::create_dir_all(to).unwrap();
-    for e in std::fs::read_dir(from).unwrap() {
-        let e = e.unwrap();
-        let p = e.path();
-        if p.is_dir() {
-            copy_dir(&p, &to.join(e.file_name()));
-        } else {
-            std::fs::copy(&p, to.join(e.file_name())).unwrap();
-        }
-    }
-}
-
-/// Every file below `dir` (relative path → bytes).
-fn tree(dir: &Path) -> BTreeMap<PathBuf, Vec<u8>> {
-    let mut out = BTreeMap::new();
-    let mut stack = vec![dir.to_path_buf()];
-    while let Some(d) = stack.pop() {
-        for e in std::fs::read_dir(&d).unwrap() {
-            let p = e.unwrap().path();
-            if p.is_dir() {
-                stack.push(p);
-            } else {
-                out.insert(
-                    p.strip_prefix(dir).unwrap().to_path_buf(),
-                    std::fs::read(&p).unwrap(),
-                );
-            }
-        }
-    }
-    out
 }
 
 fn run_in(dir: &Path, args: &[&str]) -> std::process::Output {
