@@ -34,7 +34,7 @@ pub fn run(a: RunArgs) -> CmdResult {
         output_override: None,
     };
     let r = match a.shard {
-        Some(s) => runner::run_shard(&campaign, &opts, s),
+        Some(s) => crate::pipeline::shard::run_shard(&campaign, &opts, s),
         None => runner::run_campaign(&campaign, &opts),
     }
     .map_err(CliError::failed)?;

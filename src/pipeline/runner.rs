@@ -8,13 +8,12 @@
 //! written ([`crate::output::StagedDir`]): a run that fails leaves the previous report as it was.
 //! The cache is read from the previous folder and carried over into the new one.
 //!
-//! Does not split a campaign across machines by itself: [`run_shard`] evaluates one share and
-//! [`super::shard::merge`] builds the outputs from all shares; an existing engine (Slurm, a
+//! Does not split a campaign across machines by itself: [`super::shard`] evaluates one share
+//! with `evaluate_tests` and builds the outputs from all shares; an existing engine (Slurm, a
 //! Kubernetes Indexed Job, GNU parallel; see `deploy/`) starts the shares.
 
 use super::config::{Campaign, PlannedTest};
 use super::evaluate::{evaluate, StageObserver, TestOutcome, STAGES};
-use super::shard::Shard;
 use crate::output::{sha256_hex, to_json_bytes, write_atomic, StagedDir};
 use crate::VERSION;
 use anyhow::{anyhow, Context, Result};
@@ -203,39 +202,15 @@ pub fn run_campaign(c: &Campaign, o: &RunOptions) -> Result<RunReport> {
     })
 }
 
-/// Run one share of the campaign ([`Shard`]): its tests' folders and a `shard.json` record go to
-/// `<output>/shards/<I>-of-<N>/` (replaced whole on success); the campaign outputs are left to
-/// [`super::shard::merge`]. The cache is served from an earlier run of this shard or from the
-/// campaign's report folder.
-pub fn run_shard(c: &Campaign, o: &RunOptions, shard: Shard) -> Result<RunReport> {
-    let start = std::time::Instant::now();
-    let base = o.output_override.clone().unwrap_or_else(|| c.output_dir());
-    let target = base.join(super::shard::SHARDS_DIR).join(shard.dir_name());
-    let stage = StagedDir::new(&target)?;
-    let tests = shard.select(&c.tests);
-    let (outcomes, cached_n) =
-        evaluate_tests(c, &tests, stage.path(), &[target.clone(), base], o)?;
-    let record = super::shard::ShardRecord::new(c, shard, diagnosis_on(c, o), outcomes.clone());
-    write_atomic(&stage.path().join(super::shard::RECORD), &to_json_bytes(&record)?)
-        .context("cannot write the shard record")?;
-    stage.commit()?;
-    Ok(RunReport {
-        out_dir: target,
-        outcomes,
-        cached: cached_n,
-        seconds: start.elapsed().as_secs_f64(),
-    })
-}
-
 /// Whether this run diagnoses (the pipeline enables it and `--no-diagnosis` was not given).
-fn diagnosis_on(c: &Campaign, o: &RunOptions) -> bool {
+pub(crate) fn diagnosis_on(c: &Campaign, o: &RunOptions) -> bool {
     c.file.diagnosis.enabled && !o.no_diagnosis
 }
 
 /// Evaluate `tests` (campaign order) into `out_dir/tests/<slug>/`, serving unchanged tests from
 /// the first of `cache_roots` that holds them. Returns the outcomes in the order given and how
 /// many came from the cache.
-fn evaluate_tests(
+pub(crate) fn evaluate_tests(
     c: &Campaign,
     tests: &[&PlannedTest],
     out_dir: &Path,

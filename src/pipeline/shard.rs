@@ -1,6 +1,6 @@
 //! A campaign across machines, on an engine that already exists (Slurm array jobs, Kubernetes
 //! Indexed Jobs, GNU parallel; recipes in `deploy/`): `cablab run --shard I/N` evaluates share I
-//! of N ([`super::runner::run_shard`]), `cablab merge` builds the campaign outputs from all
+//! of N ([`run_shard`]), `cablab merge` builds the campaign outputs from all
 //! shares ([`merge`]), byte-identical to a run on one machine.
 //!
 //! The share is fixed by the test ids alone: with the campaign's tests sorted by id (their paths
@@ -21,8 +21,8 @@
 
 use super::config::{Campaign, PlannedTest};
 use super::evaluate::TestOutcome;
-use super::runner::{copy_test_files, RunReport};
-use crate::output::{sha256_hex, StagedDir};
+use super::runner::{self, copy_test_files, RunOptions, RunReport};
+use crate::output::{sha256_hex, to_json_bytes, write_atomic, StagedDir};
 use crate::VERSION;
 use anyhow::{anyhow, bail, Context, Result};
 use serde::{Deserialize, Serialize};
@@ -128,6 +128,30 @@ impl ShardRecord {
             outcomes,
         }
     }
+}
+
+/// Run one share of the campaign: its tests' folders and a `shard.json` record go to
+/// `<output>/shards/<I>-of-<N>/` (replaced whole on success); the campaign outputs are left to
+/// [`merge`]. The cache is served from an earlier run of this shard or from the
+/// campaign's report folder.
+pub fn run_shard(c: &Campaign, o: &RunOptions, shard: Shard) -> Result<RunReport> {
+    let start = std::time::Instant::now();
+    let base = o.output_override.clone().unwrap_or_else(|| c.output_dir());
+    let target = base.join(SHARDS_DIR).join(shard.dir_name());
+    let stage = StagedDir::new(&target)?;
+    let tests = shard.select(&c.tests);
+    let (outcomes, cached_n) =
+        runner::evaluate_tests(c, &tests, stage.path(), &[target.clone(), base], o)?;
+    let record = ShardRecord::new(c, shard, runner::diagnosis_on(c, o), outcomes.clone());
+    write_atomic(&stage.path().join(RECORD), &to_json_bytes(&record)?)
+        .context("cannot write the shard record")?;
+    stage.commit()?;
+    Ok(RunReport {
+        out_dir: target,
+        outcomes,
+        cached: cached_n,
+        seconds: start.elapsed().as_secs_f64(),
+    })
 }
 
 /// The shards of a campaign, read and checked against each other and against the pipeline.
