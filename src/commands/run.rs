@@ -11,14 +11,7 @@ pub const DEMO_PIPELINE: &str = "pipelines/demo.toml";
 
 /// Run `cablab run`.
 pub fn run(a: RunArgs) -> CmdResult {
-    let path = a.pipeline.unwrap_or_else(|| PathBuf::from(DEMO_PIPELINE));
-    if !path.exists() {
-        return Err(CliError::input(anyhow::anyhow!(
-            "pipeline {} not found (run from the project folder, or give a pipeline file)",
-            path.display()
-        )));
-    }
-    let campaign = config::load(&path).map_err(CliError::input)?;
+    let (path, campaign) = load_campaign(a.pipeline)?;
     let quiet = a.quiet || std::env::var_os("CI").is_some();
     eprintln!(
         "cablab: campaign '{}': {} tests from {}",
@@ -38,6 +31,30 @@ pub fn run(a: RunArgs) -> CmdResult {
         None => runner::run_campaign(&campaign, &opts),
     }
     .map_err(CliError::failed)?;
+    let next = match a.shard {
+        Some(s) => format!("shard {s} done; `cablab merge` builds the report once all are"),
+        None => format!("open {}", r.out_dir.join("index.html").display()),
+    };
+    Ok(print_run(&r, &next))
+}
+
+/// The campaign `run` and `merge` work on: the pipeline given, else the demo's.
+pub(crate) fn load_campaign(
+    pipeline: Option<PathBuf>,
+) -> Result<(PathBuf, config::Campaign), CliError> {
+    let path = pipeline.unwrap_or_else(|| PathBuf::from(DEMO_PIPELINE));
+    if !path.exists() {
+        return Err(CliError::input(anyhow::anyhow!(
+            "pipeline {} not found (run from the project folder, or give a pipeline file)",
+            path.display()
+        )));
+    }
+    let campaign = config::load(&path).map_err(CliError::input)?;
+    Ok((path, campaign))
+}
+
+/// Print a finished run's failures, its counts and what to do next; exit 1 when a test failed.
+pub(crate) fn print_run(r: &runner::RunReport, next: &str) -> ExitCode {
     for o in &r.outcomes {
         if let Some(e) = &o.error {
             eprintln!("cablab: FAILED {}: {e}", o.id);
@@ -53,15 +70,12 @@ pub fn run(a: RunArgs) -> CmdResult {
         r.seconds,
         r.out_dir.display()
     );
-    match a.shard {
-        Some(s) => eprintln!("cablab: shard {s} done; `cablab merge` builds the report once all are"),
-        None => eprintln!("cablab: open {}", r.out_dir.join("index.html").display()),
-    }
-    Ok(if failed == 0 {
+    eprintln!("cablab: {next}");
+    if failed == 0 {
         ExitCode::SUCCESS
     } else {
         ExitCode::from(1)
-    })
+    }
 }
 
 /// Run `cablab verify`.

@@ -50,6 +50,21 @@ pub struct RunReport {
 }
 
 impl RunReport {
+    /// What a run that started at `start` did.
+    pub fn new(
+        out_dir: PathBuf,
+        outcomes: Vec<TestOutcome>,
+        cached: usize,
+        start: std::time::Instant,
+    ) -> Self {
+        RunReport {
+            out_dir,
+            outcomes,
+            cached,
+            seconds: start.elapsed().as_secs_f64(),
+        }
+    }
+
     /// Tests that failed.
     pub fn failed(&self) -> usize {
         self.outcomes.iter().filter(|o| o.error.is_some()).count()
@@ -194,12 +209,7 @@ pub fn run_campaign(c: &Campaign, o: &RunOptions) -> Result<RunReport> {
         evaluate_tests(c, &tests, stage.path(), &[target.clone()], o).map_err(kept)?;
     super::campaign::write_campaign_outputs(c, stage.path(), &outcomes).map_err(kept)?;
     stage.commit()?;
-    Ok(RunReport {
-        out_dir: target,
-        outcomes,
-        cached: cached_n,
-        seconds: start.elapsed().as_secs_f64(),
-    })
+    Ok(RunReport::new(target, outcomes, cached_n, start))
 }
 
 /// Whether this run diagnoses (the pipeline enables it and `--no-diagnosis` was not given).

@@ -146,12 +146,7 @@ pub fn run_shard(c: &Campaign, o: &RunOptions, shard: Shard) -> Result<RunReport
     write_atomic(&stage.path().join(RECORD), &to_json_bytes(&record)?)
         .context("cannot write the shard record")?;
     stage.commit()?;
-    Ok(RunReport {
-        out_dir: target,
-        outcomes,
-        cached: cached_n,
-        seconds: start.elapsed().as_secs_f64(),
-    })
+    Ok(RunReport::new(target, outcomes, cached_n, start))
 }
 
 /// The shards of a campaign, read and checked against each other and against the pipeline.
@@ -361,12 +356,7 @@ pub fn merge(c: &Campaign, shards: Shards, output: Option<&Path>) -> Result<RunR
         ))
     })?;
     stage.commit()?;
-    Ok(RunReport {
-        out_dir: target,
-        outcomes,
-        cached: 0,
-        seconds: start.elapsed().as_secs_f64(),
-    })
+    Ok(RunReport::new(target, outcomes, 0, start))
 }
 
 #[cfg(test)]

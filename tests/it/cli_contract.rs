@@ -6,7 +6,7 @@
 //! Does not test the physics or the readers in depth (their crates do); `run`/`verify` are in
 //! `campaign.rs`. Tests needing `../shared/real_logs` print a `SKIPPED:` line when it is absent.
 
-use crate::common::{cablab, real_logs, root};
+use crate::common::{cablab, real_logs, root, tree};
 use cablab_core::{Role, Specimen, TestKind};
 use cablab_ingest::{Format, ReadOptions};
 use cablab_synth::{Artefacts, Layout, Protocol, Rig, Step, SynthSpec};
@@ -1352,20 +1352,10 @@ fn synth_recipe_regenerates_raw_data_bit_for_bit() {
     assert_eq!(out.code, 0, "{}", out.stderr);
     let raw = root().join("raw_data");
     let rel_files = |base: &Path| -> Vec<String> {
-        let mut v = Vec::new();
-        let mut stack = vec![base.to_path_buf()];
-        while let Some(d) = stack.pop() {
-            for e in std::fs::read_dir(&d).unwrap() {
-                let p = e.unwrap().path();
-                if p.is_dir() {
-                    stack.push(p);
-                } else {
-                    v.push(p.strip_prefix(base).unwrap().to_string_lossy().into_owned());
-                }
-            }
-        }
-        v.sort();
-        v
+        tree(base)
+            .keys()
+            .map(|p| p.to_string_lossy().into_owned())
+            .collect()
     };
     let written = rel_files(dir.path());
     let mut expected = rel_files(&raw);

@@ -391,12 +391,15 @@ protocol = { steps = [ { step = "cycles", lower = 0.0, upper = 1.0e-5, rate = 1.
         let dir = tempfile::tempdir().unwrap();
         let files = run_recipe(text, dir.path()).unwrap();
         assert_eq!(files.len(), 2);
-        let mut names: Vec<String> = std::fs::read_dir(dir.path())
-            .unwrap()
-            .map(|e| e.unwrap().file_name().into_string().unwrap())
-            .collect();
-        names.sort();
-        assert_eq!(names, vec!["TRUTH.toml", "t_1.dat", "t_2.csv"]);
+        let names = || {
+            let mut v: Vec<String> = std::fs::read_dir(dir.path())
+                .unwrap()
+                .map(|e| e.unwrap().file_name().into_string().unwrap())
+                .collect();
+            v.sort();
+            v
+        };
+        assert_eq!(names(), vec!["TRUTH.toml", "t_1.dat", "t_2.csv"]);
         let first = std::fs::read(dir.path().join("t_1.dat")).unwrap();
         let again = run_recipe(text, dir.path()).unwrap();
         assert_eq!(again, files);
@@ -409,12 +412,7 @@ protocol = { steps = [ { step = "cycles", lower = 0.0, upper = 1.0e-5, rate = 1.
         std::fs::create_dir_all(dir.path().join("t_2.csv/taken")).unwrap();
         let e = run_recipe(text, dir.path()).unwrap_err().to_string();
         assert!(e.contains("t_2.csv"), "{e}");
-        let mut after: Vec<String> = std::fs::read_dir(dir.path())
-            .unwrap()
-            .map(|e| e.unwrap().file_name().into_string().unwrap())
-            .collect();
-        after.sort();
-        assert_eq!(after, vec!["TRUTH.toml", "t_1.dat", "t_2.csv"]);
+        assert_eq!(names(), vec!["TRUTH.toml", "t_1.dat", "t_2.csv"]);
         assert_eq!(std::fs::read(dir.path().join("t_1.dat")).unwrap(), first);
     }
 }
