@@ -108,9 +108,8 @@ impl StagedDir {
             if aside.exists() {
                 let _ = std::fs::remove_dir_all(&aside);
             }
-            std::fs::rename(&self.target, &aside).map_err(|e| {
-                anyhow::anyhow!("cannot move {} aside: {e}", self.target.display())
-            })?;
+            std::fs::rename(&self.target, &aside)
+                .map_err(|e| anyhow::anyhow!("cannot move {} aside: {e}", self.target.display()))?;
         }
         if let Err(e) = std::fs::rename(&self.staging, &self.target) {
             if had_old {

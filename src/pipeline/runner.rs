@@ -246,10 +246,8 @@ pub(crate) fn evaluate_tests(
         .map_err(|e| anyhow!("cannot start {jobs} worker threads: {e}"))?;
     let progress = bars(tests.len(), o.quiet);
     let next = std::sync::atomic::AtomicUsize::new(0);
-    let slots: Vec<std::sync::Mutex<Option<(TestOutcome, bool)>>> = tests
-        .iter()
-        .map(|_| std::sync::Mutex::new(None))
-        .collect();
+    let slots: Vec<std::sync::Mutex<Option<(TestOutcome, bool)>>> =
+        tests.iter().map(|_| std::sync::Mutex::new(None)).collect();
     let cache_roots: &[PathBuf] = if o.no_cache { &[] } else { cache_roots };
     std::thread::scope(|scope| -> Result<()> {
         for w in 0..jobs.min(tests.len()).max(1) {
@@ -259,8 +257,8 @@ pub(crate) fn evaluate_tests(
                 .spawn_scoped(scope, || loop {
                     let i = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
                     let Some(t) = tests.get(i) else { break };
-                    let r = pool
-                        .install(|| one_test(c, t, out_dir, diagnosis, cache_roots, &progress));
+                    let r =
+                        pool.install(|| one_test(c, t, out_dir, diagnosis, cache_roots, &progress));
                     if let Ok(mut slot) = slots[i].lock() {
                         *slot = Some(r);
                     }
@@ -319,7 +317,8 @@ fn one_test(
     cache_roots: &[PathBuf],
     obs: &Bars,
 ) -> (TestOutcome, bool) {
-    let test_dir = out_dir.join("tests").join(super::evaluate::slug(&t.id));
+    let slug = super::evaluate::slug(&t.id);
+    let test_dir = out_dir.join("tests").join(&slug);
     let bytes = match std::fs::read(&t.path) {
         Ok(b) => b,
         Err(e) => {
@@ -337,7 +336,6 @@ fn one_test(
         Ok(k) => k,
         Err(e) => return (failed_outcome(t, format!("cache key: {e}")), false),
     };
-    let slug = super::evaluate::slug(&t.id);
     for root in cache_roots {
         let from = root.join("tests").join(&slug);
         if let Some(o) = cached(&from, &key) {

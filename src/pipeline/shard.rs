@@ -225,7 +225,10 @@ pub fn load_shards(c: &Campaign, output: Option<&Path>) -> Result<Shards> {
             Ok(b) => match serde_json::from_slice(&b) {
                 Ok(r) => r,
                 Err(e) => {
-                    problems.push(format!("{}: not a cablab shard record: {e}", file.display()));
+                    problems.push(format!(
+                        "{}: not a cablab shard record: {e}",
+                        file.display()
+                    ));
                     continue;
                 }
             },
@@ -278,11 +281,7 @@ pub fn load_shards(c: &Campaign, output: Option<&Path>) -> Result<Shards> {
         .collect();
     diag.sort();
     if diag.first().map(|d| d.0) != diag.last().map(|d| d.0) {
-        let without: Vec<&str> = diag
-            .iter()
-            .filter(|d| !d.0)
-            .map(|d| d.1.as_str())
-            .collect();
+        let without: Vec<&str> = diag.iter().filter(|d| !d.0).map(|d| d.1.as_str()).collect();
         problems.push(format!(
             "shards disagree on the diagnosis: {} ran without it (--no-diagnosis), the others \
              with it: rerun them alike",
@@ -337,9 +336,8 @@ pub fn merge(c: &Campaign, shards: Shards, output: Option<&Path>) -> Result<RunR
                     "{}: does not match the hash its shard recorded (changed after the shard \
                      ran?): rerun shard {}",
                     from.join(name).display(),
-                    path.file_name().map_or(String::new(), |n| n
-                        .to_string_lossy()
-                        .to_string())
+                    path.file_name()
+                        .map_or(String::new(), |n| n.to_string_lossy().to_string())
                 );
             }
         }
@@ -415,7 +413,10 @@ mod tests {
                 let s = Shard { index: i, count: n };
                 let mine: Vec<&str> = s.select(&tests).iter().map(|t| t.id.as_str()).collect();
                 // Round-robin over the sorted ids: sizes differ by at most one.
-                assert!(mine.len() == 7 / n || mine.len() == 7 / n + 1, "{n}: {mine:?}");
+                assert!(
+                    mine.len() == 7 / n || mine.len() == 7 / n + 1,
+                    "{n}: {mine:?}"
+                );
                 // Campaign order is kept inside a share.
                 let pos: Vec<usize> = mine
                     .iter()

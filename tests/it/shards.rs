@@ -79,7 +79,14 @@ fn shards_then_merge(dir: &Path, n: usize, extra: &[&str]) -> String {
     let children: Vec<_> = (1..=n)
         .map(|i| {
             cablab_in(dir)
-                .args(["run", PIPELINE, "--shard", &format!("{i}/{n}"), "--jobs", "1"])
+                .args([
+                    "run",
+                    PIPELINE,
+                    "--shard",
+                    &format!("{i}/{n}"),
+                    "--jobs",
+                    "1",
+                ])
                 .args(extra)
                 .stderr(std::process::Stdio::piped())
                 .spawn()
@@ -128,7 +135,10 @@ fn shards_in_separate_processes_merge_to_the_single_run_byte_for_byte() {
 
     let sharded = small_project();
     let err = shards_then_merge(sharded.path(), 3, &[]);
-    assert!(err.contains("merging 3 shards (4 tests, diagnosis on)"), "{err}");
+    assert!(
+        err.contains("merging 3 shards (4 tests, diagnosis on)"),
+        "{err}"
+    );
     // The merge consumed the shards: nothing but the report is left, byte for byte the single
     // run's (the manifest's hashes and the HTML's embedded plots included).
     assert_same_tree(&report(single.path()), &report(sharded.path()), "3 shards");
@@ -166,7 +176,12 @@ fn merge_refuses_missing_mixed_and_stale_shards_and_changes_nothing() {
             .output()
             .unwrap()
     };
-    let merge = || cablab_in(d.path()).args(["merge", PIPELINE]).output().unwrap();
+    let merge = || {
+        cablab_in(d.path())
+            .args(["merge", PIPELINE])
+            .output()
+            .unwrap()
+    };
     let refused = |o: Output| -> String {
         assert_eq!(o.status.code(), Some(2), "a refused merge is bad input");
         String::from_utf8_lossy(&o.stderr).to_string()
@@ -183,7 +198,10 @@ fn merge_refuses_missing_mixed_and_stale_shards_and_changes_nothing() {
     // A stale shard of another count.
     ok(&run(&["--shard", "1/2"]));
     let e = refused(merge());
-    assert!(e.contains("shards of different counts (N = 2, N = 3)"), "{e}");
+    assert!(
+        e.contains("shards of different counts (N = 2, N = 3)"),
+        "{e}"
+    );
     std::fs::remove_dir_all(shards.join("1-of-2")).unwrap();
     // The pipeline changed after two shards ran; the third runs the new one.
     let p = d.path().join(PIPELINE);
