@@ -162,8 +162,8 @@ pub struct Shards {
 }
 
 /// Read `<report folder>/shards/` of campaign `c` (or of `output`, when given) and check that it
-/// holds exactly one complete, consistent set of shards for the pipeline as it is now. The error
-/// lists every problem found.
+/// holds exactly one complete, consistent set of shards for the pipeline as it is now, every
+/// file a shard lists present with the hash it recorded. The error lists every problem found.
 pub fn load_shards(c: &Campaign, output: Option<&Path>) -> Result<Shards> {
     let base = output.map_or_else(|| c.output_dir(), Path::to_path_buf);
     let dir = base.join(SHARDS_DIR);
@@ -273,6 +273,23 @@ pub fn load_shards(c: &Campaign, output: Option<&Path>) -> Result<Shards> {
                     + held.iter().filter(|id| !planned.contains(id)).count()
             ));
         }
+        for o in &r.outcomes {
+            let from = path.join("tests").join(&o.slug);
+            for (file, sha) in &o.files {
+                let p = from.join(file);
+                match std::fs::read(&p) {
+                    Ok(b) if &sha256_hex(&b) == sha => {}
+                    Ok(_) => problems.push(format!(
+                        "{}: not what shard {name} recorded (changed since it ran?): rerun it",
+                        p.display()
+                    )),
+                    Err(e) => problems.push(format!(
+                        "{}: missing from shard {name} ({e}): rerun it",
+                        p.display()
+                    )),
+                }
+            }
+        }
         records.push((path.clone(), r));
     }
     let mut diag: Vec<(bool, String)> = records
@@ -309,8 +326,7 @@ fn short(sha: &str) -> &str {
 }
 
 /// Build the campaign outputs from checked shards into the report folder (or `output`): every
-/// test's folder is copied from its shard (its files checked against their recorded hashes),
-/// then summary, tables, plots, report and manifest are written exactly as a single run writes
+/// test's folder is copied from its shard, then summary, tables, plots, report and manifest are written exactly as a single run writes
 /// them. The report folder, shards included, is replaced only when all of it was written.
 pub fn merge(c: &Campaign, shards: Shards, output: Option<&Path>) -> Result<RunReport> {
     let start = std::time::Instant::now();
@@ -328,19 +344,6 @@ pub fn merge(c: &Campaign, shards: Shards, output: Option<&Path>) -> Result<RunR
             .remove(&t.id)
             .ok_or_else(|| anyhow!("no shard holds test {}", t.id))?;
         let from = path.join("tests").join(&o.slug);
-        for (name, sha) in &o.files {
-            let b = std::fs::read(from.join(name))
-                .with_context(|| format!("cannot read {}", from.join(name).display()))?;
-            if &sha256_hex(&b) != sha {
-                bail!(
-                    "{}: does not match the hash its shard recorded (changed after the shard \
-                     ran?): rerun shard {}",
-                    from.join(name).display(),
-                    path.file_name()
-                        .map_or(String::new(), |n| n.to_string_lossy().to_string())
-                );
-            }
-        }
         if from.is_dir() {
             copy_test_files(&from, &stage.path().join("tests").join(&o.slug), &o)
                 .with_context(|| format!("cannot copy {}", from.display()))?;

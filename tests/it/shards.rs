@@ -1,7 +1,8 @@
 //! A campaign beyond one machine and a report that survives a failed run: `run --shard I/N` in
 //! separate processes plus `merge` give the single run's folder byte for byte (whatever N, also
-//! with a shard that gets no test), the merge refuses shards that do not belong together, and a
-//! run that fails mid-way leaves the previous report as it was.
+//! with a shard that gets no test, also with a failing test), the merge refuses shards that do not
+//! belong together or were changed after they ran, and a run that fails mid-way leaves the
+//! previous report as it was.
 //!
 //! A small campaign of four demo files (tension ×2, torsion, pure bending) keeps this fast; the
 //! three-shard comparison runs with the diagnosis, the other shard counts without it.
@@ -215,6 +216,17 @@ fn merge_refuses_missing_mixed_and_stale_shards_and_changes_nothing() {
         "{e}"
     );
     assert!(!e.contains("shard 2-of-3 ran another"), "{e}");
+    // A shard's file changed after it ran.
+    let svg = shards.join("2-of-3/tests/raw__tension_40N_1.TXT/curve.svg");
+    let mut bytes = std::fs::read(&svg).unwrap();
+    bytes.extend_from_slice(b"<!-- edited -->");
+    std::fs::write(&svg, bytes).unwrap();
+    let e = refused(merge());
+    assert!(
+        e.contains("raw__tension_40N_1.TXT/curve.svg: not what shard 2-of-3 recorded"),
+        "{e}"
+    );
+    ok(&run(&["--shard", "2/3", "--no-cache"]));
     // Nothing was merged and the refused shards are untouched.
     assert!(!report(d.path()).join("index.html").exists());
     let after = tree(&shards);
@@ -285,4 +297,55 @@ fn a_run_that_fails_mid_way_leaves_the_previous_report_as_it_was() {
         .unwrap());
     assert!(e.contains("4 from cache"), "{e}");
     assert_same_tree(kept.path(), &report(d.path()), "rerun after the fix");
+}
+
+#[test]
+fn a_failing_test_travels_through_its_shard_like_through_a_single_run() {
+    let junk = |d: &Path| {
+        std::fs::write(d.join("raw/tension_40N_7.csv"), b"\x00\x01 not a test").unwrap();
+    };
+    let single = small_project();
+    junk(single.path());
+    let o = cablab_in(single.path())
+        .args(["run", PIPELINE, "--no-diagnosis"])
+        .output()
+        .unwrap();
+    assert_eq!(
+        o.status.code(),
+        Some(1),
+        "a failing test makes the run exit 1"
+    );
+
+    let sharded = small_project();
+    junk(sharded.path());
+    for i in 1..=2 {
+        cablab_in(sharded.path())
+            .args([
+                "run",
+                PIPELINE,
+                "--no-diagnosis",
+                "--shard",
+                &format!("{i}/2"),
+            ])
+            .output()
+            .unwrap();
+    }
+    let o = cablab_in(sharded.path())
+        .args(["merge", PIPELINE])
+        .output()
+        .unwrap();
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{e}");
+    assert!(e.contains("FAILED raw/tension_40N_7.csv: ingest"), "{e}");
+    assert_same_tree(
+        &report(single.path()),
+        &report(sharded.path()),
+        "with a failure",
+    );
+    let s: serde_json::Value = serde_json::from_slice(
+        &std::fs::read(report(sharded.path()).join("summary.json")).unwrap(),
+    )
+    .unwrap();
+    assert_eq!(s["n_tests"], 5);
+    assert_eq!(s["n_failed"], 1);
 }
