@@ -41,7 +41,7 @@ pub use sectional::{
 };
 pub use stats::{linear_fit, normal_quantile, student_t_quantile, Fit};
 pub use table::{
-    campaign_table, render_csv, render_json, render_latex, render_markdown, GroupStats, TableRow,
+    campaign_table, render_json, GroupStats, TableRow,
 };
 
 /// Everything that can go wrong while measuring, with a message that says what and where.

@@ -141,37 +141,8 @@ fn in_legend(k: usize, n: usize) -> bool {
     n <= 8 || k == 0 || k + 1 == n || (k / step) * step == k
 }
 
-/// The legend corner that covers the fewest plotted points: the corner boxes span 40 % of the
-/// width and 50 % of the height; ties go to upper left, lower right, upper right, lower left.
-fn legend_corner(points: &[(f64, f64)], xa: &Axis, ya: &Axis) -> SeriesLabelPosition {
-    let corners = [
-        (SeriesLabelPosition::UpperLeft, (0.0, 0.4), (0.5, 1.0)),
-        (SeriesLabelPosition::LowerRight, (0.6, 1.0), (0.0, 0.5)),
-        (SeriesLabelPosition::UpperRight, (0.6, 1.0), (0.5, 1.0)),
-        (SeriesLabelPosition::LowerLeft, (0.0, 0.4), (0.0, 0.5)),
-    ];
-    let (w, h) = (xa.hi - xa.lo, ya.hi - ya.lo);
-    let count = |(bx, by): ((f64, f64), (f64, f64))| {
-        points
-            .iter()
-            .filter(|p| {
-                let u = (p.0 - xa.lo) / w;
-                let v = (p.1 - ya.lo) / h;
-                u >= bx.0 && u <= bx.1 && v >= by.0 && v <= by.1
-            })
-            .count()
-    };
-    let mut best = (SeriesLabelPosition::UpperLeft, usize::MAX);
-    for (pos, bx, by) in corners {
-        let c = count((bx, by));
-        if c < best.1 {
-            best = (pos, c);
-        }
-    }
-    best.0
-}
-
-/// Renders the per-test plot as a standalone SVG document (640 px wide; 400 px high, 540 px with
+/// Renders the per-test plot as a standalone SVG document (640 px plot plus a legend column of
+/// [`style::LEGEND_PX`] right of it, so the legend never covers data; 400 px high, 540 px with
 /// the residual panel).
 ///
 /// Errors: a cycle or the simulated curve whose x and y lengths differ, a simulated curve whose
@@ -262,7 +233,8 @@ pub fn curve_svg(view: &CurveView) -> Result<String, ReportError> {
     let n = view.cycles.len();
     let mut buf = String::new();
     {
-        let root = SVGBackend::with_string(&mut buf, (style::WIDTH_PX, height)).into_drawing_area();
+        let root = SVGBackend::with_string(&mut buf, (style::WIDTH_PX + style::LEGEND_PX, height))
+            .into_drawing_area();
         root.fill(&WHITE).map_err(draw_err)?;
         let (top, bottom) = if residuals.is_some() {
             let (a, b) = root.split_vertically(style::HEIGHT_PX - 10);
@@ -298,6 +270,7 @@ fn draw_main(
     let mut chart = ChartBuilder::on(area)
         .caption(title, (FONT, style::TITLE_SIZE).into_font())
         .margin(12)
+        .margin_right(12 + style::LEGEND_PX)
         .x_label_area_size(48)
         .y_label_area_size(72)
         .build_cartesian_2d(xa.lo..xa.hi, ya.lo..ya.hi)
@@ -452,15 +425,11 @@ fn draw_main(
             .legend(|(x, y)| Circle::new((x + 12, y), 6, style::YIELD.stroke_width(2)));
     }
 
-    let all: Vec<(f64, f64)> = cycles
-        .iter()
-        .flatten()
-        .chain(sim_points.iter())
-        .copied()
-        .collect();
+    // The legend sits right of the plot area, never over the data.
+    let plot_w = chart.plotting_area().dim_in_pixel().0 as i32;
     chart
         .configure_series_labels()
-        .position(legend_corner(&all, xa, ya))
+        .position(SeriesLabelPosition::Coordinate(plot_w + 10, 0))
         .background_style(WHITE.mix(0.88))
         .border_style(style::INK)
         .label_font((FONT, style::LABEL_SIZE).into_font())
@@ -491,7 +460,7 @@ fn draw_residual(
     let ra = Axis::new(-max, max, &desc);
     let mut chart = ChartBuilder::on(area)
         .margin_left(12)
-        .margin_right(12)
+        .margin_right(12 + style::LEGEND_PX)
         .margin_bottom(6)
         .x_label_area_size(40)
         .y_label_area_size(72)
@@ -561,29 +530,5 @@ mod tests {
         assert_eq!(shown, [0, 2, 4, 6, 8, 10, 11]);
         let shown = (0..100).filter(|&k| in_legend(k, 100)).count();
         assert!(shown <= 8, "{shown}");
-    }
-
-    #[test]
-    fn legend_goes_to_the_emptiest_corner() {
-        let xa = Axis::new(0.0, 1.0, "x");
-        let ya = Axis::new(0.0, 1.0, "y");
-        // A rising elastic-plastic curve fills the upper left and the diagonal: lower right is free.
-        let rising: Vec<(f64, f64)> = (0..=100)
-            .map(|i| i as f64 / 100.0)
-            .map(|t| (t, (4.0 * t).min(0.8 + 0.2 * t)))
-            .collect();
-        assert_eq!(
-            legend_corner(&rising, &xa, &ya),
-            SeriesLabelPosition::LowerRight
-        );
-        // A falling line crosses upper left and lower right: upper right is free.
-        let falling: Vec<(f64, f64)> = (0..=100)
-            .map(|i| i as f64 / 100.0)
-            .map(|t| (t, 1.0 - t))
-            .collect();
-        assert_eq!(
-            legend_corner(&falling, &xa, &ya),
-            SeriesLabelPosition::UpperRight
-        );
     }
 }

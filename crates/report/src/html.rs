@@ -25,6 +25,19 @@ pub struct Table {
     pub rows: Vec<Vec<String>>,
 }
 
+/// One element of the campaign summary.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub enum Block {
+    /// A sub-heading.
+    Heading(String),
+    /// A paragraph of text.
+    Text(String),
+    /// A table.
+    Table(Table),
+    /// (caption, SVG) from this crate's plot functions.
+    Figure(String, String),
+}
+
 /// One test's section of the report.
 #[derive(Debug, Clone, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct TestSection {
@@ -52,6 +65,10 @@ pub struct ReportDoc {
     pub generated_by: String,
     /// Introductory paragraphs (what was tested, how).
     pub summary: Vec<String>,
+    /// The campaign's summary in reading order (headings, tables, figures), shown right after
+    /// the introductory paragraphs and before `tables` and `figures`.
+    #[serde(default)]
+    pub blocks: Vec<Block>,
     /// Campaign tables (Table 1 and Table 2 style, ...).
     pub tables: Vec<Table>,
     /// Campaign figures: (caption, SVG).
@@ -87,9 +104,16 @@ pre.rejected { white-space: pre-wrap; color: #700; }
 .diagnosis { border-left: 4px solid #555; padding: 0.1em 0 0.1em 0.8em; background: #f4f4f4; }
 @page { size: A4; margin: 15mm; }
 @media print {
-  body { max-width: none; padding: 0; font-size: 10pt; }
-  nav { break-after: page; }
-  section.test { break-before: page; }
+  body { max-width: none; padding: 0; font-size: 9pt; line-height: 1.3; }
+  section.campaign figure { display: inline-block; width: 49%; vertical-align: top; margin: 0.3em 0; }
+  nav { break-before: page; }
+  nav ol { columns: 2; font-size: 0.85em; }
+  section.test { break-inside: avoid-page; border-top: 1px solid #999; }
+  section.test h2 { border: none; margin-top: 0.6em; }
+  section.test figure { display: inline-block; width: 49%; vertical-align: top; margin: 0.2em 0; }
+  dl.facts { grid-template-columns: max-content auto max-content auto; font-size: 0.9em; }
+  table { font-size: 0.8em; }
+  p.back { display: none; }
   a { color: inherit; text-decoration: none; }
   .diagnosis { background: none; }
 }
@@ -245,8 +269,34 @@ pub fn render_html(doc: &ReportDoc) -> String {
     out.push_str("</header>\n");
 
     let ids = anchors(&doc.tests);
-    out.push_str("<nav id=\"contents\">\n<h2>Contents</h2>\n<ol>\n");
-    out.push_str("<li><a href=\"#t-campaign\">Campaign overview and diagnosis</a></li>\n");
+    out.push_str("<section id=\"t-campaign\" class=\"campaign\">\n<h2>Campaign overview</h2>\n");
+    for p in &doc.summary {
+        paragraphs(&mut out, p);
+    }
+    for b in &doc.blocks {
+        match b {
+            Block::Heading(h) => {
+                let _ = writeln!(out, "<h3>{}</h3>", escape_html(h));
+            }
+            Block::Text(p) => paragraphs(&mut out, p),
+            Block::Table(t) => table(&mut out, t),
+            Block::Figure(c, svg) => figure(&mut out, c, svg),
+        }
+    }
+    for t in &doc.tables {
+        table(&mut out, t);
+    }
+    for (caption, svg) in &doc.figures {
+        figure(&mut out, caption, svg);
+    }
+    if !doc.diagnosis_text.trim().is_empty() {
+        out.push_str("<h3>Diagnosis</h3>\n<div class=\"diagnosis\">\n");
+        paragraphs(&mut out, &doc.diagnosis_text);
+        out.push_str("</div>\n");
+    }
+    out.push_str("</section>\n");
+
+    out.push_str("<nav id=\"contents\">\n<h2>Tests</h2>\n<ol>\n");
     for (t, id) in doc.tests.iter().zip(&ids) {
         let _ = write!(
             out,
@@ -263,23 +313,6 @@ pub fn render_html(doc: &ReportDoc) -> String {
         out.push_str("</li>\n");
     }
     out.push_str("</ol>\n</nav>\n");
-
-    out.push_str("<section id=\"t-campaign\" class=\"campaign\">\n<h2>Campaign overview</h2>\n");
-    for p in &doc.summary {
-        paragraphs(&mut out, p);
-    }
-    for t in &doc.tables {
-        table(&mut out, t);
-    }
-    for (caption, svg) in &doc.figures {
-        figure(&mut out, caption, svg);
-    }
-    if !doc.diagnosis_text.trim().is_empty() {
-        out.push_str("<h3>Diagnosis</h3>\n<div class=\"diagnosis\">\n");
-        paragraphs(&mut out, &doc.diagnosis_text);
-        out.push_str("</div>\n");
-    }
-    out.push_str("</section>\n");
 
     for (t, id) in doc.tests.iter().zip(&ids) {
         let _ = writeln!(out, "<section id=\"{id}\" class=\"test\">");
@@ -305,7 +338,7 @@ pub fn render_html(doc: &ReportDoc) -> String {
             paragraphs(&mut out, &t.diagnosis_text);
             out.push_str("</div>\n");
         }
-        out.push_str("<p><a href=\"#contents\">Back to contents</a></p>\n</section>\n");
+        out.push_str("<p class=\"back\"><a href=\"#contents\">Back to the list of tests</a></p>\n</section>\n");
     }
     out.push_str("</body>\n</html>\n");
     out
