@@ -124,7 +124,7 @@ fn table1_csv(groups: &[cablab_measure::GroupStats]) -> cablab_report::Grid {
                     Cell::Text(g.specimen.clone()),
                     Cell::opt(g.diameter_m),
                     Cell::Text(g.kind.as_str().into()),
-                    Cell::Num(g.n as f64),
+                    Cell::Int(g.n as i64),
                     Cell::Num(g.stiffness_mean),
                     Cell::opt(g.stiffness_sd),
                     Cell::opt(g.stiffness_cov),

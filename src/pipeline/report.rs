@@ -62,6 +62,30 @@ fn series_list<'a>(
             None => out.push((key, vec![i])),
         }
     }
+    // Levels of one specimen type and kind by their number (40N before 100N), stably.
+    let level_key = |l: Option<&str>| {
+        l.map(|l| {
+            let end = l
+                .find(|c: char| !(c.is_ascii_digit() || c == '.'))
+                .unwrap_or(l.len());
+            l[..end].parse::<f64>().unwrap_or(f64::INFINITY)
+        })
+    };
+    let firsts: Vec<(&str, TestKind)> = out.iter().fold(Vec::new(), |mut v, (k, _)| {
+        if !v.contains(&(k.0, k.1)) {
+            v.push((k.0, k.1));
+        }
+        v
+    });
+    out.sort_by(|a, b| {
+        let pa = firsts.iter().position(|f| *f == (a.0 .0, a.0 .1));
+        let pb = firsts.iter().position(|f| *f == (b.0 .0, b.0 .1));
+        pa.cmp(&pb).then(
+            level_key(a.0 .2)
+                .partial_cmp(&level_key(b.0 .2))
+                .unwrap_or(std::cmp::Ordering::Equal),
+        )
+    });
     out
 }
 
@@ -127,9 +151,10 @@ pub fn campaign_svgs(outcomes: &[TestOutcome], series: &[Option<String>]) -> Res
         };
         out.push(Figure {
             name: format!(
-                "overlay_{}_{}.svg",
+                "overlay_{}_{}{}.svg",
                 kind.as_str(),
-                super::evaluate::slug(&label).to_lowercase()
+                super::evaluate::slug(specimen).to_lowercase(),
+                level.map_or(String::new(), |l| format!("_{}", l.to_lowercase()))
             ),
             caption: format!("{label}, {kind}: all curves of the series"),
             svg: cablab_report::overlay_svg(&view)?,
@@ -186,13 +211,14 @@ fn shown_control(o: &TestOutcome, machine: f64) -> f64 {
 
 /// Per kind present, the per-specimen results table.
 pub fn results_tables(outcomes: &[TestOutcome], series: &[Option<String>]) -> Vec<(TestKind, Grid)> {
+    let list = series_list(outcomes, series);
     TestKind::ALL
         .iter()
         .filter_map(|&kind| {
-            let rows: Vec<SpecimenResult> = outcomes
+            let rows: Vec<SpecimenResult> = list
                 .iter()
-                .zip(series)
-                .filter(|(o, _)| o.kind == kind && o.error.is_none())
+                .filter(|(k, _)| k.1 == kind)
+                .flat_map(|(_, idx)| idx.iter().map(|&i| (&outcomes[i], &series[i])))
                 .map(|(o, s)| SpecimenResult {
                     specimen_id: test_label(o),
                     series: series_label(&o.specimen, s.as_deref()),
@@ -239,9 +265,9 @@ pub fn series_tables(outcomes: &[TestOutcome], series: &[Option<String>]) -> Vec
                     (st.to_string(), Box::new(|o| o.stiffness)),
                     ("E [MPa]".into(), Box::new(|o| o.modulus_pa.map(|e| e / 1e6))),
                     (format!("yield {rs} [{ru}]"), Box::new(|o| o.yield_point.map(|p| p[1]))),
-                    (format!("{rs},max [{ru}]"), Box::new(|o| o.max_response.map(|p| p[1]))),
+                    (format!("{rs}_max [{ru}]"), Box::new(|o| o.max_response.map(|p| p[1]))),
                     (
-                        "loop area, last cycle [mJ]".into(),
+                        "loop area of last cycle [mJ]".into(),
                         Box::new(|o| o.last_loop_area_j.map(|a| a * 1e3)),
                     ),
                 ];
@@ -501,7 +527,7 @@ fn section(out_dir: &Path, o: &TestOutcome) -> TestSection {
             } else {
                 c
             };
-            facts.push((format!("{rs},max"), format!("{} at {cs} = {}", on_y(r), on_x(x))));
+            facts.push((format!("{rs}_max"), format!("{} at {cs} = {}", on_y(r), on_x(x))));
         }
         facts.push((
             "break".into(),
@@ -519,7 +545,7 @@ fn section(out_dir: &Path, o: &TestOutcome) -> TestSection {
         ));
         facts.push(("cycles".into(), o.cycles.to_string()));
         if let Some(a) = o.last_loop_area_j {
-            facts.push(("loop area, last cycle".into(), format!("{} mJ", fmt_num(a * 1e3, 3))));
+            facts.push(("loop area of last cycle".into(), format!("{} mJ", fmt_num(a * 1e3, 3))));
         }
         if let Some(g) = o.baseline_gap_rel {
             facts.push(("baseline gap (RMS, rel.)".into(), fmt_percent(g, 2)));

@@ -68,6 +68,75 @@ impl Axis {
     }
 }
 
+/// What a legend entry shows left of its text.
+pub(crate) enum Swatch {
+    /// A line sample (dashes follow the series' colour in post-processing).
+    Line(plotters::style::RGBColor),
+    /// A filled band (the fit window).
+    Band(plotters::style::RGBColor),
+    /// A filled marker outline in pixel offsets.
+    Shape(Vec<(i32, i32)>, plotters::style::RGBColor),
+    /// A ring (the yield point).
+    Ring(plotters::style::RGBColor),
+}
+
+/// Draws a legend as a column of entries with its top left corner at `at` (pixels relative to
+/// `area`), outside any plot area: plotters clips its own legend to the plot area, so a legend
+/// beside the data is drawn here.
+pub(crate) fn draw_legend<DB: plotters::prelude::DrawingBackend>(
+    area: &plotters::prelude::DrawingArea<DB, plotters::coord::Shift>,
+    at: (i32, i32),
+    entries: &[(String, Swatch)],
+    font_size: f64,
+) -> Result<(), ReportError> {
+    use plotters::prelude::*;
+    let row = (font_size * 1.15).round() as i32 + 2;
+    let font = (crate::style::FONT, font_size)
+        .into_font()
+        .color(&crate::style::INK)
+        .pos(plotters::style::text_anchor::Pos::new(
+            plotters::style::text_anchor::HPos::Left,
+            plotters::style::text_anchor::VPos::Center,
+        ));
+    for (k, (text, swatch)) in entries.iter().enumerate() {
+        let (x, y) = (at.0, at.1 + row / 2 + k as i32 * row);
+        match swatch {
+            Swatch::Line(c) => area.draw(&PathElement::new(
+                vec![(x, y), (x + 24, y)],
+                c.stroke_width(2),
+            )),
+            Swatch::Band(c) => area.draw(&Rectangle::new([(x, y - 5), (x + 24, y + 5)], c.filled())),
+            Swatch::Shape(pts, c) => area.draw(&Polygon::new(
+                pts.iter().map(|(dx, dy)| (x + 12 + dx, y + dy)).collect::<Vec<_>>(),
+                c.filled(),
+            )),
+            Swatch::Ring(c) => area.draw(&Circle::new((x + 12, y), 6, c.stroke_width(2))),
+        }
+        .map_err(draw_err)?;
+        area.draw(&Text::new(
+            crate::text::strip_xml_forbidden(text),
+            (x + 30, y),
+            font.clone(),
+        ))
+        .map_err(draw_err)?;
+    }
+    Ok(())
+}
+
+/// The pixel (relative to `area`) just right of a chart's plot area, at its top.
+pub(crate) fn beside_plot<DB: plotters::prelude::DrawingBackend, X, Y>(
+    area: &plotters::prelude::DrawingArea<DB, plotters::coord::Shift>,
+    chart: &plotters::prelude::ChartContext<'_, DB, plotters::prelude::Cartesian2d<X, Y>>,
+) -> (i32, i32)
+where
+    X: plotters::coord::ranged1d::Ranged,
+    Y: plotters::coord::ranged1d::Ranged,
+{
+    let (xr, yr) = chart.plotting_area().get_pixel_range();
+    let (ox, oy) = area.get_base_pixel();
+    (xr.end - ox + 12, yr.start - oy)
+}
+
 /// Converts any plotters drawing error into [`ReportError::Draw`].
 pub(crate) fn draw_err<E: std::fmt::Display>(e: E) -> ReportError {
     ReportError::Draw(e.to_string())

@@ -8,7 +8,7 @@
 use cablab_core::TestKind;
 use plotters::prelude::*;
 
-use crate::axes::{draw_err, padded_range, Axis};
+use crate::axes::{beside_plot, draw_err, draw_legend, padded_range, Axis, Swatch};
 use crate::grid::{Cell, Grid};
 use crate::style::{self, add_title, FONT};
 use crate::text::strip_xml_forbidden;
@@ -103,8 +103,9 @@ pub fn campaign_stiffness_svg(view: &StiffnessView) -> Result<String, ReportErro
             let ya = Axis::new(y0, y1, &view.y_label);
             let mut chart = ChartBuilder::on(panel)
                 .margin(8)
+                .margin_right(16)
                 .x_label_area_size(48)
-                .y_label_area_size(70)
+                .y_label_area_size(86)
                 .build_cartesian_2d(-0.5..0.5f64, y0..y1)
                 .map_err(draw_err)?;
             let yfmt = |v: &f64| ya.tick(*v);
@@ -119,6 +120,7 @@ pub fn campaign_stiffness_svg(view: &StiffnessView) -> Result<String, ReportErro
                 .axis_desc_style((FONT, style::AXIS_DESC_SIZE).into_font())
                 .bold_line_style(style::GRID)
                 .light_line_style(WHITE)
+        .max_light_lines(0)
                 .axis_style(style::INK)
                 .draw()
                 .map_err(draw_err)?;
@@ -156,11 +158,12 @@ pub fn campaign_stiffness_svg(view: &StiffnessView) -> Result<String, ReportErro
                 )))
                 .map_err(draw_err)?;
             let label_font = (FONT, style::SMALL_SIZE).into_font().color(&style::INK);
+            let names = short_labels(&finite.iter().map(|v| v.0).collect::<Vec<_>>());
             chart
-                .draw_series(pts.iter().zip(finite.iter()).map(|(p, v)| {
+                .draw_series(pts.iter().zip(&names).map(|(p, name)| {
                     EmptyElement::at(*p)
                         + Circle::new((0, 0), 5, point_colour.stroke_width(2))
-                        + Text::new(strip_xml_forbidden(v.0), (7, -14), label_font.clone())
+                        + Text::new(strip_xml_forbidden(name), (7, -14), label_font.clone())
                 }))
                 .map_err(draw_err)?;
             // Group label and count under the panel, in pixels.
@@ -188,6 +191,30 @@ pub fn campaign_stiffness_svg(view: &StiffnessView) -> Result<String, ReportErro
         root.present().map_err(draw_err)?;
     }
     Ok(add_title(&buf, &view.title))
+}
+
+/// Point labels within a panel: the specimen ids without the prefix they all share (up to its
+/// last `-`, `_`, `.` or space), so `cable2.8-B3-2-1` and `cable2.8-B3-6-1` read `2-1` and `6-1`.
+pub fn short_labels(labels: &[&str]) -> Vec<String> {
+    if labels.len() < 2 {
+        return labels.iter().map(|s| s.to_string()).collect();
+    }
+    let first = labels[0];
+    let mut common = first.len();
+    for l in &labels[1..] {
+        common = common.min(
+            first
+                .char_indices()
+                .zip(l.chars())
+                .take_while(|((_, a), b)| a == b)
+                .last()
+                .map_or(0, |((i, c), _)| i + c.len_utf8()),
+        );
+    }
+    let cut = first[..common]
+        .rfind(['-', '_', '.', ' '])
+        .map_or(0, |i| i + 1);
+    labels.iter().map(|l| l[cut..].to_string()).collect()
 }
 
 /// One row of the campaign's stiffness statistics: one specimen type, kind and protocol level,
@@ -258,6 +285,14 @@ pub fn stiffness_table(caption: &str, rows: &[StiffnessRow]) -> Grid {
             keys.push((r.specimen.as_str(), r.level.as_deref(), r.diameter_m));
         }
     }
+    // Per specimen type, the row without a level first, then its levels in the given order.
+    let first: Vec<&str> = keys.iter().map(|k| k.0).fold(Vec::new(), |mut v, s| {
+        if !v.contains(&s) {
+            v.push(s);
+        }
+        v
+    });
+    keys.sort_by_key(|k| (first.iter().position(|s| *s == k.0), k.1.is_some()));
     let mut header = vec!["specimen".to_string(), "d [mm]".to_string()];
     for k in &kinds {
         let (s, e) = kind_headers(*k);
@@ -352,10 +387,10 @@ pub fn results_table(kind: TestKind, rows: &[SpecimenResult]) -> Grid {
         em.to_string(),
         format!("yield {rs} [{ru}]"),
         format!("yield {cs} [{cu}]"),
-        format!("{rs},max [{ru}]"),
-        format!("{cs} at {rs},max [{cu}]"),
+        format!("{rs}_max [{ru}]"),
+        format!("{cs} at {rs}_max [{cu}]"),
         format!("break {cs} [{cu}]"),
-        "loop area, last cycle [mJ]".to_string(),
+        "loop area of last cycle [mJ]".to_string(),
         "warnings".to_string(),
         "model".to_string(),
     ];
@@ -377,7 +412,7 @@ pub fn results_table(kind: TestKind, rows: &[SpecimenResult]) -> Grid {
                 r.break_at
                     .map_or(Cell::Text("none".into()), |p| Cell::Num(p.0 * cf)),
                 Cell::opt(r.loop_area_j.map(|a| a * 1e3)),
-                Cell::Num(r.warnings as f64),
+                Cell::Int(r.warnings as i64),
                 Cell::Text(r.model.clone()),
             ]
         })
@@ -438,7 +473,7 @@ pub fn series_table(caption: &str, rows: &[SeriesStat]) -> Grid {
                 vec![
                     Cell::Text(r.series.clone()),
                     Cell::Text(r.quantity.clone()),
-                    Cell::Num(r.n as f64),
+                    Cell::Int(r.n as i64),
                     Cell::Num(r.mean),
                     Cell::opt(r.sd),
                     match r.sd {
@@ -531,28 +566,19 @@ pub fn overlay_svg(view: &OverlayView) -> Result<String, ReportError> {
             .axis_desc_style((FONT, style::AXIS_DESC_SIZE).into_font())
             .bold_line_style(style::GRID)
             .light_line_style(WHITE)
+        .max_light_lines(0)
             .axis_style(style::INK)
             .draw()
             .map_err(draw_err)?;
+        let mut legend = Vec::new();
         for (k, (p, (label, _, _))) in pts.iter().zip(&view.curves).enumerate() {
             let colour = style::series_colour(k, n);
             chart
                 .draw_series(LineSeries::new(p.iter().copied(), colour.stroke_width(2)))
-                .map_err(draw_err)?
-                .label(strip_xml_forbidden(label))
-                .legend(move |(x, y)| {
-                    PathElement::new(vec![(x, y), (x + 24, y)], colour.stroke_width(2))
-                });
+                .map_err(draw_err)?;
+            legend.push((label.clone(), Swatch::Line(colour)));
         }
-        let plot_w = chart.plotting_area().dim_in_pixel().0 as i32;
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::Coordinate(plot_w + 10, 0))
-            .background_style(WHITE)
-            .border_style(style::INK)
-            .label_font((FONT, style::SMALL_SIZE).into_font())
-            .draw()
-            .map_err(draw_err)?;
+        draw_legend(&root, beside_plot(&root, &chart), &legend, style::SMALL_SIZE)?;
         root.present().map_err(draw_err)?;
     }
     let dashes: Vec<(plotters::style::RGBColor, &str)> = (0..n)
@@ -602,6 +628,19 @@ pub fn parameter_table(caption: &str, rows: &[ParameterRow]) -> Grid {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn point_labels_drop_the_shared_prefix() {
+        assert_eq!(
+            short_labels(&["cable2.8-B3-2-1", "cable2.8-B3-6-1", "cable2.8-B3-2-2"]),
+            ["2-1", "6-1", "2-2"]
+        );
+        assert_eq!(short_labels(&["T-01", "T-02"]), ["01", "02"]);
+        assert_eq!(short_labels(&["a", "b"]), ["a", "b"]);
+        assert_eq!(short_labels(&["only-one"]), ["only-one"]);
+        // A shared prefix that ends mid-word is cut at the separator before it.
+        assert_eq!(short_labels(&["x-ab1", "x-ab2"]), ["ab1", "ab2"]);
+    }
 
     #[test]
     fn mean_sd_is_the_sample_statistic() {

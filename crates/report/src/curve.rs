@@ -11,7 +11,7 @@
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
-use crate::axes::{draw_err, padded_range, unit_of, Axis};
+use crate::axes::{beside_plot, draw_err, draw_legend, padded_range, unit_of, Axis, Swatch};
 use crate::style::{self, add_title, apply_dashes, series_colour, series_dash, FONT};
 use crate::text::strip_xml_forbidden;
 use crate::ReportError;
@@ -289,10 +289,12 @@ fn draw_main(
         .axis_desc_style((FONT, style::AXIS_DESC_SIZE).into_font())
         .bold_line_style(style::GRID)
         .light_line_style(WHITE)
+        .max_light_lines(0)
         .axis_style(style::INK)
         .draw()
         .map_err(draw_err)?;
 
+    let mut legend: Vec<(String, Swatch)> = Vec::new();
     // Fit window first, so that everything else lies on top of it.
     if let Some(fit) = view
         .fit
@@ -307,11 +309,8 @@ fn draw_main(
                 [(w0.max(xa.lo), ya.lo), (w1.min(xa.hi), ya.hi)],
                 style::FIT_WINDOW.filled(),
             )))
-            .map_err(draw_err)?
-            .label("fit window")
-            .legend(|(x, y)| {
-                Rectangle::new([(x, y - 5), (x + 24, y + 5)], style::FIT_WINDOW.filled())
-            });
+            .map_err(draw_err)?;
+        legend.push(("fit window".into(), Swatch::Band(style::FIT_WINDOW)));
     }
 
     for (k, poly) in view.loops.iter().enumerate() {
@@ -338,14 +337,11 @@ fn draw_main(
             continue;
         }
         let colour = series_colour(k, n);
-        let anno = chart
+        chart
             .draw_series(LineSeries::new(pts.iter().copied(), colour.stroke_width(2)))
             .map_err(draw_err)?;
         if in_legend(k, n) {
-            anno.label(format!("cycle {}", view.cycles[k].index))
-                .legend(move |(x, y)| {
-                    PathElement::new(vec![(x, y), (x + 24, y)], colour.stroke_width(2))
-                });
+            legend.push((format!("cycle {}", view.cycles[k].index), Swatch::Line(colour)));
         }
     }
 
@@ -355,11 +351,8 @@ fn draw_main(
                 sim_points.iter().copied(),
                 style::SIMULATED.stroke_width(2),
             ))
-            .map_err(draw_err)?
-            .label("simulated")
-            .legend(|(x, y)| {
-                PathElement::new(vec![(x, y), (x + 24, y)], style::SIMULATED.stroke_width(2))
-            });
+            .map_err(draw_err)?;
+        legend.push(("simulated".into(), Swatch::Line(style::SIMULATED)));
     }
 
     if let Some(fit) = view.fit {
@@ -372,11 +365,8 @@ fn draw_main(
         if line.len() == 2 {
             chart
                 .draw_series(LineSeries::new(line, style::FIT_LINE.stroke_width(2)))
-                .map_err(draw_err)?
-                .label("elastic fit")
-                .legend(|(x, y)| {
-                    PathElement::new(vec![(x, y), (x + 24, y)], style::FIT_LINE.stroke_width(2))
-                });
+                .map_err(draw_err)?;
+            legend.push(("elastic fit".into(), Swatch::Line(style::FIT_LINE)));
         }
     }
 
@@ -397,16 +387,8 @@ fn draw_main(
                     EmptyElement::at(p) + Polygon::new(kind.marker(), style::BRANCH.filled())
                 }),
             )
-            .map_err(draw_err)?
-            .label(kind.label())
-            .legend(move |(x, y)| {
-                let pts: Vec<(i32, i32)> = kind
-                    .marker()
-                    .into_iter()
-                    .map(|(dx, dy)| (x + 12 + dx, y + dy))
-                    .collect();
-                Polygon::new(pts, style::BRANCH.filled())
-            });
+            .map_err(draw_err)?;
+        legend.push((kind.label().into(), Swatch::Shape(kind.marker(), style::BRANCH)));
     }
 
     if let Some(p) = view
@@ -420,21 +402,12 @@ fn draw_main(
                     + Circle::new((0, 0), 7, style::YIELD.stroke_width(2))
                     + Text::new("yield", (10, -20), label_style.clone()),
             ))
-            .map_err(draw_err)?
-            .label("yield point")
-            .legend(|(x, y)| Circle::new((x + 12, y), 6, style::YIELD.stroke_width(2)));
+            .map_err(draw_err)?;
+        legend.push(("yield point".into(), Swatch::Ring(style::YIELD)));
     }
 
     // The legend sits right of the plot area, never over the data.
-    let plot_w = chart.plotting_area().dim_in_pixel().0 as i32;
-    chart
-        .configure_series_labels()
-        .position(SeriesLabelPosition::Coordinate(plot_w + 10, 0))
-        .background_style(WHITE.mix(0.88))
-        .border_style(style::INK)
-        .label_font((FONT, style::LABEL_SIZE).into_font())
-        .draw()
-        .map_err(draw_err)?;
+    draw_legend(area, beside_plot(area, &chart), &legend, style::LABEL_SIZE)?;
     Ok(())
 }
 
@@ -480,6 +453,7 @@ fn draw_residual(
         .axis_desc_style((FONT, style::AXIS_DESC_SIZE).into_font())
         .bold_line_style(style::GRID)
         .light_line_style(WHITE)
+        .max_light_lines(0)
         .axis_style(style::INK)
         .draw()
         .map_err(draw_err)?;

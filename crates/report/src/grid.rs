@@ -22,6 +22,8 @@ pub enum Cell {
     Text(String),
     /// A number, shown with the grid's significant digits.
     Num(f64),
+    /// A count (`3`), in every target without decimals.
+    Int(i64),
     /// A fraction shown as a percentage with one decimal (`1.9 %`); in CSV the percentage.
     Percent(f64),
     /// `mean ± SD (n = …, CoV …)`, or `mean (n = 1)` without an SD.
@@ -121,6 +123,7 @@ fn human(c: &Cell, sig: usize) -> String {
     match c {
         Cell::Text(s) => s.clone(),
         Cell::Num(v) => fmt_num(*v, sig),
+        Cell::Int(i) => i.to_string(),
         Cell::Percent(f) => fmt_percent(*f, 1),
         Cell::Stat { mean, sd: Some(sd), n } if *n > 1 && sd.is_finite() => {
             let cov = if *mean != 0.0 {
@@ -320,6 +323,7 @@ impl Grid {
                 .map(|c| match c {
                     Cell::Text(t) => csv_field(t, sep),
                     Cell::Num(v) => fmt_plain(*v, CSV_DIGITS, comma),
+                    Cell::Int(i) => i.to_string(),
                     Cell::Percent(f) => fmt_plain(100.0 * f, CSV_DIGITS, comma),
                     Cell::Stat { mean, .. } => fmt_plain(*mean, CSV_DIGITS, comma),
                     Cell::Mpa(pa) => fmt_plain(pa / 1e6, CSV_DIGITS, comma),
@@ -339,7 +343,12 @@ mod tests {
     fn grid() -> Grid {
         Grid {
             caption: "Table 1".into(),
-            header: vec!["specimen".into(), "(EA)_T [N]".into(), "E_T [MPa]".into()],
+            header: vec![
+                "specimen".into(),
+                "(EA)_T [N]".into(),
+                "E_T [MPa]".into(),
+                "n".into(),
+            ],
             rows: vec![
                 vec![
                     Cell::Text("cable; 2.8 | A".into()),
@@ -349,8 +358,9 @@ mod tests {
                         n: 3,
                     },
                     Cell::Num(12936.7),
+                    Cell::Int(3),
                 ],
-                vec![Cell::Text("rod".into()), Cell::Num(2.02e-3)],
+                vec![Cell::Text("rod".into()), Cell::Num(2.02e-3), Cell::Empty, Cell::Int(12)],
             ],
             sig: 3,
         }
@@ -377,27 +387,30 @@ mod tests {
         let g = grid();
         let md = g.markdown();
         let html = g.to_table();
-        let row = "| cable; 2.8 \\| A | (7.97 \u{b1} 0.15)\u{b7}10\u{2074} (n = 3, CoV 1.9\u{a0}%) | 1.29\u{b7}10\u{2074} |";
+        let row = "| cable; 2.8 \\| A | (7.97 \u{b1} 0.15)\u{b7}10\u{2074} (n = 3, CoV 1.9\u{a0}%) | 1.29\u{b7}10\u{2074} | 3 |";
         assert!(md.contains(row), "{md}");
-        assert!(md.contains("| rod | 2.02\u{b7}10\u{207b}\u{b3} | \u{2013} |"), "{md}");
-        assert!(md.contains("|---|---:|---:|"), "{md}");
+        assert!(md.contains("| rod | 2.02\u{b7}10\u{207b}\u{b3} | \u{2013} | 12 |"), "{md}");
+        assert!(md.contains("|---|---:|---:|---:|\n"), "{md}");
         // HTML shows exactly the Markdown's cell text.
         assert_eq!(
             html.rows[0][1],
             "(7.97 \u{b1} 0.15)\u{b7}10\u{2074} (n = 3, CoV 1.9\u{a0}%)"
         );
-        assert_eq!(html.rows[1], ["rod", "2.02\u{b7}10\u{207b}\u{b3}", "\u{2013}"]);
+        assert_eq!(
+            html.rows[1],
+            ["rod", "2.02\u{b7}10\u{207b}\u{b3}", "\u{2013}", "12"]
+        );
         let tex = g.latex();
-        assert!(tex.starts_with("% Table 1\n\\begin{tabular}{l r r}\n\\toprule\n"));
+        assert!(tex.starts_with("% Table 1\n\\begin{tabular}{l r r r}\n\\toprule\n"), "{tex}");
         assert!(
-            tex.contains("specimen & (EA)$_\\mathrm{T}$ [N] & E$_\\mathrm{T}$ [MPa] \\\\\n\\midrule"),
+            tex.contains("specimen & (EA)$_\\mathrm{T}$ [N] & E$_\\mathrm{T}$ [MPa] & n \\\\\n\\midrule"),
             "{tex}"
         );
         assert!(
             tex.contains("(7.97 $\\pm$ 0.15)$\\cdot10^{4}$ (n = 3, CoV 1.9\\,\\%)"),
             "{tex}"
         );
-        assert!(tex.contains("rod & 2.02$\\cdot10^{-3}$ & -- \\\\"), "{tex}");
+        assert!(tex.contains("rod & 2.02$\\cdot10^{-3}$ & -- & 12 \\\\"), "{tex}");
         assert!(tex.ends_with("\\bottomrule\n\\end{tabular}\n"));
     }
 
@@ -407,12 +420,12 @@ mod tests {
         let en = g.csv(CsvLocale::En);
         assert_eq!(
             en,
-            "specimen,(EA)_T [N],E_T [MPa]\ncable; 2.8 | A,79667,12937\nrod,0.0020200,\n"
+            "specimen,(EA)_T [N],E_T [MPa],n\ncable; 2.8 | A,79667,12937,3\nrod,0.0020200,,12\n"
         );
         let de = g.csv(CsvLocale::De);
         assert_eq!(
             de,
-            "specimen;(EA)_T [N];E_T [MPa]\n\"cable; 2.8 | A\";79667;12937\nrod;0,0020200;\n"
+            "specimen;(EA)_T [N];E_T [MPa];n\n\"cable; 2.8 | A\";79667;12937;3\nrod;0,0020200;;12\n"
         );
         // German Excel's reading: split on `;` outside quotes, decimal comma.
         let second: Vec<&str> = de.lines().nth(2).unwrap().split(';').collect();

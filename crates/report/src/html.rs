@@ -81,7 +81,7 @@ pub struct ReportDoc {
 
 const CSS: &str = "\
 :root { color-scheme: light; }
-body { font-family: sans-serif; color: #111; background: #fff; max-width: 190mm; margin: 0 auto; padding: 8mm 6mm; line-height: 1.45; font-size: 11pt; }
+body { font-family: sans-serif; color: #111; background: #fff; max-width: 270mm; margin: 0 auto; padding: 8mm 6mm; line-height: 1.45; font-size: 11pt; }
 h1 { font-size: 1.7em; margin: 0 0 0.2em; }
 h2 { font-size: 1.35em; border-bottom: 1px solid #999; padding-bottom: 0.15em; margin-top: 1.6em; }
 h3 { font-size: 1.1em; margin-top: 1.2em; }
@@ -90,7 +90,9 @@ nav ol { padding-left: 1.6em; }
 nav li span.headline { color: #444; }
 table { border-collapse: collapse; margin: 0.6em 0 1.2em; font-size: 0.92em; }
 caption { caption-side: top; text-align: left; font-weight: bold; padding-bottom: 0.3em; }
-th, td { border: 1px solid #888; padding: 0.25em 0.5em; vertical-align: top; }
+th, td { border: 1px solid #888; padding: 0.2em 0.4em; vertical-align: top; }
+figure svg { max-width: 100%; }
+section.campaign figure { display: inline-block; width: 49%; vertical-align: top; }
 th { background: #eee; text-align: left; }
 td { text-align: left; }
 td.num { text-align: right; font-variant-numeric: tabular-nums; }
@@ -170,8 +172,10 @@ fn figure(out: &mut String, caption: &str, svg: &str) {
 /// Whether a cell reads as a number (right-aligned): it starts with a digit, a sign, a
 /// parenthesised mantissa or the "not available" dash.
 fn is_numeric(cell: &str) -> bool {
-    cell.trim_start().starts_with(|c: char| {
-        c.is_ascii_digit() || matches!(c, '-' | '+' | '(' | '\u{2212}' | '\u{2013}' | '.')
+    let t = cell.trim_start();
+    let t = t.strip_prefix('(').unwrap_or(t);
+    t.starts_with(|c: char| {
+        c.is_ascii_digit() || matches!(c, '-' | '+' | '\u{2212}' | '\u{2013}' | '.')
     })
 }
 
