@@ -669,6 +669,63 @@ mod tests {
     use super::*;
 
     #[test]
+    fn levels_come_from_the_file_name() {
+        assert_eq!(
+            level_from_name("raw_data/cable/tension_40N_1.TXT").as_deref(),
+            Some("40N")
+        );
+        assert_eq!(
+            level_from_name("three_point_6mm_2.dat").as_deref(),
+            Some("6mm")
+        );
+        assert_eq!(
+            level_from_name("torsion_360deg_3.csv").as_deref(),
+            Some("360deg")
+        );
+        assert_eq!(level_from_name("a/b/zug-1.5kN-7.csv").as_deref(), Some("1.5kN"));
+        // Replicate numbers, specimen ids and plain words are not levels.
+        assert_eq!(level_from_name("cable2.8-T40-1.csv"), None);
+        assert_eq!(level_from_name("tension_1.csv"), None);
+        assert_eq!(level_from_name("probe_12abc_1.csv"), None);
+    }
+
+    #[test]
+    fn maximum_and_break() {
+        // Loading to 10 at x = 1, unloading back: no break.
+        let x = [0.0, 0.5, 1.0, 0.5, 0.0];
+        let y = [0.0, 5.0, 10.0, 5.0, 0.0];
+        assert_eq!(max_and_break(&x, &y), (Some([1.0, 10.0]), None));
+        // The force collapses while the crosshead keeps going: a break after x = 1.1.
+        let x = [0.0, 0.5, 1.0, 1.1, 1.2, 1.3];
+        let y = [0.0, 5.0, 10.0, 9.0, 0.4, 0.1];
+        assert_eq!(max_and_break(&x, &y), (Some([1.0, 10.0]), Some([1.1, 9.0])));
+        // Negative direction (compression-like): the same by magnitude.
+        let x = [0.0, -1.0, -1.2];
+        let y = [0.0, -8.0, -1.0];
+        assert_eq!(max_and_break(&x, &y), (Some([-1.0, -8.0]), Some([-1.0, -8.0])));
+        assert_eq!(max_and_break(&[], &[]), (None, None));
+    }
+
+    #[test]
+    fn header_fields_from_metadata() {
+        let meta: Vec<(String, String)> = [
+            ("Prüfer :", "cablab"),
+            ("Datum", "16.05.2019"),
+            ("Maschinendaten", "\"virtual machine\""),
+            ("Operator", ""),
+        ]
+        .iter()
+        .map(|(k, v)| (k.to_string(), v.to_string()))
+        .collect();
+        let h = TestHeader::from_metadata(Some("cable2.8-T100-2"), &meta);
+        assert_eq!(h.specimen_id.as_deref(), Some("cable2.8-T100-2"));
+        assert_eq!(h.operator.as_deref(), Some("cablab"));
+        assert_eq!(h.date.as_deref(), Some("16.05.2019"));
+        assert_eq!(h.machine.as_deref(), Some("virtual machine"));
+        assert_eq!(TestHeader::from_metadata(None, &[]), TestHeader::default());
+    }
+
+    #[test]
     fn slugs_are_folder_names() {
         assert_eq!(
             slug("raw_data/cable/tension_A.TXT"),

@@ -95,17 +95,20 @@ pub fn campaign_svgs(outcomes: &[TestOutcome], series: &[Option<String>]) -> Res
     let mut out = Vec::new();
     for kind in TestKind::ALL {
         let mut groups: Vec<StiffnessGroup> = Vec::new();
-        for o in outcomes
-            .iter()
-            .filter(|o| o.kind == kind && o.error.is_none())
+        // One panel per series: a specimen type, split by protocol level where it has several.
+        for ((specimen, _, level), idx) in series_list(outcomes, series)
+            .into_iter()
+            .filter(|(k, _)| k.1 == kind)
         {
-            let Some(s) = o.stiffness else { continue };
-            match groups.iter_mut().find(|g| g.label == o.specimen) {
-                Some(g) => g.values.push((test_label(o), s)),
-                None => groups.push(StiffnessGroup {
-                    label: o.specimen.clone(),
-                    values: vec![(test_label(o), s)],
-                }),
+            let values: Vec<(String, f64)> = idx
+                .iter()
+                .filter_map(|&i| Some((test_label(&outcomes[i]), outcomes[i].stiffness?)))
+                .collect();
+            if !values.is_empty() {
+                groups.push(StiffnessGroup {
+                    label: series_label(specimen, level),
+                    values,
+                });
             }
         }
         if groups.is_empty() {
@@ -119,7 +122,7 @@ pub fn campaign_svgs(outcomes: &[TestOutcome], series: &[Option<String>]) -> Res
         out.push(Figure {
             name: format!("stiffness_{}.svg", kind.as_str()),
             caption: format!(
-                "{}; one panel per specimen type with its own range; red: mean ± 1 SD",
+                "{}; one panel per series (specimen type and level) with its own range; red: mean ± 1 SD",
                 kind_title(kind)
             ),
             svg: cablab_report::campaign::campaign_stiffness_svg(&view)?,
