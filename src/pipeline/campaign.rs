@@ -192,7 +192,10 @@ pub fn write_campaign_outputs(
                 cablab_measure::render_json(&groups).into_bytes(),
             )),
             "csv" => {
-                written.push(("table1.csv".into(), table1_csv(&groups).csv(locale).into_bytes()));
+                written.push((
+                    "table1.csv".into(),
+                    table1_csv(&groups).csv(locale).into_bytes(),
+                ));
                 for (kind, grid) in super::report::results_tables(outcomes, &series) {
                     written.push((
                         format!("specimens_{}.csv", kind.as_str()),
@@ -268,8 +271,7 @@ pub fn write_campaign_outputs(
         written.push((f.name.clone(), f.svg.clone().into_bytes()));
     }
     if c.file.reports.html {
-        let html =
-            super::report::html(c, out_dir, outcomes, &series, &groups, &table2, &figures)?;
+        let html = super::report::html(c, out_dir, outcomes, &series, &groups, &table2, &figures)?;
         written.push(("index.html".into(), html.into_bytes()));
     }
     for (name, bytes) in &written {

@@ -128,7 +128,9 @@ impl TestHeader {
         };
         TestHeader {
             specimen_id: label.map(str::to_string),
-            operator: find(&["operator", "tester", "prüfer", "bediener", "user", "benutzer"]),
+            operator: find(&[
+                "operator", "tester", "prüfer", "bediener", "user", "benutzer",
+            ]),
             date: find(&[
                 "date",
                 "datum",
@@ -164,7 +166,9 @@ pub fn level_from_name(id: &str) -> Option<String> {
             .find(|c: char| !(c.is_ascii_digit() || c == '.' || c == ','))
             .filter(|&i| i > 0)?;
         let unit = &tok[digits..];
-        let known = ["N", "kN", "mN", "mm", "m", "deg", "rad", "Nm", "Nmm", "mrad", "°"];
+        let known = [
+            "N", "kN", "mN", "mm", "m", "deg", "rad", "Nm", "Nmm", "mrad", "°",
+        ];
         known.contains(&unit).then(|| tok.to_string())
     })
 }
@@ -682,7 +686,10 @@ mod tests {
             level_from_name("torsion_360deg_3.csv").as_deref(),
             Some("360deg")
         );
-        assert_eq!(level_from_name("a/b/zug-1.5kN-7.csv").as_deref(), Some("1.5kN"));
+        assert_eq!(
+            level_from_name("a/b/zug-1.5kN-7.csv").as_deref(),
+            Some("1.5kN")
+        );
         // Replicate numbers, specimen ids and plain words are not levels.
         assert_eq!(level_from_name("cable2.8-T40-1.csv"), None);
         assert_eq!(level_from_name("tension_1.csv"), None);
@@ -702,7 +709,10 @@ mod tests {
         // Negative direction (compression-like): the same by magnitude.
         let x = [0.0, -1.0, -1.2];
         let y = [0.0, -8.0, -1.0];
-        assert_eq!(max_and_break(&x, &y), (Some([-1.0, -8.0]), Some([-1.0, -8.0])));
+        assert_eq!(
+            max_and_break(&x, &y),
+            (Some([-1.0, -8.0]), Some([-1.0, -8.0]))
+        );
         assert_eq!(max_and_break(&[], &[]), (None, None));
     }
 

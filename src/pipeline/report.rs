@@ -45,13 +45,19 @@ fn test_label(o: &TestOutcome) -> String {
         .unwrap_or_else(|| o.id.rsplit('/').next().unwrap_or(&o.id).to_string())
 }
 
+/// One number of a test that the series statistics summarise.
+type Quantity = fn(&TestOutcome) -> Option<f64>;
+
+/// A series: specimen type, kind and protocol level.
+type SeriesKey<'a> = (&'a str, TestKind, Option<&'a str>);
+
 /// The series of the campaign in order of first appearance: (specimen type, kind, series) and
 /// the indices of their tests (the evaluated ones).
 fn series_list<'a>(
     outcomes: &'a [TestOutcome],
     series: &'a [Option<String>],
-) -> Vec<((&'a str, TestKind, Option<&'a str>), Vec<usize>)> {
-    let mut out: Vec<((&str, TestKind, Option<&str>), Vec<usize>)> = Vec::new();
+) -> Vec<(SeriesKey<'a>, Vec<usize>)> {
+    let mut out: Vec<(SeriesKey<'a>, Vec<usize>)> = Vec::new();
     for (i, (o, s)) in outcomes.iter().zip(series).enumerate() {
         if o.error.is_some() {
             continue;
@@ -173,9 +179,9 @@ pub fn table1(groups: &[GroupStats]) -> Grid {
         .iter()
         .filter(|g| {
             g.series.is_some()
-                || !groups.iter().any(|h| {
-                    h.series.is_some() && h.specimen == g.specimen && h.kind == g.kind
-                })
+                || !groups
+                    .iter()
+                    .any(|h| h.series.is_some() && h.specimen == g.specimen && h.kind == g.kind)
         })
         .map(|g| StiffnessRow {
             specimen: g.specimen.clone(),
@@ -213,7 +219,10 @@ fn shown_control(o: &TestOutcome, machine: f64) -> f64 {
 }
 
 /// Per kind present, the per-specimen results table.
-pub fn results_tables(outcomes: &[TestOutcome], series: &[Option<String>]) -> Vec<(TestKind, Grid)> {
+pub fn results_tables(
+    outcomes: &[TestOutcome],
+    series: &[Option<String>],
+) -> Vec<(TestKind, Grid)> {
     let list = series_list(outcomes, series);
     TestKind::ALL
         .iter()
@@ -258,24 +267,28 @@ pub fn series_tables(outcomes: &[TestOutcome], series: &[Option<String>]) -> Vec
         .iter()
         .filter_map(|&kind| {
             let (rs, ru, _, _, _) = cablab_report::campaign::kind_quantities(kind);
-            let (st, _) = (cablab_report::campaign::stiffness_axis_label(kind), ());
+            let st = cablab_report::campaign::stiffness_axis_label(kind);
             let mut rows = Vec::new();
-            for ((specimen, k, level), idx) in list.iter().filter(|(k, _)| k.1 == kind) {
-                debug_assert_eq!(*k, kind);
+            for ((specimen, _, level), idx) in list.iter().filter(|(k, _)| k.1 == kind) {
                 let label = series_label(specimen, *level);
                 let tests: Vec<&TestOutcome> = idx.iter().map(|&i| &outcomes[i]).collect();
-                let quantities: [(String, Box<dyn Fn(&TestOutcome) -> Option<f64>>); 5] = [
-                    (st.to_string(), Box::new(|o| o.stiffness)),
-                    ("E [MPa]".into(), Box::new(|o| o.modulus_pa.map(|e| e / 1e6))),
-                    (format!("yield {rs} [{ru}]"), Box::new(|o| o.yield_point.map(|p| p[1]))),
-                    (format!("{rs}_max [{ru}]"), Box::new(|o| o.max_response.map(|p| p[1]))),
-                    (
-                        "loop area of last cycle [mJ]".into(),
-                        Box::new(|o| o.last_loop_area_j.map(|a| a * 1e3)),
-                    ),
+                let quantities: [(String, Quantity); 5] = [
+                    (st.to_string(), |o| o.stiffness),
+                    ("E [MPa]".into(), |o| o.modulus_pa.map(|e| e / 1e6)),
+                    (format!("yield {rs} [{ru}]"), |o| {
+                        o.yield_point.map(|p| p[1])
+                    }),
+                    (format!("{rs}_max [{ru}]"), |o| o.max_response.map(|p| p[1])),
+                    ("loop area of last cycle [mJ]".into(), |o| {
+                        o.last_loop_area_j.map(|a| a * 1e3)
+                    }),
                 ];
                 for (q, f) in quantities {
-                    let v: Vec<f64> = tests.iter().filter_map(|o| f(o)).filter(|v| v.is_finite()).collect();
+                    let v: Vec<f64> = tests
+                        .iter()
+                        .filter_map(|o| f(o))
+                        .filter(|v| v.is_finite())
+                        .collect();
                     if v.is_empty() {
                         continue;
                     }
@@ -504,7 +517,8 @@ fn section(out_dir: &Path, o: &TestOutcome) -> TestSection {
         }
         facts.push((
             "Young's modulus".into(),
-            o.modulus_pa.map_or("–".into(), |e| format!("{} MPa", fmt_mpa(e))),
+            o.modulus_pa
+                .map_or("–".into(), |e| format!("{} MPa", fmt_mpa(e))),
         ));
         facts.push(("behaviour".into(), o.behaviour.clone().unwrap_or_default()));
         if let Some([c, r]) = o.yield_point {
@@ -530,7 +544,10 @@ fn section(out_dir: &Path, o: &TestOutcome) -> TestSection {
             } else {
                 c
             };
-            facts.push((format!("{rs}_max"), format!("{} at {cs} = {}", on_y(r), on_x(x))));
+            facts.push((
+                format!("{rs}_max"),
+                format!("{} at {cs} = {}", on_y(r), on_x(x)),
+            ));
         }
         facts.push((
             "break".into(),
@@ -548,7 +565,10 @@ fn section(out_dir: &Path, o: &TestOutcome) -> TestSection {
         ));
         facts.push(("cycles".into(), o.cycles.to_string()));
         if let Some(a) = o.last_loop_area_j {
-            facts.push(("loop area of last cycle".into(), format!("{} mJ", fmt_num(a * 1e3, 3))));
+            facts.push((
+                "loop area of last cycle".into(),
+                format!("{} mJ", fmt_num(a * 1e3, 3)),
+            ));
         }
         if let Some(g) = o.baseline_gap_rel {
             facts.push(("baseline gap (RMS, rel.)".into(), fmt_percent(g, 2)));

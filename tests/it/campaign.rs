@@ -429,9 +429,14 @@ tables = ["csv"]
     assert!(st.is_finite() && st > 0.0, "{t}");
     assert_eq!(s["groups"][0]["n"], 1);
     let dir = d.path().join("reports/demo");
-    assert!(dir.join("tests/raw_data__cable__three_point_6mm_1.csv/curve.svg").exists());
+    assert!(dir
+        .join("tests/raw_data__cable__three_point_6mm_1.csv/curve.svg")
+        .exists());
     let html = std::fs::read_to_string(dir.join("index.html")).unwrap();
-    assert!(html.contains("failed: calibrate: "), "model failure not in the report");
+    assert!(
+        html.contains("failed: calibrate: "),
+        "model failure not in the report"
+    );
     let csv = std::fs::read_to_string(dir.join("specimens_three_point.csv")).unwrap();
     let row = csv.lines().nth(1).unwrap();
     assert!(row.contains("failed: calibrate"), "{csv}");

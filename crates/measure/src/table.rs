@@ -83,7 +83,11 @@ pub fn campaign_table(rows: &[TableRow]) -> Vec<GroupStats> {
     for ((specimen, kind), rs) in groups {
         out.push(stats(&specimen, kind, None, &rs));
         let mut series: Vec<Option<String>> = rs.iter().map(|r| r.series.clone()).collect();
-        series.sort_by(|a, b| series_key(a).partial_cmp(&series_key(b)).unwrap_or(std::cmp::Ordering::Equal));
+        series.sort_by(|a, b| {
+            series_key(a)
+                .partial_cmp(&series_key(b))
+                .unwrap_or(std::cmp::Ordering::Equal)
+        });
         series.dedup();
         if series.len() > 1 {
             for s in series {
@@ -227,7 +231,11 @@ mod tests {
             .collect();
         assert_eq!(
             got,
-            [(None, 4, 7.6e4), (Some("40N"), 2, 7.1e4), (Some("100N"), 2, 8.1e4)]
+            [
+                (None, 4, 7.6e4),
+                (Some("40N"), 2, 7.1e4),
+                (Some("100N"), 2, 8.1e4)
+            ]
         );
         // One series only: no split.
         let one = campaign_table(&[mk("40N", 7.0e4), mk("40N", 7.2e4)]);

@@ -105,9 +105,13 @@ pub(crate) fn draw_legend<DB: plotters::prelude::DrawingBackend>(
                 vec![(x, y), (x + 24, y)],
                 c.stroke_width(2),
             )),
-            Swatch::Band(c) => area.draw(&Rectangle::new([(x, y - 5), (x + 24, y + 5)], c.filled())),
+            Swatch::Band(c) => {
+                area.draw(&Rectangle::new([(x, y - 5), (x + 24, y + 5)], c.filled()))
+            }
             Swatch::Shape(pts, c) => area.draw(&Polygon::new(
-                pts.iter().map(|(dx, dy)| (x + 12 + dx, y + dy)).collect::<Vec<_>>(),
+                pts.iter()
+                    .map(|(dx, dy)| (x + 12 + dx, y + dy))
+                    .collect::<Vec<_>>(),
                 c.filled(),
             )),
             Swatch::Ring(c) => area.draw(&Circle::new((x + 12, y), 6, c.stroke_width(2))),

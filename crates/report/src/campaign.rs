@@ -93,11 +93,8 @@ pub fn campaign_stiffness_svg(view: &StiffnessView) -> Result<String, ReportErro
             let vals: Vec<f64> = finite.iter().map(|v| v.1).collect();
             let (mean, sd) = mean_sd(&vals).unwrap_or((f64::NAN, 0.0));
             // The range shows the scatter: the values and mean ± SD, padded; never forced to 0.
-            let (y0, y1) = padded_range(
-                vals.iter().copied().chain([mean - sd, mean + sd]),
-                0.12,
-            )
-            .ok_or_else(|| ReportError::NoData {
+            let (y0, y1) = padded_range(vals.iter().copied().chain([mean - sd, mean + sd]), 0.12)
+                .ok_or_else(|| ReportError::NoData {
                 what: format!("stiffness values of '{}'", group.label),
             })?;
             let ya = Axis::new(y0, y1, &view.y_label);
@@ -120,7 +117,7 @@ pub fn campaign_stiffness_svg(view: &StiffnessView) -> Result<String, ReportErro
                 .axis_desc_style((FONT, style::AXIS_DESC_SIZE).into_font())
                 .bold_line_style(style::GRID)
                 .light_line_style(WHITE)
-        .max_light_lines(0)
+                .max_light_lines(0)
                 .axis_style(style::INK)
                 .draw()
                 .map_err(draw_err)?;
@@ -363,7 +360,9 @@ pub struct SpecimenResult {
 
 /// Symbols and display units of a kind's response and control: (response symbol, unit,
 /// control symbol, display unit, factor from SI to the display unit).
-pub fn kind_quantities(kind: TestKind) -> (&'static str, &'static str, &'static str, &'static str, f64) {
+pub fn kind_quantities(
+    kind: TestKind,
+) -> (&'static str, &'static str, &'static str, &'static str, f64) {
     match kind {
         TestKind::Tension => ("F", "N", "\u{394}l", "mm", 1e3),
         TestKind::Torsion => ("M_T", "N m", "\u{3b8}_T", "rad", 1.0),
@@ -394,7 +393,10 @@ pub fn results_table(kind: TestKind, rows: &[SpecimenResult]) -> Grid {
         "warnings".to_string(),
         "model".to_string(),
     ];
-    let mut methods: Vec<&str> = rows.iter().filter_map(|r| r.yield_method.as_deref()).collect();
+    let mut methods: Vec<&str> = rows
+        .iter()
+        .filter_map(|r| r.yield_method.as_deref())
+        .collect();
     methods.sort();
     methods.dedup();
     let body = rows
@@ -464,9 +466,18 @@ pub struct SeriesStat {
 pub fn series_table(caption: &str, rows: &[SeriesStat]) -> Grid {
     Grid {
         caption: caption.to_string(),
-        header: ["series", "quantity [unit]", "n", "mean", "SD", "CoV [%]", "min", "max"]
-            .map(String::from)
-            .to_vec(),
+        header: [
+            "series",
+            "quantity [unit]",
+            "n",
+            "mean",
+            "SD",
+            "CoV [%]",
+            "min",
+            "max",
+        ]
+        .map(String::from)
+        .to_vec(),
         rows: rows
             .iter()
             .map(|r| {
@@ -566,7 +577,7 @@ pub fn overlay_svg(view: &OverlayView) -> Result<String, ReportError> {
             .axis_desc_style((FONT, style::AXIS_DESC_SIZE).into_font())
             .bold_line_style(style::GRID)
             .light_line_style(WHITE)
-        .max_light_lines(0)
+            .max_light_lines(0)
             .axis_style(style::INK)
             .draw()
             .map_err(draw_err)?;
@@ -578,7 +589,12 @@ pub fn overlay_svg(view: &OverlayView) -> Result<String, ReportError> {
                 .map_err(draw_err)?;
             legend.push((label.clone(), Swatch::Line(colour)));
         }
-        draw_legend(&root, beside_plot(&root, &chart), &legend, style::SMALL_SIZE)?;
+        draw_legend(
+            &root,
+            beside_plot(&root, &chart),
+            &legend,
+            style::SMALL_SIZE,
+        )?;
         root.present().map_err(draw_err)?;
     }
     let dashes: Vec<(plotters::style::RGBColor, &str)> = (0..n)

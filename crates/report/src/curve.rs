@@ -341,7 +341,10 @@ fn draw_main(
             .draw_series(LineSeries::new(pts.iter().copied(), colour.stroke_width(2)))
             .map_err(draw_err)?;
         if in_legend(k, n) {
-            legend.push((format!("cycle {}", view.cycles[k].index), Swatch::Line(colour)));
+            legend.push((
+                format!("cycle {}", view.cycles[k].index),
+                Swatch::Line(colour),
+            ));
         }
     }
 
@@ -388,7 +391,10 @@ fn draw_main(
                 }),
             )
             .map_err(draw_err)?;
-        legend.push((kind.label().into(), Swatch::Shape(kind.marker(), style::BRANCH)));
+        legend.push((
+            kind.label().into(),
+            Swatch::Shape(kind.marker(), style::BRANCH),
+        ));
     }
 
     if let Some(p) = view

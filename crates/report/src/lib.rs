@@ -33,10 +33,10 @@ pub use campaign::{
     StiffnessGroup, StiffnessRow, StiffnessView,
 };
 pub use curve::{axis_labels, curve_svg, BranchKind, CurveView, CycleSeries, FitLine};
-pub use grid::{fmt_plain, Cell, CsvLocale, Grid};
 pub use gap::{
     gap_waterfall_svg, gap_where_svg, gap_which_svg, span_residual_svg, CandidateBar, SpanResidual,
 };
+pub use grid::{fmt_plain, Cell, CsvLocale, Grid};
 pub use html::{render_html, Block, ReportDoc, Table, TestSection};
 pub use text::escape_html;
 pub use words::{diagnosis_words, DiagnosisSummary};

@@ -198,7 +198,12 @@ pub fn engineering_exponent(values: impl IntoIterator<Item = f64>) -> i32 {
 
 /// A value with the unit an axis over `range` shows it in: the axis `elongation Δl [m]` over
 /// 0…40 µm is drawn in µm, so 2.06·10⁻⁵ m reads `20.6 µm` (`sig` significant digits).
-pub fn fmt_on_axis(v: f64, range: impl IntoIterator<Item = f64>, label: &str, sig: usize) -> String {
+pub fn fmt_on_axis(
+    v: f64,
+    range: impl IntoIterator<Item = f64>,
+    label: &str,
+    sig: usize,
+) -> String {
     let unit_in = |l: &str| match (l.rfind('['), l.ends_with(']')) {
         (Some(i), true) => l[i + 1..l.len() - 1].to_string(),
         _ => String::new(),
@@ -341,7 +346,10 @@ mod tests {
         assert_eq!(fmt_on_axis(2.06e-5, [0.0, 4e-5], l, 3), "20.6 \u{b5}m");
         assert_eq!(fmt_on_axis(2.06e-3, [0.0, 4e-3], l, 3), "2.06 mm");
         assert_eq!(fmt_on_axis(52.0, [0.0, 100.0], "force F [N]", 3), "52.0 N");
-        assert_eq!(fmt_on_axis(3.2e-3, [0.0, 5e-3], "moment [N m]", 2), "3.2\u{b7}10\u{207b}\u{b3} N m");
+        assert_eq!(
+            fmt_on_axis(3.2e-3, [0.0, 5e-3], "moment [N m]", 2),
+            "3.2\u{b7}10\u{207b}\u{b3} N m"
+        );
     }
 
     #[test]

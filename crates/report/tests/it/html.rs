@@ -94,7 +94,9 @@ fn summary_blocks_render_in_order() {
     let doc = parse(&html);
     let h = html.find("<h3>Series statistics</h3>").unwrap();
     let p = html.find("<p>paragraphs</p>").unwrap();
-    let t = html.find("<caption>Tension: results per specimen</caption>").unwrap();
+    let t = html
+        .find("<caption>Tension: results per specimen</caption>")
+        .unwrap();
     let s = html.find("class=\"test\"").unwrap();
     assert!(h < p && p < t && t < s);
     let cells: Vec<&str> = doc

@@ -45,9 +45,16 @@ fn tension_curve_carries_every_series() {
         .filter(|n| n.has_tag_name("polyline"))
         .filter_map(|n| n.attribute("points"))
         .filter(|p| p.split_whitespace().count() > 2)
-        .flat_map(|p| p.split_whitespace().map(|xy| xy.split(',').next().unwrap().parse::<f64>().unwrap()).collect::<Vec<_>>())
+        .flat_map(|p| {
+            p.split_whitespace()
+                .map(|xy| xy.split(',').next().unwrap().parse::<f64>().unwrap())
+                .collect::<Vec<_>>()
+        })
         .fold(0.0f64, f64::max);
-    assert!(data_right <= 628.0 + 1.0 && data_right < legend_x, "data up to x = {data_right}");
+    assert!(
+        data_right <= 628.0 + 1.0 && data_right < legend_x,
+        "data up to x = {data_right}"
+    );
     // One polyline per cycle plus its legend sample, each in its own palette colour and dash.
     for k in 0..3 {
         let colour = hex(series_colour(k, 3));
