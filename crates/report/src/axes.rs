@@ -141,6 +141,43 @@ where
     (xr.end - ox + 12, yr.start - oy)
 }
 
+/// Draws a chart's grid, ticks and axis descriptions in the report's style: `y_labels` ticks on
+/// y; on x eight ticks, or none and no vertical grid lines without an x axis (`xa = None`).
+pub(crate) fn draw_mesh<DB: plotters::prelude::DrawingBackend>(
+    chart: &mut plotters::prelude::ChartContext<
+        '_,
+        DB,
+        plotters::prelude::Cartesian2d<
+            plotters::coord::types::RangedCoordf64,
+            plotters::coord::types::RangedCoordf64,
+        >,
+    >,
+    xa: Option<&Axis>,
+    ya: &Axis,
+    y_labels: usize,
+) -> Result<(), ReportError> {
+    use crate::style::{self, FONT};
+    use plotters::prelude::*;
+    let xfmt = |v: &f64| xa.map_or(String::new(), |a| a.tick(*v));
+    let yfmt = |v: &f64| ya.tick(*v);
+    let mut mesh = chart.configure_mesh();
+    mesh.y_desc(ya.desc.as_str())
+        .y_label_formatter(&yfmt)
+        .y_labels(y_labels)
+        .x_label_formatter(&xfmt)
+        .label_style((FONT, style::LABEL_SIZE).into_font())
+        .axis_desc_style((FONT, style::AXIS_DESC_SIZE).into_font())
+        .bold_line_style(style::GRID)
+        .light_line_style(WHITE)
+        .max_light_lines(0)
+        .axis_style(style::INK);
+    match xa {
+        Some(a) => mesh.x_desc(a.desc.as_str()).x_labels(8),
+        None => mesh.x_labels(0).disable_x_mesh(),
+    };
+    mesh.draw().map_err(draw_err)
+}
+
 /// Converts any plotters drawing error into [`ReportError::Draw`].
 pub(crate) fn draw_err<E: std::fmt::Display>(e: E) -> ReportError {
     ReportError::Draw(e.to_string())

@@ -8,7 +8,7 @@
 use cablab_core::TestKind;
 use plotters::prelude::*;
 
-use crate::axes::{beside_plot, draw_err, draw_legend, padded_range, Axis, Swatch};
+use crate::axes::{beside_plot, draw_err, draw_legend, draw_mesh, padded_range, Axis, Swatch};
 use crate::grid::{Cell, Grid};
 use crate::style::{self, add_title, FONT};
 use crate::text::strip_xml_forbidden;
@@ -105,22 +105,7 @@ pub fn campaign_stiffness_svg(view: &StiffnessView) -> Result<String, ReportErro
                 .y_label_area_size(86)
                 .build_cartesian_2d(-0.5..0.5f64, y0..y1)
                 .map_err(draw_err)?;
-            let yfmt = |v: &f64| ya.tick(*v);
-            chart
-                .configure_mesh()
-                .y_desc(ya.desc.as_str())
-                .y_label_formatter(&yfmt)
-                .y_labels(6)
-                .x_labels(0)
-                .disable_x_mesh()
-                .label_style((FONT, style::LABEL_SIZE).into_font())
-                .axis_desc_style((FONT, style::AXIS_DESC_SIZE).into_font())
-                .bold_line_style(style::GRID)
-                .light_line_style(WHITE)
-                .max_light_lines(0)
-                .axis_style(style::INK)
-                .draw()
-                .map_err(draw_err)?;
+            draw_mesh(&mut chart, None, &ya, 6)?;
             let m = finite.len();
             let pts: Vec<(f64, f64)> = finite
                 .iter()
@@ -563,24 +548,7 @@ pub fn overlay_svg(view: &OverlayView) -> Result<String, ReportError> {
             .y_label_area_size(72)
             .build_cartesian_2d(xa.lo..xa.hi, ya.lo..ya.hi)
             .map_err(draw_err)?;
-        let xfmt = |v: &f64| xa.tick(*v);
-        let yfmt = |v: &f64| ya.tick(*v);
-        chart
-            .configure_mesh()
-            .x_desc(xa.desc.as_str())
-            .y_desc(ya.desc.as_str())
-            .x_label_formatter(&xfmt)
-            .y_label_formatter(&yfmt)
-            .x_labels(8)
-            .y_labels(8)
-            .label_style((FONT, style::LABEL_SIZE).into_font())
-            .axis_desc_style((FONT, style::AXIS_DESC_SIZE).into_font())
-            .bold_line_style(style::GRID)
-            .light_line_style(WHITE)
-            .max_light_lines(0)
-            .axis_style(style::INK)
-            .draw()
-            .map_err(draw_err)?;
+        draw_mesh(&mut chart, Some(&xa), &ya, 8)?;
         let mut legend = Vec::new();
         for (k, (p, (label, _, _))) in pts.iter().zip(&view.curves).enumerate() {
             let colour = style::series_colour(k, n);

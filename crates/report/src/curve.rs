@@ -11,7 +11,9 @@
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
-use crate::axes::{beside_plot, draw_err, draw_legend, padded_range, unit_of, Axis, Swatch};
+use crate::axes::{
+    beside_plot, draw_err, draw_legend, draw_mesh, padded_range, unit_of, Axis, Swatch,
+};
 use crate::style::{self, add_title, apply_dashes, series_colour, series_dash, FONT};
 use crate::text::strip_xml_forbidden;
 use crate::ReportError;
@@ -275,24 +277,7 @@ fn draw_main(
         .y_label_area_size(72)
         .build_cartesian_2d(xa.lo..xa.hi, ya.lo..ya.hi)
         .map_err(draw_err)?;
-    let xfmt = |v: &f64| xa.tick(*v);
-    let yfmt = |v: &f64| ya.tick(*v);
-    chart
-        .configure_mesh()
-        .x_desc(xa.desc.as_str())
-        .y_desc(ya.desc.as_str())
-        .x_label_formatter(&xfmt)
-        .y_label_formatter(&yfmt)
-        .x_labels(8)
-        .y_labels(8)
-        .label_style((FONT, style::LABEL_SIZE).into_font())
-        .axis_desc_style((FONT, style::AXIS_DESC_SIZE).into_font())
-        .bold_line_style(style::GRID)
-        .light_line_style(WHITE)
-        .max_light_lines(0)
-        .axis_style(style::INK)
-        .draw()
-        .map_err(draw_err)?;
+    draw_mesh(&mut chart, Some(xa), ya, 8)?;
 
     let mut legend: Vec<(String, Swatch)> = Vec::new();
     // Fit window first, so that everything else lies on top of it.
@@ -445,24 +430,7 @@ fn draw_residual(
         .y_label_area_size(72)
         .build_cartesian_2d(xa.lo..xa.hi, -max..max)
         .map_err(draw_err)?;
-    let xfmt = |v: &f64| xa.tick(*v);
-    let yfmt = |v: &f64| ra.tick(*v);
-    chart
-        .configure_mesh()
-        .x_desc(xa.desc.as_str())
-        .y_desc(ra.desc.as_str())
-        .x_label_formatter(&xfmt)
-        .y_label_formatter(&yfmt)
-        .x_labels(8)
-        .y_labels(4)
-        .label_style((FONT, style::LABEL_SIZE).into_font())
-        .axis_desc_style((FONT, style::AXIS_DESC_SIZE).into_font())
-        .bold_line_style(style::GRID)
-        .light_line_style(WHITE)
-        .max_light_lines(0)
-        .axis_style(style::INK)
-        .draw()
-        .map_err(draw_err)?;
+    draw_mesh(&mut chart, Some(xa), &ra, 4)?;
     chart
         .draw_series(std::iter::once(PathElement::new(
             vec![(xa.lo, 0.0), (xa.hi, 0.0)],
