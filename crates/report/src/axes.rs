@@ -178,6 +178,41 @@ pub(crate) fn draw_mesh<DB: plotters::prelude::DrawingBackend>(
     mesh.draw().map_err(draw_err)
 }
 
+/// The chart of a curve plot: title, a plot area with the legend column
+/// ([`crate::style::LEGEND_PX`]) right of it, both axes meshed.
+pub(crate) fn curve_chart<'a, DB: plotters::prelude::DrawingBackend>(
+    area: &'a plotters::prelude::DrawingArea<DB, plotters::coord::Shift>,
+    title: &str,
+    xa: &Axis,
+    ya: &Axis,
+) -> Result<
+    plotters::prelude::ChartContext<
+        'a,
+        DB,
+        plotters::prelude::Cartesian2d<
+            plotters::coord::types::RangedCoordf64,
+            plotters::coord::types::RangedCoordf64,
+        >,
+    >,
+    ReportError,
+> {
+    use crate::style::{self, FONT};
+    use plotters::prelude::*;
+    let mut chart = ChartBuilder::on(area)
+        .caption(
+            crate::text::strip_xml_forbidden(title),
+            (FONT, style::TITLE_SIZE).into_font(),
+        )
+        .margin(12)
+        .margin_right(12 + style::LEGEND_PX)
+        .x_label_area_size(48)
+        .y_label_area_size(72)
+        .build_cartesian_2d(xa.lo..xa.hi, ya.lo..ya.hi)
+        .map_err(draw_err)?;
+    draw_mesh(&mut chart, Some(xa), ya, 8)?;
+    Ok(chart)
+}
+
 /// Converts any plotters drawing error into [`ReportError::Draw`].
 pub(crate) fn draw_err<E: std::fmt::Display>(e: E) -> ReportError {
     ReportError::Draw(e.to_string())

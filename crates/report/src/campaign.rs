@@ -8,7 +8,9 @@
 use cablab_core::TestKind;
 use plotters::prelude::*;
 
-use crate::axes::{beside_plot, draw_err, draw_legend, draw_mesh, padded_range, Axis, Swatch};
+use crate::axes::{
+    beside_plot, curve_chart, draw_err, draw_legend, draw_mesh, padded_range, Axis, Swatch,
+};
 use crate::grid::{Cell, Grid};
 use crate::style::{self, add_title, FONT};
 use crate::text::strip_xml_forbidden;
@@ -537,18 +539,7 @@ pub fn overlay_svg(view: &OverlayView) -> Result<String, ReportError> {
         )
         .into_drawing_area();
         root.fill(&WHITE).map_err(draw_err)?;
-        let mut chart = ChartBuilder::on(&root)
-            .caption(
-                strip_xml_forbidden(&view.title),
-                (FONT, style::TITLE_SIZE).into_font(),
-            )
-            .margin(12)
-            .margin_right(12 + style::LEGEND_PX)
-            .x_label_area_size(48)
-            .y_label_area_size(72)
-            .build_cartesian_2d(xa.lo..xa.hi, ya.lo..ya.hi)
-            .map_err(draw_err)?;
-        draw_mesh(&mut chart, Some(&xa), &ya, 8)?;
+        let mut chart = curve_chart(&root, &view.title, &xa, &ya)?;
         let mut legend = Vec::new();
         for (k, (p, (label, _, _))) in pts.iter().zip(&view.curves).enumerate() {
             let colour = style::series_colour(k, n);

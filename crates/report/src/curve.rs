@@ -12,10 +12,9 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 
 use crate::axes::{
-    beside_plot, draw_err, draw_legend, draw_mesh, padded_range, unit_of, Axis, Swatch,
+    beside_plot, curve_chart, draw_err, draw_legend, draw_mesh, padded_range, unit_of, Axis, Swatch,
 };
 use crate::style::{self, add_title, apply_dashes, series_colour, series_dash, FONT};
-use crate::text::strip_xml_forbidden;
 use crate::ReportError;
 
 /// The branch a marked point starts (as the measure crate segments cycles).
@@ -268,16 +267,7 @@ fn draw_main(
     sim_points: &[(f64, f64)],
 ) -> Result<(), ReportError> {
     let n = cycles.len();
-    let title = strip_xml_forbidden(&view.title);
-    let mut chart = ChartBuilder::on(area)
-        .caption(title, (FONT, style::TITLE_SIZE).into_font())
-        .margin(12)
-        .margin_right(12 + style::LEGEND_PX)
-        .x_label_area_size(48)
-        .y_label_area_size(72)
-        .build_cartesian_2d(xa.lo..xa.hi, ya.lo..ya.hi)
-        .map_err(draw_err)?;
-    draw_mesh(&mut chart, Some(xa), ya, 8)?;
+    let mut chart = curve_chart(area, &view.title, xa, ya)?;
 
     let mut legend: Vec<(String, Swatch)> = Vec::new();
     // Fit window first, so that everything else lies on top of it.
