@@ -103,20 +103,11 @@ fn table1_csv(groups: &[cablab_measure::GroupStats]) -> cablab_report::Grid {
     use cablab_report::Cell;
     cablab_report::Grid {
         caption: String::new(),
-        header: [
-            "specimen",
-            "diameter_m",
-            "kind",
-            "n",
-            "stiffness_mean",
-            "stiffness_sd",
-            "stiffness_cov",
-            "stiffness_unit",
-            "modulus_mean_pa",
-            "series",
-        ]
-        .map(String::from)
-        .to_vec(),
+        header: cablab_measure::GROUP_KEYS
+            .iter()
+            .chain(&["series"])
+            .map(|k| k.to_string())
+            .collect(),
         rows: groups
             .iter()
             .map(|g| {

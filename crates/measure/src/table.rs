@@ -56,6 +56,20 @@ pub struct GroupStats {
     pub series: Option<String>,
 }
 
+/// The keys of a pooled `groups` entry in `summary.json` (CONTRACT.md), in order; a series
+/// group adds `series`.
+pub const GROUP_KEYS: [&str; 9] = [
+    "specimen",
+    "diameter_m",
+    "kind",
+    "n",
+    "stiffness_mean",
+    "stiffness_sd",
+    "stiffness_cov",
+    "stiffness_unit",
+    "modulus_mean_pa",
+];
+
 /// Sort key of a series label: its leading number, then the text (`40N` before `100N`).
 fn series_key(s: &Option<String>) -> (bool, f64, String) {
     match s {
@@ -257,20 +271,7 @@ mod tests {
             .keys()
             .map(|k| k.as_str())
             .collect();
-        assert_eq!(
-            keys,
-            [
-                "specimen",
-                "diameter_m",
-                "kind",
-                "n",
-                "stiffness_mean",
-                "stiffness_sd",
-                "stiffness_cov",
-                "stiffness_unit",
-                "modulus_mean_pa"
-            ]
-        );
+        assert_eq!(keys, GROUP_KEYS);
         assert_eq!(first["kind"], "tension");
         assert!(json[2]["stiffness_sd"].is_null());
     }
