@@ -1,5 +1,8 @@
-//! The campaign's pictures and its HTML report, built from the per-test outcomes and the files
-//! the tests wrote. Drawing is the report crate's; this module decides what goes where.
+//! The campaign's pictures, its series tables and its HTML report, built from the per-test
+//! outcomes and the files the tests wrote. Drawing and formatting are the report crate's; this
+//! module decides what goes where: Table 1, the series statistics and the per-specimen results
+//! first, then the overlays and stiffness panels, then the per-test detail. A series is a
+//! specimen type and kind, split by protocol level (`campaign::series_of`).
 
 use super::campaign::PiecewiseRow;
 use super::config::Campaign;

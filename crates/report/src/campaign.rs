@@ -1,9 +1,13 @@
-//! Campaign views: the stiffness of every specimen, grouped by specimen type, with mean and
-//! scatter (one plot per test kind, since the units differ), and the chapter's table styles:
-//! Table 1 (elastic stiffnesses and Young's moduli per kind) and Table 2 (model parameters).
+//! Campaign views, as a testXpert user reads a series: the stiffness of every specimen (one
+//! plot per test kind, since the units differ; one panel per series with its own range and
+//! labelled points), the overlay of all curves of a series, and the tables: Table 1 (elastic
+//! stiffnesses and Young's moduli per kind and series), Table 2 (model parameters), the
+//! per-specimen results of a kind and the series statistics (n, mean, SD, CoV, min, max). The
+//! tables are [`Grid`]s: one model and one number formatter for md, tex, csv and html.
 //!
-//! Means and standard deviations are computed here only for the plot's marks; the table takes
+//! Means and standard deviations are computed here only for the plot's marks; the tables take
 //! the pipeline's own statistics (`summary.json` groups) so the report shows exactly those.
+//! Does not decide what a series is: the caller labels it ([`series_label`]).
 
 use cablab_core::TestKind;
 use plotters::prelude::*;

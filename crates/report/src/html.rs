@@ -1,6 +1,7 @@
-//! The self-contained HTML report of a campaign: an index (contents, the campaign tables and
-//! figures, the campaign-level diagnosis), then one section per test with its facts, plots and
-//! diagnosis in plain words.
+//! The self-contained HTML report of a campaign: the campaign's results first (summary, the
+//! blocks of tables and figures, the campaign-level diagnosis), then the list of tests and one
+//! section per test with its facts, plots and diagnosis in plain words. Printed on A4 the
+//! summary comes first and the test sections follow without a page each (two figures a row).
 //!
 //! One string, readable offline: CSS inline, SVG inline, generic font families only, and a
 //! Content-Security-Policy that forbids every network fetch and every script. Every string in
