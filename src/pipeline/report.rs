@@ -430,14 +430,32 @@ pub fn html(
     for (id, why) in &c.skipped {
         summary.push(format!("Skipped {id}: {why}"));
     }
-    // Campaign-level diagnosis: the verdicts by specimen and kind.
+    // Campaign-level diagnosis: the verdicts per series, counted; the words are in each test's
+    // section.
     let mut diag = String::new();
-    for o in outcomes.iter().filter(|o| o.verdict.is_some()) {
+    for ((specimen, kind, level), idx) in series_list(outcomes, series) {
+        let mut verdicts: Vec<(&str, usize)> = Vec::new();
+        for v in idx.iter().filter_map(|&i| outcomes[i].verdict.as_deref()) {
+            match verdicts.iter_mut().find(|x| x.0 == v) {
+                Some(x) => x.1 += 1,
+                None => verdicts.push((v, 1)),
+            }
+        }
+        if verdicts.is_empty() {
+            continue;
+        }
+        let counted: Vec<String> = verdicts
+            .iter()
+            .map(|(v, n)| format!("{v} in {n} of {} tests", idx.len()))
+            .collect();
         diag.push_str(&format!(
-            "{}: {}\n\n",
-            o.id,
-            o.diagnosis_words.as_deref().unwrap_or("")
+            "{} ({kind}): {}.\n\n",
+            series_label(specimen, level),
+            counted.join("; ")
         ));
+    }
+    if !diag.is_empty() {
+        diag.push_str("Each test's diagnosis in plain words is in its section below.");
     }
     let tests = outcomes
         .iter()
