@@ -58,6 +58,75 @@ struct SummaryTest<'a> {
     verdict: Option<&'a str>,
     why: &'a [String],
     report: String,
+    /// Why calibration, simulation or diagnosis failed (the measurement above is kept).
+    model_error: Option<&'a str>,
+    /// Protocol series (level) the test belongs to; null when pooled or not stated.
+    series: Option<&'a str>,
+    /// Specimen id, operator, date and machine from the file's header.
+    header: &'a super::evaluate::TestHeader,
+    yield_method: Option<&'a str>,
+    max_response: Option<serde_json::Value>,
+    #[serde(rename = "break")]
+    break_at: Option<serde_json::Value>,
+    last_loop_area_j: Option<f64>,
+}
+
+/// The series (protocol level) of each test: its file name's level where its specimen type and
+/// kind has tests of two or more levels, else `None`; all `None` with `pool`.
+pub fn series_of(outcomes: &[TestOutcome], pool: bool) -> Vec<Option<String>> {
+    outcomes
+        .iter()
+        .map(|o| {
+            if pool {
+                return None;
+            }
+            let mut levels: Vec<Option<&str>> = outcomes
+                .iter()
+                .filter(|p| p.specimen == o.specimen && p.kind == o.kind)
+                .map(|p| p.level.as_deref())
+                .collect();
+            levels.sort();
+            levels.dedup();
+            if levels.len() > 1 {
+                o.level.clone()
+            } else {
+                None
+            }
+        })
+        .collect()
+}
+
+/// `table1.csv`: one line per `groups` entry with the `groups` keys as header (CONTRACT.md),
+/// then `series`; numbers with 5 significant digits, SI (the unit in the key or in
+/// `stiffness_unit`); empty fields for nulls.
+fn table1_csv(groups: &[cablab_measure::GroupStats]) -> cablab_report::Grid {
+    use cablab_report::Cell;
+    cablab_report::Grid {
+        caption: String::new(),
+        header: cablab_measure::GROUP_KEYS
+            .iter()
+            .chain(&["series"])
+            .map(|k| k.to_string())
+            .collect(),
+        rows: groups
+            .iter()
+            .map(|g| {
+                vec![
+                    Cell::Text(g.specimen.clone()),
+                    Cell::opt(g.diameter_m),
+                    Cell::Text(g.kind.as_str().into()),
+                    Cell::Int(g.n as i64),
+                    Cell::Num(g.stiffness_mean),
+                    Cell::opt(g.stiffness_sd),
+                    Cell::opt(g.stiffness_cov),
+                    Cell::Text(g.stiffness_unit.clone()),
+                    Cell::opt(g.modulus_mean_pa),
+                    g.series.clone().map_or(Cell::Empty, Cell::Text),
+                ]
+            })
+            .collect(),
+        sig: 5,
+    }
 }
 
 fn rel(from: &Path, to: &Path) -> String {
@@ -85,37 +154,62 @@ pub fn write_campaign_outputs(
     outcomes: &[TestOutcome],
 ) -> Result<()> {
     let mut written: Vec<(String, Vec<u8>)> = Vec::new();
-    // Table 1: groups per specimen type and kind.
+    let series = series_of(outcomes, c.file.reports.pool_levels);
+    // Table 1: groups per specimen type and kind, and per series where a kind has several.
     let rows: Vec<cablab_measure::TableRow> = outcomes
         .iter()
-        .filter(|o| o.error.is_none())
-        .filter_map(|o| {
+        .zip(&series)
+        .filter(|(o, _)| o.error.is_none())
+        .filter_map(|(o, s)| {
             Some(cablab_measure::TableRow {
                 specimen: o.specimen.clone(),
                 diameter_m: Some(o.diameter_m),
                 kind: o.kind,
                 stiffness: o.stiffness?,
                 modulus_pa: o.modulus_pa,
+                series: s.clone(),
             })
         })
         .collect();
     let groups = cablab_measure::campaign_table(&rows);
     let table2 = piecewise_rows(outcomes);
+    let locale = cablab_report::CsvLocale::parse(&c.file.reports.csv_locale);
+    let table1 = super::report::table1(&groups);
     for t in &c.file.reports.tables {
-        let (name, text) = match t.as_str() {
-            "md" => ("table1.md", cablab_measure::render_markdown(&groups)),
-            "csv" => ("table1.csv", cablab_measure::render_csv(&groups)),
-            "json" => ("table1.json", cablab_measure::render_json(&groups)),
-            _ => ("table1.tex", cablab_measure::render_latex(&groups)),
-        };
-        written.push((name.to_string(), text.into_bytes()));
+        match t.as_str() {
+            "md" => written.push(("table1.md".into(), table1.markdown().into_bytes())),
+            "json" => written.push((
+                "table1.json".into(),
+                cablab_measure::render_json(&groups).into_bytes(),
+            )),
+            "csv" => {
+                written.push((
+                    "table1.csv".into(),
+                    table1_csv(&groups).csv(locale).into_bytes(),
+                ));
+                for (kind, grid) in super::report::results_tables(outcomes, &series) {
+                    written.push((
+                        format!("specimens_{}.csv", kind.as_str()),
+                        grid.csv(locale).into_bytes(),
+                    ));
+                }
+                for (kind, grid) in super::report::series_tables(outcomes, &series) {
+                    written.push((
+                        format!("series_{}.csv", kind.as_str()),
+                        grid.csv(locale).into_bytes(),
+                    ));
+                }
+            }
+            _ => written.push(("table1.tex".into(), table1.latex().into_bytes())),
+        }
     }
     if !table2.is_empty() {
         written.push(("table2.json".into(), to_json_bytes(&table2)?));
     }
     let tests: Vec<SummaryTest> = outcomes
         .iter()
-        .map(|o| SummaryTest {
+        .zip(&series)
+        .map(|(o, s)| SummaryTest {
             id: &o.id,
             specimen: &o.specimen,
             kind: o.kind,
@@ -134,6 +228,17 @@ pub fn write_campaign_outputs(
             verdict: o.verdict.as_deref(),
             why: &o.why,
             report: format!("tests/{}/result.json", o.slug),
+            model_error: o.model_error.as_deref(),
+            series: s.as_deref(),
+            header: &o.header,
+            yield_method: o.yield_method.as_deref(),
+            max_response: o
+                .max_response
+                .map(|[c, r]| serde_json::json!({"control": c, "response": r})),
+            break_at: o
+                .break_at
+                .map(|[c, r]| serde_json::json!({"control": c, "response": r})),
+            last_loop_area_j: o.last_loop_area_j,
         })
         .collect();
     let summary = serde_json::json!({
@@ -148,13 +253,16 @@ pub fn write_campaign_outputs(
         "tests": tests,
     });
     written.push(("summary.json".into(), to_json_bytes(&summary)?));
-    if c.file.reports.svg || c.file.reports.html {
-        for (name, svg) in super::report::campaign_svgs(outcomes)? {
-            written.push((name, svg.into_bytes()));
-        }
+    let figures = if c.file.reports.svg || c.file.reports.html {
+        super::report::campaign_svgs(outcomes, &series)?
+    } else {
+        vec![]
+    };
+    for f in &figures {
+        written.push((f.name.clone(), f.svg.clone().into_bytes()));
     }
     if c.file.reports.html {
-        let html = super::report::html(c, out_dir, outcomes, &groups, &table2, &written)?;
+        let html = super::report::html(c, out_dir, outcomes, &series, &groups, &table2, &figures)?;
         written.push(("index.html".into(), html.into_bytes()));
     }
     for (name, bytes) in &written {

@@ -214,6 +214,18 @@ pub struct ReportSettings {
     /// Table formats among `md`, `csv`, `json`, `tex`.
     #[serde(default = "default_tables")]
     pub tables: Vec<String>,
+    /// Pool the protocol levels of a specimen type and kind (`tension_40N_*` with
+    /// `tension_100N_*`) into one series statistic; default false: one series per level.
+    #[serde(default)]
+    pub pool_levels: bool,
+    /// CSV dialect: `"en"` (`,` and decimal point, the default) or `"de"` (`;` and decimal
+    /// comma, as German Excel opens CSV).
+    #[serde(default = "default_csv_locale")]
+    pub csv_locale: String,
+}
+
+fn default_csv_locale() -> String {
+    "en".into()
 }
 
 impl Default for ReportSettings {
@@ -223,6 +235,8 @@ impl Default for ReportSettings {
             svg: true,
             parquet: true,
             tables: default_tables(),
+            pool_levels: false,
+            csv_locale: default_csv_locale(),
         }
     }
 }
@@ -394,6 +408,12 @@ fn validate(file: PipelineFile, path: &Path, bytes: Vec<u8>, root: PathBuf) -> R
                 "{ctx}: reports.tables: unknown table format {t:?} (expected md, csv, json, tex)"
             );
         }
+    }
+    if !["en", "de"].contains(&file.reports.csv_locale.as_str()) {
+        bail!(
+            "{ctx}: reports.csv_locale: expected \"en\" (`,` and decimal point) or \"de\" (`;` and decimal comma), got {:?}",
+            file.reports.csv_locale
+        );
     }
     if file.model.elements < 4 || file.model.elements > 2000 {
         bail!(

@@ -71,6 +71,125 @@ pub struct TestOutcome {
     pub warnings: Vec<String>,
     /// Files of this test (relative to the test's folder) with their SHA-256.
     pub files: Vec<(String, String)>,
+    /// `null` when calibration, simulation and diagnosis ran (or were not asked for); else why
+    /// the model part failed, naming the stage. The characterisation above is kept either way.
+    #[serde(default)]
+    pub model_error: Option<String>,
+    /// What the file's header says about the test (specimen id, operator, date, machine).
+    #[serde(default)]
+    pub header: TestHeader,
+    /// Protocol level of the test's series (`40N`, `6mm`, ...) from the file name, or null.
+    #[serde(default)]
+    pub level: Option<String>,
+    /// How the yield point was found (`bend of the first loading (bilinear fit)`), or null.
+    #[serde(default)]
+    pub yield_method: Option<String>,
+    /// Largest |response| and the machine control there, SI (`[control, response]`).
+    #[serde(default)]
+    pub max_response: Option<[f64; 2]>,
+    /// Where the specimen broke: machine control and response just before the drop, SI; null
+    /// when the response never fell below half its maximum while the control still advanced.
+    #[serde(default)]
+    pub break_at: Option<[f64; 2]>,
+    /// Loop area ∮ response d(control) of the last cycle that has one, J.
+    #[serde(default)]
+    pub last_loop_area_j: Option<f64>,
+    /// The curve as the test's plot shows it (x, response), SI, at most
+    /// `views::OVERLAY_POINTS` samples: the series overlay draws it.
+    #[serde(default)]
+    pub overlay: Vec<[f64; 2]>,
+}
+
+/// Header data a file carries, as written (empty when the file does not say).
+#[derive(Debug, Clone, Default, Serialize, Deserialize, PartialEq)]
+pub struct TestHeader {
+    /// Specimen id from the file (`cable2.8-T40-1`).
+    pub specimen_id: Option<String>,
+    /// Operator / tester.
+    pub operator: Option<String>,
+    /// Test date (and time) as written.
+    pub date: Option<String>,
+    /// Machine or load cell.
+    pub machine: Option<String>,
+}
+
+impl TestHeader {
+    /// Reads the header fields from a record's metadata (keys compared case-insensitively,
+    /// English and German as testXpert, Bluehill and MTS write them); the specimen id from the
+    /// reader's specimen label.
+    pub fn from_metadata(label: Option<&str>, meta: &[(String, String)]) -> Self {
+        let find = |keys: &[&str]| {
+            meta.iter()
+                .find(|(k, v)| {
+                    let k = k.trim().trim_end_matches(':').trim().to_lowercase();
+                    !v.trim().is_empty() && keys.iter().any(|x| k == *x)
+                })
+                .map(|(_, v)| v.trim().trim_matches('"').to_string())
+        };
+        TestHeader {
+            specimen_id: label.map(str::to_string),
+            operator: find(&[
+                "operator", "tester", "prüfer", "bediener", "user", "benutzer",
+            ]),
+            date: find(&[
+                "date",
+                "datum",
+                "test date",
+                "prüfdatum",
+                "datum/uhrzeit",
+                "date/time",
+            ]),
+            machine: find(&[
+                "machine",
+                "maschinendaten",
+                "maschine",
+                "machine data",
+                "instrument",
+                "frame",
+                "prüfmaschine",
+            ]),
+        }
+    }
+}
+
+/// The protocol level a file name states: the first `_`/`-`-separated token of the stem that is
+/// a number followed by a unit (`40N`, `100N`, `6mm`, `360deg`, `1.5kN`), e.g. `40N` for
+/// `tension_40N_1.TXT`. Replicates of one series share it; tests of one specimen type and kind
+/// with different levels are different series.
+///
+/// Does not read the data: a level that only the data shows is not found.
+pub fn level_from_name(id: &str) -> Option<String> {
+    let name = id.rsplit(['/', '\\']).next().unwrap_or(id);
+    let stem = name.rsplit_once('.').map_or(name, |(s, _)| s);
+    stem.split(['_', '-', ' ']).find_map(|tok| {
+        let digits = tok
+            .find(|c: char| !(c.is_ascii_digit() || c == '.' || c == ','))
+            .filter(|&i| i > 0)?;
+        let unit = &tok[digits..];
+        let known = [
+            "N", "kN", "mN", "mm", "m", "deg", "rad", "Nm", "Nmm", "mrad", "°",
+        ];
+        known.contains(&unit).then(|| tok.to_string())
+    })
+}
+
+/// Largest |response| with its control, and where the specimen broke: the first sample after
+/// the maximum whose |response| is below half the maximum while the control has not gone back
+/// below its value at the maximum (an unloading goes back; a break does not). Returns
+/// `(max, break)`, each `[control, response]` (the break as the last sample before the drop).
+pub fn max_and_break(control: &[f64], response: &[f64]) -> (Option<[f64; 2]>, Option<[f64; 2]>) {
+    let imax = response
+        .iter()
+        .enumerate()
+        .filter(|(_, r)| r.is_finite())
+        .max_by(|a, b| a.1.abs().total_cmp(&b.1.abs()))
+        .map(|(i, _)| i);
+    let Some(i) = imax else { return (None, None) };
+    let (cm, rm) = (control[i], response[i]);
+    let brk = (i + 1..response.len())
+        .find(|&k| response[k].abs() < 0.5 * rm.abs() && (control[k] - cm) * cm.signum() >= 0.0)
+        .map(|k| [control[k - 1], response[k - 1]]);
+    (Some([cm, rm]), brk)
 }
 
 impl TestOutcome {
@@ -103,6 +222,14 @@ impl TestOutcome {
             why: vec![],
             warnings: vec![],
             files: vec![],
+            model_error: None,
+            header: TestHeader::default(),
+            level: level_from_name(&t.id),
+            yield_method: None,
+            max_response: None,
+            break_at: None,
+            last_loop_area_j: None,
+            overlay: vec![],
         }
     }
 }
@@ -199,6 +326,7 @@ fn stages(
     };
     let rec = cablab_ingest::read_bytes(bytes, &t.id, &opts)?;
     out.format = Some(rec.provenance.format.as_str().to_string());
+    out.header = TestHeader::from_metadata(rec.specimen.label.as_deref(), &rec.metadata);
     out.warnings
         .extend(rec.warnings.iter().map(|w| w.to_string()));
     let geom = crate::bridge::geometry(
@@ -229,87 +357,36 @@ fn stages(
         &ao,
     )?;
     fill_analysis(out, &an);
+    (out.max_response, out.break_at) = max_and_break(&curve.control, &curve.response);
+    out.overlay = super::views::overlay_points(t.kind, &geom, &curve);
     done(1);
 
-    // 3. calibrate and simulate the baseline
-    let mut rod_setup = cablab_rod::TestSetup::new(t.kind, geom.free_length_m);
-    rod_setup.elements = c.file.model.elements;
-    let (dtest, offsets) = crate::bridge::diag_test(
-        t.kind,
+    // 3–4. The model part: a failure here keeps the characterisation, the curve and the table
+    // rows; it is recorded in `model_error` with its stage.
+    let mut simulated: Option<Vec<f64>> = None;
+    let mut diagnosis = None;
+    let mut model_stage = 2;
+    let model = model_part(
+        c,
+        t,
         &geom,
         &curve,
-        Some(t.specimen.clone()),
-        Some(rod_setup),
-    )?;
-    let tests = std::slice::from_ref(&dtest);
-    let rod = Rod::default();
-    let ctx = cablab_diagnose::Context {
-        catalog: &Registry,
-        rod: Some(&rod),
-    };
-    let mut simulated: Option<Vec<f64>> = None;
-    if c.file.model.calibrate {
-        let model = ModelSpec::law(&c.file.model.baseline);
-        // The characterisation gives good starting values (stiffness, yield): one warm start
-        // plus one spread start instead of several blind ones.
-        let copts = cablab_diagnose::CalibrateOptions {
-            starts: 2,
-            warm: warm_start(t.kind, &c.file.model.baseline, &an),
-            ..Default::default()
-        };
-        let cal = cablab_diagnose::calibrate(ctx, tests, &model, &copts)
-            .context("calibrating the baseline")?;
-        let fwd = cablab_diagnose::model::ModelForward::new(tests, &model, &Registry, Some(&rod))?;
-        // The model of the measurement: the simulated response plus the offset taken off.
-        let sim: Vec<f64> = fwd
-            .simulate_all(cal.values())?
-            .pop()
-            .unwrap_or_default()
-            .into_iter()
-            .map(|v| v + offsets.response)
-            .collect();
-        let scale = curve.response.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-        let rms = (sim
-            .iter()
-            .zip(&curve.response)
-            .map(|(s, m)| (m - s).powi(2))
-            .sum::<f64>()
-            / sim.len().max(1) as f64)
-            .sqrt();
-        out.baseline_gap_rel = (scale > 0.0).then(|| rms / scale);
-        out.calibration = Some(serde_json::to_value(&cal)?);
-        simulated = Some(sim);
-    } else {
-        out.why.push("calibrate: disabled in [model]".into());
+        &an,
+        diagnosis_enabled,
+        out,
+        &mut simulated,
+        &mut diagnosis,
+        &mut |s| {
+            done(s);
+            model_stage = s + 1;
+        },
+    );
+    if let Err(e) = model {
+        out.model_error = Some(format!("{}: {e:#}", STAGES[model_stage.min(3)]));
+        for s in model_stage..4 {
+            done(s);
+        }
     }
-    done(2);
-
-    // 4. diagnose
-    let mut diagnosis = None;
-    let kind_ok = c
-        .diagnose_kinds
-        .as_ref()
-        .is_none_or(|k| k.contains(&t.kind));
-    if diagnosis_enabled && kind_ok {
-        let dopts = cablab_diagnose::DiagnoseOptions {
-            baseline: c.file.model.baseline.clone(),
-            candidates: c.candidates.clone(),
-            ladder: c.file.diagnosis.ladder,
-            ..Default::default()
-        };
-        let d = cablab_diagnose::diagnose(ctx, tests, &dopts).context("diagnosing the gap")?;
-        out.verdict = Some(d.verdict.effect.as_str().to_string());
-        out.diagnosis_words = Some(words(&d));
-        diagnosis = Some(d);
-    } else if !diagnosis_enabled {
-        out.why.push("diagnose: disabled for this run".into());
-    } else {
-        out.why.push(format!(
-            "diagnose: {} is not among [diagnosis].kinds",
-            t.kind
-        ));
-    }
-    done(3);
 
     // 5. per-test files
     let result = serde_json::json!({
@@ -317,11 +394,13 @@ fn stages(
         "specimen": t.specimen,
         "kind": t.kind,
         "input": {"path": t.id, "sha256": out.input_sha256, "format": out.format},
+        "header": out.header,
         "geometry": {"free_length_m": geom.free_length_m, "diameter_m": geom.diameter_m},
         "analysis": an,
         "calibration": out.calibration,
         "baseline_gap_rel": out.baseline_gap_rel,
         "diagnosis": diagnosis,
+        "model_error": out.model_error,
     });
     files.push(("result.json".into(), crate::output::to_json_bytes(&result)?));
     if c.file.reports.parquet {
@@ -345,6 +424,101 @@ fn stages(
         }
     }
     done(4);
+    Ok(())
+}
+
+/// Calibrate and simulate the baseline, then diagnose (stages 2 and 3).
+#[allow(clippy::too_many_arguments)]
+fn model_part(
+    c: &Campaign,
+    t: &PlannedTest,
+    geom: &cablab_measure::Geometry,
+    curve: &Curve,
+    an: &Analysis,
+    diagnosis_enabled: bool,
+    out: &mut TestOutcome,
+    simulated: &mut Option<Vec<f64>>,
+    diagnosis: &mut Option<cablab_diagnose::Diagnosis>,
+    done: &mut dyn FnMut(usize),
+) -> Result<()> {
+    // 3. calibrate and simulate the baseline
+    let mut rod_setup = cablab_rod::TestSetup::new(t.kind, geom.free_length_m);
+    rod_setup.elements = c.file.model.elements;
+    let (dtest, offsets) = crate::bridge::diag_test(
+        t.kind,
+        geom,
+        curve,
+        Some(t.specimen.clone()),
+        Some(rod_setup),
+    )?;
+    let tests = std::slice::from_ref(&dtest);
+    let rod = Rod::default();
+    let ctx = cablab_diagnose::Context {
+        catalog: &Registry,
+        rod: Some(&rod),
+    };
+    if c.file.model.calibrate {
+        let model = ModelSpec::law(&c.file.model.baseline);
+        // The characterisation gives good starting values (stiffness, yield): one warm start
+        // plus one spread start instead of several blind ones.
+        let copts = cablab_diagnose::CalibrateOptions {
+            starts: 2,
+            warm: warm_start(t.kind, &c.file.model.baseline, an),
+            ..Default::default()
+        };
+        let cal = cablab_diagnose::calibrate(ctx, tests, &model, &copts)
+            .context("calibrating the baseline")?;
+        let fwd = cablab_diagnose::model::ModelForward::new(tests, &model, &Registry, Some(&rod))?;
+        // The model of the measurement: the simulated response plus the offset taken off.
+        let sim: Vec<f64> = fwd
+            .simulate_all(cal.values())?
+            .pop()
+            .unwrap_or_default()
+            .into_iter()
+            .map(|v| v + offsets.response)
+            .collect();
+        let scale = curve.response.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        let rms = (sim
+            .iter()
+            .zip(&curve.response)
+            .map(|(s, m)| (m - s).powi(2))
+            .sum::<f64>()
+            / sim.len().max(1) as f64)
+            .sqrt();
+        out.baseline_gap_rel = (scale > 0.0).then(|| rms / scale);
+        out.calibration = Some(serde_json::to_value(&cal)?);
+        *simulated = Some(sim);
+    } else {
+        out.why.push("calibrate: disabled in [model]".into());
+    }
+    done(2);
+
+    // 4. diagnose
+    let kind_ok = c
+        .diagnose_kinds
+        .as_ref()
+        .is_none_or(|k| k.contains(&t.kind));
+    if diagnosis_enabled && kind_ok {
+        let dopts = cablab_diagnose::DiagnoseOptions {
+            baseline: c.file.model.baseline.clone(),
+            candidates: c.candidates.clone(),
+            ladder: c.file.diagnosis.ladder,
+            ..Default::default()
+        };
+        let d = cablab_diagnose::diagnose(ctx, tests, &dopts).context("diagnosing the gap")?;
+        out.verdict = Some(d.verdict.effect.as_str().to_string());
+        out.diagnosis_words = Some(words(&d));
+        *diagnosis = Some(d);
+    } else if !diagnosis_enabled {
+        out.why.push("diagnose: disabled for this run".into());
+    } else {
+        out.why.push(format!(
+            "diagnose: {} is not among [diagnosis].kinds",
+            t.kind
+        ));
+    }
+    done(3);
+
     Ok(())
 }
 
@@ -385,6 +559,11 @@ fn fill_analysis(out: &mut TestOutcome, an: &Analysis) {
     out.modulus_pa = an.modulus_pa;
     out.behaviour = Some(an.behaviour.as_str().to_string());
     out.yield_point = an.yield_point.as_ref().map(|y| [y.control, y.response]);
+    out.yield_method = an
+        .yield_point
+        .as_ref()
+        .map(|_| "bend of the first loading (two-slope hinge fit)".to_string());
+    out.last_loop_area_j = an.cycles.iter().rev().find_map(|c| c.loop_area);
     out.piecewise = an
         .piecewise
         .as_ref()
@@ -492,6 +671,69 @@ fn unit_tag(u: &str) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn levels_come_from_the_file_name() {
+        assert_eq!(
+            level_from_name("raw_data/cable/tension_40N_1.TXT").as_deref(),
+            Some("40N")
+        );
+        assert_eq!(
+            level_from_name("three_point_6mm_2.dat").as_deref(),
+            Some("6mm")
+        );
+        assert_eq!(
+            level_from_name("torsion_360deg_3.csv").as_deref(),
+            Some("360deg")
+        );
+        assert_eq!(
+            level_from_name("a/b/zug-1.5kN-7.csv").as_deref(),
+            Some("1.5kN")
+        );
+        // Replicate numbers, specimen ids and plain words are not levels.
+        assert_eq!(level_from_name("cable2.8-T40-1.csv"), None);
+        assert_eq!(level_from_name("tension_1.csv"), None);
+        assert_eq!(level_from_name("probe_12abc_1.csv"), None);
+    }
+
+    #[test]
+    fn maximum_and_break() {
+        // Loading to 10 at x = 1, unloading back: no break.
+        let x = [0.0, 0.5, 1.0, 0.5, 0.0];
+        let y = [0.0, 5.0, 10.0, 5.0, 0.0];
+        assert_eq!(max_and_break(&x, &y), (Some([1.0, 10.0]), None));
+        // The force collapses while the crosshead keeps going: a break after x = 1.1.
+        let x = [0.0, 0.5, 1.0, 1.1, 1.2, 1.3];
+        let y = [0.0, 5.0, 10.0, 9.0, 0.4, 0.1];
+        assert_eq!(max_and_break(&x, &y), (Some([1.0, 10.0]), Some([1.1, 9.0])));
+        // Negative direction (compression-like): the same by magnitude.
+        let x = [0.0, -1.0, -1.2];
+        let y = [0.0, -8.0, -1.0];
+        assert_eq!(
+            max_and_break(&x, &y),
+            (Some([-1.0, -8.0]), Some([-1.0, -8.0]))
+        );
+        assert_eq!(max_and_break(&[], &[]), (None, None));
+    }
+
+    #[test]
+    fn header_fields_from_metadata() {
+        let meta: Vec<(String, String)> = [
+            ("Prüfer :", "cablab"),
+            ("Datum", "16.05.2019"),
+            ("Maschinendaten", "\"virtual machine\""),
+            ("Operator", ""),
+        ]
+        .iter()
+        .map(|(k, v)| (k.to_string(), v.to_string()))
+        .collect();
+        let h = TestHeader::from_metadata(Some("cable2.8-T100-2"), &meta);
+        assert_eq!(h.specimen_id.as_deref(), Some("cable2.8-T100-2"));
+        assert_eq!(h.operator.as_deref(), Some("cablab"));
+        assert_eq!(h.date.as_deref(), Some("16.05.2019"));
+        assert_eq!(h.machine.as_deref(), Some("virtual machine"));
+        assert_eq!(TestHeader::from_metadata(None, &[]), TestHeader::default());
+    }
 
     #[test]
     fn slugs_are_folder_names() {

@@ -8,8 +8,9 @@ use cablab_core::TestKind;
 use cablab_measure::{Analysis, Branch};
 use cablab_report::{BranchKind, CurveView, CycleSeries, FitLine};
 
-/// Plot at most this many points per test: curves of 20,000 samples stay legible and small.
-const MAX_PLOT_POINTS: usize = 2500;
+/// Plot at most this many points per test: curves of 20,000 samples stay legible and small
+/// (the plot is 640 px wide: two samples per pixel).
+const MAX_PLOT_POINTS: usize = 1200;
 
 fn branch_kind(b: Branch) -> BranchKind {
     match b {
@@ -29,6 +30,27 @@ fn plot_x(kind: TestKind, geom: &cablab_measure::Geometry, control: &[f64]) -> V
     } else {
         control.to_vec()
     }
+}
+
+/// Samples of a test's curve in the series overlay.
+pub const OVERLAY_POINTS: usize = 400;
+
+/// The curve as its plot shows it (x as [`plot_x`], response), every k-th sample and the last,
+/// at most about [`OVERLAY_POINTS`] points.
+pub fn overlay_points(
+    kind: TestKind,
+    geom: &cablab_measure::Geometry,
+    curve: &Curve,
+) -> Vec<[f64; 2]> {
+    let n = curve.control.len();
+    if n == 0 {
+        return vec![];
+    }
+    let x = plot_x(kind, geom, &curve.control);
+    cycle_indices(0, n, n.div_ceil(OVERLAY_POINTS).max(1))
+        .into_iter()
+        .map(|k| [x[k], curve.response[k]])
+        .collect()
 }
 
 /// Factor from the sectional control (the unit of the fit window) to the plot's x.

@@ -341,3 +341,69 @@ fn the_committed_demo_report_is_current() {
         String::from_utf8_lossy(&v.stderr)
     );
 }
+
+/// A three-point test on a span far shorter than its deflection: the rod slides off its
+/// supports, so the model (calibration) fails, but the measurement survives: the stiffness,
+/// the curve and the table row are kept and the model part is marked failed with why.
+#[test]
+fn a_failing_model_keeps_the_measurement() {
+    let d = tempfile::tempdir().unwrap();
+    copy_dir(
+        &root().join("raw_data/cable"),
+        &d.path().join("raw_data/cable"),
+    );
+    std::fs::create_dir_all(d.path().join("pipelines")).unwrap();
+    std::fs::write(
+        d.path().join("pipelines/demo.toml"),
+        r#"
+[campaign]
+name = "demo"
+
+[[specimen]]
+label = "cable"
+diameter_mm = 2.8
+
+[[input]]
+glob = "raw_data/cable/three_point_6mm_1.csv"
+specimen = "cable"
+kind = "three_point"
+length_mm = 3
+
+[model]
+calibrate = true
+baseline = "elastoplastic"
+elements = 8
+
+[diagnosis]
+enabled = false
+
+[reports]
+parquet = false
+tables = ["csv"]
+"#,
+    )
+    .unwrap();
+    let r = run_in(d.path(), &["--jobs", "1"]);
+    let err = String::from_utf8_lossy(&r.stderr);
+    let s = summary(d.path());
+    let t = &s["tests"][0];
+    assert_eq!(t["ok"], true, "{t}\n{err}");
+    let why = t["model_error"].as_str().unwrap_or_else(|| panic!("{t}"));
+    assert!(why.starts_with("calibrate: "), "{why}");
+    // The characterisation survives: stiffness (F l³/48w with the short span) and its row.
+    let st = t["stiffness"].as_f64().unwrap();
+    assert!(st.is_finite() && st > 0.0, "{t}");
+    assert_eq!(s["groups"][0]["n"], 1);
+    let dir = d.path().join("reports/demo");
+    assert!(dir
+        .join("tests/raw_data__cable__three_point_6mm_1.csv/curve.svg")
+        .exists());
+    let html = std::fs::read_to_string(dir.join("index.html")).unwrap();
+    assert!(
+        html.contains("failed: calibrate: "),
+        "model failure not in the report"
+    );
+    let csv = std::fs::read_to_string(dir.join("specimens_three_point.csv")).unwrap();
+    let row = csv.lines().nth(1).unwrap();
+    assert!(row.contains("failed: calibrate"), "{csv}");
+}

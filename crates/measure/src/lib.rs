@@ -40,9 +40,7 @@ pub use sectional::{
     three_point_peak_curvature, three_point_peak_moment, Geometry,
 };
 pub use stats::{linear_fit, normal_quantile, student_t_quantile, Fit};
-pub use table::{
-    campaign_table, render_csv, render_json, render_latex, render_markdown, GroupStats, TableRow,
-};
+pub use table::{campaign_table, render_json, GroupStats, TableRow, GROUP_KEYS};
 
 /// Everything that can go wrong while measuring, with a message that says what and where.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]

@@ -68,6 +68,151 @@ impl Axis {
     }
 }
 
+/// What a legend entry shows left of its text.
+pub(crate) enum Swatch {
+    /// A line sample (dashes follow the series' colour in post-processing).
+    Line(plotters::style::RGBColor),
+    /// A filled band (the fit window).
+    Band(plotters::style::RGBColor),
+    /// A filled marker outline in pixel offsets.
+    Shape(Vec<(i32, i32)>, plotters::style::RGBColor),
+    /// A ring (the yield point).
+    Ring(plotters::style::RGBColor),
+}
+
+/// Draws a legend as a column of entries with its top left corner at `at` (pixels relative to
+/// `area`), outside any plot area: plotters clips its own legend to the plot area, so a legend
+/// beside the data is drawn here.
+pub(crate) fn draw_legend<DB: plotters::prelude::DrawingBackend>(
+    area: &plotters::prelude::DrawingArea<DB, plotters::coord::Shift>,
+    at: (i32, i32),
+    entries: &[(String, Swatch)],
+    font_size: f64,
+) -> Result<(), ReportError> {
+    use plotters::prelude::*;
+    let row = (font_size * 1.15).round() as i32 + 2;
+    let font = (crate::style::FONT, font_size)
+        .into_font()
+        .color(&crate::style::INK)
+        .pos(plotters::style::text_anchor::Pos::new(
+            plotters::style::text_anchor::HPos::Left,
+            plotters::style::text_anchor::VPos::Center,
+        ));
+    for (k, (text, swatch)) in entries.iter().enumerate() {
+        let (x, y) = (at.0, at.1 + row / 2 + k as i32 * row);
+        match swatch {
+            Swatch::Line(c) => area.draw(&PathElement::new(
+                vec![(x, y), (x + 24, y)],
+                c.stroke_width(2),
+            )),
+            Swatch::Band(c) => {
+                area.draw(&Rectangle::new([(x, y - 5), (x + 24, y + 5)], c.filled()))
+            }
+            Swatch::Shape(pts, c) => area.draw(&Polygon::new(
+                pts.iter()
+                    .map(|(dx, dy)| (x + 12 + dx, y + dy))
+                    .collect::<Vec<_>>(),
+                c.filled(),
+            )),
+            Swatch::Ring(c) => area.draw(&Circle::new((x + 12, y), 6, c.stroke_width(2))),
+        }
+        .map_err(draw_err)?;
+        area.draw(&Text::new(
+            crate::text::strip_xml_forbidden(text),
+            (x + 30, y),
+            font.clone(),
+        ))
+        .map_err(draw_err)?;
+    }
+    Ok(())
+}
+
+/// The pixel (relative to `area`) just right of a chart's plot area, at its top.
+pub(crate) fn beside_plot<DB: plotters::prelude::DrawingBackend, X, Y>(
+    area: &plotters::prelude::DrawingArea<DB, plotters::coord::Shift>,
+    chart: &plotters::prelude::ChartContext<'_, DB, plotters::prelude::Cartesian2d<X, Y>>,
+) -> (i32, i32)
+where
+    X: plotters::coord::ranged1d::Ranged,
+    Y: plotters::coord::ranged1d::Ranged,
+{
+    let (xr, yr) = chart.plotting_area().get_pixel_range();
+    let (ox, oy) = area.get_base_pixel();
+    (xr.end - ox + 12, yr.start - oy)
+}
+
+/// Draws a chart's grid, ticks and axis descriptions in the report's style: `y_labels` ticks on
+/// y; on x eight ticks, or none and no vertical grid lines without an x axis (`xa = None`).
+pub(crate) fn draw_mesh<DB: plotters::prelude::DrawingBackend>(
+    chart: &mut plotters::prelude::ChartContext<
+        '_,
+        DB,
+        plotters::prelude::Cartesian2d<
+            plotters::coord::types::RangedCoordf64,
+            plotters::coord::types::RangedCoordf64,
+        >,
+    >,
+    xa: Option<&Axis>,
+    ya: &Axis,
+    y_labels: usize,
+) -> Result<(), ReportError> {
+    use crate::style::{self, FONT};
+    use plotters::prelude::*;
+    let xfmt = |v: &f64| xa.map_or(String::new(), |a| a.tick(*v));
+    let yfmt = |v: &f64| ya.tick(*v);
+    let mut mesh = chart.configure_mesh();
+    mesh.y_desc(ya.desc.as_str())
+        .y_label_formatter(&yfmt)
+        .y_labels(y_labels)
+        .x_label_formatter(&xfmt)
+        .label_style((FONT, style::LABEL_SIZE).into_font())
+        .axis_desc_style((FONT, style::AXIS_DESC_SIZE).into_font())
+        .bold_line_style(style::GRID)
+        .light_line_style(WHITE)
+        .max_light_lines(0)
+        .axis_style(style::INK);
+    match xa {
+        Some(a) => mesh.x_desc(a.desc.as_str()).x_labels(8),
+        None => mesh.x_labels(0).disable_x_mesh(),
+    };
+    mesh.draw().map_err(draw_err)
+}
+
+/// The chart of a curve plot: title, a plot area with the legend column
+/// ([`crate::style::LEGEND_PX`]) right of it, both axes meshed.
+pub(crate) fn curve_chart<'a, DB: plotters::prelude::DrawingBackend>(
+    area: &'a plotters::prelude::DrawingArea<DB, plotters::coord::Shift>,
+    title: &str,
+    xa: &Axis,
+    ya: &Axis,
+) -> Result<
+    plotters::prelude::ChartContext<
+        'a,
+        DB,
+        plotters::prelude::Cartesian2d<
+            plotters::coord::types::RangedCoordf64,
+            plotters::coord::types::RangedCoordf64,
+        >,
+    >,
+    ReportError,
+> {
+    use crate::style::{self, FONT};
+    use plotters::prelude::*;
+    let mut chart = ChartBuilder::on(area)
+        .caption(
+            crate::text::strip_xml_forbidden(title),
+            (FONT, style::TITLE_SIZE).into_font(),
+        )
+        .margin(12)
+        .margin_right(12 + style::LEGEND_PX)
+        .x_label_area_size(48)
+        .y_label_area_size(72)
+        .build_cartesian_2d(xa.lo..xa.hi, ya.lo..ya.hi)
+        .map_err(draw_err)?;
+    draw_mesh(&mut chart, Some(xa), ya, 8)?;
+    Ok(chart)
+}
+
 /// Converts any plotters drawing error into [`ReportError::Draw`].
 pub(crate) fn draw_err<E: std::fmt::Display>(e: E) -> ReportError {
     ReportError::Draw(e.to_string())

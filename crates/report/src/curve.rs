@@ -11,9 +11,10 @@
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
-use crate::axes::{draw_err, padded_range, unit_of, Axis};
+use crate::axes::{
+    beside_plot, curve_chart, draw_err, draw_legend, draw_mesh, padded_range, unit_of, Axis, Swatch,
+};
 use crate::style::{self, add_title, apply_dashes, series_colour, series_dash, FONT};
-use crate::text::strip_xml_forbidden;
 use crate::ReportError;
 
 /// The branch a marked point starts (as the measure crate segments cycles).
@@ -141,37 +142,8 @@ fn in_legend(k: usize, n: usize) -> bool {
     n <= 8 || k == 0 || k + 1 == n || (k / step) * step == k
 }
 
-/// The legend corner that covers the fewest plotted points: the corner boxes span 40 % of the
-/// width and 50 % of the height; ties go to upper left, lower right, upper right, lower left.
-fn legend_corner(points: &[(f64, f64)], xa: &Axis, ya: &Axis) -> SeriesLabelPosition {
-    let corners = [
-        (SeriesLabelPosition::UpperLeft, (0.0, 0.4), (0.5, 1.0)),
-        (SeriesLabelPosition::LowerRight, (0.6, 1.0), (0.0, 0.5)),
-        (SeriesLabelPosition::UpperRight, (0.6, 1.0), (0.5, 1.0)),
-        (SeriesLabelPosition::LowerLeft, (0.0, 0.4), (0.0, 0.5)),
-    ];
-    let (w, h) = (xa.hi - xa.lo, ya.hi - ya.lo);
-    let count = |(bx, by): ((f64, f64), (f64, f64))| {
-        points
-            .iter()
-            .filter(|p| {
-                let u = (p.0 - xa.lo) / w;
-                let v = (p.1 - ya.lo) / h;
-                u >= bx.0 && u <= bx.1 && v >= by.0 && v <= by.1
-            })
-            .count()
-    };
-    let mut best = (SeriesLabelPosition::UpperLeft, usize::MAX);
-    for (pos, bx, by) in corners {
-        let c = count((bx, by));
-        if c < best.1 {
-            best = (pos, c);
-        }
-    }
-    best.0
-}
-
-/// Renders the per-test plot as a standalone SVG document (640 px wide; 400 px high, 540 px with
+/// Renders the per-test plot as a standalone SVG document (640 px plot plus a legend column of
+/// [`style::LEGEND_PX`] right of it, so the legend never covers data; 400 px high, 540 px with
 /// the residual panel).
 ///
 /// Errors: a cycle or the simulated curve whose x and y lengths differ, a simulated curve whose
@@ -262,7 +234,8 @@ pub fn curve_svg(view: &CurveView) -> Result<String, ReportError> {
     let n = view.cycles.len();
     let mut buf = String::new();
     {
-        let root = SVGBackend::with_string(&mut buf, (style::WIDTH_PX, height)).into_drawing_area();
+        let root = SVGBackend::with_string(&mut buf, (style::WIDTH_PX + style::LEGEND_PX, height))
+            .into_drawing_area();
         root.fill(&WHITE).map_err(draw_err)?;
         let (top, bottom) = if residuals.is_some() {
             let (a, b) = root.split_vertically(style::HEIGHT_PX - 10);
@@ -294,32 +267,9 @@ fn draw_main(
     sim_points: &[(f64, f64)],
 ) -> Result<(), ReportError> {
     let n = cycles.len();
-    let title = strip_xml_forbidden(&view.title);
-    let mut chart = ChartBuilder::on(area)
-        .caption(title, (FONT, style::TITLE_SIZE).into_font())
-        .margin(12)
-        .x_label_area_size(48)
-        .y_label_area_size(72)
-        .build_cartesian_2d(xa.lo..xa.hi, ya.lo..ya.hi)
-        .map_err(draw_err)?;
-    let xfmt = |v: &f64| xa.tick(*v);
-    let yfmt = |v: &f64| ya.tick(*v);
-    chart
-        .configure_mesh()
-        .x_desc(xa.desc.as_str())
-        .y_desc(ya.desc.as_str())
-        .x_label_formatter(&xfmt)
-        .y_label_formatter(&yfmt)
-        .x_labels(8)
-        .y_labels(8)
-        .label_style((FONT, style::LABEL_SIZE).into_font())
-        .axis_desc_style((FONT, style::AXIS_DESC_SIZE).into_font())
-        .bold_line_style(style::GRID)
-        .light_line_style(WHITE)
-        .axis_style(style::INK)
-        .draw()
-        .map_err(draw_err)?;
+    let mut chart = curve_chart(area, &view.title, xa, ya)?;
 
+    let mut legend: Vec<(String, Swatch)> = Vec::new();
     // Fit window first, so that everything else lies on top of it.
     if let Some(fit) = view
         .fit
@@ -334,11 +284,8 @@ fn draw_main(
                 [(w0.max(xa.lo), ya.lo), (w1.min(xa.hi), ya.hi)],
                 style::FIT_WINDOW.filled(),
             )))
-            .map_err(draw_err)?
-            .label("fit window")
-            .legend(|(x, y)| {
-                Rectangle::new([(x, y - 5), (x + 24, y + 5)], style::FIT_WINDOW.filled())
-            });
+            .map_err(draw_err)?;
+        legend.push(("fit window".into(), Swatch::Band(style::FIT_WINDOW)));
     }
 
     for (k, poly) in view.loops.iter().enumerate() {
@@ -365,14 +312,14 @@ fn draw_main(
             continue;
         }
         let colour = series_colour(k, n);
-        let anno = chart
+        chart
             .draw_series(LineSeries::new(pts.iter().copied(), colour.stroke_width(2)))
             .map_err(draw_err)?;
         if in_legend(k, n) {
-            anno.label(format!("cycle {}", view.cycles[k].index))
-                .legend(move |(x, y)| {
-                    PathElement::new(vec![(x, y), (x + 24, y)], colour.stroke_width(2))
-                });
+            legend.push((
+                format!("cycle {}", view.cycles[k].index),
+                Swatch::Line(colour),
+            ));
         }
     }
 
@@ -382,11 +329,8 @@ fn draw_main(
                 sim_points.iter().copied(),
                 style::SIMULATED.stroke_width(2),
             ))
-            .map_err(draw_err)?
-            .label("simulated")
-            .legend(|(x, y)| {
-                PathElement::new(vec![(x, y), (x + 24, y)], style::SIMULATED.stroke_width(2))
-            });
+            .map_err(draw_err)?;
+        legend.push(("simulated".into(), Swatch::Line(style::SIMULATED)));
     }
 
     if let Some(fit) = view.fit {
@@ -399,11 +343,8 @@ fn draw_main(
         if line.len() == 2 {
             chart
                 .draw_series(LineSeries::new(line, style::FIT_LINE.stroke_width(2)))
-                .map_err(draw_err)?
-                .label("elastic fit")
-                .legend(|(x, y)| {
-                    PathElement::new(vec![(x, y), (x + 24, y)], style::FIT_LINE.stroke_width(2))
-                });
+                .map_err(draw_err)?;
+            legend.push(("elastic fit".into(), Swatch::Line(style::FIT_LINE)));
         }
     }
 
@@ -424,16 +365,11 @@ fn draw_main(
                     EmptyElement::at(p) + Polygon::new(kind.marker(), style::BRANCH.filled())
                 }),
             )
-            .map_err(draw_err)?
-            .label(kind.label())
-            .legend(move |(x, y)| {
-                let pts: Vec<(i32, i32)> = kind
-                    .marker()
-                    .into_iter()
-                    .map(|(dx, dy)| (x + 12 + dx, y + dy))
-                    .collect();
-                Polygon::new(pts, style::BRANCH.filled())
-            });
+            .map_err(draw_err)?;
+        legend.push((
+            kind.label().into(),
+            Swatch::Shape(kind.marker(), style::BRANCH),
+        ));
     }
 
     if let Some(p) = view
@@ -447,25 +383,12 @@ fn draw_main(
                     + Circle::new((0, 0), 7, style::YIELD.stroke_width(2))
                     + Text::new("yield", (10, -20), label_style.clone()),
             ))
-            .map_err(draw_err)?
-            .label("yield point")
-            .legend(|(x, y)| Circle::new((x + 12, y), 6, style::YIELD.stroke_width(2)));
+            .map_err(draw_err)?;
+        legend.push(("yield point".into(), Swatch::Ring(style::YIELD)));
     }
 
-    let all: Vec<(f64, f64)> = cycles
-        .iter()
-        .flatten()
-        .chain(sim_points.iter())
-        .copied()
-        .collect();
-    chart
-        .configure_series_labels()
-        .position(legend_corner(&all, xa, ya))
-        .background_style(WHITE.mix(0.88))
-        .border_style(style::INK)
-        .label_font((FONT, style::LABEL_SIZE).into_font())
-        .draw()
-        .map_err(draw_err)?;
+    // The legend sits right of the plot area, never over the data.
+    draw_legend(area, beside_plot(area, &chart), &legend, style::LABEL_SIZE)?;
     Ok(())
 }
 
@@ -491,29 +414,13 @@ fn draw_residual(
     let ra = Axis::new(-max, max, &desc);
     let mut chart = ChartBuilder::on(area)
         .margin_left(12)
-        .margin_right(12)
+        .margin_right(12 + style::LEGEND_PX)
         .margin_bottom(6)
         .x_label_area_size(40)
         .y_label_area_size(72)
         .build_cartesian_2d(xa.lo..xa.hi, -max..max)
         .map_err(draw_err)?;
-    let xfmt = |v: &f64| xa.tick(*v);
-    let yfmt = |v: &f64| ra.tick(*v);
-    chart
-        .configure_mesh()
-        .x_desc(xa.desc.as_str())
-        .y_desc(ra.desc.as_str())
-        .x_label_formatter(&xfmt)
-        .y_label_formatter(&yfmt)
-        .x_labels(8)
-        .y_labels(4)
-        .label_style((FONT, style::LABEL_SIZE).into_font())
-        .axis_desc_style((FONT, style::AXIS_DESC_SIZE).into_font())
-        .bold_line_style(style::GRID)
-        .light_line_style(WHITE)
-        .axis_style(style::INK)
-        .draw()
-        .map_err(draw_err)?;
+    draw_mesh(&mut chart, Some(xa), &ra, 4)?;
     chart
         .draw_series(std::iter::once(PathElement::new(
             vec![(xa.lo, 0.0), (xa.hi, 0.0)],
@@ -561,29 +468,5 @@ mod tests {
         assert_eq!(shown, [0, 2, 4, 6, 8, 10, 11]);
         let shown = (0..100).filter(|&k| in_legend(k, 100)).count();
         assert!(shown <= 8, "{shown}");
-    }
-
-    #[test]
-    fn legend_goes_to_the_emptiest_corner() {
-        let xa = Axis::new(0.0, 1.0, "x");
-        let ya = Axis::new(0.0, 1.0, "y");
-        // A rising elastic-plastic curve fills the upper left and the diagonal: lower right is free.
-        let rising: Vec<(f64, f64)> = (0..=100)
-            .map(|i| i as f64 / 100.0)
-            .map(|t| (t, (4.0 * t).min(0.8 + 0.2 * t)))
-            .collect();
-        assert_eq!(
-            legend_corner(&rising, &xa, &ya),
-            SeriesLabelPosition::LowerRight
-        );
-        // A falling line crosses upper left and lower right: upper right is free.
-        let falling: Vec<(f64, f64)> = (0..=100)
-            .map(|i| i as f64 / 100.0)
-            .map(|t| (t, 1.0 - t))
-            .collect();
-        assert_eq!(
-            legend_corner(&falling, &xa, &ya),
-            SeriesLabelPosition::UpperRight
-        );
     }
 }

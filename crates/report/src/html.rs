@@ -1,6 +1,7 @@
-//! The self-contained HTML report of a campaign: an index (contents, the campaign tables and
-//! figures, the campaign-level diagnosis), then one section per test with its facts, plots and
-//! diagnosis in plain words.
+//! The self-contained HTML report of a campaign: the campaign's results first (summary, the
+//! blocks of tables and figures, the campaign-level diagnosis), then the list of tests and one
+//! section per test with its facts, plots and diagnosis in plain words. Printed on A4 the
+//! summary comes first and the test sections follow without a page each (two figures a row).
 //!
 //! One string, readable offline: CSS inline, SVG inline, generic font families only, and a
 //! Content-Security-Policy that forbids every network fetch and every script. Every string in
@@ -23,6 +24,19 @@ pub struct Table {
     pub header: Vec<String>,
     /// Rows of cells; a row may be shorter than the header (missing cells are left blank).
     pub rows: Vec<Vec<String>>,
+}
+
+/// One element of the campaign summary.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub enum Block {
+    /// A sub-heading.
+    Heading(String),
+    /// A paragraph of text.
+    Text(String),
+    /// A table.
+    Table(Table),
+    /// (caption, SVG) from this crate's plot functions.
+    Figure(String, String),
 }
 
 /// One test's section of the report.
@@ -52,6 +66,10 @@ pub struct ReportDoc {
     pub generated_by: String,
     /// Introductory paragraphs (what was tested, how).
     pub summary: Vec<String>,
+    /// The campaign's summary in reading order (headings, tables, figures), shown right after
+    /// the introductory paragraphs and before `tables` and `figures`.
+    #[serde(default)]
+    pub blocks: Vec<Block>,
     /// Campaign tables (Table 1 and Table 2 style, ...).
     pub tables: Vec<Table>,
     /// Campaign figures: (caption, SVG).
@@ -64,7 +82,7 @@ pub struct ReportDoc {
 
 const CSS: &str = "\
 :root { color-scheme: light; }
-body { font-family: sans-serif; color: #111; background: #fff; max-width: 190mm; margin: 0 auto; padding: 8mm 6mm; line-height: 1.45; font-size: 11pt; }
+body { font-family: sans-serif; color: #111; background: #fff; max-width: 270mm; margin: 0 auto; padding: 8mm 6mm; line-height: 1.45; font-size: 11pt; }
 h1 { font-size: 1.7em; margin: 0 0 0.2em; }
 h2 { font-size: 1.35em; border-bottom: 1px solid #999; padding-bottom: 0.15em; margin-top: 1.6em; }
 h3 { font-size: 1.1em; margin-top: 1.2em; }
@@ -73,7 +91,9 @@ nav ol { padding-left: 1.6em; }
 nav li span.headline { color: #444; }
 table { border-collapse: collapse; margin: 0.6em 0 1.2em; font-size: 0.92em; }
 caption { caption-side: top; text-align: left; font-weight: bold; padding-bottom: 0.3em; }
-th, td { border: 1px solid #888; padding: 0.25em 0.5em; vertical-align: top; }
+th, td { border: 1px solid #888; padding: 0.2em 0.4em; vertical-align: top; }
+figure svg { max-width: 100%; }
+section.campaign figure { display: inline-block; width: 49%; vertical-align: top; }
 th { background: #eee; text-align: left; }
 td { text-align: left; }
 td.num { text-align: right; font-variant-numeric: tabular-nums; }
@@ -87,9 +107,16 @@ pre.rejected { white-space: pre-wrap; color: #700; }
 .diagnosis { border-left: 4px solid #555; padding: 0.1em 0 0.1em 0.8em; background: #f4f4f4; }
 @page { size: A4; margin: 15mm; }
 @media print {
-  body { max-width: none; padding: 0; font-size: 10pt; }
-  nav { break-after: page; }
-  section.test { break-before: page; }
+  body { max-width: none; padding: 0; font-size: 9pt; line-height: 1.3; }
+  section.campaign figure { display: inline-block; width: 49%; vertical-align: top; margin: 0.3em 0; }
+  nav { break-before: page; }
+  nav ol { columns: 2; font-size: 0.85em; }
+  section.test { break-inside: avoid-page; border-top: 1px solid #999; }
+  section.test h2 { border: none; margin-top: 0.6em; }
+  section.test figure { display: inline-block; width: 49%; vertical-align: top; margin: 0.2em 0; }
+  dl.facts { grid-template-columns: max-content auto max-content auto; font-size: 0.9em; }
+  table { font-size: 0.8em; }
+  p.back { display: none; }
   a { color: inherit; text-decoration: none; }
   .diagnosis { background: none; }
 }
@@ -146,8 +173,10 @@ fn figure(out: &mut String, caption: &str, svg: &str) {
 /// Whether a cell reads as a number (right-aligned): it starts with a digit, a sign, a
 /// parenthesised mantissa or the "not available" dash.
 fn is_numeric(cell: &str) -> bool {
-    cell.trim_start().starts_with(|c: char| {
-        c.is_ascii_digit() || matches!(c, '-' | '+' | '(' | '\u{2212}' | '\u{2013}' | '.')
+    let t = cell.trim_start();
+    let t = t.strip_prefix('(').unwrap_or(t);
+    t.starts_with(|c: char| {
+        c.is_ascii_digit() || matches!(c, '-' | '+' | '\u{2212}' | '\u{2013}' | '.')
     })
 }
 
@@ -245,8 +274,34 @@ pub fn render_html(doc: &ReportDoc) -> String {
     out.push_str("</header>\n");
 
     let ids = anchors(&doc.tests);
-    out.push_str("<nav id=\"contents\">\n<h2>Contents</h2>\n<ol>\n");
-    out.push_str("<li><a href=\"#t-campaign\">Campaign overview and diagnosis</a></li>\n");
+    out.push_str("<section id=\"t-campaign\" class=\"campaign\">\n<h2>Campaign overview</h2>\n");
+    for p in &doc.summary {
+        paragraphs(&mut out, p);
+    }
+    for b in &doc.blocks {
+        match b {
+            Block::Heading(h) => {
+                let _ = writeln!(out, "<h3>{}</h3>", escape_html(h));
+            }
+            Block::Text(p) => paragraphs(&mut out, p),
+            Block::Table(t) => table(&mut out, t),
+            Block::Figure(c, svg) => figure(&mut out, c, svg),
+        }
+    }
+    for t in &doc.tables {
+        table(&mut out, t);
+    }
+    for (caption, svg) in &doc.figures {
+        figure(&mut out, caption, svg);
+    }
+    if !doc.diagnosis_text.trim().is_empty() {
+        out.push_str("<h3>Diagnosis</h3>\n<div class=\"diagnosis\">\n");
+        paragraphs(&mut out, &doc.diagnosis_text);
+        out.push_str("</div>\n");
+    }
+    out.push_str("</section>\n");
+
+    out.push_str("<nav id=\"contents\">\n<h2>Tests</h2>\n<ol>\n");
     for (t, id) in doc.tests.iter().zip(&ids) {
         let _ = write!(
             out,
@@ -263,23 +318,6 @@ pub fn render_html(doc: &ReportDoc) -> String {
         out.push_str("</li>\n");
     }
     out.push_str("</ol>\n</nav>\n");
-
-    out.push_str("<section id=\"t-campaign\" class=\"campaign\">\n<h2>Campaign overview</h2>\n");
-    for p in &doc.summary {
-        paragraphs(&mut out, p);
-    }
-    for t in &doc.tables {
-        table(&mut out, t);
-    }
-    for (caption, svg) in &doc.figures {
-        figure(&mut out, caption, svg);
-    }
-    if !doc.diagnosis_text.trim().is_empty() {
-        out.push_str("<h3>Diagnosis</h3>\n<div class=\"diagnosis\">\n");
-        paragraphs(&mut out, &doc.diagnosis_text);
-        out.push_str("</div>\n");
-    }
-    out.push_str("</section>\n");
 
     for (t, id) in doc.tests.iter().zip(&ids) {
         let _ = writeln!(out, "<section id=\"{id}\" class=\"test\">");
@@ -305,7 +343,7 @@ pub fn render_html(doc: &ReportDoc) -> String {
             paragraphs(&mut out, &t.diagnosis_text);
             out.push_str("</div>\n");
         }
-        out.push_str("<p><a href=\"#contents\">Back to contents</a></p>\n</section>\n");
+        out.push_str("<p class=\"back\"><a href=\"#contents\">Back to the list of tests</a></p>\n</section>\n");
     }
     out.push_str("</body>\n</html>\n");
     out

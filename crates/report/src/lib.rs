@@ -11,7 +11,8 @@
 //! Modules: [`curve`] (per-test curve with fit, yield, loops, simulated and residual panel),
 //! [`gap`] (where / which / how far views of the sim-to-real gap, residual along the span),
 //! [`campaign`] (stiffness scatter per specimen type, Table 1 and Table 2 style tables),
-//! [`html`] (the report document), [`words`] (the diagnosis in plain words), [`style`] (sizes, greyscale-safe palette), [`text`]
+//! [`grid`] (one table model and number formatter for md, tex, csv and html), [`html`] (the
+//! report document), [`words`] (the diagnosis in plain words), [`style`] (sizes, greyscale-safe palette), [`text`]
 //! (escaping and number formatting).
 
 #![warn(missing_docs)]
@@ -20,20 +21,23 @@ mod axes;
 pub mod campaign;
 pub mod curve;
 pub mod gap;
+pub mod grid;
 pub mod html;
 pub mod style;
 pub mod text;
 pub mod words;
 
 pub use campaign::{
-    campaign_stiffness_svg, mean_sd, parameter_table, stiffness_axis_label, stiffness_table,
-    ParameterRow, StiffnessGroup, StiffnessRow, StiffnessView,
+    campaign_stiffness_svg, mean_sd, overlay_svg, parameter_table, results_table, series_table,
+    stiffness_axis_label, stiffness_table, OverlayView, ParameterRow, SeriesStat, SpecimenResult,
+    StiffnessGroup, StiffnessRow, StiffnessView,
 };
 pub use curve::{axis_labels, curve_svg, BranchKind, CurveView, CycleSeries, FitLine};
 pub use gap::{
     gap_waterfall_svg, gap_where_svg, gap_which_svg, span_residual_svg, CandidateBar, SpanResidual,
 };
-pub use html::{render_html, ReportDoc, Table, TestSection};
+pub use grid::{fmt_plain, Cell, CsvLocale, Grid};
+pub use html::{render_html, Block, ReportDoc, Table, TestSection};
 pub use text::escape_html;
 pub use words::{diagnosis_words, DiagnosisSummary};
 

@@ -12,6 +12,8 @@ use plotters::style::RGBColor;
 
 /// Width of every plot, px (169 mm at 96 dpi).
 pub const WIDTH_PX: u32 = 640;
+/// Width of the legend column right of a plot's axes (the legend never covers data), px.
+pub const LEGEND_PX: u32 = 150;
 /// Height of a single-panel plot, px.
 pub const HEIGHT_PX: u32 = 400;
 /// Height of a plot with a residual panel below, px.
@@ -25,6 +27,8 @@ pub const TITLE_SIZE: f64 = 20.0;
 pub const AXIS_DESC_SIZE: f64 = 17.0;
 /// Font size of tick labels and legends (written as 12.1 px, about 9 pt).
 pub const LABEL_SIZE: f64 = 15.0;
+/// Font size of point labels (written as 9.7 px, about 7 pt).
+pub const SMALL_SIZE: f64 = 12.0;
 
 /// Axes, text and frames.
 pub const INK: RGBColor = RGBColor(0, 0, 0);

@@ -196,6 +196,33 @@ pub fn engineering_exponent(values: impl IntoIterator<Item = f64>) -> i32 {
     (max.log10().floor() as i32).div_euclid(3) * 3
 }
 
+/// A value with the unit an axis over `range` shows it in: the axis `elongation Δl [m]` over
+/// 0…40 µm is drawn in µm, so 2.06·10⁻⁵ m reads `20.6 µm` (`sig` significant digits).
+pub fn fmt_on_axis(
+    v: f64,
+    range: impl IntoIterator<Item = f64>,
+    label: &str,
+    sig: usize,
+) -> String {
+    let unit_in = |l: &str| match (l.rfind('['), l.ends_with(']')) {
+        (Some(i), true) => l[i + 1..l.len() - 1].to_string(),
+        _ => String::new(),
+    };
+    let mut exp = engineering_exponent(range);
+    let mut unit = unit_in(&scaled_label(label, exp));
+    // A compound unit is scaled by a power of ten on the axis; a number carries that itself.
+    if unit.starts_with("10") {
+        exp = 0;
+        unit = unit_in(label);
+    }
+    let num = fmt_num(v * 10f64.powi(-exp), sig);
+    if unit.is_empty() || unit == "-" {
+        num
+    } else {
+        format!("{num} {unit}")
+    }
+}
+
 /// Rewrites an axis label `quantity [unit]` for values divided by `10^exp`: simple units get an
 /// SI prefix (`[m]` → `[mm]`, `[N]` → `[kN]`), compound ones a power of ten
 /// (`[N m]` → `[10⁻³ N m]`); a label without a `[unit]` gets ` [10ⁿ]` appended. `exp = 0` leaves
@@ -311,6 +338,18 @@ mod tests {
         assert_eq!(engineering_exponent([7.96e4]), 3);
         assert_eq!(engineering_exponent([f64::NAN]), 0);
         assert_eq!(engineering_exponent([]), 0);
+    }
+
+    #[test]
+    fn values_read_in_their_axis_units() {
+        let l = "elongation \u{394}l [m]";
+        assert_eq!(fmt_on_axis(2.06e-5, [0.0, 4e-5], l, 3), "20.6 \u{b5}m");
+        assert_eq!(fmt_on_axis(2.06e-3, [0.0, 4e-3], l, 3), "2.06 mm");
+        assert_eq!(fmt_on_axis(52.0, [0.0, 100.0], "force F [N]", 3), "52.0 N");
+        assert_eq!(
+            fmt_on_axis(3.2e-3, [0.0, 5e-3], "moment [N m]", 2),
+            "3.2\u{b7}10\u{207b}\u{b3} N m"
+        );
     }
 
     #[test]

@@ -256,6 +256,7 @@ pub fn demo_doc(hostile: bool) -> ReportDoc {
                 specimen: format!("cable 2.8 mm{tag}"),
                 diameter_m: Some(2.8e-3),
                 kind: TestKind::Tension,
+                level: None,
                 n: 3,
                 stiffness_mean: 7.96e4,
                 stiffness_sd: 2.6e3,
@@ -265,6 +266,7 @@ pub fn demo_doc(hostile: bool) -> ReportDoc {
                 specimen: format!("cable 2.8 mm{tag}"),
                 diameter_m: Some(2.8e-3),
                 kind: TestKind::Torsion,
+                level: None,
                 n: 2,
                 stiffness_mean: 2.02e-3,
                 stiffness_sd: 0.1e-3,
@@ -274,6 +276,7 @@ pub fn demo_doc(hostile: bool) -> ReportDoc {
                 specimen: format!("cable 2.8 mm{tag}"),
                 diameter_m: Some(2.8e-3),
                 kind: TestKind::ThreePoint,
+                level: None,
                 n: 2,
                 stiffness_mean: 1.37e-3,
                 stiffness_sd: 0.05e-3,
@@ -310,7 +313,8 @@ pub fn demo_doc(hostile: bool) -> ReportDoc {
         summary: vec![format!(
             "Three kinds of test on a 2.8 mm cable{tag} and a Bowden cable."
         )],
-        tables: vec![t1, t2],
+        blocks: vec![],
+        tables: vec![t1.to_table(), t2.to_table()],
         figures: vec![
             (
                 "Stiffness per specimen; red: mean \u{b1} 1 sd".into(),

@@ -63,6 +63,48 @@ fn report_has_index_tables_sections_and_plots() {
         );
     }
     assert!(html.contains("@media print") && html.contains("size: A4"));
+    // The campaign's results come first, the per-test detail after, without a page per test.
+    let campaign = html.find("id=\"t-campaign\"").unwrap();
+    let first_test = html.find("class=\"test\"").unwrap();
+    assert!(campaign < first_test);
+    assert!(!html.contains("section.test { break-before: page; }"));
+}
+
+#[test]
+fn summary_blocks_render_in_order() {
+    let grid = Grid {
+        caption: "Tension: results per specimen".into(),
+        header: vec!["specimen id".into(), "(EA)_T [N]".into()],
+        rows: vec![vec![Cell::Text("T-1".into()), Cell::Num(7.96e4)]],
+        sig: 3,
+    };
+    let html = render_html(&ReportDoc {
+        title: "t".into(),
+        blocks: vec![
+            Block::Heading("Series statistics".into()),
+            Block::Text("two\n\nparagraphs".into()),
+            Block::Table(grid.to_table()),
+        ],
+        tests: vec![TestSection {
+            id: "x".into(),
+            ..Default::default()
+        }],
+        ..Default::default()
+    });
+    let doc = parse(&html);
+    let h = html.find("<h3>Series statistics</h3>").unwrap();
+    let p = html.find("<p>paragraphs</p>").unwrap();
+    let t = html
+        .find("<caption>Tension: results per specimen</caption>")
+        .unwrap();
+    let s = html.find("class=\"test\"").unwrap();
+    assert!(h < p && p < t && t < s);
+    let cells: Vec<&str> = doc
+        .descendants()
+        .filter(|n| n.has_tag_name("td"))
+        .filter_map(|n| n.text())
+        .collect();
+    assert_eq!(cells, ["T-1", "7.96\u{b7}10\u{2074}"]);
 }
 
 #[test]

@@ -31,8 +31,30 @@ fn tension_curve_carries_every_series() {
     let doc = parse(&svg);
     let root = doc.root_element();
     assert_eq!(root.tag_name().name(), "svg");
-    assert_eq!(root.attribute("width"), Some("640"));
+    assert_eq!(root.attribute("width"), Some("790"));
     assert_eq!(root.attribute("height"), Some("400"));
+    // The legend lies right of the plot area: no data point reaches its left edge.
+    let legend_x = doc
+        .descendants()
+        .filter(|n| n.has_tag_name("text") && n.text().is_some_and(|t| t.starts_with("cycle ")))
+        .map(|n| n.attribute("x").unwrap().parse::<f64>().unwrap())
+        .fold(f64::INFINITY, f64::min);
+    assert!(legend_x > 628.0, "legend at x = {legend_x}");
+    let data_right = doc
+        .descendants()
+        .filter(|n| n.has_tag_name("polyline"))
+        .filter_map(|n| n.attribute("points"))
+        .filter(|p| p.split_whitespace().count() > 2)
+        .flat_map(|p| {
+            p.split_whitespace()
+                .map(|xy| xy.split(',').next().unwrap().parse::<f64>().unwrap())
+                .collect::<Vec<_>>()
+        })
+        .fold(0.0f64, f64::max);
+    assert!(
+        data_right <= 628.0 + 1.0 && data_right < legend_x,
+        "data up to x = {data_right}"
+    );
     // One polyline per cycle plus its legend sample, each in its own palette colour and dash.
     for k in 0..3 {
         let colour = hex(series_colour(k, 3));
