@@ -54,7 +54,7 @@ pub enum IngestError {
         header: String,
     },
     /// A unit that the unit table does not know, on a column the test needs.
-    #[error("{file}:{line}:{column}: unknown unit '{unit}' on column '{name}' (the {role} column); expected one of the units in cablab-ingest's unit table (N, kN, mm, s, deg, N·m, ...)")]
+    #[error("{file}:{line}:{column}: cannot read the unit '{unit}' of column '{name}' (the {role} column); expected one of the units in cablab-ingest's unit table (N, kN, mm, s, deg, N·m, ...); state it with --unit '{name}=UNIT'")]
     UnknownUnit {
         /// File path or label.
         file: String,

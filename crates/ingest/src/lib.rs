@@ -45,6 +45,13 @@ pub struct ReadOptions {
     pub response: Option<String>,
     /// Test kind (`--kind`); `None` = from metadata or channels, else unknown.
     pub kind: Option<TestKind>,
+    /// Units stated by the user, `(column, unit)` (`--unit COLUMN=UNIT`): they replace the unit
+    /// the file writes (or fails to write readably) for that column. The unit must be one of
+    /// the unit table's.
+    pub units: Vec<(String, String)>,
+    /// Keep a time/control/response column whose unit cannot be read (values as written, a
+    /// warning) instead of refusing the file; for `inspect`, which shows rather than computes.
+    pub keep_unknown_units: bool,
 }
 
 /// Reads a file. The bytes are read once, hashed, decoded once (the raw buffer is reused for

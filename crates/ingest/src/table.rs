@@ -26,6 +26,11 @@ pub(crate) struct RawBlock {
     pub rows: usize,
     /// Starts of runs of consecutive physical lines: (row index, line number).
     pub line_runs: Vec<(usize, usize)>,
+    /// Text (label) columns: column index and one cell text per row ("" where empty). A column
+    /// is a label column when the block's first data row holds text there.
+    pub labels: Vec<(usize, Vec<String>)>,
+    /// Per column, its slot in `labels`.
+    pub label_slot: Vec<Option<usize>>,
 }
 
 impl RawBlock {
@@ -61,6 +66,10 @@ struct Pending {
 
 #[derive(Default)]
 struct RowStats {
+    /// Rows read with another separator or decimal mark than the block's: count, first line,
+    /// what was used.
+    switched: usize,
+    first_switched: Option<(usize, String)>,
     short_rows: usize,
     first_short: Option<usize>,
     text_cells: usize,
@@ -82,6 +91,12 @@ struct Engine<'a> {
     blank_in_table: bool,
     orphan_first: Option<usize>,
     orphans: usize,
+    /// A line inside an open block that is not a data row of it: kept aside until the next
+    /// line tells whether it was one malformed row (the block goes on) or the block's end.
+    suspect: Option<Pending>,
+    /// Malformed rows skipped inside blocks: (line, text).
+    skipped: Vec<(usize, String)>,
+    skipped_count: usize,
 }
 
 /// Reads every block of a delimited text.
@@ -127,6 +142,9 @@ pub(crate) fn read_table(
         blank_in_table: false,
         orphan_first: None,
         orphans: 0,
+        suspect: None,
+        skipped: Vec::new(),
+        skipped_count: 0,
     };
     eng.run(eol)?;
     Ok(eng.out)
@@ -266,25 +284,55 @@ impl<'a> Engine<'a> {
             self.line(pos, lend, line_no);
             pos = end + 1;
         }
+        if let Some(p) = self.suspect.take() {
+            // The last non-blank line after the data: a footer or end marker.
+            self.close_block();
+            self.outside(p.start, p.end, p.line_no);
+        }
         self.close_block();
         self.finish(line_no)
     }
 
     fn line(&mut self, start: usize, end: usize, line_no: usize) {
         let line = &self.text[start..end];
-        let blank = line
-            .iter()
-            .all(|&b| b == b' ' || b == b'\t' || b == b'"' || b == b',' || b == b';');
         if self.open.is_some() {
-            if blank {
+            if is_blank(line) {
                 self.blank_in_table = true;
                 return;
             }
             if self.push_row(line, line_no) {
+                if let Some(p) = self.suspect.take() {
+                    // One line that is not a row, between rows of the block: skipped.
+                    self.skipped_count += 1;
+                    if self.skipped.len() < 5 {
+                        let t = String::from_utf8_lossy(&self.text[p.start..p.end]);
+                        self.skipped.push((p.line_no, shorten(t.trim(), 60)));
+                    }
+                }
+                return;
+            }
+            let here = Pending {
+                line_no,
+                start,
+                end,
+                blank: false,
+            };
+            if self.suspect.is_none() && !self.blank_in_table {
+                self.suspect = Some(here);
                 return;
             }
             self.close_block();
+            if let Some(p) = self.suspect.take() {
+                self.outside(p.start, p.end, p.line_no);
+            }
         }
+        self.outside(start, end, line_no);
+    }
+
+    /// A line outside any block: blank, metadata, header, or the first row of a new block.
+    fn outside(&mut self, start: usize, end: usize, line_no: usize) {
+        let line = &self.text[start..end];
+        let blank = is_blank(line);
         if blank {
             self.pending.push(Pending {
                 line_no,
@@ -295,33 +343,33 @@ impl<'a> Engine<'a> {
             return;
         }
         // Outside a table: does a block start here?
-        split(line, self.sep, &mut self.cells);
-        let mut nums = 0usize;
+        let (dec, text_cols) = match self.row_shape(line) {
+            Some(x) => x,
+            None => {
+                self.pending.push(Pending {
+                    line_no,
+                    start,
+                    end,
+                    blank: false,
+                });
+                return;
+            }
+        };
         let mut last_nonempty = 0usize;
-        let mut all_numeric = true;
         for (i, &(a, b)) in self.cells.iter().enumerate() {
-            match parse_cell(&line[a..b.max(a)], self.dec) {
-                Cell::Num(_) => {
-                    nums += 1;
-                    last_nonempty = i;
-                }
-                Cell::Missing => last_nonempty = i,
-                Cell::Empty => {}
-                Cell::Text => {
-                    all_numeric = false;
-                    break;
-                }
+            if parse_cell(&line[a..b.max(a)], dec) != Cell::Empty {
+                last_nonempty = i;
             }
         }
-        if all_numeric && nums > 0 {
-            let ncells = self.cells.len();
-            if self.start_block(line_no, last_nonempty, ncells) {
-                if self.push_row(line, line_no) {
-                    return;
-                }
-                // Cannot happen (the row was checked above); drop the empty block rather than panic.
-                self.open = None;
+        let ncells = self.cells.len();
+        if self.start_block(line_no, last_nonempty, ncells, &text_cols) {
+            if self.push_row(line, line_no) {
+                return;
             }
+            // Cannot happen (the row was checked above); drop the empty block rather than panic.
+            self.open = None;
+        }
+        if text_cols.is_empty() {
             self.orphans += 1;
             self.orphan_first.get_or_insert(line_no);
         }
@@ -331,6 +379,44 @@ impl<'a> Engine<'a> {
             end,
             blank: false,
         });
+    }
+
+    /// Whether a line outside a block can be a block's first data row: every cell a number
+    /// (with the block's decimal mark, else the other one), or at least two numbers and no more
+    /// text cells than numbers (the text cells become label columns). Leaves the cells of the
+    /// line in `self.cells`; returns the decimal mark and the text columns.
+    fn row_shape(&mut self, line: &[u8]) -> Option<(u8, Vec<usize>)> {
+        split(line, self.sep, &mut self.cells);
+        let other = if self.dec == b',' { b'.' } else { b',' };
+        let mut best: Option<(u8, Vec<usize>)> = None;
+        for dec in [self.dec, other] {
+            let mut nums = 0usize;
+            let mut text = Vec::new();
+            for (i, &(a, b)) in self.cells.iter().enumerate() {
+                match parse_cell(&line[a..b.max(a)], dec) {
+                    Cell::Num(_) => nums += 1,
+                    Cell::Text => text.push(i),
+                    _ => {}
+                }
+            }
+            // Mixed rows: not in catman files (their per-channel rows `T0;0;0` are keyed), and
+            // never with a `Key:` cell.
+            let keyed = text.iter().any(|&i| {
+                let (a, b) = self.cells[i];
+                line[a..b.max(a)].trim_ascii_end().ends_with(b":")
+            });
+            let mixed_ok = self.format != Format::CatmanAscii && !keyed;
+            let ok = nums > 0
+                && (text.is_empty() || (mixed_ok && nums >= 2 && text.len() <= nums));
+            if ok && best.as_ref().is_none_or(|b| text.len() < b.1.len()) {
+                best = Some((dec, text));
+            }
+            if best.as_ref().is_some_and(|b| b.1.is_empty()) {
+                break;
+            }
+        }
+        // A mixed row only with the block's own decimal mark: a switch is told by whole rows.
+        best.filter(|(d, t)| *d == self.dec || t.is_empty())
     }
 
     fn cells_of(&mut self, p: Pending) -> Vec<String> {
@@ -343,7 +429,13 @@ impl<'a> Engine<'a> {
     }
 
     /// Looks for the names row (and units row) just above a first data row.
-    fn start_block(&mut self, line_no: usize, last_nonempty: usize, ncells: usize) -> bool {
+    fn start_block(
+        &mut self,
+        line_no: usize,
+        last_nonempty: usize,
+        ncells: usize,
+        text_cols: &[usize],
+    ) -> bool {
         let k = self.pending.len();
         let (names_idx, units_idx, mut names, mut units) = if self.format == Format::CatmanAscii {
             match self.catman_header() {
@@ -403,6 +495,12 @@ impl<'a> Engine<'a> {
         }
         units.resize(ncols, String::new());
         units.truncate(ncols);
+        let mut label_slot = vec![None; ncols];
+        let mut labels = Vec::new();
+        for &c in text_cols.iter().filter(|&&c| c < ncols) {
+            label_slot[c] = Some(labels.len());
+            labels.push((c, Vec::new()));
+        }
 
         // Metadata and title from the lines above the header.
         let above: Vec<Pending> = self.pending[..names_idx].to_vec();
@@ -440,6 +538,8 @@ impl<'a> Engine<'a> {
             columns: vec![Vec::new(); ncols],
             rows: 0,
             line_runs: vec![(0, line_no)],
+            labels,
+            label_slot,
         };
         self.open = Some((block, RowStats::default()));
         self.blank_in_table = false;
@@ -511,18 +611,98 @@ impl<'a> Engine<'a> {
     }
 
     fn push_row(&mut self, line: &[u8], line_no: usize) -> bool {
+        if self.push_row_with(line, line_no, self.sep, self.dec) {
+            return true;
+        }
+        // Not a row with the block's separator and decimal mark: is it one with another pair
+        // (a locale switch inside the data)? Only whole rows of numbers count.
+        let other = if self.dec == b',' { b'.' } else { b',' };
+        let pairs = [
+            (self.sep, other),
+            (Separator::Tab, self.dec),
+            (Separator::Semicolon, self.dec),
+            (Separator::Comma, self.dec),
+            (Separator::Space, self.dec),
+            (Separator::Tab, other),
+            (Separator::Semicolon, other),
+            (Separator::Space, other),
+        ];
+        if self.open.is_none() {
+            return false;
+        }
+        for (sep, dec) in pairs {
+            if (sep, dec) == (self.sep, self.dec) || (sep == Separator::Comma && dec == b',') {
+                continue;
+            }
+            if !self.clean_row(line, sep, dec) {
+                continue;
+            }
+            if self.push_row_with(line, line_no, sep, dec) {
+                if let Some((_, st)) = self.open.as_mut() {
+                    st.switched += 1;
+                    if st.first_switched.is_none() {
+                        let what = format!(
+                            "separator {} and decimal mark '{}'",
+                            sep.as_str(),
+                            dec as char
+                        );
+                        st.first_switched = Some((line_no, what));
+                    }
+                }
+                return true;
+            }
+        }
+        false
+    }
+
+    /// True when every non-empty cell of `line` split by `sep` is a number with `dec`, and the
+    /// row has as many cells as the open block has columns (give or take a trailing empty one).
+    fn clean_row(&mut self, line: &[u8], sep: Separator, dec: u8) -> bool {
+        let Some((block, _)) = self.open.as_ref() else {
+            return false;
+        };
+        let ncols = block.columns.len();
+        if !block.labels.is_empty() {
+            return false;
+        }
+        let mut cells = Vec::new();
+        split(line, sep, &mut cells);
+        let filled = cells
+            .iter()
+            .rposition(|&(a, b)| parse_cell(&line[a..b.max(a)], dec) != Cell::Empty)
+            .map_or(0, |p| p + 1);
+        filled == ncols
+            && cells.iter().all(|&(a, b)| {
+                matches!(
+                    parse_cell(&line[a..b.max(a)], dec),
+                    Cell::Num(_) | Cell::Empty | Cell::Missing
+                )
+            })
+    }
+
+    fn push_row_with(&mut self, line: &[u8], line_no: usize, sep: Separator, dec: u8) -> bool {
         let Some((block, stats)) = self.open.as_mut() else {
             return false;
         };
-        split(line, self.sep, &mut self.cells);
+        split(line, sep, &mut self.cells);
         let ncols = block.columns.len();
         let (mut num, mut text, mut extra) = (0usize, 0usize, 0usize);
         let mut first_text = None;
         let mut missing = 0usize;
         let mut first_missing = None;
+        let has_labels = !block.labels.is_empty();
         for (ci, &(a, b)) in self.cells.iter().enumerate() {
             let raw = &line[a..b.max(a)];
-            let c = parse_cell(raw, self.dec);
+            if has_labels && ci < ncols {
+                if let Some(slot) = block.label_slot[ci] {
+                    block.labels[slot]
+                        .1
+                        .push(String::from_utf8_lossy(raw).trim().to_string());
+                    block.columns[ci].push(f64::NAN);
+                    continue;
+                }
+            }
+            let c = parse_cell(raw, dec);
             if ci >= ncols {
                 if c != Cell::Empty {
                     extra += 1;
@@ -552,12 +732,19 @@ impl<'a> Engine<'a> {
             }
         }
         let got = self.cells.len().min(ncols);
-        for col in &mut block.columns[got..] {
-            col.push(f64::NAN);
+        for ci in got..ncols {
+            block.columns[ci].push(f64::NAN);
+            if let Some(slot) = block.label_slot[ci] {
+                block.labels[slot].1.push(String::new());
+            }
         }
-        if num == 0 || text * 2 >= ncols.max(1) && text > 0 || extra > 0 {
+        let numeric_cols = ncols - block.labels.len();
+        if num == 0 || text * 2 >= numeric_cols.max(1) && text > 0 || extra > 0 {
             for col in &mut block.columns {
                 col.pop();
+            }
+            for (_, l) in &mut block.labels {
+                l.pop();
             }
             return false;
         }
@@ -594,6 +781,19 @@ impl<'a> Engine<'a> {
         };
         let idx = self.out.blocks.len() + 1;
         let src = self.source.to_string();
+        if let Some((l, what)) = &st.first_switched {
+            self.out.warnings.push(Diagnostic {
+                file: src.clone(),
+                line: Some(*l),
+                column: None,
+                message: format!(
+                    "block {idx}: {} row(s) are written with another locale than the block's first rows ({what} instead of separator {} and decimal mark '{}'); read with it",
+                    st.switched,
+                    self.sep.as_str(),
+                    self.dec as char
+                ),
+            });
+        }
         if st.short_rows > 0 {
             self.out.warnings.push(Diagnostic {
                 file: src.clone(),
@@ -640,6 +840,44 @@ impl<'a> Engine<'a> {
 
     fn finish(&mut self, last_line: usize) -> Result<(), IngestError> {
         let pending = std::mem::take(&mut self.pending);
+        if self.skipped_count > 0 {
+            let lines: Vec<String> = self
+                .skipped
+                .iter()
+                .map(|(l, t)| format!("line {l} '{t}'"))
+                .collect();
+            self.out.warnings.push(Diagnostic {
+                file: self.source.to_string(),
+                line: self.skipped.first().map(|s| s.0),
+                column: None,
+                message: format!(
+                    "{} malformed row(s) inside the data skipped ({}{}); the rows around them were read",
+                    self.skipped_count,
+                    lines.join(", "),
+                    if self.skipped_count > lines.len() { ", ..." } else { "" }
+                ),
+            });
+        }
+        if let Some(last) = self.out.blocks.last() {
+            let after: Vec<&Pending> = pending
+                .iter()
+                .filter(|p| !p.blank && p.line_no > last.last_data_line)
+                .collect();
+            if let Some(first) = after.first() {
+                let t = String::from_utf8_lossy(&self.text[first.start..first.end]);
+                self.out.warnings.push(Diagnostic {
+                    file: self.source.to_string(),
+                    line: Some(first.line_no),
+                    column: None,
+                    message: format!(
+                        "{} line(s) after the last data row (line {}) are not data: footer or end marker '{}' skipped (kept as metadata)",
+                        after.len(),
+                        last.last_data_line,
+                        shorten(t.trim(), 40)
+                    ),
+                });
+            }
+        }
         for p in pending.iter().filter(|p| !p.blank) {
             let cells = self.cells_of(*p);
             if let Some(kv) = key_value(&cells, &self.text[p.start..p.end]) {
@@ -668,6 +906,18 @@ impl<'a> Engine<'a> {
             }
             if let Some(p) = pending.iter().rev().find(|p| !p.blank) {
                 let line = String::from_utf8_lossy(&self.text[p.start..p.end]).into_owned();
+                if let Some((col, cell)) = self.unreadable_cell(p) {
+                    return Err(IngestError::NoData {
+                        file: self.source.to_string(),
+                        detail: format!(
+                            "line {}: '{}' looks like a data row, but cell {col} '{cell}' is not a number (expected numbers with decimal mark '{}' separated by {})",
+                            p.line_no,
+                            shorten(line.trim(), 60),
+                            self.dec as char,
+                            self.sep.as_str()
+                        ),
+                    });
+                }
                 return Err(IngestError::HeaderWithoutData {
                     file: self.source.to_string(),
                     line: p.line_no,
@@ -681,6 +931,36 @@ impl<'a> Engine<'a> {
         }
         Ok(())
     }
+}
+
+impl Engine<'_> {
+    /// For a line with numbers in most cells: the first cell (1-based) that is not one.
+    fn unreadable_cell(&mut self, p: &Pending) -> Option<(usize, String)> {
+        let line = &self.text[p.start..p.end];
+        split(line, self.sep, &mut self.cells);
+        let mut nums = 0;
+        let mut bad = None;
+        for (i, &(a, b)) in self.cells.iter().enumerate() {
+            let raw = &line[a..b.max(a)];
+            match parse_cell(raw, self.dec) {
+                Cell::Num(_) => nums += 1,
+                Cell::Text => {
+                    if numeric_any(raw) {
+                        nums += 1;
+                    }
+                    bad.get_or_insert((i + 1, shorten(String::from_utf8_lossy(raw).trim(), 30)));
+                }
+                _ => {}
+            }
+        }
+        bad.filter(|_| nums * 2 >= self.cells.len())
+    }
+}
+
+/// A line with no content: only spaces, tabs, quotes and separators.
+fn is_blank(line: &[u8]) -> bool {
+    line.iter()
+        .all(|&b| b == b' ' || b == b'\t' || b == b'"' || b == b',' || b == b';')
 }
 
 /// A names row: some non-numeric cell, and at least as many cells as the data row fills.
