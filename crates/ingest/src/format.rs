@@ -124,6 +124,17 @@ pub fn detect(text: &str, encoding: Encoding, source: &str) -> (Format, String) 
             format!("MTS 793 locale line '{}'", shorten(first, 40)),
         ));
     }
+    let catman_time = head.iter().take(60).any(|l| {
+        l.split(['\t', ';'])
+            .any(|c| crate::table::is_catman_time_name(c.trim_matches('"')))
+    });
+    if catman_time {
+        cands.push((
+            86,
+            Format::CatmanAscii,
+            "HBM catman time channel name ('Time  1 - default sample rate') in the header".into(),
+        ));
+    }
     if lower_head.iter().any(|l| l.contains("catman"))
         || lower_head
             .first()

@@ -438,7 +438,7 @@ impl<'a> Engine<'a> {
     ) -> bool {
         let k = self.pending.len();
         let (names_idx, units_idx, mut names, mut units) = if self.format == Format::CatmanAscii {
-            match self.catman_header() {
+            match self.catman_header(ncells) {
                 Some(h) => h,
                 None => return false,
             }
@@ -548,7 +548,10 @@ impl<'a> Engine<'a> {
 
     /// catman: `Channel name` / `Unit` rows (first cell is the key) anywhere above the data.
     #[allow(clippy::type_complexity)]
-    fn catman_header(&mut self) -> Option<(usize, Option<usize>, Vec<String>, Vec<String>)> {
+    fn catman_header(
+        &mut self,
+        ncells: usize,
+    ) -> Option<(usize, Option<usize>, Vec<String>, Vec<String>)> {
         let mut names = None;
         let mut units = None;
         for i in 0..self.pending.len() {
@@ -568,6 +571,48 @@ impl<'a> Engine<'a> {
                 names = Some((i, c[1..].to_vec()));
             } else if matches!(key.as_str(), "unit" | "units" | "einheit") && c.len() > 1 {
                 units = Some((i, c[1..].to_vec()));
+            }
+        }
+        if names.is_none() {
+            // No keyed names row: the last line above the data that names a catman time
+            // channel ("Time  1 - default sample rate"), else the last all-text line with at
+            // least as many cells as the data row.
+            let mut fallback = None;
+            for i in (0..self.pending.len()).rev() {
+                if self.pending[i].blank {
+                    continue;
+                }
+                let c = self.cells_of(self.pending[i]);
+                if c.iter().any(|x| is_catman_time_name(x)) {
+                    names = Some((i, c));
+                    break;
+                }
+                let filled = c.iter().filter(|x| !x.trim().is_empty()).count();
+                if fallback.is_none()
+                    && filled >= ncells.max(2)
+                    && c.iter().all(|x| x.trim().is_empty() || !numeric_any(x.as_bytes()))
+                {
+                    fallback = Some((i, c));
+                }
+            }
+            names = names.or(fallback);
+            if let Some((ni, _)) = names {
+                // A units row: any later header line whose cells all read as units.
+                for i in ni + 1..self.pending.len() {
+                    if self.pending[i].blank {
+                        continue;
+                    }
+                    let c = self.cells_of(self.pending[i]);
+                    if c.iter().any(|x| !x.trim().is_empty())
+                        && c.iter().all(|x| {
+                            x.trim().is_empty()
+                                || (looks_like_unit(x) && !numeric_any(x.as_bytes()))
+                        })
+                    {
+                        units = Some((i, c));
+                        break;
+                    }
+                }
             }
         }
         let (ni, n) = names?;
@@ -776,18 +821,45 @@ impl<'a> Engine<'a> {
     }
 
     fn close_block(&mut self) {
-        let Some((block, st)) = self.open.take() else {
+        let Some((mut block, st)) = self.open.take() else {
             return;
         };
         let idx = self.out.blocks.len() + 1;
         let src = self.source.to_string();
+        if self.format == Format::CatmanAscii {
+            // catman writes -1000000 for samples a channel does not have (unused channels,
+            // slower sample rates): missing, not data.
+            let mut n = 0usize;
+            let mut first: Option<(usize, usize)> = None;
+            for (ci, col) in block.columns.iter_mut().enumerate() {
+                for (row, v) in col.iter_mut().enumerate() {
+                    if *v == CATMAN_SENTINEL {
+                        *v = f64::NAN;
+                        n += 1;
+                        if first.is_none_or(|(r, _)| row < r) {
+                            first = Some((row, ci));
+                        }
+                    }
+                }
+            }
+            if let Some((row, ci)) = first {
+                self.out.warnings.push(Diagnostic {
+                    file: src.clone(),
+                    line: Some(block.line_of_row(row)),
+                    column: Some(ci + 1),
+                    message: format!(
+                        "block {idx}: {n} cell(s) hold catman's placeholder {CATMAN_SENTINEL} (no sample); read as missing"
+                    ),
+                });
+            }
+        }
         if let Some((l, what)) = &st.first_switched {
             self.out.warnings.push(Diagnostic {
                 file: src.clone(),
                 line: Some(*l),
                 column: None,
                 message: format!(
-                    "block {idx}: {} row(s) are written with another locale than the block's first rows ({what} instead of separator {} and decimal mark '{}'); read with it",
+                    "block {idx}: {} row(s) are written in another locale than the rest of the block ({what} instead of separator {} and decimal mark '{}'); read with it",
                     st.switched,
                     self.sep.as_str(),
                     self.dec as char
@@ -955,6 +1027,22 @@ impl Engine<'_> {
         }
         bad.filter(|_| nums * 2 >= self.cells.len())
     }
+}
+
+/// catman's placeholder for a sample a channel does not have.
+const CATMAN_SENTINEL: f64 = -1_000_000.0;
+
+/// A catman time channel's name: a time word, a number, a dash and the sample rate's name
+/// (`Time  1 - default sample rate`, `Zeit  1 - Standardmessrate`).
+pub(crate) fn is_catman_time_name(cell: &str) -> bool {
+    let l = cell.trim().to_lowercase();
+    ["time", "zeit", "temps", "tiempo", "tempo"].iter().any(|w| {
+        l.strip_prefix(w).is_some_and(|rest| {
+            let rest = rest.trim_start();
+            let digits = rest.chars().take_while(|c| c.is_ascii_digit()).count();
+            digits > 0 && rest[digits..].trim_start().starts_with('-')
+        })
+    })
 }
 
 /// A line with no content: only spaces, tabs, quotes and separators.

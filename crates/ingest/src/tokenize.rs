@@ -223,9 +223,17 @@ pub fn parse_cell(raw: &[u8], dec: u8) -> Cell {
     let mut has_thou = false;
     let mut digits = 0u32; // digits since the last thousands separator (or start)
     let mut int_closed = false; // decimal mark or exponent seen
+    // A first digit group of "0" ("0,100") is not a thousands grouping: that is another
+    // decimal mark, and a number read here would be 1000× off.
+    let lead_zero = s
+        .iter()
+        .find(|b| b.is_ascii_digit() || **b == thou || **b == dec)
+        .is_some_and(|&b| b == b'0');
     for &b in s {
         if b == thou {
-            if int_closed || (has_thou && digits != 3) || (!has_thou && (digits == 0 || digits > 3))
+            if int_closed
+                || (has_thou && digits != 3)
+                || (!has_thou && (digits == 0 || digits > 3 || lead_zero))
             {
                 return na_or_text(s);
             }
@@ -425,6 +433,9 @@ mod tests {
         assert_eq!(parse_cell(b"1,5", b'.'), Cell::Text);
         assert_eq!(parse_cell(b"11.09.2014", b','), Cell::Text);
         assert_eq!(parse_cell(b"12,34.5", b'.'), Cell::Text);
+        assert_eq!(parse_cell(b"0,100", b'.'), Cell::Text);
+        assert_eq!(parse_cell(b"-0.250", b','), Cell::Text);
+        assert_eq!(parse_cell(b"10,100", b'.'), Cell::Num(10100.0));
         assert_eq!(parse_cell(b"abc", b'.'), Cell::Text);
         assert_eq!(parse_cell(b"1.2.3", b'.'), Cell::Text);
     }
