@@ -362,7 +362,7 @@ impl<'a> Engine<'a> {
             }
         }
         let ncells = self.cells.len();
-        if self.start_block(line_no, last_nonempty, ncells, &text_cols) {
+        if self.start_block(line_no, last_nonempty, ncells, &text_cols, (start, end)) {
             if self.push_row(line, line_no) {
                 return;
             }
@@ -435,6 +435,7 @@ impl<'a> Engine<'a> {
         last_nonempty: usize,
         ncells: usize,
         text_cols: &[usize],
+        data_span: (usize, usize),
     ) -> bool {
         let k = self.pending.len();
         let (names_idx, units_idx, mut names, mut units) = if self.format == Format::CatmanAscii {
@@ -487,6 +488,14 @@ impl<'a> Engine<'a> {
             }
             if merged.len() == ncells {
                 names = merged;
+            } else if let Some(p) = self.pending.get(names_idx).copied().filter(|p| p.end > p.start) {
+                // Names with spaces ("Ch 1 Displacement"): columns are told by runs of two or
+                // more spaces, else by where the data row's cells sit under the header.
+                let head = &self.text[p.start..p.end];
+                let data = &self.text[data_span.0..data_span.1];
+                if let Some(aligned) = align_header(head, data, ncells) {
+                    names = aligned;
+                }
             }
         }
         let ncols = names.len().max(last_nonempty + 1);
@@ -1029,6 +1038,89 @@ impl Engine<'_> {
     }
 }
 
+/// Splits a space-separated header line into `n` names that may hold single spaces: by runs of
+/// two or more spaces/tabs when that gives `n` cells, else by aligning each word with the cell
+/// of `data` (the first data row) it sits over or nearest to. `None` when neither fits.
+fn align_header(head: &[u8], data: &[u8], n: usize) -> Option<Vec<String>> {
+    let words = |line: &[u8], min_gap: usize| -> Vec<(usize, usize)> {
+        let mut out = Vec::new();
+        let mut i = 0;
+        let gap = |b: u8| b == b' ' || b == b'\t';
+        while i < line.len() {
+            while i < line.len() && gap(line[i]) {
+                i += 1;
+            }
+            if i >= line.len() {
+                break;
+            }
+            let start = i;
+            let mut end = i;
+            while i < line.len() {
+                if gap(line[i]) {
+                    let mut k = i;
+                    while k < line.len() && gap(line[k]) {
+                        k += 1;
+                    }
+                    let tab = line[i..k].contains(&b'\t');
+                    if k - i >= min_gap || tab || k >= line.len() {
+                        break;
+                    }
+                    i = k;
+                } else {
+                    i += 1;
+                    end = i;
+                }
+            }
+            out.push((start, end));
+        }
+        out
+    };
+    let text = |sp: &[(usize, usize)]| -> Vec<String> {
+        sp.iter()
+            .map(|&(a, b)| String::from_utf8_lossy(&head[a..b]).trim().to_string())
+            .collect()
+    };
+    let runs = words(head, 2);
+    if runs.len() == n {
+        return Some(text(&runs));
+    }
+    let cells = words(data, 1);
+    let tokens = words(head, 1);
+    if cells.len() != n || tokens.len() < n {
+        return None;
+    }
+    // Each word goes to the data cell nearest its centre; words of a column stay together.
+    let mut groups: Vec<Vec<(usize, usize)>> = vec![Vec::new(); n];
+    let mut last = 0usize;
+    for &(a, b) in &tokens {
+        let c2 = a + b; // twice the centre
+        let j = (0..n)
+            .min_by_key(|&j| {
+                let (x, y) = cells[j];
+                if 2 * x <= c2 && c2 <= 2 * y {
+                    0
+                } else {
+                    (2 * x).abs_diff(c2).min((2 * y).abs_diff(c2))
+                }
+            })
+            .unwrap_or(0);
+        if j < last {
+            return None;
+        }
+        last = j;
+        groups[j].push((a, b));
+    }
+    if groups.iter().any(|g| g.is_empty()) {
+        return None;
+    }
+    Some(
+        groups
+            .iter()
+            .map(|g| String::from_utf8_lossy(&head[g[0].0..g[g.len() - 1].1]).trim().to_string())
+            .collect(),
+    )
+}
+
 /// catman's placeholder for a sample a channel does not have.
 const CATMAN_SENTINEL: f64 = -1_000_000.0;
 
@@ -1193,6 +1285,19 @@ mod tests {
             ),
             "{e}"
         );
+    }
+
+    #[test]
+    fn names_with_spaces_in_space_separated_layouts_stay_whole() {
+        // Runs of spaces between columns.
+        let t = read("Ch 1 Displacement   Ch 1 Force   Running Time\nmm   kN   sec\n0.1   2.5   0.0\n0.2   2.7   0.1\n");
+        let b = &t.blocks[0];
+        assert_eq!(b.header_cells, ["Ch 1 Displacement", "Ch 1 Force", "Running Time"]);
+        assert_eq!(b.unit_cells, ["mm", "kN", "sec"]);
+        assert_eq!(b.columns[1], [2.5, 2.7]);
+        // Single spaces between columns: aligned with the data row's cells.
+        let t = read("Ch 1 Displacement Ch 1 Force\n       0.1000000     2.5000\n       0.2000000     2.7000\n");
+        assert_eq!(t.blocks[0].header_cells, ["Ch 1 Displacement", "Ch 1 Force"]);
     }
 
     #[test]
