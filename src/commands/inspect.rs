@@ -23,8 +23,8 @@ pub fn run(a: InspectArgs) -> CmdResult {
     println!("sha256    {}", p.sha256);
     println!("layout    {}  ({})", p.format.as_str(), p.reason);
     println!(
-        "encoding  {}   separator {}   decimal {}",
-        p.encoding, p.separator, p.decimal
+        "encoding  {} ({})   separator {}   decimal {}",
+        p.encoding, p.encoding_confidence, p.separator, p.decimal
     );
     println!("kind      {}  ({})", rec.kind, rec.kind_reason);
     let sp = &rec.specimen;

@@ -19,7 +19,7 @@ pub mod tokenize;
 pub mod units;
 mod xml;
 
-pub use decode::Encoding;
+pub use decode::{Confidence, Encoding};
 pub use error::{Diagnostic, IngestError};
 pub use format::{Format, UnknownFormat};
 pub use record::{
@@ -63,8 +63,8 @@ pub fn read_path(path: &Path, opts: &ReadOptions) -> Result<TestRecord, IngestEr
     })?;
     let source = path.display().to_string();
     let sha = sha256_hex(&bytes);
-    let enc = decode::detect(&bytes);
-    let text = decode::decode_owned(bytes, enc);
+    let enc = decode::detect_assess(&bytes);
+    let text = decode::decode_owned(bytes, enc.0);
     parse(&text, enc, sha, &source, opts)
 }
 
@@ -75,8 +75,8 @@ pub fn read_bytes(
     opts: &ReadOptions,
 ) -> Result<TestRecord, IngestError> {
     let sha = sha256_hex(bytes);
-    let enc = decode::detect(bytes);
-    let text = decode::decode(bytes, enc);
+    let enc = decode::detect_assess(bytes);
+    let text = decode::decode(bytes, enc.0);
     parse(&text, enc, sha, source, opts)
 }
 
@@ -86,7 +86,7 @@ fn sha256_hex(bytes: &[u8]) -> String {
 
 fn parse(
     text: &str,
-    enc: Encoding,
+    (enc, confidence): (Encoding, decode::Confidence),
     sha256: String,
     source: &str,
     opts: &ReadOptions,
@@ -104,15 +104,41 @@ fn parse(
         Some(f) => (f, "forced by --format".to_string()),
         None => format::detect(text, enc, source),
     };
-    let raw = match format {
+    let mut raw = match format {
         Format::MtsTestsuiteXml => xml::read_xml(text, source)?,
         _ => table::read_table(text, format, source)?,
     };
+    if enc == Encoding::Utf8StrayBom {
+        raw.warnings.insert(
+            0,
+            Diagnostic {
+                file: source.into(),
+                line: Some(1),
+                column: Some(1),
+                message: "a UTF-16 byte-order mark in front of UTF-8 text; skipped".into(),
+            },
+        );
+    }
+    if confidence == decode::Confidence::Low {
+        raw.warnings.insert(
+            0,
+            Diagnostic {
+                file: source.into(),
+                line: None,
+                column: None,
+                message: format!(
+                    "the text encoding is a guess ({}, low confidence: little non-ASCII text or another code page fits nearly as well); names and text may be garbled, numbers are not affected",
+                    enc.as_str()
+                ),
+            },
+        );
+    }
     let provenance = Provenance {
         path: source.to_string(),
         sha256,
         format,
-        encoding: enc.as_str().to_string(),
+        encoding: enc.as_str(),
+        encoding_confidence: confidence.as_str().to_string(),
         reason,
         separator: raw.separator.map_or("none", |s| s.as_str()).to_string(),
         decimal: if raw.decimal == b',' {

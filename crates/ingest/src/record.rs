@@ -53,8 +53,11 @@ pub struct Provenance {
     pub sha256: String,
     /// Layout read.
     pub format: Format,
-    /// Text encoding (`utf-8`, `utf-8-bom`, `utf-16le`, `latin-1`, ...).
+    /// Text encoding (`utf-8`, `utf-8-bom`, `utf-16le`, `latin-1`, `gbk`, ...).
     pub encoding: String,
+    /// How sure the encoding is: `certain` (BOM, zero pattern, valid UTF-8), `high` or `low`
+    /// (trial decoding of legacy code pages; `low` comes with a warning).
+    pub encoding_confidence: String,
     /// Why this layout was chosen.
     pub reason: String,
     /// Cell separator (`tab`, `comma`, `semicolon`, `space`; `none` for XML).
@@ -165,6 +168,8 @@ pub struct InspectReport {
     pub format: String,
     /// Encoding name.
     pub encoding: String,
+    /// How sure the encoding is (`certain`, `high`, `low`).
+    pub encoding_confidence: String,
     /// Data rows of the main block.
     pub rows: usize,
     /// Channels.
@@ -773,6 +778,7 @@ impl TestRecord {
         InspectReport {
             format: self.provenance.format.as_str().to_string(),
             encoding: self.provenance.encoding.clone(),
+            encoding_confidence: self.provenance.encoding_confidence.clone(),
             rows: self.data.height(),
             channels,
             metadata: MetadataObject(self.metadata.clone()),

@@ -277,3 +277,21 @@ fn catman_ascii_is_recognised_sentinels_missing_volts_known() {
         assert_ne!(r.kind, TestKind::Torsion);
     }
 }
+
+#[test]
+fn a_gbk_bluehill_export_has_its_chinese_names() {
+    let mut text = String::from("\"试样标签\",\"S1 拉伸试验\"\r\n\"操作者\",\"张工程师\"\r\n\r\n");
+    text += "\"时间\",\"位移\",\"力\"\r\n\"(s)\",\"(mm)\",\"(kN)\"\r\n";
+    for i in 0..30 {
+        text += &format!("\"{:.2}\",\"{:.4}\",\"{:.4}\"\r\n", 0.1 * i as f64, 0.02 * i as f64, 0.05 * i as f64);
+    }
+    let (bytes, _, bad) = encoding_rs::GBK.encode(&text);
+    assert!(!bad);
+    let r = read_bytes(&bytes, "Specimen_RawData_1.csv", &ReadOptions::default()).unwrap();
+    assert_eq!(r.provenance.encoding, "gbk");
+    assert_eq!(r.provenance.encoding_confidence, "high");
+    let names: Vec<&str> = r.channels.iter().map(|c| c.name.as_str()).collect();
+    assert_eq!(names, ["时间", "位移", "力"]);
+    assert!((col(&r, "力")[29] - 1450.0).abs() < 1e-9);
+    assert!(r.metadata.iter().any(|(k, v)| k == "操作者" && v == "张工程师"));
+}

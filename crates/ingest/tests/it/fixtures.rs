@@ -198,6 +198,7 @@ fn instron_metadata_nan_cells_and_inspect() {
         [
             "format",
             "encoding",
+            "encoding_confidence",
             "rows",
             "channels",
             "metadata",
