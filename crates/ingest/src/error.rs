@@ -19,6 +19,25 @@ pub enum IngestError {
         /// The operating-system error, as text (not a chained source: the message says it once).
         reason: String,
     },
+    /// The path is not a regular file (a directory, FIFO, device or socket): refused before it
+    /// is opened, so that nothing blocks or reads without end.
+    #[error("{path}: not a regular file ({what}); expected a machine export file")]
+    NotAFile {
+        /// The path given.
+        path: PathBuf,
+        /// What it is.
+        what: &'static str,
+    },
+    /// The file is larger than any test export the readers accept.
+    #[error("{path}: {bytes} bytes is beyond the {limit}-byte bound of the readers (test exports are far smaller; split the file or export fewer channels)")]
+    TooLarge {
+        /// The path given.
+        path: PathBuf,
+        /// Its size.
+        bytes: u64,
+        /// The bound, [`crate::MAX_FILE_BYTES`].
+        limit: u64,
+    },
     /// The input has no bytes (or only a byte-order mark / whitespace).
     #[error("{file}: the file is empty (expected a machine export with a header and data rows)")]
     Empty {

@@ -95,7 +95,8 @@ impl FromStr for Format {
 
 /// Scores every layout on the head of the text and returns the best with its reason.
 pub fn detect(text: &str, encoding: Encoding, source: &str) -> (Format, String) {
-    let head: Vec<&str> = text.lines().take(200).collect();
+    // Signatures sit at the start of a line: long lines are looked at up to 4 KiB.
+    let head: Vec<&str> = text.lines().take(200).map(|l| head_str(l, 4096)).collect();
     let first = head
         .first()
         .map(|l| l.trim_start_matches('\u{feff}'))

@@ -159,7 +159,8 @@ fn sample_lines(bytes: &[u8], eol: u8, n: usize) -> Vec<&[u8]> {
         if let [rest @ .., b'\r'] = line {
             line = rest;
         }
-        v.push(line);
+        // Over-long lines are refused by the reader; detection looks at their start only.
+        v.push(&line[..line.len().min(crate::MAX_LINE_BYTES)]);
         pos = end + 1;
     }
     v
@@ -281,6 +282,17 @@ impl<'a> Engine<'a> {
                 lend -= 1;
             }
             line_no += 1;
+            if lend - pos > crate::MAX_LINE_BYTES {
+                return Err(IngestError::Malformed {
+                    file: self.source.to_string(),
+                    line: line_no,
+                    detail: format!(
+                        "the line is {} bytes long, beyond the readers' bound of {} bytes per line (a table row has at most a few hundred cells; is this a text export with line breaks?)",
+                        lend - pos,
+                        crate::MAX_LINE_BYTES
+                    ),
+                });
+            }
             self.line(pos, lend, line_no);
             pos = end + 1;
         }
