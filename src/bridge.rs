@@ -109,7 +109,7 @@ pub fn read_options(r: &crate::cli::ReaderArgs, kind: Option<TestKind>) -> Resul
         response: r.response.clone(),
         kind,
         units,
-        keep_unknown_units: false,
+        lenient: false,
     })
 }
 

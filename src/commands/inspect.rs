@@ -9,7 +9,7 @@ pub fn run(a: InspectArgs) -> CmdResult {
     let kind = a.kind.as_deref().map(parse_kind).transpose()?;
     let mut opts = crate::bridge::read_options(&a.reader, kind).map_err(CliError::input)?;
     // Inspect shows a column whose unit cannot be read (with a warning) rather than refusing.
-    opts.keep_unknown_units = true;
+    opts.lenient = true;
     let rec = cablab_ingest::read_path(&a.file, &opts).map_err(CliError::input)?;
     for w in &rec.warnings {
         eprintln!("cablab: warning: {w}");

@@ -88,6 +88,17 @@ pub enum IngestError {
         /// Which role needed it (`time`, `control`, `response`).
         role: &'static str,
     },
+    /// A table of one row per cycle (statistic-named columns such as `Torque:Maximum`), not the
+    /// curve of a test: refused rather than analysed.
+    #[error("{file}:{line}: a per-cycle summary table, not a test curve: {detail}; export the raw data (every sample) instead, or look at it with `cablab inspect`")]
+    SummaryTable {
+        /// File path or label.
+        file: String,
+        /// 1-based line of the names row.
+        line: usize,
+        /// The statistic-named columns found.
+        detail: String,
+    },
     /// `--time/--control/--response` named a column that does not exist.
     #[error("{file}: {option} '{given}' matches no column; columns are: {available}")]
     UnknownColumn {

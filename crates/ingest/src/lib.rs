@@ -49,9 +49,10 @@ pub struct ReadOptions {
     /// the file writes (or fails to write readably) for that column. The unit must be one of
     /// the unit table's.
     pub units: Vec<(String, String)>,
-    /// Keep a time/control/response column whose unit cannot be read (values as written, a
-    /// warning) instead of refusing the file; for `inspect`, which shows rather than computes.
-    pub keep_unknown_units: bool,
+    /// Show rather than refuse (for `inspect`): a time/control/response column whose unit
+    /// cannot be read is kept (values as written, a warning), and a per-cycle summary table is
+    /// read (with a warning) instead of being refused as a curve.
+    pub lenient: bool,
 }
 
 /// Largest file the readers accept: 512 MiB. Test exports are a few MB to a few hundred MB;

@@ -211,6 +211,33 @@ fn find_column(names: &[String], headers: &[String], given: &str) -> Option<usiz
         .or_else(|| names.iter().position(|n| n.eq_ignore_ascii_case(g)))
 }
 
+/// A column named for a per-cycle statistic: `Rotation:Maximum`, `Torque - Min`, `Load (mean)`,
+/// `Peak Load`... (a statistic word after a `:`, ` - `, `_` or in brackets, or a leading
+/// `Peak`/`Valley`/`Max.`/`Min.` word).
+fn is_statistic_name(name: &str) -> bool {
+    const STATS: &[&str] = &[
+        "maximum", "minimum", "max", "min", "mean", "average", "avg", "amplitude", "range",
+        "peak", "valley", "median", "std", "stdev", "rms", "mittelwert", "minimal", "maximal",
+    ];
+    let l = name.trim().to_lowercase();
+    let tail = l
+        .rsplit_once(':')
+        .or_else(|| l.rsplit_once(" - "))
+        .or_else(|| l.rsplit_once('_'))
+        .map(|(_, t)| t.trim().trim_matches(|c| c == '(' || c == ')' || c == '.').to_string());
+    if tail.as_deref().is_some_and(|t| STATS.contains(&t)) {
+        return true;
+    }
+    if let Some(p) = l.rfind('(') {
+        let inner = l[p + 1..].trim_end_matches(')').trim();
+        if STATS.contains(&inner) {
+            return true;
+        }
+    }
+    let first = l.split_whitespace().next().unwrap_or("").trim_end_matches('.');
+    matches!(first, "peak" | "valley") && l.split_whitespace().count() > 1
+}
+
 /// Index of the time column of a raw block: the first whose unit is a time unit, else the first
 /// whose name says time.
 fn raw_time_column(b: &RawBlock) -> Option<usize> {
@@ -475,6 +502,29 @@ pub(crate) fn build(
                     }),
             }
         };
+    // A per-cycle trend table (one row per cycle, statistic-named columns) is not a curve.
+    let stats: Vec<&String> = names.iter().filter(|n| is_statistic_name(n)).collect();
+    if stats.len() >= 2 && stats.len() * 2 >= n.saturating_sub(2) {
+        let detail = format!(
+            "{} of {n} columns name a per-cycle statistic ({}{})",
+            stats.len(),
+            stats.iter().take(4).map(|s| format!("'{s}'")).collect::<Vec<_>>().join(", "),
+            if stats.len() > 4 { ", ..." } else { "" }
+        );
+        if !opts.lenient {
+            return Err(IngestError::SummaryTable {
+                file: source,
+                line: block.names_line,
+                detail,
+            });
+        }
+        warnings.push(Diagnostic {
+            file: source.clone(),
+            line: Some(block.names_line),
+            column: None,
+            message: format!("a per-cycle summary table, not a test curve: {detail}; analysis refuses it"),
+        });
+    }
     let ft = pick(&opts.time, "--time")?;
     let fc = pick(&opts.control, "--control")?;
     let fr = pick(&opts.response, "--response")?;
@@ -488,7 +538,7 @@ pub(crate) fn build(
     let unit_line = block.units_line.unwrap_or(block.names_line);
     for (idx, role) in [(t, "time"), (c, "control"), (r, "response")] {
         let Some(i) = idx else { continue };
-        if !units[i].is_empty() && infos[i].is_none() && opts.keep_unknown_units {
+        if !units[i].is_empty() && infos[i].is_none() && opts.lenient {
             warnings.push(Diagnostic {
                 file: source.clone(),
                 line: Some(unit_line),

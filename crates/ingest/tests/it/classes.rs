@@ -197,7 +197,7 @@ fn an_unreadable_unit_is_never_si() {
             text.as_bytes(),
             "u.csv",
             &ReadOptions {
-                keep_unknown_units: true,
+                lenient: true,
                 ..Default::default()
             },
         )
@@ -294,4 +294,32 @@ fn a_gbk_bluehill_export_has_its_chinese_names() {
     assert_eq!(names, ["时间", "位移", "力"]);
     assert!((col(&r, "力")[29] - 1450.0).abs() < 1e-9);
     assert!(r.metadata.iter().any(|(k, v)| k == "操作者" && v == "张工程师"));
+}
+
+#[test]
+fn a_per_cycle_trend_table_is_refused_as_a_curve() {
+    // An Instron WaveMatrix "trends" export: one row per cycle.
+    let mut text = String::from("Total Cycles,Rotation:Maximum (deg),Rotation:Minimum (deg),Torque:Maximum (N*m),Torque:Minimum (N*m)\n");
+    for c in 1..=15 {
+        text += &format!("{c},{:.2},{:.2},{:.3},{:.3}\n", 10.0 + 0.1 * c as f64, -10.0, 1.5 + 0.01 * c as f64, -1.5);
+    }
+    let e = read_bytes(text.as_bytes(), "trends.csv", &ReadOptions::default()).unwrap_err();
+    assert!(matches!(e, IngestError::SummaryTable { line: 1, .. }), "{e}");
+    let m = e.to_string();
+    assert!(m.contains("4 of 5 columns") && m.contains("Rotation:Maximum"), "{m}");
+    // inspect still shows it, with the reason as a warning.
+    let r = read_bytes(
+        text.as_bytes(),
+        "trends.csv",
+        &ReadOptions {
+            lenient: true,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    assert_eq!(r.data.height(), 15);
+    assert!(warned(&r, &["per-cycle summary table"]));
+    // A curve whose columns merely mention a statistic elsewhere is not refused.
+    let ok = "Time (s),Max Load Cell (N),Position (mm)\n0,1,0\n0.1,2,0.01\n0.2,3,0.02\n";
+    assert!(read_bytes(ok.as_bytes(), "curve.csv", &ReadOptions::default()).is_ok());
 }
