@@ -323,3 +323,24 @@ fn a_per_cycle_trend_table_is_refused_as_a_curve() {
     let ok = "Time (s),Max Load Cell (N),Position (mm)\n0,1,0\n0.1,2,0.01\n0.2,3,0.02\n";
     assert!(read_bytes(ok.as_bytes(), "curve.csv", &ReadOptions::default()).is_ok());
 }
+
+#[test]
+fn parquet_carries_units_roles_and_the_file_metadata() {
+    let text = "Specimen:\tA7\nGauge length:\t25\tmm\n\nTime\tForce\tPosition\ns\tkN\tmm\n0\t1.5\t0\n0.1\t2.5\t0.01\n0.2\t3.0\t0.02\n";
+    let r = read(text, "meta.txt");
+    let kv = r.parquet_metadata();
+    let get = |k: &str| kv.iter().find(|(a, _)| a == k).map(|(_, v)| v.as_str());
+    assert_eq!(get("cablab.unit.Force"), Some("N"));
+    assert_eq!(get("cablab.unit_written.Force"), Some("kN"));
+    assert_eq!(get("cablab.role.Force"), Some("response"));
+    assert_eq!(get("cablab.unit.Position"), Some("m"));
+    assert_eq!(get("meta.Gauge length"), Some("25 mm"));
+    assert_eq!(get("cablab.sha256").map(str::len), Some(64));
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("m.parquet");
+    r.write_parquet(&p).unwrap();
+    // The footer holds the key-value pairs as plain strings.
+    let bytes = std::fs::read(&p).unwrap();
+    let has = |s: &str| bytes.windows(s.len()).any(|w| w == s.as_bytes());
+    assert!(has("cablab.unit_written.Force") && has("kN") && has("meta.Specimen") && has("A7"));
+}
