@@ -183,9 +183,10 @@ pub fn detect_assess(bytes: &[u8]) -> (Encoding, Confidence) {
     legacy(bytes)
 }
 
-/// Trial decoding of a non-UTF text over its first MiB.
+/// Trial decoding of a non-UTF text over its first 256 KiB (the names, units and metadata,
+/// where the non-ASCII text of an export is, come first).
 fn legacy(bytes: &[u8]) -> (Encoding, Confidence) {
-    let mut sample = &bytes[..bytes.len().min(1 << 20)];
+    let mut sample = &bytes[..bytes.len().min(1 << 18)];
     if sample.len() < bytes.len() {
         // End on a line break so that no character is cut in two.
         if let Some(p) = sample.iter().rposition(|&b| b == b'\n') {
