@@ -8,7 +8,7 @@
 
 use crate::error::{Diagnostic, IngestError};
 use crate::format::{is_mts_locale_line, mts_locale_decimal, shorten, Format};
-use crate::tokenize::{cell_text_raw, find_byte, numeric_any, parse_cell, split, Cell, Separator};
+use crate::tokenize::{cell_text_raw, numeric_any, parse_cell, split, Cell, Separator};
 use crate::units::looks_like_unit;
 
 /// One data block as read: raw header cells, raw values (not yet SI).
@@ -146,7 +146,7 @@ pub(crate) fn read_table(
         skipped: Vec::new(),
         skipped_count: 0,
     };
-    eng.run(eol)?;
+    eng.run()?;
     Ok(eng.out)
 }
 
@@ -271,16 +271,22 @@ fn detect_decimal(lines: &[&[u8]], sep: Separator) -> u8 {
 }
 
 impl<'a> Engine<'a> {
-    fn run(&mut self, eol: u8) -> Result<(), IngestError> {
+    fn run(&mut self) -> Result<(), IngestError> {
         let bytes = self.text;
         let mut pos = 0usize;
         let mut line_no = 0usize;
         while pos < bytes.len() {
-            let end = find_byte(eol, &bytes[pos..]).map_or(bytes.len(), |p| pos + p);
-            let mut lend = end;
-            if lend > pos && bytes[lend - 1] == b'\r' {
-                lend -= 1;
-            }
+            // A line ends at LF, CR LF, or a lone CR (files that mix them lose no row).
+            let lend = bytes[pos..]
+                .iter()
+                .position(|&x| x == b'\n' || x == b'\r')
+                .map_or(bytes.len(), |p| pos + p);
+            let end = if lend + 1 < bytes.len() && bytes[lend] == b'\r' && bytes[lend + 1] == b'\n'
+            {
+                lend + 1
+            } else {
+                lend
+            };
             line_no += 1;
             if lend - pos > crate::MAX_LINE_BYTES {
                 return Err(IngestError::Malformed {
@@ -1310,6 +1316,15 @@ mod tests {
         // Single spaces between columns: aligned with the data row's cells.
         let t = read("Ch 1 Displacement Ch 1 Force\n       0.1000000     2.5000\n       0.2000000     2.7000\n");
         assert_eq!(t.blocks[0].header_cells, ["Ch 1 Displacement", "Ch 1 Force"]);
+    }
+
+    #[test]
+    fn lines_end_at_lf_crlf_or_a_lone_cr() {
+        let t = read("\"Zeit\"\t\"Kraft\"\r\n\"s\"\t\"N\"\r1\t2\n3\t4\r\n5\t6\r7\t8");
+        let b = &t.blocks[0];
+        assert_eq!(b.unit_cells, ["s", "N"]);
+        assert_eq!(b.columns[1], [2.0, 4.0, 6.0, 8.0]);
+        assert_eq!((b.units_line, b.last_data_line), (Some(2), 6));
     }
 
     #[test]
