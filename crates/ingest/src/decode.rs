@@ -252,10 +252,9 @@ pub fn decode(bytes: &[u8], enc: Encoding) -> Cow<'_, str> {
         Encoding::Latin1 | Encoding::Windows1252 => {
             Cow::Owned(decode_chunked(encoding_rs::WINDOWS_1252, body))
         }
-        Encoding::Utf32Le | Encoding::Utf32Be => Cow::Owned(decode_utf32(
-            bytes,
-            enc == Encoding::Utf32Le,
-        )),
+        Encoding::Utf32Le | Encoding::Utf32Be => {
+            Cow::Owned(decode_utf32(bytes, enc == Encoding::Utf32Le))
+        }
         Encoding::Legacy(e) => {
             let (text, _) = e.decode_without_bom_handling(body);
             Cow::Owned(text.into_owned())
@@ -439,8 +438,14 @@ mod tests {
     #[test]
     fn utf32_and_stray_bom() {
         let text = "Zeit (s)\tKraft (N)\n0,5\t1,25\n";
-        let le: Vec<u8> = text.chars().flat_map(|c| (c as u32).to_le_bytes()).collect();
-        let be: Vec<u8> = text.chars().flat_map(|c| (c as u32).to_be_bytes()).collect();
+        let le: Vec<u8> = text
+            .chars()
+            .flat_map(|c| (c as u32).to_le_bytes())
+            .collect();
+        let be: Vec<u8> = text
+            .chars()
+            .flat_map(|c| (c as u32).to_be_bytes())
+            .collect();
         assert_eq!(detect(&le), Encoding::Utf32Le);
         assert_eq!(detect(&be), Encoding::Utf32Be);
         assert_eq!(decode(&le, Encoding::Utf32Le), text);
@@ -449,8 +454,14 @@ mod tests {
         assert_eq!(decode(&with_bom, Encoding::Utf32Le), text);
         // A UTF-16 BOM in front of UTF-8 text: the text, not mojibake.
         let stray = [&[0xFF, 0xFE][..], "Kraft (N)\tWeg (mm)\n1\t2\n".as_bytes()].concat();
-        assert_eq!(detect_assess(&stray), (Encoding::Utf8StrayBom, Confidence::High));
-        assert_eq!(decode_owned(stray, Encoding::Utf8StrayBom), "Kraft (N)\tWeg (mm)\n1\t2\n");
+        assert_eq!(
+            detect_assess(&stray),
+            (Encoding::Utf8StrayBom, Confidence::High)
+        );
+        assert_eq!(
+            decode_owned(stray, Encoding::Utf8StrayBom),
+            "Kraft (N)\tWeg (mm)\n1\t2\n"
+        );
     }
 
     #[test]

@@ -92,7 +92,11 @@ pub fn read_path(path: &Path, opts: &ReadOptions) -> Result<TestRecord, IngestEr
             "not a file"
         };
         #[cfg(not(unix))]
-        let what = if ft.is_dir() { "a directory" } else { "not a file" };
+        let what = if ft.is_dir() {
+            "a directory"
+        } else {
+            "not a file"
+        };
         return Err(IngestError::NotAFile {
             path: path.to_path_buf(),
             what,
@@ -109,7 +113,10 @@ pub fn read_path(path: &Path, opts: &ReadOptions) -> Result<TestRecord, IngestEr
     // The size may change while reading: never take more than the bound.
     let mut r = f.take(MAX_FILE_BYTES + 1);
     let mut bytes = Vec::with_capacity((1 << 16) + 1);
-    r.by_ref().take(1 << 16).read_to_end(&mut bytes).map_err(io)?;
+    r.by_ref()
+        .take(1 << 16)
+        .read_to_end(&mut bytes)
+        .map_err(io)?;
     let source = path.display().to_string();
     sniff_binary(&bytes, &source)?;
     bytes.reserve_exact((meta.len().min(MAX_FILE_BYTES) as usize + 1).saturating_sub(bytes.len()));

@@ -216,15 +216,35 @@ fn find_column(names: &[String], headers: &[String], given: &str) -> Option<usiz
 /// `Peak`/`Valley`/`Max.`/`Min.` word).
 fn is_statistic_name(name: &str) -> bool {
     const STATS: &[&str] = &[
-        "maximum", "minimum", "max", "min", "mean", "average", "avg", "amplitude", "range",
-        "peak", "valley", "median", "std", "stdev", "rms", "mittelwert", "minimal", "maximal",
+        "maximum",
+        "minimum",
+        "max",
+        "min",
+        "mean",
+        "average",
+        "avg",
+        "amplitude",
+        "range",
+        "peak",
+        "valley",
+        "median",
+        "std",
+        "stdev",
+        "rms",
+        "mittelwert",
+        "minimal",
+        "maximal",
     ];
     let l = name.trim().to_lowercase();
     let tail = l
         .rsplit_once(':')
         .or_else(|| l.rsplit_once(" - "))
         .or_else(|| l.rsplit_once('_'))
-        .map(|(_, t)| t.trim().trim_matches(|c| c == '(' || c == ')' || c == '.').to_string());
+        .map(|(_, t)| {
+            t.trim()
+                .trim_matches(|c| c == '(' || c == ')' || c == '.')
+                .to_string()
+        });
     if tail.as_deref().is_some_and(|t| STATS.contains(&t)) {
         return true;
     }
@@ -234,7 +254,11 @@ fn is_statistic_name(name: &str) -> bool {
             return true;
         }
     }
-    let first = l.split_whitespace().next().unwrap_or("").trim_end_matches('.');
+    let first = l
+        .split_whitespace()
+        .next()
+        .unwrap_or("")
+        .trim_end_matches('.');
     matches!(first, "peak" | "valley") && l.split_whitespace().count() > 1
 }
 
@@ -252,7 +276,10 @@ fn raw_time_column(b: &RawBlock) -> Option<usize> {
         .find(|&i| lookup(&unit_of(i)).is_some_and(|u| u.dimension == Dimension::Time))
         .or_else(|| {
             (0..b.columns.len()).find(|&i| {
-                let n = b.header_cells.get(i).map_or(String::new(), |s| s.to_lowercase());
+                let n = b
+                    .header_cells
+                    .get(i)
+                    .map_or(String::new(), |s| s.to_lowercase());
                 n.contains("time") || n.contains("zeit") || n.contains("tiempo")
             })
         })
@@ -275,7 +302,11 @@ fn continues(a: &RawBlock, b: &RawBlock) -> bool {
     let Some(t) = raw_time_column(a) else {
         return false;
     };
-    let ta: Vec<f64> = a.columns[t].iter().copied().filter(|v| !v.is_nan()).collect();
+    let ta: Vec<f64> = a.columns[t]
+        .iter()
+        .copied()
+        .filter(|v| !v.is_nan())
+        .collect();
     let Some(&first_b) = b.columns[t].iter().find(|v| !v.is_nan()) else {
         return false;
     };
@@ -508,7 +539,12 @@ pub(crate) fn build(
         let detail = format!(
             "{} of {n} columns name a per-cycle statistic ({}{})",
             stats.len(),
-            stats.iter().take(4).map(|s| format!("'{s}'")).collect::<Vec<_>>().join(", "),
+            stats
+                .iter()
+                .take(4)
+                .map(|s| format!("'{s}'"))
+                .collect::<Vec<_>>()
+                .join(", "),
             if stats.len() > 4 { ", ..." } else { "" }
         );
         if !opts.lenient {
@@ -522,7 +558,9 @@ pub(crate) fn build(
             file: source.clone(),
             line: Some(block.names_line),
             column: None,
-            message: format!("a per-cycle summary table, not a test curve: {detail}; analysis refuses it"),
+            message: format!(
+                "a per-cycle summary table, not a test curve: {detail}; analysis refuses it"
+            ),
         });
     }
     let ft = pick(&opts.time, "--time")?;
@@ -872,7 +910,10 @@ impl TestRecord {
         for c in &self.channels {
             kv.push((format!("cablab.unit.{}", c.name), c.si_unit.clone()));
             kv.push((format!("cablab.unit_written.{}", c.name), c.unit.clone()));
-            kv.push((format!("cablab.role.{}", c.name), c.role.as_str().to_string()));
+            kv.push((
+                format!("cablab.role.{}", c.name),
+                c.role.as_str().to_string(),
+            ));
         }
         let mut seen: Vec<&str> = Vec::new();
         for (k, v) in &self.metadata {

@@ -424,8 +424,7 @@ impl<'a> Engine<'a> {
                 line[a..b.max(a)].trim_ascii_end().ends_with(b":")
             });
             let mixed_ok = self.format != Format::CatmanAscii && !keyed;
-            let ok = nums > 0
-                && (text.is_empty() || (mixed_ok && nums >= 2 && text.len() <= nums));
+            let ok = nums > 0 && (text.is_empty() || (mixed_ok && nums >= 2 && text.len() <= nums));
             if ok && best.as_ref().is_none_or(|b| text.len() < b.1.len()) {
                 best = Some((dec, text));
             }
@@ -506,7 +505,12 @@ impl<'a> Engine<'a> {
             }
             if merged.len() == ncells {
                 names = merged;
-            } else if let Some(p) = self.pending.get(names_idx).copied().filter(|p| p.end > p.start) {
+            } else if let Some(p) = self
+                .pending
+                .get(names_idx)
+                .copied()
+                .filter(|p| p.end > p.start)
+            {
                 // Names with spaces ("Ch 1 Displacement"): columns are told by runs of two or
                 // more spaces, else by where the data row's cells sit under the header.
                 let head = &self.text[p.start..p.end];
@@ -617,7 +621,8 @@ impl<'a> Engine<'a> {
                 let filled = c.iter().filter(|x| !x.trim().is_empty()).count();
                 if fallback.is_none()
                     && filled >= ncells.max(2)
-                    && c.iter().all(|x| x.trim().is_empty() || !numeric_any(x.as_bytes()))
+                    && c.iter()
+                        .all(|x| x.trim().is_empty() || !numeric_any(x.as_bytes()))
                 {
                     fallback = Some((i, c));
                 }
@@ -1134,7 +1139,11 @@ fn align_header(head: &[u8], data: &[u8], n: usize) -> Option<Vec<String>> {
     Some(
         groups
             .iter()
-            .map(|g| String::from_utf8_lossy(&head[g[0].0..g[g.len() - 1].1]).trim().to_string())
+            .map(|g| {
+                String::from_utf8_lossy(&head[g[0].0..g[g.len() - 1].1])
+                    .trim()
+                    .to_string()
+            })
             .collect(),
     )
 }
@@ -1146,13 +1155,15 @@ const CATMAN_SENTINEL: f64 = -1_000_000.0;
 /// (`Time  1 - default sample rate`, `Zeit  1 - Standardmessrate`).
 pub(crate) fn is_catman_time_name(cell: &str) -> bool {
     let l = cell.trim().to_lowercase();
-    ["time", "zeit", "temps", "tiempo", "tempo"].iter().any(|w| {
-        l.strip_prefix(w).is_some_and(|rest| {
-            let rest = rest.trim_start();
-            let digits = rest.chars().take_while(|c| c.is_ascii_digit()).count();
-            digits > 0 && rest[digits..].trim_start().starts_with('-')
+    ["time", "zeit", "temps", "tiempo", "tempo"]
+        .iter()
+        .any(|w| {
+            l.strip_prefix(w).is_some_and(|rest| {
+                let rest = rest.trim_start();
+                let digits = rest.chars().take_while(|c| c.is_ascii_digit()).count();
+                digits > 0 && rest[digits..].trim_start().starts_with('-')
+            })
         })
-    })
 }
 
 /// A line with no content: only spaces, tabs, quotes and separators.
@@ -1310,12 +1321,18 @@ mod tests {
         // Runs of spaces between columns.
         let t = read("Ch 1 Displacement   Ch 1 Force   Running Time\nmm   kN   sec\n0.1   2.5   0.0\n0.2   2.7   0.1\n");
         let b = &t.blocks[0];
-        assert_eq!(b.header_cells, ["Ch 1 Displacement", "Ch 1 Force", "Running Time"]);
+        assert_eq!(
+            b.header_cells,
+            ["Ch 1 Displacement", "Ch 1 Force", "Running Time"]
+        );
         assert_eq!(b.unit_cells, ["mm", "kN", "sec"]);
         assert_eq!(b.columns[1], [2.5, 2.7]);
         // Single spaces between columns: aligned with the data row's cells.
         let t = read("Ch 1 Displacement Ch 1 Force\n       0.1000000     2.5000\n       0.2000000     2.7000\n");
-        assert_eq!(t.blocks[0].header_cells, ["Ch 1 Displacement", "Ch 1 Force"]);
+        assert_eq!(
+            t.blocks[0].header_cells,
+            ["Ch 1 Displacement", "Ch 1 Force"]
+        );
     }
 
     #[test]

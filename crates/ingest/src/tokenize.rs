@@ -223,8 +223,8 @@ pub fn parse_cell(raw: &[u8], dec: u8) -> Cell {
     let mut has_thou = false;
     let mut digits = 0u32; // digits since the last thousands separator (or start)
     let mut int_closed = false; // decimal mark or exponent seen
-    // A first digit group of "0" ("0,100") is not a thousands grouping: that is another
-    // decimal mark, and a number read here would be 1000× off.
+                                // A first digit group of "0" ("0,100") is not a thousands grouping: that is another
+                                // decimal mark, and a number read here would be 1000× off.
     let lead_zero = s
         .iter()
         .find(|b| b.is_ascii_digit() || **b == thou || **b == dec)

@@ -589,7 +589,10 @@ mod tests {
     #[test]
     fn unreadable_units_are_kept_as_text() {
         let u = unreadable_unit;
-        assert_eq!(u("Displacement (mm"), Some(("Displacement".into(), "(mm".into())));
+        assert_eq!(
+            u("Displacement (mm"),
+            Some(("Displacement".into(), "(mm".into()))
+        );
         assert_eq!(u("Force {N}"), Some(("Force".into(), "{N}".into())));
         assert_eq!(u("Force (🔧)"), Some(("Force".into(), "(🔧)".into())));
         assert_eq!(u("Force"), None);
@@ -610,7 +613,10 @@ mod tests {
             ("Ω", 1.0, "Ohm"),
         ] {
             let i = lookup(u).unwrap_or_else(|| panic!("{u}"));
-            assert_eq!((i.dimension, i.factor, i.si_unit), (Dimension::Electrical, factor, si));
+            assert_eq!(
+                (i.dimension, i.factor, i.si_unit),
+                (Dimension::Electrical, factor, si)
+            );
         }
     }
 

@@ -104,10 +104,18 @@ fn a_text_column_is_a_label_channel_and_an_end_marker_is_a_warning() {
     assert_eq!(labels.get(0), Some("Loading"));
     assert_eq!(labels.get(49), Some("Unloading"));
     assert_eq!(
-        r.channels.iter().find(|c| c.role == Role::Response).unwrap().name,
+        r.channels
+            .iter()
+            .find(|c| c.role == Role::Response)
+            .unwrap()
+            .name,
         "Load"
     );
-    assert!(warned(&r, &["END OF FILE", "after the last data row"]), "{:?}", r.warnings);
+    assert!(
+        warned(&r, &["END OF FILE", "after the last data row"]),
+        "{:?}",
+        r.warnings
+    );
     // A label channel has no numbers and says why in inspect.
     let rep = r.inspect();
     let ph = rep.channels.iter().find(|c| c.name == "Phase").unwrap();
@@ -123,7 +131,10 @@ fn unreadable_data_rows_are_not_called_a_header() {
     let e = read_bytes(text.as_bytes(), "val_exp_D.csv", &ReadOptions::default()).unwrap_err();
     let m = e.to_string();
     assert!(!m.contains("header row"), "{m}");
-    assert!(m.contains("looks like a data row") && m.contains("9.9500D+"), "{m}");
+    assert!(
+        m.contains("looks like a data row") && m.contains("9.9500D+"),
+        "{m}"
+    );
 }
 
 /// MTS 793 acquisition written as consecutive buffers: one block per buffer, same columns.
@@ -131,7 +142,11 @@ fn mts793_buffers(blocks: usize, rows: usize, gap_steps: usize) -> String {
     let mut t = String::from("MTS793|MPT|ENU|1|2|.|/|:|1|0|0|A\n\n");
     let mut i = 0usize;
     for b in 0..blocks {
-        t += &format!("Data Acquisition: {}\t\tTime: {:.3} Sec\n\n", b + 1, 0.01 * i as f64);
+        t += &format!(
+            "Data Acquisition: {}\t\tTime: {:.3} Sec\n\n",
+            b + 1,
+            0.01 * i as f64
+        );
         t += "Time\tAxial Displacement\tAxial Force\nsec\tmm\tkN\n";
         for _ in 0..rows {
             t += &format!(
@@ -171,7 +186,10 @@ fn consecutive_mts793_buffers_are_joined_and_block_picks_one() {
         },
     )
     .unwrap();
-    assert_eq!((one.data.height(), one.joined_blocks.clone()), (100, vec![3]));
+    assert_eq!(
+        (one.data.height(), one.joined_blocks.clone()),
+        (100, vec![3])
+    );
     // Buffers far apart in time (cyclic acquisitions) are not one series.
     let apart = read(&mts793_buffers(3, 50, 5000), "apart.dat");
     assert_eq!((apart.data.height(), apart.joined_blocks.len()), (50, 1));
@@ -202,7 +220,11 @@ fn an_unreadable_unit_is_never_si() {
             },
         )
         .unwrap();
-        let ch = r.channels.iter().find(|c| c.name == "Displacement").unwrap();
+        let ch = r
+            .channels
+            .iter()
+            .find(|c| c.name == "Displacement")
+            .unwrap();
         assert!(ch.dimension.is_none() && ch.factor == 1.0);
         assert!(warned(&r, &["cannot be read"]), "{:?}", r.warnings);
         // Stating the unit reads it in SI.
@@ -234,7 +256,11 @@ fn catman_like() -> String {
     t += "sample rate 20 Hz\tMC1\tMC2\tMC3\tMC4\n";
     t += "T0\t0\t0\t0\t0\n";
     for i in 0..40 {
-        let spare = if i % 2 == 0 { "-1000000".to_string() } else { "0,5".into() };
+        let spare = if i % 2 == 0 {
+            "-1000000".to_string()
+        } else {
+            "0,5".into()
+        };
         t += &format!(
             "{}\t{}\t{}\t{}\t{spare}\t\n",
             format!("{:.2}", 0.05 * i as f64).replace('.', ","),
@@ -267,11 +293,19 @@ fn catman_ascii_is_recognised_sentinels_missing_volts_known() {
         assert_eq!((bridge.si_unit.as_str(), bridge.factor), ("V/V", 1e-3));
         assert!(!warned(&r, &["unknown unit"]), "{:?}", r.warnings);
         assert_eq!(
-            r.channels.iter().find(|c| c.role == Role::Time).unwrap().name,
+            r.channels
+                .iter()
+                .find(|c| c.role == Role::Time)
+                .unwrap()
+                .name,
             "Time  1 - default sample rate"
         );
         assert_eq!(
-            r.channels.iter().find(|c| c.role == Role::Control).unwrap().name,
+            r.channels
+                .iter()
+                .find(|c| c.role == Role::Control)
+                .unwrap()
+                .name,
             "Displacement"
         );
         assert_ne!(r.kind, TestKind::Torsion);
@@ -283,7 +317,12 @@ fn a_gbk_bluehill_export_has_its_chinese_names() {
     let mut text = String::from("\"试样标签\",\"S1 拉伸试验\"\r\n\"操作者\",\"张工程师\"\r\n\r\n");
     text += "\"时间\",\"位移\",\"力\"\r\n\"(s)\",\"(mm)\",\"(kN)\"\r\n";
     for i in 0..30 {
-        text += &format!("\"{:.2}\",\"{:.4}\",\"{:.4}\"\r\n", 0.1 * i as f64, 0.02 * i as f64, 0.05 * i as f64);
+        text += &format!(
+            "\"{:.2}\",\"{:.4}\",\"{:.4}\"\r\n",
+            0.1 * i as f64,
+            0.02 * i as f64,
+            0.05 * i as f64
+        );
     }
     let (bytes, _, bad) = encoding_rs::GBK.encode(&text);
     assert!(!bad);
@@ -293,7 +332,10 @@ fn a_gbk_bluehill_export_has_its_chinese_names() {
     let names: Vec<&str> = r.channels.iter().map(|c| c.name.as_str()).collect();
     assert_eq!(names, ["时间", "位移", "力"]);
     assert!((col(&r, "力")[29] - 1450.0).abs() < 1e-9);
-    assert!(r.metadata.iter().any(|(k, v)| k == "操作者" && v == "张工程师"));
+    assert!(r
+        .metadata
+        .iter()
+        .any(|(k, v)| k == "操作者" && v == "张工程师"));
 }
 
 #[test]
@@ -301,12 +343,24 @@ fn a_per_cycle_trend_table_is_refused_as_a_curve() {
     // An Instron WaveMatrix "trends" export: one row per cycle.
     let mut text = String::from("Total Cycles,Rotation:Maximum (deg),Rotation:Minimum (deg),Torque:Maximum (N*m),Torque:Minimum (N*m)\n");
     for c in 1..=15 {
-        text += &format!("{c},{:.2},{:.2},{:.3},{:.3}\n", 10.0 + 0.1 * c as f64, -10.0, 1.5 + 0.01 * c as f64, -1.5);
+        text += &format!(
+            "{c},{:.2},{:.2},{:.3},{:.3}\n",
+            10.0 + 0.1 * c as f64,
+            -10.0,
+            1.5 + 0.01 * c as f64,
+            -1.5
+        );
     }
     let e = read_bytes(text.as_bytes(), "trends.csv", &ReadOptions::default()).unwrap_err();
-    assert!(matches!(e, IngestError::SummaryTable { line: 1, .. }), "{e}");
+    assert!(
+        matches!(e, IngestError::SummaryTable { line: 1, .. }),
+        "{e}"
+    );
     let m = e.to_string();
-    assert!(m.contains("4 of 5 columns") && m.contains("Rotation:Maximum"), "{m}");
+    assert!(
+        m.contains("4 of 5 columns") && m.contains("Rotation:Maximum"),
+        "{m}"
+    );
     // inspect still shows it, with the reason as a warning.
     let r = read_bytes(
         text.as_bytes(),

@@ -11,12 +11,30 @@ const MIB: usize = 1 << 20;
 fn directories_devices_and_fifos_are_refused_on_their_metadata() {
     let dir = tempfile::tempdir().unwrap();
     let e = read_path(dir.path(), &ReadOptions::default()).unwrap_err();
-    assert!(matches!(e, IngestError::NotAFile { what: "a directory", .. }), "{e}");
+    assert!(
+        matches!(
+            e,
+            IngestError::NotAFile {
+                what: "a directory",
+                ..
+            }
+        ),
+        "{e}"
+    );
     #[cfg(unix)]
     {
         for dev in ["/dev/zero", "/dev/urandom"] {
             let (e, bytes) = peak(|| read_path(dev.as_ref(), &ReadOptions::default()).unwrap_err());
-            assert!(matches!(e, IngestError::NotAFile { what: "a device", .. }), "{e}");
+            assert!(
+                matches!(
+                    e,
+                    IngestError::NotAFile {
+                        what: "a device",
+                        ..
+                    }
+                ),
+                "{e}"
+            );
             assert!(bytes < MIB, "{dev}: {bytes} bytes");
         }
         let fifo = dir.path().join("pipe");
@@ -28,7 +46,10 @@ fn directories_devices_and_fifos_are_refused_on_their_metadata() {
         assert!(ok);
         // Would block forever if opened: refused before.
         let e = read_path(&fifo, &ReadOptions::default()).unwrap_err();
-        assert!(matches!(e, IngestError::NotAFile { what: "a FIFO", .. }), "{e}");
+        assert!(
+            matches!(e, IngestError::NotAFile { what: "a FIFO", .. }),
+            "{e}"
+        );
         assert!(e.to_string().contains("not a regular file"), "{e}");
     }
 }
@@ -68,7 +89,8 @@ fn one_endless_line_is_refused_with_bounded_memory() {
         line.push(',');
         i += 1;
     }
-    let (e, bytes) = peak(|| read_bytes(line.as_bytes(), "one_line.csv", &ReadOptions::default()).unwrap_err());
+    let (e, bytes) =
+        peak(|| read_bytes(line.as_bytes(), "one_line.csv", &ReadOptions::default()).unwrap_err());
     assert!(matches!(e, IngestError::Malformed { line: 1, .. }), "{e}");
     assert!(e.to_string().contains("bytes per line"), "{e}");
     // The input itself is 10 MB; the read adds at most a few times that, not 0.5 GB.
