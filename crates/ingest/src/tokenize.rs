@@ -248,15 +248,23 @@ pub fn parse_cell(raw: &[u8], dec: u8) -> Cell {
             int_closed = true;
             b'.'
         } else {
+            // Fortran writes the exponent with D (`9.9500D+01`).
+            let fortran = matches!(b, b'd' | b'D')
+                && n > 0
+                && (buf[n - 1].is_ascii_digit() || buf[n - 1] == b'.');
             if b.is_ascii_digit() {
                 digits += 1;
-            } else if b == b'e' || b == b'E' {
+            } else if b == b'e' || b == b'E' || fortran {
                 if has_thou && !int_closed && digits != 3 {
                     return na_or_text(s);
                 }
                 int_closed = true;
             }
-            b
+            if fortran {
+                b'e'
+            } else {
+                b
+            }
         };
         buf[n] = c;
         n += 1;
@@ -436,6 +444,10 @@ mod tests {
         assert_eq!(parse_cell(b"0,100", b'.'), Cell::Text);
         assert_eq!(parse_cell(b"-0.250", b','), Cell::Text);
         assert_eq!(parse_cell(b"10,100", b'.'), Cell::Num(10100.0));
+        assert_eq!(parse_cell(b"9.9500D+01", b'.'), Cell::Num(99.5));
+        assert_eq!(parse_cell(b"-1.5d-3", b'.'), Cell::Num(-1.5e-3));
+        assert_eq!(parse_cell(b"2D", b'.'), Cell::Text);
+        assert_eq!(parse_cell(b"nd", b'.'), Cell::Text);
         assert_eq!(parse_cell(b"abc", b'.'), Cell::Text);
         assert_eq!(parse_cell(b"1.2.3", b'.'), Cell::Text);
     }

@@ -123,16 +123,22 @@ fn a_text_column_is_a_label_channel_and_an_end_marker_is_a_warning() {
 }
 
 #[test]
-fn unreadable_data_rows_are_not_called_a_header() {
+fn fortran_exponents_are_read_and_unreadable_rows_are_not_called_a_header() {
+    // Fortran output: exponents written with D.
     let mut text = String::from("x,y\n");
     for i in 0..200 {
-        text += &format!("{}.95,9.9500D+{i:02}\n", i);
+        text += &format!("{i}.95,9.9500D+{:02}\n", i % 3);
     }
-    let e = read_bytes(text.as_bytes(), "val_exp_D.csv", &ReadOptions::default()).unwrap_err();
+    let r = read(&text, "val_exp_D.csv");
+    assert_eq!(r.data.height(), 200);
+    assert_eq!(&col(&r, "y")[..3], [9.95, 99.5, 995.0]);
+    // Cells that are no number in any spelling: the message says so, not "header row".
+    let bad = text.replace('D', "Q");
+    let e = read_bytes(bad.as_bytes(), "val_exp_Q.csv", &ReadOptions::default()).unwrap_err();
     let m = e.to_string();
     assert!(!m.contains("header row"), "{m}");
     assert!(
-        m.contains("looks like a data row") && m.contains("9.9500D+"),
+        m.contains("looks like a data row") && m.contains("9.9500Q+"),
         "{m}"
     );
 }
