@@ -48,10 +48,11 @@ impl serde::Serialize for Encoding {
 pub enum Confidence {
     /// A byte-order mark, the UTF-16/32 zero pattern, or valid UTF-8.
     Certain,
-    /// Trial decoding: at least 16 non-ASCII bytes, decoded without error into letters and the
-    /// usual symbols of exports.
+    /// Trial decoding: decoded without error into letters and the usual symbols of exports,
+    /// from at least 16 non-ASCII bytes (or fewer that are Western European letters).
     High,
-    /// Trial decoding: little non-ASCII text, decoding errors, or many odd characters.
+    /// Trial decoding: few non-ASCII bytes of another script, decoding errors, or odd
+    /// characters.
     Low,
 }
 
@@ -196,25 +197,27 @@ fn legacy(bytes: &[u8]) -> (Encoding, Confidence) {
     let mut det = chardetng::EncodingDetector::new(chardetng::Iso2022JpDetection::Deny);
     det.feed(sample, sample.len() == bytes.len());
     let guess = det.guess(None, chardetng::Utf8Detection::Deny);
-    // How sure: enough non-ASCII text, a decode without errors, and a guess that no regional
-    // hint can flip (chardetng weighs code pages by the top-level domain; a guess that changes
-    // with it was a close call).
+    // How sure: a decode without errors into plausible text. Plausible: the non-ASCII
+    // characters are letters (of any script) or the usual symbols of test exports (°, µ, ²,
+    // ³, ±, ·), not control, private-use or odd symbols (¼, ¤, ¦ are what a wrong code page
+    // makes of CJK bytes). Sure with 16 non-ASCII bytes or more; with fewer, only when the text
+    // is Western European letters in Windows-1252 (a German "Länge", a "°C": nothing else
+    // would read as well). chardetng's own scores are not public.
     let non_ascii = sample.iter().filter(|&&b| b >= 0x80).count();
-    let clean = !guess.decode_without_bom_handling(sample).1;
-    // Plausibility: the decoded non-ASCII characters are letters (of any script) or the
-    // usual symbols of test exports (°, µ, ², ³, ±, ·), not control or private-use code
-    // points. chardetng's own scores are not public.
-    let decoded = guess.decode_without_bom_handling(sample).0;
-    let (mut plain, mut odd) = (0usize, 0usize);
+    let (decoded, errors) = guess.decode_without_bom_handling(sample);
+    let (mut plain, mut odd, mut western) = (0usize, 0usize, true);
     for c in decoded.chars().filter(|c| !c.is_ascii()) {
-        if c.is_alphabetic() || "°µ²³±·§€–—’“”«»×÷".contains(c) {
+        let symbol = "°µ²³±·§€–—’“”«»×÷".contains(c);
+        if c.is_alphabetic() || symbol {
             plain += 1;
         } else {
             odd += 1;
         }
+        western &= symbol || ('\u{C0}'..='\u{FF}').contains(&c) && c != '×' && c != '÷';
     }
-    let plausible = odd * 20 <= plain + odd;
-    let conf = if non_ascii >= 16 && clean && plausible {
+    let plausible = !errors && odd * 20 <= plain + odd;
+    let few_western = guess == encoding_rs::WINDOWS_1252 && western && odd == 0;
+    let conf = if plausible && (non_ascii >= 16 || few_western) {
         Confidence::High
     } else {
         Confidence::Low
@@ -484,8 +487,11 @@ mod tests {
             assert_eq!(conf, Confidence::High, "{}", want.name());
             assert_eq!(decode(&bytes, enc), body);
         }
-        // Two non-ASCII bytes decide nothing: low confidence.
-        let (_, conf) = detect_assess(b"Pr\xFCfkraft\t\xB0C\n1\t2\n");
+        // A few Western European letters read as Windows-1252/Latin-1 with confidence...
+        let (enc, conf) = detect_assess(b"Pr\xFCfkraft\t\xB0C\tL\xE4nge\n1\t2\t3\n");
+        assert_eq!((enc, conf), (Encoding::Latin1, Confidence::High));
+        // ...two Chinese characters (four GBK bytes) decide nothing.
+        let (_, conf) = detect_assess(b"\xCA\xB1\xBC\xE4 (s)\t1\n0.5\t2\n");
         assert_eq!(conf, Confidence::Low);
     }
 
