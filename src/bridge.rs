@@ -94,6 +94,13 @@ pub fn read_options(r: &crate::cli::ReaderArgs, kind: Option<TestKind>) -> Resul
         Some(f) => Some(f.parse().map_err(|e| anyhow!("--format: {e}"))?),
         None => None,
     };
+    let mut units = Vec::new();
+    for u in &r.units {
+        let (col, unit) = u.rsplit_once('=').ok_or_else(|| {
+            anyhow!("--unit '{u}': expected COLUMN=UNIT, e.g. --unit 'Displacement=mm'")
+        })?;
+        units.push((col.trim().to_string(), unit.trim().to_string()));
+    }
     Ok(ReadOptions {
         format,
         block: r.block,
@@ -101,6 +108,8 @@ pub fn read_options(r: &crate::cli::ReaderArgs, kind: Option<TestKind>) -> Resul
         control: r.control.clone(),
         response: r.response.clone(),
         kind,
+        units,
+        lenient: false,
     })
 }
 

@@ -69,6 +69,10 @@ pub struct ReaderArgs {
     /// Name of the response column: what the machine measures (force, torque, moment).
     #[arg(long, value_name = "COLUMN")]
     pub response: Option<String>,
+    /// State a column's unit when the file writes none or one that cannot be read
+    /// (`--unit "Displacement=mm"`); repeatable.
+    #[arg(long = "unit", value_name = "COLUMN=UNIT")]
+    pub units: Vec<String>,
 }
 
 /// `cablab run`.

@@ -7,7 +7,9 @@ use std::process::ExitCode;
 /// Run `cablab inspect`.
 pub fn run(a: InspectArgs) -> CmdResult {
     let kind = a.kind.as_deref().map(parse_kind).transpose()?;
-    let opts = crate::bridge::read_options(&a.reader, kind).map_err(CliError::input)?;
+    let mut opts = crate::bridge::read_options(&a.reader, kind).map_err(CliError::input)?;
+    // Inspect shows a column whose unit cannot be read (with a warning) rather than refusing.
+    opts.lenient = true;
     let rec = cablab_ingest::read_path(&a.file, &opts).map_err(CliError::input)?;
     for w in &rec.warnings {
         eprintln!("cablab: warning: {w}");
@@ -21,8 +23,8 @@ pub fn run(a: InspectArgs) -> CmdResult {
     println!("sha256    {}", p.sha256);
     println!("layout    {}  ({})", p.format.as_str(), p.reason);
     println!(
-        "encoding  {}   separator {}   decimal {}",
-        p.encoding, p.separator, p.decimal
+        "encoding  {} ({})   separator {}   decimal {}",
+        p.encoding, p.encoding_confidence, p.separator, p.decimal
     );
     println!("kind      {}  ({})", rec.kind, rec.kind_reason);
     let sp = &rec.specimen;
@@ -35,11 +37,20 @@ pub fn run(a: InspectArgs) -> CmdResult {
             .map_or("-".into(), |l| format!("{:.4} mm", l * 1e3)),
     );
     if rec.blocks.len() > 1 {
-        println!(
-            "blocks    {} (using block {}; choose with --block N)",
-            rec.blocks.len(),
-            rec.main_block
-        );
+        if rec.joined_blocks.len() > 1 {
+            println!(
+                "blocks    {} found; blocks {}-{} joined (same columns, continuous time; read one with --block N)",
+                rec.blocks.len(),
+                rec.joined_blocks[0],
+                rec.joined_blocks[rec.joined_blocks.len() - 1]
+            );
+        } else {
+            println!(
+                "blocks    {} (using block {}; choose with --block N)",
+                rec.blocks.len(),
+                rec.main_block
+            );
+        }
         for b in &rec.blocks {
             println!(
                 "  #{:<2} lines {:>6}-{:<6} {:>7} rows  {}",

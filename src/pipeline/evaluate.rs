@@ -323,6 +323,7 @@ fn stages(
         control: t.control.clone(),
         response: t.response.clone(),
         kind: Some(t.kind),
+        ..Default::default()
     };
     let rec = cablab_ingest::read_bytes(bytes, &t.id, &opts)?;
     out.format = Some(rec.provenance.format.as_str().to_string());

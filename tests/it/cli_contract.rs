@@ -541,6 +541,26 @@ fn convert_writes_si_csv_and_parquet_and_nothing_on_error() {
     assert!(msg.contains(".parquet") && msg.contains(".csv"), "{msg}");
     assert_eq!(names_in(dir.path()), before);
 
+    // The output is the input (also through another spelling of the path): refused before
+    // anything is read, exit 2, the raw file unchanged.
+    let raw = dir.path().join("raw.csv");
+    std::fs::write(
+        &raw,
+        "Time (s),Force (N),Position (mm)\n0,1,0\n0.1,2,0.01\n0.2,3,0.02\n",
+    )
+    .unwrap();
+    let same = dir.path().join(".").join("raw.csv");
+    let msg = run_fails_2(&[
+        "convert",
+        raw.to_str().unwrap(),
+        "-o",
+        same.to_str().unwrap(),
+    ]);
+    assert!(msg.contains("never overwritten"), "{msg}");
+    assert!(std::fs::read_to_string(&raw)
+        .unwrap()
+        .starts_with("Time (s),Force"));
+
     // Unreadable inputs: missing file, binary junk. Exit 2, output not created.
     let junk = dir.path().join("junk.bin");
     std::fs::write(&junk, [0u8, 1, 2, 0xff, 0xfe, 0x89, b'P', b'N', b'G', 0, 0]).unwrap();
@@ -559,7 +579,10 @@ fn convert_writes_si_csv_and_parquet_and_nothing_on_error() {
         );
         assert!(!target.exists(), "{} created", target.display());
     }
-    assert_eq!(names_in(dir.path()), ["junk.bin", "x.csv", "x.parquet"]);
+    assert_eq!(
+        names_in(dir.path()),
+        ["junk.bin", "raw.csv", "x.csv", "x.parquet"]
+    );
 }
 
 /// Outputs are ordinary files (0644 like every other cablab output), not the temporary file's

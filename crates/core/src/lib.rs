@@ -131,6 +131,8 @@ pub enum Role {
     Response,
     /// Anything else (set points, cycle counters, extensometers, computed columns).
     Other,
+    /// A text column (phase, step or segment names): no numbers, usable as labels.
+    Label,
 }
 
 impl Role {
@@ -141,6 +143,7 @@ impl Role {
             Role::Control => "control",
             Role::Response => "response",
             Role::Other => "other",
+            Role::Label => "label",
         }
     }
 }

@@ -19,6 +19,25 @@ pub enum IngestError {
         /// The operating-system error, as text (not a chained source: the message says it once).
         reason: String,
     },
+    /// The path is not a regular file (a directory, FIFO, device or socket): refused before it
+    /// is opened, so that nothing blocks or reads without end.
+    #[error("{path}: not a regular file ({what}); expected a machine export file")]
+    NotAFile {
+        /// The path given.
+        path: PathBuf,
+        /// What it is.
+        what: &'static str,
+    },
+    /// The file is larger than any test export the readers accept.
+    #[error("{path}: {bytes} bytes is beyond the {limit}-byte bound of the readers (test exports are far smaller; split the file or export fewer channels)")]
+    TooLarge {
+        /// The path given.
+        path: PathBuf,
+        /// Its size.
+        bytes: u64,
+        /// The bound, [`crate::MAX_FILE_BYTES`].
+        limit: u64,
+    },
     /// The input has no bytes (or only a byte-order mark / whitespace).
     #[error("{file}: the file is empty (expected a machine export with a header and data rows)")]
     Empty {
@@ -54,7 +73,7 @@ pub enum IngestError {
         header: String,
     },
     /// A unit that the unit table does not know, on a column the test needs.
-    #[error("{file}:{line}:{column}: unknown unit '{unit}' on column '{name}' (the {role} column); expected one of the units in cablab-ingest's unit table (N, kN, mm, s, deg, N·m, ...)")]
+    #[error("{file}:{line}:{column}: cannot read the unit '{unit}' of column '{name}' (the {role} column); expected one of the units in cablab-ingest's unit table (N, kN, mm, s, deg, N·m, ...); state it with --unit '{name}=UNIT'")]
     UnknownUnit {
         /// File path or label.
         file: String,
@@ -68,6 +87,17 @@ pub enum IngestError {
         unit: String,
         /// Which role needed it (`time`, `control`, `response`).
         role: &'static str,
+    },
+    /// A table of one row per cycle (statistic-named columns such as `Torque:Maximum`), not the
+    /// curve of a test: refused rather than analysed.
+    #[error("{file}:{line}: a per-cycle summary table, not a test curve: {detail}; export the raw data (every sample) instead, or look at it with `cablab inspect`")]
+    SummaryTable {
+        /// File path or label.
+        file: String,
+        /// 1-based line of the names row.
+        line: usize,
+        /// The statistic-named columns found.
+        detail: String,
     },
     /// `--time/--control/--response` named a column that does not exist.
     #[error("{file}: {option} '{given}' matches no column; columns are: {available}")]

@@ -5,12 +5,16 @@
 //! reads no data; the readers (`table.rs`, `xml.rs`) do that.
 //!
 //! HBM catman ASCII: no public description of the export and no openly licensed catman file
-//! could be found (searched the docs, pages and code corpora for the catman ASCII export layout),
-//! so the accepted layout is a reconstruction and is unverified against real files: a `catman` or
-//! `File header` signature, a `Channel name` row and a `Unit` row whose first cell is the key
-//! followed by one cell per channel, optional per-channel rows (`T0`, `dt`, `Length`, kept as
-//! metadata), then the numeric rows without a key cell. `tests/data/catman_ascii_sample.txt`
-//! is written in that layout.
+//! could be found. What public code that reads catman ASCII exports shows (searched the code
+//! corpus): tab-separated text, a header of file lines, a names row without a key cell whose
+//! time channel is called `Time  1 - default sample rate` / `Zeit  1 - Standardmessrate`
+//! (names row at line 9, data from line 38 in one reader: per-channel header rows in between),
+//! data rows ending in a tab, decimal comma in German locales; `-1000000` for samples an unused
+//! channel does not have. Accepted: a `catman`/`File header` signature or such a time channel
+//! name; the names row keyed (`Channel name`) or not (the row naming the time channel, else the
+//! last all-text row as wide as the data); a `Unit` row keyed or one whose cells all read as
+//! units; every other header row kept as metadata. `tests/data/catman_ascii_sample.txt` and the
+//! generated file of `tests/it/classes.rs` are written in those two shapes.
 
 use crate::decode::Encoding;
 use std::fmt;
@@ -95,7 +99,8 @@ impl FromStr for Format {
 
 /// Scores every layout on the head of the text and returns the best with its reason.
 pub fn detect(text: &str, encoding: Encoding, source: &str) -> (Format, String) {
-    let head: Vec<&str> = text.lines().take(200).collect();
+    // Signatures sit at the start of a line: long lines are looked at up to 4 KiB.
+    let head: Vec<&str> = text.lines().take(200).map(|l| head_str(l, 4096)).collect();
     let first = head
         .first()
         .map(|l| l.trim_start_matches('\u{feff}'))
@@ -122,6 +127,17 @@ pub fn detect(text: &str, encoding: Encoding, source: &str) -> (Format, String) 
             90,
             Format::Mts793Dat,
             format!("MTS 793 locale line '{}'", shorten(first, 40)),
+        ));
+    }
+    let catman_time = head.iter().take(60).any(|l| {
+        l.split(['\t', ';'])
+            .any(|c| crate::table::is_catman_time_name(c.trim_matches('"')))
+    });
+    if catman_time {
+        cands.push((
+            86,
+            Format::CatmanAscii,
+            "HBM catman time channel name ('Time  1 - default sample rate') in the header".into(),
         ));
     }
     if lower_head.iter().any(|l| l.contains("catman"))

@@ -19,7 +19,7 @@ pub mod tokenize;
 pub mod units;
 mod xml;
 
-pub use decode::Encoding;
+pub use decode::{Confidence, Encoding};
 pub use error::{Diagnostic, IngestError};
 pub use format::{Format, UnknownFormat};
 pub use record::{
@@ -45,20 +45,111 @@ pub struct ReadOptions {
     pub response: Option<String>,
     /// Test kind (`--kind`); `None` = from metadata or channels, else unknown.
     pub kind: Option<TestKind>,
+    /// Units stated by the user, `(column, unit)` (`--unit COLUMN=UNIT`): they replace the unit
+    /// the file writes (or fails to write readably) for that column. The unit must be one of
+    /// the unit table's.
+    pub units: Vec<(String, String)>,
+    /// Show rather than refuse (for `inspect`): a time/control/response column whose unit
+    /// cannot be read is kept (values as written, a warning), and a per-cycle summary table is
+    /// read (with a warning) instead of being refused as a curve.
+    pub lenient: bool,
 }
 
-/// Reads a file. The bytes are read once, hashed, decoded once (the raw buffer is reused for
-/// UTF-8 and freed before parsing otherwise).
+/// Largest file the readers accept: 512 MiB. Test exports are a few MB to a few hundred MB;
+/// reading needs about three times the file size at peak (bytes, decoded text, columns).
+pub const MAX_FILE_BYTES: u64 = 512 << 20;
+
+/// Longest line the readers accept: 1 MiB (a row of a test export has at most a few hundred
+/// cells; a longer line is not a table row, and splitting it would cost memory per cell).
+pub const MAX_LINE_BYTES: usize = 1 << 20;
+
+/// Reads a file. It is sniffed before it is read whole: the path must be a regular file (no
+/// directory, FIFO or device: checked on its metadata, before opening), at most
+/// [`MAX_FILE_BYTES`], and its first 64 KiB must be text (no NUL byte outside UTF-16/32). The
+/// bytes are then read once, hashed, decoded once (the raw buffer is reused for UTF-8 and
+/// freed before parsing otherwise).
 pub fn read_path(path: &Path, opts: &ReadOptions) -> Result<TestRecord, IngestError> {
-    let bytes = std::fs::read(path).map_err(|e| IngestError::Io {
+    use std::io::Read;
+    let io = |e: std::io::Error| IngestError::Io {
         path: path.to_path_buf(),
         reason: e.to_string(),
-    })?;
+    };
+    let meta = std::fs::metadata(path).map_err(io)?;
+    let ft = meta.file_type();
+    if !ft.is_file() {
+        #[cfg(unix)]
+        use std::os::unix::fs::FileTypeExt;
+        #[cfg(unix)]
+        let what = if ft.is_dir() {
+            "a directory"
+        } else if ft.is_fifo() {
+            "a FIFO"
+        } else if ft.is_char_device() || ft.is_block_device() {
+            "a device"
+        } else if ft.is_socket() {
+            "a socket"
+        } else {
+            "not a file"
+        };
+        #[cfg(not(unix))]
+        let what = if ft.is_dir() {
+            "a directory"
+        } else {
+            "not a file"
+        };
+        return Err(IngestError::NotAFile {
+            path: path.to_path_buf(),
+            what,
+        });
+    }
+    if meta.len() > MAX_FILE_BYTES {
+        return Err(IngestError::TooLarge {
+            path: path.to_path_buf(),
+            bytes: meta.len(),
+            limit: MAX_FILE_BYTES,
+        });
+    }
+    let f = std::fs::File::open(path).map_err(io)?;
+    // The size may change while reading: never take more than the bound.
+    let mut r = f.take(MAX_FILE_BYTES + 1);
+    let mut bytes = Vec::with_capacity((1 << 16) + 1);
+    r.by_ref()
+        .take(1 << 16)
+        .read_to_end(&mut bytes)
+        .map_err(io)?;
     let source = path.display().to_string();
+    sniff_binary(&bytes, &source)?;
+    bytes.reserve_exact((meta.len().min(MAX_FILE_BYTES) as usize + 1).saturating_sub(bytes.len()));
+    r.read_to_end(&mut bytes).map_err(io)?;
+    if bytes.len() as u64 > MAX_FILE_BYTES {
+        return Err(IngestError::TooLarge {
+            path: path.to_path_buf(),
+            bytes: bytes.len() as u64,
+            limit: MAX_FILE_BYTES,
+        });
+    }
     let sha = sha256_hex(&bytes);
-    let enc = decode::detect(&bytes);
-    let text = decode::decode_owned(bytes, enc);
+    let enc = decode::detect_assess(&bytes);
+    let text = decode::decode_owned(bytes, enc.0);
     parse(&text, enc, sha, &source, opts)
+}
+
+/// A NUL byte in the head of a file that is not UTF-16/32 text: binary, refused before the
+/// rest is read.
+fn sniff_binary(head: &[u8], source: &str) -> Result<(), IngestError> {
+    let Some(at) = memchr::memchr(0, head) else {
+        return Ok(());
+    };
+    let enc = decode::detect(head);
+    let wide = enc.is_utf16() || matches!(enc, Encoding::Utf32Le | Encoding::Utf32Be);
+    if wide {
+        return Ok(());
+    }
+    Err(IngestError::Binary {
+        file: source.into(),
+        offset: at,
+        detail: "NUL byte in the first 64 KiB; refused before reading the rest".into(),
+    })
 }
 
 /// Reads bytes already in memory; `source` names them in messages and the provenance.
@@ -68,8 +159,8 @@ pub fn read_bytes(
     opts: &ReadOptions,
 ) -> Result<TestRecord, IngestError> {
     let sha = sha256_hex(bytes);
-    let enc = decode::detect(bytes);
-    let text = decode::decode(bytes, enc);
+    let enc = decode::detect_assess(bytes);
+    let text = decode::decode(bytes, enc.0);
     parse(&text, enc, sha, source, opts)
 }
 
@@ -79,7 +170,7 @@ fn sha256_hex(bytes: &[u8]) -> String {
 
 fn parse(
     text: &str,
-    enc: Encoding,
+    (enc, confidence): (Encoding, decode::Confidence),
     sha256: String,
     source: &str,
     opts: &ReadOptions,
@@ -97,15 +188,41 @@ fn parse(
         Some(f) => (f, "forced by --format".to_string()),
         None => format::detect(text, enc, source),
     };
-    let raw = match format {
+    let mut raw = match format {
         Format::MtsTestsuiteXml => xml::read_xml(text, source)?,
         _ => table::read_table(text, format, source)?,
     };
+    if enc == Encoding::Utf8StrayBom {
+        raw.warnings.insert(
+            0,
+            Diagnostic {
+                file: source.into(),
+                line: Some(1),
+                column: Some(1),
+                message: "a UTF-16 byte-order mark in front of UTF-8 text; skipped".into(),
+            },
+        );
+    }
+    if confidence == decode::Confidence::Low {
+        raw.warnings.insert(
+            0,
+            Diagnostic {
+                file: source.into(),
+                line: None,
+                column: None,
+                message: format!(
+                    "the text encoding is a guess ({}, low confidence: little non-ASCII text or another code page fits nearly as well); names and text may be garbled, numbers are not affected",
+                    enc.as_str()
+                ),
+            },
+        );
+    }
     let provenance = Provenance {
         path: source.to_string(),
         sha256,
         format,
-        encoding: enc.as_str().to_string(),
+        encoding: enc.as_str(),
+        encoding_confidence: confidence.as_str().to_string(),
         reason,
         separator: raw.separator.map_or("none", |s| s.as_str()).to_string(),
         decimal: if raw.decimal == b',' {

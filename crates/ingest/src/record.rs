@@ -12,7 +12,7 @@ use crate::roles::{
     ChannelFacts,
 };
 use crate::table::{RawBlock, RawTable};
-use crate::units::{lookup, split_name_unit, strip_brackets, Dimension};
+use crate::units::{lookup, split_name_unit, strip_brackets, unreadable_unit, Dimension};
 use crate::ReadOptions;
 use cablab_core::{Role, Specimen, TestKind};
 use polars::prelude::*;
@@ -53,8 +53,11 @@ pub struct Provenance {
     pub sha256: String,
     /// Layout read.
     pub format: Format,
-    /// Text encoding (`utf-8`, `utf-8-bom`, `utf-16le`, `latin-1`, ...).
+    /// Text encoding (`utf-8`, `utf-8-bom`, `utf-16le`, `latin-1`, `gbk`, ...).
     pub encoding: String,
+    /// How sure the encoding is: `certain` (BOM, zero pattern, valid UTF-8), `high` or `low`
+    /// (trial decoding of legacy code pages; `low` comes with a warning).
+    pub encoding_confidence: String,
     /// Why this layout was chosen.
     pub reason: String,
     /// Cell separator (`tab`, `comma`, `semicolon`, `space`; `none` for XML).
@@ -105,8 +108,10 @@ pub struct TestRecord {
     pub provenance: Provenance,
     /// All data blocks of the file.
     pub blocks: Vec<BlockInfo>,
-    /// The block read into `data` (1-based).
+    /// The block read into `data` (1-based; the first of the joined ones).
     pub main_block: usize,
+    /// Blocks joined into `data` (1-based, consecutive; one entry when nothing was joined).
+    pub joined_blocks: Vec<usize>,
     /// Warnings (file, line, column, message).
     pub warnings: Vec<Diagnostic>,
 }
@@ -163,6 +168,8 @@ pub struct InspectReport {
     pub format: String,
     /// Encoding name.
     pub encoding: String,
+    /// How sure the encoding is (`certain`, `high`, `low`).
+    pub encoding_confidence: String,
     /// Data rows of the main block.
     pub rows: usize,
     /// Channels.
@@ -171,6 +178,13 @@ pub struct InspectReport {
     pub metadata: MetadataObject,
     /// Kind or "unknown".
     pub kind: TestKind,
+    /// Data blocks found in the file.
+    pub blocks_found: usize,
+    /// Blocks read into the data (1-based; more than one when consecutive blocks with the same
+    /// columns and continuous time were joined).
+    pub blocks_joined: Vec<usize>,
+    /// Every warning of the reader (file, line, column, message).
+    pub warnings: Vec<Diagnostic>,
 }
 
 fn dedupe(names: &mut [String]) -> Vec<usize> {
@@ -197,6 +211,132 @@ fn find_column(names: &[String], headers: &[String], given: &str) -> Option<usiz
         .or_else(|| names.iter().position(|n| n.eq_ignore_ascii_case(g)))
 }
 
+/// A column named for a per-cycle statistic: `Rotation:Maximum`, `Torque - Min`, `Load (mean)`,
+/// `Peak Load`... (a statistic word after a `:`, ` - `, `_` or in brackets, or a leading
+/// `Peak`/`Valley`/`Max.`/`Min.` word).
+fn is_statistic_name(name: &str) -> bool {
+    const STATS: &[&str] = &[
+        "maximum",
+        "minimum",
+        "max",
+        "min",
+        "mean",
+        "average",
+        "avg",
+        "amplitude",
+        "range",
+        "peak",
+        "valley",
+        "median",
+        "std",
+        "stdev",
+        "rms",
+        "mittelwert",
+        "minimal",
+        "maximal",
+    ];
+    let l = name.trim().to_lowercase();
+    let tail = l
+        .rsplit_once(':')
+        .or_else(|| l.rsplit_once(" - "))
+        .or_else(|| l.rsplit_once('_'))
+        .map(|(_, t)| {
+            t.trim()
+                .trim_matches(|c| c == '(' || c == ')' || c == '.')
+                .to_string()
+        });
+    if tail.as_deref().is_some_and(|t| STATS.contains(&t)) {
+        return true;
+    }
+    if let Some(p) = l.rfind('(') {
+        let inner = l[p + 1..].trim_end_matches(')').trim();
+        if STATS.contains(&inner) {
+            return true;
+        }
+    }
+    let first = l
+        .split_whitespace()
+        .next()
+        .unwrap_or("")
+        .trim_end_matches('.');
+    matches!(first, "peak" | "valley") && l.split_whitespace().count() > 1
+}
+
+/// Index of the time column of a raw block: the first whose unit is a time unit, else the first
+/// whose name says time.
+fn raw_time_column(b: &RawBlock) -> Option<usize> {
+    let unit_of = |i: usize| {
+        let u = b.unit_cells.get(i).map(|u| strip_brackets(u).to_string());
+        match u {
+            Some(u) if !u.is_empty() => u,
+            _ => split_name_unit(b.header_cells.get(i).map_or("", |s| s.as_str())).1,
+        }
+    };
+    (0..b.columns.len())
+        .find(|&i| lookup(&unit_of(i)).is_some_and(|u| u.dimension == Dimension::Time))
+        .or_else(|| {
+            (0..b.columns.len()).find(|&i| {
+                let n = b
+                    .header_cells
+                    .get(i)
+                    .map_or(String::new(), |s| s.to_lowercase());
+                n.contains("time") || n.contains("zeit") || n.contains("tiempo")
+            })
+        })
+}
+
+/// True when block `b` continues block `a`: the same names and units, and its first time
+/// follows `a`'s last time within ten of `a`'s median steps (MTS 793 writes one acquisition
+/// buffer per block).
+fn continues(a: &RawBlock, b: &RawBlock) -> bool {
+    let same = |x: &[String], y: &[String]| {
+        x.len() == y.len() && x.iter().zip(y).all(|(p, q)| p.trim() == q.trim())
+    };
+    if !same(&a.header_cells, &b.header_cells)
+        || !same(&a.unit_cells, &b.unit_cells)
+        || a.rows < 2
+        || b.rows < 1
+    {
+        return false;
+    }
+    let Some(t) = raw_time_column(a) else {
+        return false;
+    };
+    let ta: Vec<f64> = a.columns[t]
+        .iter()
+        .copied()
+        .filter(|v| !v.is_nan())
+        .collect();
+    let Some(&first_b) = b.columns[t].iter().find(|v| !v.is_nan()) else {
+        return false;
+    };
+    if ta.len() < 2 {
+        return false;
+    }
+    let mut steps: Vec<f64> = ta.windows(2).map(|w| w[1] - w[0]).collect();
+    steps.sort_by(|x, y| x.total_cmp(y));
+    let dt = steps[steps.len() / 2];
+    let last = ta[ta.len() - 1];
+    dt > 0.0 && first_b > last && first_b - last <= 10.0 * dt
+}
+
+/// Appends block `b`'s rows to `a` (same columns).
+fn append_block(a: &mut RawBlock, b: RawBlock) {
+    let base = a.rows;
+    a.line_runs.push((base, b.first_data_line));
+    for &(r, l) in b.line_runs.iter().skip(1) {
+        a.line_runs.push((base + r, l));
+    }
+    for (x, y) in a.columns.iter_mut().zip(b.columns) {
+        x.extend(y);
+    }
+    for ((_, x), (_, y)) in a.labels.iter_mut().zip(b.labels) {
+        x.extend(y);
+    }
+    a.rows += b.rows;
+    a.last_data_line = b.last_data_line;
+}
+
 /// Builds the record from what a reader found.
 pub(crate) fn build(
     mut raw: RawTable,
@@ -220,7 +360,7 @@ pub(crate) fn build(
             units: b.unit_cells.clone(),
         })
         .collect();
-    let main_block = match opts.block {
+    let (main_block, joined) = match opts.block {
         Some(k) if k == 0 || k > blocks.len() => {
             return Err(IngestError::BlockOutOfRange {
                 file: source,
@@ -228,19 +368,45 @@ pub(crate) fn build(
                 available: blocks.len(),
             })
         }
-        Some(k) => k,
+        Some(k) => (k, vec![k]),
         None => {
-            let mut best = 0;
-            for (i, b) in raw.blocks.iter().enumerate() {
-                if b.rows > raw.blocks[best].rows {
-                    best = i;
+            // Runs of consecutive blocks that continue one another; the run with most rows.
+            let mut runs: Vec<Vec<usize>> = Vec::new();
+            for i in 0..raw.blocks.len() {
+                match runs.last_mut() {
+                    Some(run) if continues(&raw.blocks[i - 1], &raw.blocks[i]) => run.push(i),
+                    _ => runs.push(vec![i]),
                 }
             }
-            best + 1
+            let rows = |r: &Vec<usize>| r.iter().map(|&i| raw.blocks[i].rows).sum::<usize>();
+            let mut best = 0;
+            for (k, r) in runs.iter().enumerate() {
+                if rows(r) > rows(&runs[best]) {
+                    best = k;
+                }
+            }
+            let run: Vec<usize> = runs
+                .get(best)
+                .map(|r| r.iter().map(|i| i + 1).collect())
+                .unwrap_or_else(|| vec![1]);
+            (run[0], run)
         }
     };
     let mut warnings = std::mem::take(&mut raw.warnings);
-    if blocks.len() > 1 {
+    if joined.len() > 1 {
+        warnings.push(Diagnostic {
+            file: source.clone(),
+            line: Some(blocks[main_block - 1].names_line),
+            column: None,
+            message: format!(
+                "{} data blocks found; blocks {}-{} have the same columns and continuous time and were joined into one series of {} rows (read one with --block N)",
+                blocks.len(),
+                joined[0],
+                joined[joined.len() - 1],
+                joined.iter().map(|&k| blocks[k - 1].rows).sum::<usize>()
+            ),
+        });
+    } else if blocks.len() > 1 {
         warnings.push(Diagnostic {
             file: source.clone(),
             line: Some(blocks[main_block - 1].names_line),
@@ -262,6 +428,10 @@ pub(crate) fn build(
         });
     }
     let mut block: RawBlock = std::mem::take(&mut raw.blocks[main_block - 1]);
+    for &k in &joined[1..] {
+        let next = std::mem::take(&mut raw.blocks[k - 1]);
+        append_block(&mut block, next);
+    }
     drop(raw.blocks);
 
     // Names and units.
@@ -280,7 +450,12 @@ pub(crate) fn build(
             .map(|s| strip_brackets(s).to_string())
             .unwrap_or_default();
         let (mut name, unit) = if unit_cell.is_empty() {
-            split_name_unit(&header)
+            let (n, u) = split_name_unit(&header);
+            if u.is_empty() {
+                unreadable_unit(&header).unwrap_or((n, u))
+            } else {
+                (n, u)
+            }
         } else {
             (header.clone(), unit_cell)
         };
@@ -302,12 +477,44 @@ pub(crate) fn build(
             message: format!("repeated column name; this one is called '{}'", names[i]),
         });
     }
+    let is_label: Vec<bool> = (0..n)
+        .map(|i| block.label_slot.get(i).is_some_and(|s| s.is_some()))
+        .collect();
+    // Units stated by the user (`--unit COLUMN=UNIT`) replace what the file says.
+    for (col, unit) in &opts.units {
+        let i = find_column(&names, &block.header_cells, col).ok_or_else(|| {
+            IngestError::UnknownColumn {
+                file: source.clone(),
+                option: "--unit",
+                given: col.clone(),
+                available: names.join(", "),
+            }
+        })?;
+        if lookup(unit).is_none() {
+            return Err(IngestError::UnknownUnit {
+                file: source.clone(),
+                line: block.names_line,
+                column: i + 1,
+                name: names[i].clone(),
+                unit: unit.clone(),
+                role: "--unit",
+            });
+        }
+        units[i] = unit.clone();
+    }
     let infos: Vec<_> = units.iter().map(|u| lookup(u)).collect();
     let facts: Vec<ChannelFacts> = (0..n)
         .map(|i| ChannelFacts {
-            name: names[i].clone(),
+            // A label column takes no role: no name to score.
+            name: if is_label[i] {
+                String::new()
+            } else {
+                names[i].clone()
+            },
             dimension: infos[i].map(|x| x.dimension),
-            unit_written: !units[i].is_empty(),
+            // An unreadable unit scores like a missing one, so that the column still gets its
+            // role by name and then refuses below for want of a unit.
+            unit_written: !units[i].is_empty() && infos[i].is_some(),
         })
         .collect();
 
@@ -326,14 +533,61 @@ pub(crate) fn build(
                     }),
             }
         };
+    // A per-cycle trend table (one row per cycle, statistic-named columns) is not a curve.
+    let stats: Vec<&String> = names.iter().filter(|n| is_statistic_name(n)).collect();
+    if stats.len() >= 2 && stats.len() * 2 >= n.saturating_sub(2) {
+        let detail = format!(
+            "{} of {n} columns name a per-cycle statistic ({}{})",
+            stats.len(),
+            stats
+                .iter()
+                .take(4)
+                .map(|s| format!("'{s}'"))
+                .collect::<Vec<_>>()
+                .join(", "),
+            if stats.len() > 4 { ", ..." } else { "" }
+        );
+        if !opts.lenient {
+            return Err(IngestError::SummaryTable {
+                file: source,
+                line: block.names_line,
+                detail,
+            });
+        }
+        warnings.push(Diagnostic {
+            file: source.clone(),
+            line: Some(block.names_line),
+            column: None,
+            message: format!(
+                "a per-cycle summary table, not a test curve: {detail}; analysis refuses it"
+            ),
+        });
+    }
     let ft = pick(&opts.time, "--time")?;
     let fc = pick(&opts.control, "--control")?;
     let fr = pick(&opts.response, "--response")?;
     let (t, c, r) = assign_roles(&facts, ft, fc, fr);
-    let roles = roles_of(n, t, c, r);
+    let mut roles = roles_of(n, t, c, r);
+    for (role, &l) in roles.iter_mut().zip(&is_label) {
+        if l {
+            *role = Role::Label;
+        }
+    }
     let unit_line = block.units_line.unwrap_or(block.names_line);
     for (idx, role) in [(t, "time"), (c, "control"), (r, "response")] {
         let Some(i) = idx else { continue };
+        if !units[i].is_empty() && infos[i].is_none() && opts.lenient {
+            warnings.push(Diagnostic {
+                file: source.clone(),
+                line: Some(unit_line),
+                column: Some(i + 1),
+                message: format!(
+                    "the {role} column '{}' has a unit that cannot be read ('{}'): its values are kept as written, not SI, and analysis refuses it until the unit is stated (--unit '{}=UNIT')",
+                    names[i], units[i], names[i]
+                ),
+            });
+            continue;
+        }
         if !units[i].is_empty() && infos[i].is_none() {
             return Err(IngestError::UnknownUnit {
                 file: source,
@@ -461,7 +715,8 @@ pub(crate) fn build(
         });
     }
 
-    let data = to_frame(&names, columns, &source)?;
+    let labels = std::mem::take(&mut block.labels);
+    let data = to_frame(&names, columns, labels, &source)?;
     Ok(TestRecord {
         kind,
         kind_reason,
@@ -472,6 +727,7 @@ pub(crate) fn build(
         provenance,
         blocks,
         main_block,
+        joined_blocks: joined,
         warnings,
     })
 }
@@ -480,11 +736,20 @@ pub(crate) fn build(
 fn to_frame(
     names: &[String],
     columns: Vec<Vec<f64>>,
+    labels: Vec<(usize, Vec<String>)>,
     source: &str,
 ) -> Result<DataFrame, IngestError> {
     let height = columns.first().map_or(0, |c| c.len());
     let mut cols = Vec::with_capacity(columns.len());
-    for (name, vals) in names.iter().zip(columns) {
+    for (i, (name, vals)) in names.iter().zip(columns).enumerate() {
+        if let Some((_, text)) = labels.iter().find(|(c, _)| *c == i) {
+            let ca = StringChunked::from_iter_values(
+                name.as_str().into(),
+                text.iter().map(|s| s.as_str()),
+            );
+            cols.push(ca.into_series().into_column());
+            continue;
+        }
         let len = vals.len();
         let ca = if vals.iter().any(|v| v.is_nan()) {
             let mut bits = vec![0u8; len.div_ceil(8)];
@@ -573,7 +838,9 @@ impl TestRecord {
                 };
                 let first = at(first_row);
                 let last = at(last_row);
-                let why = if min.is_none() {
+                let why = if ch.role == Role::Label {
+                    Some("label channel: text, not numbers".to_string())
+                } else if min.is_none() {
                     Some("the channel has no numeric value".to_string())
                 } else if first.is_none() || last.is_none() {
                     Some(
@@ -599,23 +866,67 @@ impl TestRecord {
         InspectReport {
             format: self.provenance.format.as_str().to_string(),
             encoding: self.provenance.encoding.clone(),
+            encoding_confidence: self.provenance.encoding_confidence.clone(),
             rows: self.data.height(),
             channels,
             metadata: MetadataObject(self.metadata.clone()),
             kind: self.kind,
+            blocks_found: self.blocks.len(),
+            blocks_joined: self.joined_blocks.clone(),
+            warnings: self.warnings.clone(),
         }
     }
 
     /// Writes the SI table as Parquet, atomically (temporary file in the same directory, then
     /// rename; nothing is left behind on error).
+    ///
+    /// The file's key-value metadata carries what the table alone does not: per channel
+    /// `cablab.unit.NAME` (SI unit of the values), `cablab.unit_written.NAME` and
+    /// `cablab.role.NAME`; the record's `cablab.source`, `cablab.sha256`, `cablab.format`,
+    /// `cablab.encoding`, `cablab.kind`; and every metadata line of the export as
+    /// `meta.KEY` (a repeated key gets " (2)", ...).
     pub fn write_parquet(&self, path: &Path) -> Result<(), IngestError> {
         let mut df = self.data.clone();
+        let kv = polars_io::parquet::write::KeyValueMetadata::from_static(self.parquet_metadata());
         atomic_write(path, |f| {
             polars_io::prelude::ParquetWriter::new(f)
+                .with_key_value_metadata(Some(kv))
                 .finish(&mut df)
                 .map(|_| ())
                 .map_err(|e| e.to_string())
         })
+    }
+
+    /// The key-value metadata written with the Parquet table (see [`Self::write_parquet`]).
+    pub fn parquet_metadata(&self) -> Vec<(String, String)> {
+        let p = &self.provenance;
+        let mut kv = vec![
+            ("cablab.source".to_string(), p.path.clone()),
+            ("cablab.sha256".into(), p.sha256.clone()),
+            ("cablab.format".into(), p.format.as_str().to_string()),
+            ("cablab.encoding".into(), p.encoding.clone()),
+            ("cablab.kind".into(), self.kind.to_string()),
+        ];
+        for c in &self.channels {
+            kv.push((format!("cablab.unit.{}", c.name), c.si_unit.clone()));
+            kv.push((format!("cablab.unit_written.{}", c.name), c.unit.clone()));
+            kv.push((
+                format!("cablab.role.{}", c.name),
+                c.role.as_str().to_string(),
+            ));
+        }
+        let mut seen: Vec<&str> = Vec::new();
+        for (k, v) in &self.metadata {
+            let n = seen.iter().filter(|x| **x == k.as_str()).count();
+            seen.push(k);
+            let key = if n == 0 {
+                format!("meta.{k}")
+            } else {
+                format!("meta.{k} ({})", n + 1)
+            };
+            kv.push((key, v.clone()));
+        }
+        kv
     }
 
     /// Writes the SI table as CSV (header = channel names), atomically.

@@ -8,7 +8,7 @@
 
 use crate::error::{Diagnostic, IngestError};
 use crate::format::{is_mts_locale_line, mts_locale_decimal, shorten, Format};
-use crate::tokenize::{cell_text_raw, find_byte, numeric_any, parse_cell, split, Cell, Separator};
+use crate::tokenize::{cell_text_raw, numeric_any, parse_cell, split, Cell, Separator};
 use crate::units::looks_like_unit;
 
 /// One data block as read: raw header cells, raw values (not yet SI).
@@ -26,6 +26,11 @@ pub(crate) struct RawBlock {
     pub rows: usize,
     /// Starts of runs of consecutive physical lines: (row index, line number).
     pub line_runs: Vec<(usize, usize)>,
+    /// Text (label) columns: column index and one cell text per row ("" where empty). A column
+    /// is a label column when the block's first data row holds text there.
+    pub labels: Vec<(usize, Vec<String>)>,
+    /// Per column, its slot in `labels`.
+    pub label_slot: Vec<Option<usize>>,
 }
 
 impl RawBlock {
@@ -61,6 +66,10 @@ struct Pending {
 
 #[derive(Default)]
 struct RowStats {
+    /// Rows read with another separator or decimal mark than the block's: count, first line,
+    /// what was used.
+    switched: usize,
+    first_switched: Option<(usize, String)>,
     short_rows: usize,
     first_short: Option<usize>,
     text_cells: usize,
@@ -82,6 +91,12 @@ struct Engine<'a> {
     blank_in_table: bool,
     orphan_first: Option<usize>,
     orphans: usize,
+    /// A line inside an open block that is not a data row of it: kept aside until the next
+    /// line tells whether it was one malformed row (the block goes on) or the block's end.
+    suspect: Option<Pending>,
+    /// Malformed rows skipped inside blocks: (line, text).
+    skipped: Vec<(usize, String)>,
+    skipped_count: usize,
 }
 
 /// Reads every block of a delimited text.
@@ -127,8 +142,11 @@ pub(crate) fn read_table(
         blank_in_table: false,
         orphan_first: None,
         orphans: 0,
+        suspect: None,
+        skipped: Vec::new(),
+        skipped_count: 0,
     };
-    eng.run(eol)?;
+    eng.run()?;
     Ok(eng.out)
 }
 
@@ -141,7 +159,8 @@ fn sample_lines(bytes: &[u8], eol: u8, n: usize) -> Vec<&[u8]> {
         if let [rest @ .., b'\r'] = line {
             line = rest;
         }
-        v.push(line);
+        // Over-long lines are refused by the reader; detection looks at their start only.
+        v.push(&line[..line.len().min(crate::MAX_LINE_BYTES)]);
         pos = end + 1;
     }
     v
@@ -252,19 +271,41 @@ fn detect_decimal(lines: &[&[u8]], sep: Separator) -> u8 {
 }
 
 impl<'a> Engine<'a> {
-    fn run(&mut self, eol: u8) -> Result<(), IngestError> {
+    fn run(&mut self) -> Result<(), IngestError> {
         let bytes = self.text;
         let mut pos = 0usize;
         let mut line_no = 0usize;
         while pos < bytes.len() {
-            let end = find_byte(eol, &bytes[pos..]).map_or(bytes.len(), |p| pos + p);
-            let mut lend = end;
-            if lend > pos && bytes[lend - 1] == b'\r' {
-                lend -= 1;
-            }
+            // A line ends at LF, CR LF, or a lone CR (files that mix them lose no row).
+            let lend = bytes[pos..]
+                .iter()
+                .position(|&x| x == b'\n' || x == b'\r')
+                .map_or(bytes.len(), |p| pos + p);
+            let end = if lend + 1 < bytes.len() && bytes[lend] == b'\r' && bytes[lend + 1] == b'\n'
+            {
+                lend + 1
+            } else {
+                lend
+            };
             line_no += 1;
+            if lend - pos > crate::MAX_LINE_BYTES {
+                return Err(IngestError::Malformed {
+                    file: self.source.to_string(),
+                    line: line_no,
+                    detail: format!(
+                        "the line is {} bytes long, beyond the readers' bound of {} bytes per line (a table row has at most a few hundred cells; is this a text export with line breaks?)",
+                        lend - pos,
+                        crate::MAX_LINE_BYTES
+                    ),
+                });
+            }
             self.line(pos, lend, line_no);
             pos = end + 1;
+        }
+        if let Some(p) = self.suspect.take() {
+            // The last non-blank line after the data: a footer or end marker.
+            self.close_block();
+            self.outside(p.start, p.end, p.line_no);
         }
         self.close_block();
         self.finish(line_no)
@@ -272,19 +313,44 @@ impl<'a> Engine<'a> {
 
     fn line(&mut self, start: usize, end: usize, line_no: usize) {
         let line = &self.text[start..end];
-        let blank = line
-            .iter()
-            .all(|&b| b == b' ' || b == b'\t' || b == b'"' || b == b',' || b == b';');
         if self.open.is_some() {
-            if blank {
+            if is_blank(line) {
                 self.blank_in_table = true;
                 return;
             }
             if self.push_row(line, line_no) {
+                if let Some(p) = self.suspect.take() {
+                    // One line that is not a row, between rows of the block: skipped.
+                    self.skipped_count += 1;
+                    if self.skipped.len() < 5 {
+                        let t = String::from_utf8_lossy(&self.text[p.start..p.end]);
+                        self.skipped.push((p.line_no, shorten(t.trim(), 60)));
+                    }
+                }
+                return;
+            }
+            let here = Pending {
+                line_no,
+                start,
+                end,
+                blank: false,
+            };
+            if self.suspect.is_none() && !self.blank_in_table {
+                self.suspect = Some(here);
                 return;
             }
             self.close_block();
+            if let Some(p) = self.suspect.take() {
+                self.outside(p.start, p.end, p.line_no);
+            }
         }
+        self.outside(start, end, line_no);
+    }
+
+    /// A line outside any block: blank, metadata, header, or the first row of a new block.
+    fn outside(&mut self, start: usize, end: usize, line_no: usize) {
+        let line = &self.text[start..end];
+        let blank = is_blank(line);
         if blank {
             self.pending.push(Pending {
                 line_no,
@@ -295,33 +361,33 @@ impl<'a> Engine<'a> {
             return;
         }
         // Outside a table: does a block start here?
-        split(line, self.sep, &mut self.cells);
-        let mut nums = 0usize;
+        let (dec, text_cols) = match self.row_shape(line) {
+            Some(x) => x,
+            None => {
+                self.pending.push(Pending {
+                    line_no,
+                    start,
+                    end,
+                    blank: false,
+                });
+                return;
+            }
+        };
         let mut last_nonempty = 0usize;
-        let mut all_numeric = true;
         for (i, &(a, b)) in self.cells.iter().enumerate() {
-            match parse_cell(&line[a..b.max(a)], self.dec) {
-                Cell::Num(_) => {
-                    nums += 1;
-                    last_nonempty = i;
-                }
-                Cell::Missing => last_nonempty = i,
-                Cell::Empty => {}
-                Cell::Text => {
-                    all_numeric = false;
-                    break;
-                }
+            if parse_cell(&line[a..b.max(a)], dec) != Cell::Empty {
+                last_nonempty = i;
             }
         }
-        if all_numeric && nums > 0 {
-            let ncells = self.cells.len();
-            if self.start_block(line_no, last_nonempty, ncells) {
-                if self.push_row(line, line_no) {
-                    return;
-                }
-                // Cannot happen (the row was checked above); drop the empty block rather than panic.
-                self.open = None;
+        let ncells = self.cells.len();
+        if self.start_block(line_no, last_nonempty, ncells, &text_cols, (start, end)) {
+            if self.push_row(line, line_no) {
+                return;
             }
+            // Cannot happen (the row was checked above); drop the empty block rather than panic.
+            self.open = None;
+        }
+        if text_cols.is_empty() {
             self.orphans += 1;
             self.orphan_first.get_or_insert(line_no);
         }
@@ -331,6 +397,43 @@ impl<'a> Engine<'a> {
             end,
             blank: false,
         });
+    }
+
+    /// Whether a line outside a block can be a block's first data row: every cell a number
+    /// (with the block's decimal mark, else the other one), or at least two numbers and no more
+    /// text cells than numbers (the text cells become label columns). Leaves the cells of the
+    /// line in `self.cells`; returns the decimal mark and the text columns.
+    fn row_shape(&mut self, line: &[u8]) -> Option<(u8, Vec<usize>)> {
+        split(line, self.sep, &mut self.cells);
+        let other = if self.dec == b',' { b'.' } else { b',' };
+        let mut best: Option<(u8, Vec<usize>)> = None;
+        for dec in [self.dec, other] {
+            let mut nums = 0usize;
+            let mut text = Vec::new();
+            for (i, &(a, b)) in self.cells.iter().enumerate() {
+                match parse_cell(&line[a..b.max(a)], dec) {
+                    Cell::Num(_) => nums += 1,
+                    Cell::Text => text.push(i),
+                    _ => {}
+                }
+            }
+            // Mixed rows: not in catman files (their per-channel rows `T0;0;0` are keyed), and
+            // never with a `Key:` cell.
+            let keyed = text.iter().any(|&i| {
+                let (a, b) = self.cells[i];
+                line[a..b.max(a)].trim_ascii_end().ends_with(b":")
+            });
+            let mixed_ok = self.format != Format::CatmanAscii && !keyed;
+            let ok = nums > 0 && (text.is_empty() || (mixed_ok && nums >= 2 && text.len() <= nums));
+            if ok && best.as_ref().is_none_or(|b| text.len() < b.1.len()) {
+                best = Some((dec, text));
+            }
+            if best.as_ref().is_some_and(|b| b.1.is_empty()) {
+                break;
+            }
+        }
+        // A mixed row only with the block's own decimal mark: a switch is told by whole rows.
+        best.filter(|(d, t)| *d == self.dec || t.is_empty())
     }
 
     fn cells_of(&mut self, p: Pending) -> Vec<String> {
@@ -343,10 +446,17 @@ impl<'a> Engine<'a> {
     }
 
     /// Looks for the names row (and units row) just above a first data row.
-    fn start_block(&mut self, line_no: usize, last_nonempty: usize, ncells: usize) -> bool {
+    fn start_block(
+        &mut self,
+        line_no: usize,
+        last_nonempty: usize,
+        ncells: usize,
+        text_cols: &[usize],
+        data_span: (usize, usize),
+    ) -> bool {
         let k = self.pending.len();
         let (names_idx, units_idx, mut names, mut units) = if self.format == Format::CatmanAscii {
-            match self.catman_header() {
+            match self.catman_header(ncells) {
                 Some(h) => h,
                 None => return false,
             }
@@ -395,6 +505,19 @@ impl<'a> Engine<'a> {
             }
             if merged.len() == ncells {
                 names = merged;
+            } else if let Some(p) = self
+                .pending
+                .get(names_idx)
+                .copied()
+                .filter(|p| p.end > p.start)
+            {
+                // Names with spaces ("Ch 1 Displacement"): columns are told by runs of two or
+                // more spaces, else by where the data row's cells sit under the header.
+                let head = &self.text[p.start..p.end];
+                let data = &self.text[data_span.0..data_span.1];
+                if let Some(aligned) = align_header(head, data, ncells) {
+                    names = aligned;
+                }
             }
         }
         let ncols = names.len().max(last_nonempty + 1);
@@ -403,6 +526,12 @@ impl<'a> Engine<'a> {
         }
         units.resize(ncols, String::new());
         units.truncate(ncols);
+        let mut label_slot = vec![None; ncols];
+        let mut labels = Vec::new();
+        for &c in text_cols.iter().filter(|&&c| c < ncols) {
+            label_slot[c] = Some(labels.len());
+            labels.push((c, Vec::new()));
+        }
 
         // Metadata and title from the lines above the header.
         let above: Vec<Pending> = self.pending[..names_idx].to_vec();
@@ -440,6 +569,8 @@ impl<'a> Engine<'a> {
             columns: vec![Vec::new(); ncols],
             rows: 0,
             line_runs: vec![(0, line_no)],
+            labels,
+            label_slot,
         };
         self.open = Some((block, RowStats::default()));
         self.blank_in_table = false;
@@ -448,7 +579,10 @@ impl<'a> Engine<'a> {
 
     /// catman: `Channel name` / `Unit` rows (first cell is the key) anywhere above the data.
     #[allow(clippy::type_complexity)]
-    fn catman_header(&mut self) -> Option<(usize, Option<usize>, Vec<String>, Vec<String>)> {
+    fn catman_header(
+        &mut self,
+        ncells: usize,
+    ) -> Option<(usize, Option<usize>, Vec<String>, Vec<String>)> {
         let mut names = None;
         let mut units = None;
         for i in 0..self.pending.len() {
@@ -468,6 +602,49 @@ impl<'a> Engine<'a> {
                 names = Some((i, c[1..].to_vec()));
             } else if matches!(key.as_str(), "unit" | "units" | "einheit") && c.len() > 1 {
                 units = Some((i, c[1..].to_vec()));
+            }
+        }
+        if names.is_none() {
+            // No keyed names row: the last line above the data that names a catman time
+            // channel ("Time  1 - default sample rate"), else the last all-text line with at
+            // least as many cells as the data row.
+            let mut fallback = None;
+            for i in (0..self.pending.len()).rev() {
+                if self.pending[i].blank {
+                    continue;
+                }
+                let c = self.cells_of(self.pending[i]);
+                if c.iter().any(|x| is_catman_time_name(x)) {
+                    names = Some((i, c));
+                    break;
+                }
+                let filled = c.iter().filter(|x| !x.trim().is_empty()).count();
+                if fallback.is_none()
+                    && filled >= ncells.max(2)
+                    && c.iter()
+                        .all(|x| x.trim().is_empty() || !numeric_any(x.as_bytes()))
+                {
+                    fallback = Some((i, c));
+                }
+            }
+            names = names.or(fallback);
+            if let Some((ni, _)) = names {
+                // A units row: any later header line whose cells all read as units.
+                for i in ni + 1..self.pending.len() {
+                    if self.pending[i].blank {
+                        continue;
+                    }
+                    let c = self.cells_of(self.pending[i]);
+                    if c.iter().any(|x| !x.trim().is_empty())
+                        && c.iter().all(|x| {
+                            x.trim().is_empty()
+                                || (looks_like_unit(x) && !numeric_any(x.as_bytes()))
+                        })
+                    {
+                        units = Some((i, c));
+                        break;
+                    }
+                }
             }
         }
         let (ni, n) = names?;
@@ -511,18 +688,98 @@ impl<'a> Engine<'a> {
     }
 
     fn push_row(&mut self, line: &[u8], line_no: usize) -> bool {
+        if self.push_row_with(line, line_no, self.sep, self.dec) {
+            return true;
+        }
+        // Not a row with the block's separator and decimal mark: is it one with another pair
+        // (a locale switch inside the data)? Only whole rows of numbers count.
+        let other = if self.dec == b',' { b'.' } else { b',' };
+        let pairs = [
+            (self.sep, other),
+            (Separator::Tab, self.dec),
+            (Separator::Semicolon, self.dec),
+            (Separator::Comma, self.dec),
+            (Separator::Space, self.dec),
+            (Separator::Tab, other),
+            (Separator::Semicolon, other),
+            (Separator::Space, other),
+        ];
+        if self.open.is_none() {
+            return false;
+        }
+        for (sep, dec) in pairs {
+            if (sep, dec) == (self.sep, self.dec) || (sep == Separator::Comma && dec == b',') {
+                continue;
+            }
+            if !self.clean_row(line, sep, dec) {
+                continue;
+            }
+            if self.push_row_with(line, line_no, sep, dec) {
+                if let Some((_, st)) = self.open.as_mut() {
+                    st.switched += 1;
+                    if st.first_switched.is_none() {
+                        let what = format!(
+                            "separator {} and decimal mark '{}'",
+                            sep.as_str(),
+                            dec as char
+                        );
+                        st.first_switched = Some((line_no, what));
+                    }
+                }
+                return true;
+            }
+        }
+        false
+    }
+
+    /// True when every non-empty cell of `line` split by `sep` is a number with `dec`, and the
+    /// row has as many cells as the open block has columns (give or take a trailing empty one).
+    fn clean_row(&mut self, line: &[u8], sep: Separator, dec: u8) -> bool {
+        let Some((block, _)) = self.open.as_ref() else {
+            return false;
+        };
+        let ncols = block.columns.len();
+        if !block.labels.is_empty() {
+            return false;
+        }
+        let mut cells = Vec::new();
+        split(line, sep, &mut cells);
+        let filled = cells
+            .iter()
+            .rposition(|&(a, b)| parse_cell(&line[a..b.max(a)], dec) != Cell::Empty)
+            .map_or(0, |p| p + 1);
+        filled == ncols
+            && cells.iter().all(|&(a, b)| {
+                matches!(
+                    parse_cell(&line[a..b.max(a)], dec),
+                    Cell::Num(_) | Cell::Empty | Cell::Missing
+                )
+            })
+    }
+
+    fn push_row_with(&mut self, line: &[u8], line_no: usize, sep: Separator, dec: u8) -> bool {
         let Some((block, stats)) = self.open.as_mut() else {
             return false;
         };
-        split(line, self.sep, &mut self.cells);
+        split(line, sep, &mut self.cells);
         let ncols = block.columns.len();
         let (mut num, mut text, mut extra) = (0usize, 0usize, 0usize);
         let mut first_text = None;
         let mut missing = 0usize;
         let mut first_missing = None;
+        let has_labels = !block.labels.is_empty();
         for (ci, &(a, b)) in self.cells.iter().enumerate() {
             let raw = &line[a..b.max(a)];
-            let c = parse_cell(raw, self.dec);
+            if has_labels && ci < ncols {
+                if let Some(slot) = block.label_slot[ci] {
+                    block.labels[slot]
+                        .1
+                        .push(String::from_utf8_lossy(raw).trim().to_string());
+                    block.columns[ci].push(f64::NAN);
+                    continue;
+                }
+            }
+            let c = parse_cell(raw, dec);
             if ci >= ncols {
                 if c != Cell::Empty {
                     extra += 1;
@@ -552,12 +809,19 @@ impl<'a> Engine<'a> {
             }
         }
         let got = self.cells.len().min(ncols);
-        for col in &mut block.columns[got..] {
-            col.push(f64::NAN);
+        for ci in got..ncols {
+            block.columns[ci].push(f64::NAN);
+            if let Some(slot) = block.label_slot[ci] {
+                block.labels[slot].1.push(String::new());
+            }
         }
-        if num == 0 || text * 2 >= ncols.max(1) && text > 0 || extra > 0 {
+        let numeric_cols = ncols - block.labels.len();
+        if num == 0 || text * 2 >= numeric_cols.max(1) && text > 0 || extra > 0 {
             for col in &mut block.columns {
                 col.pop();
+            }
+            for (_, l) in &mut block.labels {
+                l.pop();
             }
             return false;
         }
@@ -589,11 +853,51 @@ impl<'a> Engine<'a> {
     }
 
     fn close_block(&mut self) {
-        let Some((block, st)) = self.open.take() else {
+        let Some((mut block, st)) = self.open.take() else {
             return;
         };
         let idx = self.out.blocks.len() + 1;
         let src = self.source.to_string();
+        if self.format == Format::CatmanAscii {
+            // catman writes -1000000 for samples a channel does not have (unused channels,
+            // slower sample rates): missing, not data.
+            let mut n = 0usize;
+            let mut first: Option<(usize, usize)> = None;
+            for (ci, col) in block.columns.iter_mut().enumerate() {
+                for (row, v) in col.iter_mut().enumerate() {
+                    if *v == CATMAN_SENTINEL {
+                        *v = f64::NAN;
+                        n += 1;
+                        if first.is_none_or(|(r, _)| row < r) {
+                            first = Some((row, ci));
+                        }
+                    }
+                }
+            }
+            if let Some((row, ci)) = first {
+                self.out.warnings.push(Diagnostic {
+                    file: src.clone(),
+                    line: Some(block.line_of_row(row)),
+                    column: Some(ci + 1),
+                    message: format!(
+                        "block {idx}: {n} cell(s) hold catman's placeholder {CATMAN_SENTINEL} (no sample); read as missing"
+                    ),
+                });
+            }
+        }
+        if let Some((l, what)) = &st.first_switched {
+            self.out.warnings.push(Diagnostic {
+                file: src.clone(),
+                line: Some(*l),
+                column: None,
+                message: format!(
+                    "block {idx}: {} row(s) are written in another locale than the rest of the block ({what} instead of separator {} and decimal mark '{}'); read with it",
+                    st.switched,
+                    self.sep.as_str(),
+                    self.dec as char
+                ),
+            });
+        }
         if st.short_rows > 0 {
             self.out.warnings.push(Diagnostic {
                 file: src.clone(),
@@ -640,6 +944,44 @@ impl<'a> Engine<'a> {
 
     fn finish(&mut self, last_line: usize) -> Result<(), IngestError> {
         let pending = std::mem::take(&mut self.pending);
+        if self.skipped_count > 0 {
+            let lines: Vec<String> = self
+                .skipped
+                .iter()
+                .map(|(l, t)| format!("line {l} '{t}'"))
+                .collect();
+            self.out.warnings.push(Diagnostic {
+                file: self.source.to_string(),
+                line: self.skipped.first().map(|s| s.0),
+                column: None,
+                message: format!(
+                    "{} malformed row(s) inside the data skipped ({}{}); the rows around them were read",
+                    self.skipped_count,
+                    lines.join(", "),
+                    if self.skipped_count > lines.len() { ", ..." } else { "" }
+                ),
+            });
+        }
+        if let Some(last) = self.out.blocks.last() {
+            let after: Vec<&Pending> = pending
+                .iter()
+                .filter(|p| !p.blank && p.line_no > last.last_data_line)
+                .collect();
+            if let Some(first) = after.first() {
+                let t = String::from_utf8_lossy(&self.text[first.start..first.end]);
+                self.out.warnings.push(Diagnostic {
+                    file: self.source.to_string(),
+                    line: Some(first.line_no),
+                    column: None,
+                    message: format!(
+                        "{} line(s) after the last data row (line {}) are not data: footer or end marker '{}' skipped (kept as metadata)",
+                        after.len(),
+                        last.last_data_line,
+                        shorten(t.trim(), 40)
+                    ),
+                });
+            }
+        }
         for p in pending.iter().filter(|p| !p.blank) {
             let cells = self.cells_of(*p);
             if let Some(kv) = key_value(&cells, &self.text[p.start..p.end]) {
@@ -668,6 +1010,18 @@ impl<'a> Engine<'a> {
             }
             if let Some(p) = pending.iter().rev().find(|p| !p.blank) {
                 let line = String::from_utf8_lossy(&self.text[p.start..p.end]).into_owned();
+                if let Some((col, cell)) = self.unreadable_cell(p) {
+                    return Err(IngestError::NoData {
+                        file: self.source.to_string(),
+                        detail: format!(
+                            "line {}: '{}' looks like a data row, but cell {col} '{cell}' is not a number (expected numbers with decimal mark '{}' separated by {})",
+                            p.line_no,
+                            shorten(line.trim(), 60),
+                            self.dec as char,
+                            self.sep.as_str()
+                        ),
+                    });
+                }
                 return Err(IngestError::HeaderWithoutData {
                     file: self.source.to_string(),
                     line: p.line_no,
@@ -681,6 +1035,141 @@ impl<'a> Engine<'a> {
         }
         Ok(())
     }
+}
+
+impl Engine<'_> {
+    /// For a line with numbers in most cells: the first cell (1-based) that is not one.
+    fn unreadable_cell(&mut self, p: &Pending) -> Option<(usize, String)> {
+        let line = &self.text[p.start..p.end];
+        split(line, self.sep, &mut self.cells);
+        let mut nums = 0;
+        let mut bad = None;
+        for (i, &(a, b)) in self.cells.iter().enumerate() {
+            let raw = &line[a..b.max(a)];
+            match parse_cell(raw, self.dec) {
+                Cell::Num(_) => nums += 1,
+                Cell::Text => {
+                    if numeric_any(raw) {
+                        nums += 1;
+                    }
+                    bad.get_or_insert((i + 1, shorten(String::from_utf8_lossy(raw).trim(), 30)));
+                }
+                _ => {}
+            }
+        }
+        bad.filter(|_| nums * 2 >= self.cells.len())
+    }
+}
+
+/// Splits a space-separated header line into `n` names that may hold single spaces: by runs of
+/// two or more spaces/tabs when that gives `n` cells, else by aligning each word with the cell
+/// of `data` (the first data row) it sits over or nearest to. `None` when neither fits.
+fn align_header(head: &[u8], data: &[u8], n: usize) -> Option<Vec<String>> {
+    let words = |line: &[u8], min_gap: usize| -> Vec<(usize, usize)> {
+        let mut out = Vec::new();
+        let mut i = 0;
+        let gap = |b: u8| b == b' ' || b == b'\t';
+        while i < line.len() {
+            while i < line.len() && gap(line[i]) {
+                i += 1;
+            }
+            if i >= line.len() {
+                break;
+            }
+            let start = i;
+            let mut end = i;
+            while i < line.len() {
+                if gap(line[i]) {
+                    let mut k = i;
+                    while k < line.len() && gap(line[k]) {
+                        k += 1;
+                    }
+                    let tab = line[i..k].contains(&b'\t');
+                    if k - i >= min_gap || tab || k >= line.len() {
+                        break;
+                    }
+                    i = k;
+                } else {
+                    i += 1;
+                    end = i;
+                }
+            }
+            out.push((start, end));
+        }
+        out
+    };
+    let text = |sp: &[(usize, usize)]| -> Vec<String> {
+        sp.iter()
+            .map(|&(a, b)| String::from_utf8_lossy(&head[a..b]).trim().to_string())
+            .collect()
+    };
+    let runs = words(head, 2);
+    if runs.len() == n {
+        return Some(text(&runs));
+    }
+    let cells = words(data, 1);
+    let tokens = words(head, 1);
+    if cells.len() != n || tokens.len() < n {
+        return None;
+    }
+    // Each word goes to the data cell nearest its centre; words of a column stay together.
+    let mut groups: Vec<Vec<(usize, usize)>> = vec![Vec::new(); n];
+    let mut last = 0usize;
+    for &(a, b) in &tokens {
+        let c2 = a + b; // twice the centre
+        let j = (0..n)
+            .min_by_key(|&j| {
+                let (x, y) = cells[j];
+                if 2 * x <= c2 && c2 <= 2 * y {
+                    0
+                } else {
+                    (2 * x).abs_diff(c2).min((2 * y).abs_diff(c2))
+                }
+            })
+            .unwrap_or(0);
+        if j < last {
+            return None;
+        }
+        last = j;
+        groups[j].push((a, b));
+    }
+    if groups.iter().any(|g| g.is_empty()) {
+        return None;
+    }
+    Some(
+        groups
+            .iter()
+            .map(|g| {
+                String::from_utf8_lossy(&head[g[0].0..g[g.len() - 1].1])
+                    .trim()
+                    .to_string()
+            })
+            .collect(),
+    )
+}
+
+/// catman's placeholder for a sample a channel does not have.
+const CATMAN_SENTINEL: f64 = -1_000_000.0;
+
+/// A catman time channel's name: a time word, a number, a dash and the sample rate's name
+/// (`Time  1 - default sample rate`, `Zeit  1 - Standardmessrate`).
+pub(crate) fn is_catman_time_name(cell: &str) -> bool {
+    let l = cell.trim().to_lowercase();
+    ["time", "zeit", "temps", "tiempo", "tempo"]
+        .iter()
+        .any(|w| {
+            l.strip_prefix(w).is_some_and(|rest| {
+                let rest = rest.trim_start();
+                let digits = rest.chars().take_while(|c| c.is_ascii_digit()).count();
+                digits > 0 && rest[digits..].trim_start().starts_with('-')
+            })
+        })
+}
+
+/// A line with no content: only spaces, tabs, quotes and separators.
+fn is_blank(line: &[u8]) -> bool {
+    line.iter()
+        .all(|&b| b == b' ' || b == b'\t' || b == b'"' || b == b',' || b == b';')
 }
 
 /// A names row: some non-numeric cell, and at least as many cells as the data row fills.
@@ -825,6 +1314,34 @@ mod tests {
             ),
             "{e}"
         );
+    }
+
+    #[test]
+    fn names_with_spaces_in_space_separated_layouts_stay_whole() {
+        // Runs of spaces between columns.
+        let t = read("Ch 1 Displacement   Ch 1 Force   Running Time\nmm   kN   sec\n0.1   2.5   0.0\n0.2   2.7   0.1\n");
+        let b = &t.blocks[0];
+        assert_eq!(
+            b.header_cells,
+            ["Ch 1 Displacement", "Ch 1 Force", "Running Time"]
+        );
+        assert_eq!(b.unit_cells, ["mm", "kN", "sec"]);
+        assert_eq!(b.columns[1], [2.5, 2.7]);
+        // Single spaces between columns: aligned with the data row's cells.
+        let t = read("Ch 1 Displacement Ch 1 Force\n       0.1000000     2.5000\n       0.2000000     2.7000\n");
+        assert_eq!(
+            t.blocks[0].header_cells,
+            ["Ch 1 Displacement", "Ch 1 Force"]
+        );
+    }
+
+    #[test]
+    fn lines_end_at_lf_crlf_or_a_lone_cr() {
+        let t = read("\"Zeit\"\t\"Kraft\"\r\n\"s\"\t\"N\"\r1\t2\n3\t4\r\n5\t6\r7\t8");
+        let b = &t.blocks[0];
+        assert_eq!(b.unit_cells, ["s", "N"]);
+        assert_eq!(b.columns[1], [2.0, 4.0, 6.0, 8.0]);
+        assert_eq!((b.units_line, b.last_data_line), (Some(2), 6));
     }
 
     #[test]

@@ -223,9 +223,17 @@ pub fn parse_cell(raw: &[u8], dec: u8) -> Cell {
     let mut has_thou = false;
     let mut digits = 0u32; // digits since the last thousands separator (or start)
     let mut int_closed = false; // decimal mark or exponent seen
+                                // A first digit group of "0" ("0,100") is not a thousands grouping: that is another
+                                // decimal mark, and a number read here would be 1000× off.
+    let lead_zero = s
+        .iter()
+        .find(|b| b.is_ascii_digit() || **b == thou || **b == dec)
+        .is_some_and(|&b| b == b'0');
     for &b in s {
         if b == thou {
-            if int_closed || (has_thou && digits != 3) || (!has_thou && (digits == 0 || digits > 3))
+            if int_closed
+                || (has_thou && digits != 3)
+                || (!has_thou && (digits == 0 || digits > 3 || lead_zero))
             {
                 return na_or_text(s);
             }
@@ -240,15 +248,23 @@ pub fn parse_cell(raw: &[u8], dec: u8) -> Cell {
             int_closed = true;
             b'.'
         } else {
+            // Fortran writes the exponent with D (`9.9500D+01`).
+            let fortran = matches!(b, b'd' | b'D')
+                && n > 0
+                && (buf[n - 1].is_ascii_digit() || buf[n - 1] == b'.');
             if b.is_ascii_digit() {
                 digits += 1;
-            } else if b == b'e' || b == b'E' {
+            } else if b == b'e' || b == b'E' || fortran {
                 if has_thou && !int_closed && digits != 3 {
                     return na_or_text(s);
                 }
                 int_closed = true;
             }
-            b
+            if fortran {
+                b'e'
+            } else {
+                b
+            }
         };
         buf[n] = c;
         n += 1;
@@ -425,6 +441,13 @@ mod tests {
         assert_eq!(parse_cell(b"1,5", b'.'), Cell::Text);
         assert_eq!(parse_cell(b"11.09.2014", b','), Cell::Text);
         assert_eq!(parse_cell(b"12,34.5", b'.'), Cell::Text);
+        assert_eq!(parse_cell(b"0,100", b'.'), Cell::Text);
+        assert_eq!(parse_cell(b"-0.250", b','), Cell::Text);
+        assert_eq!(parse_cell(b"10,100", b'.'), Cell::Num(10100.0));
+        assert_eq!(parse_cell(b"9.9500D+01", b'.'), Cell::Num(99.5));
+        assert_eq!(parse_cell(b"-1.5d-3", b'.'), Cell::Num(-1.5e-3));
+        assert_eq!(parse_cell(b"2D", b'.'), Cell::Text);
+        assert_eq!(parse_cell(b"nd", b'.'), Cell::Text);
         assert_eq!(parse_cell(b"abc", b'.'), Cell::Text);
         assert_eq!(parse_cell(b"1.2.3", b'.'), Cell::Text);
     }

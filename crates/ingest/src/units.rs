@@ -39,6 +39,8 @@ pub enum Dimension {
     Area,
     /// Energy (SI: J).
     Energy,
+    /// Electrical signals (V, mV, mV/V, A, Ω): not mechanical, never a role by unit.
+    Electrical,
 }
 
 /// A known unit: what it measures and how to reach SI.
@@ -307,6 +309,16 @@ static TABLE: &[Row] = &[
     (&["m²", "m2", "m^2"], D::Area, "m^2", 1.0, 0.0, false),
     (&["J"], D::Energy, "J", 1.0, 0.0, false),
     (&["kJ"], D::Energy, "J", 1e3, 0.0, false),
+    // electrical (amplifier and bridge signals, e.g. HBM catman channels)
+    (&["V"], D::Electrical, "V", 1.0, 0.0, false),
+    (&["mV"], D::Electrical, "V", 1e-3, 0.0, false),
+    (&["µV", "uV"], D::Electrical, "V", 1e-6, 0.0, false),
+    (&["mV/V"], D::Electrical, "V/V", 1e-3, 0.0, false),
+    (&["V/V"], D::Electrical, "V/V", 1.0, 0.0, false),
+    (&["A"], D::Electrical, "A", 1.0, 0.0, false),
+    (&["mA"], D::Electrical, "A", 1e-3, 0.0, false),
+    (&["Ω", "Ohm", "ohm"], D::Electrical, "Ohm", 1.0, 0.0, false),
+    (&["kΩ", "kOhm"], D::Electrical, "Ohm", 1e3, 0.0, false),
 ];
 
 /// Normalises the product sign of compound units: `N*m`, `N.m`, `N m`, `N-m`, `N⋅m`, `N×m` → `N·m`.
@@ -401,6 +413,38 @@ pub(crate) fn strip_brackets(cell: &str) -> &str {
     } else {
         c
     }
+}
+
+/// A unit written in a header cell that cannot be read: an unclosed bracket (`Displacement (mm`),
+/// braces (`Force {N}`), or brackets around something that is not a unit's spelling (an emoji).
+/// Returns (name, the unit text as written) so that the channel is marked unit-unknown rather
+/// than taken as SI. Does not look the text up: [`split_name_unit`] does that first.
+pub fn unreadable_unit(cell: &str) -> Option<(String, String)> {
+    let c = cell.trim();
+    let short = |t: &str| !t.is_empty() && t.chars().count() <= 12 && !t.contains(' ');
+    // Brackets or braces closed at the end.
+    for (open, close) in [('(', ')'), ('[', ']'), ('{', '}')] {
+        if c.ends_with(close) {
+            if let Some(pos) = c.rfind(open) {
+                let inner = &c[pos + open.len_utf8()..c.len() - close.len_utf8()];
+                let name = c[..pos].trim();
+                if !name.is_empty() && short(inner.trim()) {
+                    return Some((name.to_string(), c[pos..].to_string()));
+                }
+            }
+        }
+    }
+    // An opening bracket that is never closed.
+    for (open, close) in [('(', ')'), ('[', ']'), ('{', '}')] {
+        if let Some(pos) = c.rfind(open) {
+            let tail = &c[pos + open.len_utf8()..];
+            let name = c[..pos].trim();
+            if !tail.contains(close) && !name.is_empty() && short(tail.trim()) {
+                return Some((name.to_string(), c[pos..].to_string()));
+            }
+        }
+    }
+    None
 }
 
 /// Splits a header cell into (name, unit) when the unit is written inside it: `Force (kN)`,
@@ -540,6 +584,40 @@ mod tests {
             ("Force".into(), "furlong".into())
         );
         assert_eq!(split_name_unit("Ch 1 Weg"), ("Ch 1 Weg".into(), "".into()));
+    }
+
+    #[test]
+    fn unreadable_units_are_kept_as_text() {
+        let u = unreadable_unit;
+        assert_eq!(
+            u("Displacement (mm"),
+            Some(("Displacement".into(), "(mm".into()))
+        );
+        assert_eq!(u("Force {N}"), Some(("Force".into(), "{N}".into())));
+        assert_eq!(u("Force (🔧)"), Some(("Force".into(), "(🔧)".into())));
+        assert_eq!(u("Force"), None);
+        assert_eq!(u("Total Cycle Count(Linear Waveform)"), None);
+        for c in ["Displacement (mm", "Force {N}", "Force (🔧)"] {
+            let (_, unit) = unreadable_unit(c).unwrap();
+            assert!(lookup(&unit).is_none(), "{c}");
+        }
+    }
+
+    #[test]
+    fn electrical_units_are_known_and_not_mechanical() {
+        for (u, factor, si) in [
+            ("V", 1.0, "V"),
+            ("mV", 1e-3, "V"),
+            ("mV/V", 1e-3, "V/V"),
+            ("A", 1.0, "A"),
+            ("Ω", 1.0, "Ohm"),
+        ] {
+            let i = lookup(u).unwrap_or_else(|| panic!("{u}"));
+            assert_eq!(
+                (i.dimension, i.factor, i.si_unit),
+                (Dimension::Electrical, factor, si)
+            );
+        }
     }
 
     #[test]

@@ -207,9 +207,11 @@ pub(crate) fn read_xml(text: &str, source: &str) -> Result<RawTable, IngestError
         last_data_line: last_line,
         header_cells: names,
         unit_cells: units,
+        label_slot: vec![None; columns.len()],
         columns,
         rows,
         line_runs: Vec::new(),
+        labels: Vec::new(),
     });
     Ok(out)
 }

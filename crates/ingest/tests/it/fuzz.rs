@@ -130,9 +130,13 @@ proptest! {
         let fx = fixtures();
         let bytes = apply(fx[which % fx.len()].clone(), &edits);
         for o in all_options() {
-            if let Ok(r) = read_bytes(&bytes, "mutated", &o) {
-                let _ = r.inspect();
-            }
+            let (_, heap) = crate::mem::peak(|| {
+                if let Ok(r) = read_bytes(&bytes, "mutated", &o) {
+                    let _ = r.inspect();
+                }
+            });
+            // Bounded memory: a small multiple of the input (plus polars' fixed overhead).
+            prop_assert!(heap <= 64 * bytes.len() + (8 << 20), "{heap} bytes for {}", bytes.len());
         }
     }
 }
