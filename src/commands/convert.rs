@@ -18,7 +18,8 @@ pub fn run(a: ConvertArgs) -> CmdResult {
             a.output.display()
         )));
     }
-    let kind = a.kind.as_deref().map(parse_kind).transpose()?;
+    super::refuse_overwrite(&a.output, &[&a.file])?;
+    let kind = a.kind.as_ref().map(parse_kind).transpose()?;
     let opts = crate::bridge::read_options(&a.reader, kind).map_err(CliError::input)?;
     let rec = cablab_ingest::read_path(&a.file, &opts).map_err(CliError::input)?;
     for w in &rec.warnings {

@@ -6,7 +6,7 @@ use std::process::ExitCode;
 
 /// Run `cablab inspect`.
 pub fn run(a: InspectArgs) -> CmdResult {
-    let kind = a.kind.as_deref().map(parse_kind).transpose()?;
+    let kind = a.kind.as_ref().map(parse_kind).transpose()?;
     let opts = crate::bridge::read_options(&a.reader, kind).map_err(CliError::input)?;
     let rec = cablab_ingest::read_path(&a.file, &opts).map_err(CliError::input)?;
     for w in &rec.warnings {

@@ -1,7 +1,8 @@
 //! `cablab run` (a campaign end to end) and `cablab verify` (rerun from a manifest and compare).
 
-use super::{CliError, CmdResult};
+use super::{init, CliError, CmdResult};
 use crate::cli::{RunArgs, VerifyArgs};
+use crate::output::write_atomic;
 use crate::pipeline::{config, runner, verify as ver};
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -9,27 +10,64 @@ use std::process::ExitCode;
 /// The demo campaign, relative to the working directory.
 pub const DEMO_PIPELINE: &str = "pipelines/demo.toml";
 
-/// Run `cablab run`.
+/// Run `cablab run`: a pipeline file (one `.toml` argument, default the demo), or folder mode
+/// over folders, files and globs of raw exports.
 pub fn run(a: RunArgs) -> CmdResult {
-    let path = a.pipeline.unwrap_or_else(|| PathBuf::from(DEMO_PIPELINE));
-    if !path.exists() {
+    let tomls = a
+        .paths
+        .iter()
+        .filter(|p| {
+            p.extension()
+                .is_some_and(|e| e.eq_ignore_ascii_case("toml"))
+        })
+        .count();
+    let folder_mode = !a.paths.is_empty() && tomls == 0;
+    if tomls > 0 && a.paths.len() > 1 {
         return Err(CliError::input(anyhow::anyhow!(
-            "pipeline {} not found (run from the project folder, or give a pipeline file)",
-            path.display()
+            "give one pipeline file, or folders/files of raw exports, not both ({} paths, {tomls} .toml)",
+            a.paths.len()
         )));
     }
-    let campaign = config::load(&path).map_err(CliError::input)?;
+    let inferred = a.infer.kind.is_some()
+        || a.infer.length_mm.is_some()
+        || a.infer.diameter_mm.is_some()
+        || a.infer.name.is_some()
+        || a.skip_incomplete;
+    if !folder_mode && inferred {
+        return Err(CliError::input(anyhow::anyhow!(
+            "--name, --kind, --length-mm, --diameter-mm and --skip-incomplete are for folders of raw exports; a pipeline file sets these itself"
+        )));
+    }
+    let (campaign, source) = if folder_mode {
+        (folder_campaign(&a)?, "folder mode".to_string())
+    } else {
+        let path = a
+            .paths
+            .first()
+            .cloned()
+            .unwrap_or_else(|| PathBuf::from(DEMO_PIPELINE));
+        if !path.exists() {
+            return Err(CliError::input(anyhow::anyhow!(
+                "pipeline {} not found (run from the project folder, or give a pipeline file or folders of raw exports)",
+                path.display()
+            )));
+        }
+        let c = config::load(&path).map_err(CliError::input)?;
+        (c, path.display().to_string())
+    };
     let quiet = a.quiet || std::env::var_os("CI").is_some();
     eprintln!(
-        "cablab: campaign '{}': {} tests from {}",
+        "cablab: campaign '{}': {} tests from {source}",
         campaign.file.campaign.name,
         campaign.tests.len(),
-        path.display()
     );
+    for (id, why) in &campaign.skipped {
+        eprintln!("cablab: skipped {id}: {why}");
+    }
     let r = runner::run_campaign(
         &campaign,
         &runner::RunOptions {
-            jobs: a.jobs,
+            jobs: super::capped_jobs(a.jobs),
             no_cache: a.no_cache,
             quiet,
             no_diagnosis: a.no_diagnosis,
@@ -37,6 +75,15 @@ pub fn run(a: RunArgs) -> CmdResult {
         },
     )
     .map_err(CliError::failed)?;
+    if folder_mode {
+        // The pipeline folder mode generated, beside the report: `cablab verify` reruns from it.
+        write_atomic(&campaign.pipeline_path, &campaign.pipeline_bytes).map_err(|e| {
+            CliError::failed(anyhow::anyhow!(
+                "{}: cannot write: {e}",
+                campaign.pipeline_path.display()
+            ))
+        })?;
+    }
     for o in &r.outcomes {
         if let Some(e) = &o.error {
             eprintln!("cablab: FAILED {}: {e}", o.id);
@@ -60,9 +107,51 @@ pub fn run(a: RunArgs) -> CmdResult {
     })
 }
 
+/// Folder mode: infer every file, stop with one message listing the gaps (unless
+/// `--skip-incomplete`), then validate the generated pipeline exactly as a pipeline file is
+/// validated. The pipeline is kept as `reports/<name>/pipeline.toml` (written after the run).
+fn folder_campaign(a: &RunArgs) -> Result<config::Campaign, CliError> {
+    let mut s = init::survey(&a.paths, &a.infer)?;
+    eprint!("cablab: inferred:\n{}", init::describe(&s));
+    if let Some(m) = init::gaps_message(&s, &a.paths) {
+        if !a.skip_incomplete {
+            return Err(CliError::input(anyhow::anyhow!("{m}")));
+        }
+        let (keep, drop): (Vec<_>, Vec<_>) = s.found.into_iter().partition(|f| f.gaps().is_empty());
+        for f in drop {
+            let why = format!("--skip-incomplete: no {}", f.gaps().join(", no "));
+            eprintln!("cablab: skipped {}: {why}", f.path.display());
+            s.skipped.push((f.path, why));
+        }
+        s.found = keep;
+    }
+    if s.found.is_empty() {
+        return Err(CliError::input(anyhow::anyhow!(
+            "no test files to evaluate under {}",
+            a.paths
+                .iter()
+                .map(|p| p.display().to_string())
+                .collect::<Vec<_>>()
+                .join(" ")
+        )));
+    }
+    let name = init::campaign_name(&a.paths, &a.infer);
+    let pipeline = PathBuf::from("reports").join(&name).join("pipeline.toml");
+    let cmd = format!(
+        "cablab run {}",
+        a.paths
+            .iter()
+            .map(|p| p.display().to_string())
+            .collect::<Vec<_>>()
+            .join(" ")
+    );
+    let text = init::render(&s, &name, init::root_from(&pipeline).as_deref(), &cmd);
+    config::load_str(&text, &pipeline).map_err(CliError::input)
+}
+
 /// Run `cablab verify`.
 pub fn verify(a: VerifyArgs) -> CmdResult {
-    let rep = ver::verify(&a.manifest, a.jobs).map_err(CliError::input)?;
+    let rep = ver::verify(&a.manifest, super::capped_jobs(a.jobs)).map_err(CliError::input)?;
     if rep.differences.is_empty() {
         println!(
             "verified: {} files match {} ({} regenerated outputs are not kept on disk)",

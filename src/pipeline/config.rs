@@ -49,6 +49,11 @@ pub struct CampaignSection {
     /// Output folder, relative to the pipeline file's project root (the folder holding `pipelines/`).
     #[serde(default)]
     pub output: Option<PathBuf>,
+    /// Project root, relative to this file's folder (default: the parent of a `pipelines/`
+    /// folder, else the file's own folder). Folder mode writes it into the pipeline it keeps in
+    /// the report folder, so that `cablab verify` finds the inputs again.
+    #[serde(default)]
+    pub root: Option<PathBuf>,
     /// Poisson ratio for moduli from stiffnesses (the chapter: 0.5).
     #[serde(default = "default_nu")]
     pub nu: f64,
@@ -323,23 +328,209 @@ pub fn load(pipeline: &Path) -> Result<Campaign> {
         .with_context(|| format!("cannot read pipeline {}", pipeline.display()))?;
     let text = std::str::from_utf8(&bytes)
         .map_err(|e| anyhow!("{}: not UTF-8 text ({e})", pipeline.display()))?;
-    let file: PipelineFile =
-        toml::from_str(text).map_err(|e| anyhow!("{}: {}", pipeline.display(), e))?;
-    let root = project_root(pipeline);
-    validate(file, pipeline, bytes.clone(), root)
+    load_str(text, pipeline)
 }
 
-fn positive(v: Option<f64>, what: &str, ctx: &str) -> Result<()> {
-    if let Some(x) = v {
-        if !(x.is_finite() && x > 0.0) {
-            bail!("{ctx}: {what} must be a positive number, got {x}");
+/// Parse and validate pipeline text as if read from `pipeline` (which need not exist yet: folder
+/// mode validates the pipeline it generates before writing it).
+pub fn load_str(text: &str, pipeline: &Path) -> Result<Campaign> {
+    let file: PipelineFile = toml::from_str(text).map_err(|e| {
+        anyhow!(
+            "{}: {}",
+            pipeline.display(),
+            with_suggestion(&e.to_string())
+        )
+    })?;
+    let root = match &file.campaign.root {
+        Some(r) => {
+            let dir = pipeline.parent().unwrap_or(Path::new("."));
+            let dir = if dir.as_os_str().is_empty() {
+                Path::new(".")
+            } else {
+                dir
+            };
+            lexical(&dir.join(r))
+        }
+        None => project_root(pipeline),
+    };
+    validate(file, pipeline, text.as_bytes().to_vec(), root)
+}
+
+/// `a/b/../c` → `a/c` without touching the file system (the folder `b` need not exist yet).
+fn lexical(p: &Path) -> PathBuf {
+    use std::path::Component;
+    let mut out = PathBuf::new();
+    for c in p.components() {
+        match c {
+            Component::CurDir => {}
+            Component::ParentDir => {
+                let last = out.components().next_back();
+                if matches!(last, Some(Component::Normal(_))) {
+                    out.pop();
+                } else if !matches!(last, Some(Component::RootDir | Component::Prefix(_))) {
+                    out.push("..");
+                }
+            }
+            c => out.push(c.as_os_str()),
         }
     }
-    Ok(())
+    if out.as_os_str().is_empty() {
+        PathBuf::from(".")
+    } else {
+        out
+    }
+}
+
+/// Every key the parser accepts, as `table.key` (`[[specimen]]` → `specimen.key`, per-kind
+/// settings → `kinds.<kind>.key`, per-file overrides → `input.overrides.<file>.key`). The
+/// pipeline reference (`docs/pipeline.md`) documents each of them; a test checks that it does.
+pub fn known_keys() -> Vec<String> {
+    let mut keys = Vec::new();
+    for (prefix, names) in [
+        ("", fields::<PipelineFile>()),
+        ("campaign.", fields::<CampaignSection>()),
+        ("specimen.", fields::<SpecimenType>()),
+        ("input.", fields::<InputGroup>()),
+        ("input.overrides.<file>.", fields::<FileOverride>()),
+        ("kinds.<kind>.", fields::<KindSettings>()),
+        ("model.", fields::<ModelSettings>()),
+        ("diagnosis.", fields::<DiagnosisSettings>()),
+        ("reports.", fields::<ReportSettings>()),
+    ] {
+        keys.extend(names.into_iter().map(|n| format!("{prefix}{n}")));
+    }
+    keys
+}
+
+/// The field names serde accepts for `T`, read from the error an unknown field provokes (so the
+/// list cannot drift from the struct).
+fn fields<T: serde::de::DeserializeOwned>() -> Vec<String> {
+    let probe = "__no_such_key__ = 1";
+    let e = match toml::from_str::<T>(probe) {
+        Ok(_) => return Vec::new(),
+        Err(e) => e.to_string(),
+    };
+    expected_names(&e)
+}
+
+/// The names in "expected one of `a`, `b`" / "expected `a`" of a serde error.
+fn expected_names(e: &str) -> Vec<String> {
+    let Some(p) = e.find("expected") else {
+        return Vec::new();
+    };
+    e[p..]
+        .split('`')
+        .skip(1)
+        .step_by(2)
+        .map(str::to_string)
+        .collect()
+}
+
+/// A serde "unknown field `x`, expected one of ..." error with "did you mean `y`?" added when a
+/// known name is close to the misspelt one.
+fn with_suggestion(e: &str) -> String {
+    let Some(p) = e.find("unknown field `") else {
+        return e.to_string();
+    };
+    let rest = &e[p + "unknown field `".len()..];
+    let Some(end) = rest.find('`') else {
+        return e.to_string();
+    };
+    let given = &rest[..end];
+    let best = expected_names(rest)
+        .into_iter()
+        .map(|n| (edit_distance(given, &n), n))
+        .min();
+    match best {
+        Some((d, n)) if d <= (given.chars().count() / 3).max(2) => {
+            format!("{}\ndid you mean `{n}`?", e.trim_end())
+        }
+        _ => e.to_string(),
+    }
+}
+
+/// Levenshtein distance (insertions, deletions, substitutions), case-insensitive.
+fn edit_distance(a: &str, b: &str) -> usize {
+    let a: Vec<char> = a.to_lowercase().chars().collect();
+    let b: Vec<char> = b.to_lowercase().chars().collect();
+    let mut prev: Vec<usize> = (0..=b.len()).collect();
+    for (i, ca) in a.iter().enumerate() {
+        let mut cur = vec![i + 1; b.len() + 1];
+        for (j, cb) in b.iter().enumerate() {
+            cur[j + 1] = (prev[j] + usize::from(ca != cb))
+                .min(prev[j + 1] + 1)
+                .min(cur[j] + 1);
+        }
+        prev = cur;
+    }
+    prev[b.len()]
+}
+
+/// Finds the line of a key in the pipeline text, for messages about values that parsed but are
+/// out of range (the TOML parser only reports lines for syntax and type errors).
+struct Lines<'a> {
+    text: &'a str,
+}
+
+impl Lines<'_> {
+    /// Line (1-based) of `key = ...` inside the `nth` (0-based) table whose header is `table`
+    /// (`campaign`, `specimen`, `input`, `kinds.tension`, ...); a header that merely contains
+    /// `table` after the nth `[[input]]` counts for override sub-tables.
+    fn of(&self, table: &str, nth: usize, key: &str) -> Option<usize> {
+        let mut seen = 0usize;
+        let mut inside = false;
+        for (i, line) in self.text.lines().enumerate() {
+            let t = line.trim();
+            if t.starts_with('[') {
+                let name = t.trim_matches(|c| c == '[' || c == ']').trim();
+                let name: String = name.chars().filter(|c| *c != '"' && *c != '\'').collect();
+                inside = name == table;
+                if inside {
+                    seen += 1;
+                }
+                continue;
+            }
+            if inside && seen == nth + 1 {
+                if let Some(rest) = t.strip_prefix(key) {
+                    if rest.trim_start().starts_with('=') {
+                        return Some(i + 1);
+                    }
+                }
+            }
+        }
+        None
+    }
+
+    /// `file:line: ` or `file: ` when the line is not found.
+    fn at(&self, file: &str, table: &str, nth: usize, key: &str) -> String {
+        match self.of(table, nth, key) {
+            Some(l) => format!("{file}:{l}: [{table}] {key}"),
+            None => format!("{file}: [{table}] {key}"),
+        }
+    }
+}
+
+/// Plausible section diameters, mm: a 10 µm fibre to a 0.5 m column.
+pub const DIAMETER_MM: (f64, f64) = (0.01, 500.0);
+/// Plausible free lengths and spans, mm: 0.1 mm to 100 m.
+pub const LENGTH_MM: (f64, f64) = (0.1, 100_000.0);
+/// Plausible machine compliances, m/N or rad/(N m). Load frames and torsion heads are far stiffer
+/// than 1 mm/kN (1e-6 m/N); 1e-3 already means the machine, not the specimen, is being measured.
+pub const COMPLIANCE: (f64, f64) = (0.0, 1e-3);
+
+/// `Ok` when `v` lies in `[lo, hi]`; else the message names the key, the value and the range.
+fn in_range(v: f64, (lo, hi): (f64, f64), unit: &str, at: &str) -> Result<()> {
+    if v.is_finite() && v >= lo && v <= hi && !(lo == 0.0 && v == 0.0 && unit == "mm") {
+        Ok(())
+    } else {
+        bail!("{at} = {v}: outside the plausible range {lo}..{hi} {unit}")
+    }
 }
 
 fn validate(file: PipelineFile, path: &Path, bytes: Vec<u8>, root: PathBuf) -> Result<Campaign> {
     let ctx = path.display().to_string();
+    let text = String::from_utf8_lossy(&bytes).to_string();
+    let lines = Lines { text: &text };
     if file.campaign.name.trim().is_empty()
         || file
             .campaign
@@ -348,25 +539,36 @@ fn validate(file: PipelineFile, path: &Path, bytes: Vec<u8>, root: PathBuf) -> R
             .any(|c| !(c.is_ascii_alphanumeric() || c == '-' || c == '_'))
     {
         bail!(
-            "{ctx}: campaign.name must be a non-empty folder name of letters, digits, '-' or '_', got {:?}",
+            "{}: must be a non-empty folder name of letters, digits, '-' or '_', got {:?}",
+            lines.at(&ctx, "campaign", 0, "name"),
             file.campaign.name
         );
     }
     if !(0.0..0.5 + 1e-12).contains(&file.campaign.nu) {
         bail!(
-            "{ctx}: campaign.nu must lie in [0, 0.5], got {}",
+            "{}: must lie in [0, 0.5], got {}",
+            lines.at(&ctx, "campaign", 0, "nu"),
             file.campaign.nu
         );
     }
     let mut diam = BTreeMap::new();
-    for s in &file.specimens {
-        positive(
-            Some(s.diameter_mm),
-            "diameter_mm",
-            &format!("{ctx}: specimen '{}'", s.label),
+    for (si, s) in file.specimens.iter().enumerate() {
+        in_range(
+            s.diameter_mm,
+            DIAMETER_MM,
+            "mm",
+            &format!(
+                "{} (specimen '{}')",
+                lines.at(&ctx, "specimen", si, "diameter_mm"),
+                s.label
+            ),
         )?;
         if diam.insert(s.label.clone(), s.diameter_mm * 1e-3).is_some() {
-            bail!("{ctx}: specimen '{}' is declared twice", s.label);
+            bail!(
+                "{}: specimen '{}' is declared twice",
+                lines.at(&ctx, "specimen", si, "label"),
+                s.label
+            );
         }
     }
     for (k, ks) in &file.kinds {
@@ -378,9 +580,12 @@ fn validate(file: PipelineFile, path: &Path, bytes: Vec<u8>, root: PathBuf) -> R
             }
         }
         if let Some(c) = ks.compliance {
-            if !(c.is_finite() && c >= 0.0) {
-                bail!("{ctx}: [kinds.{k}] compliance must be >= 0, got {c}");
-            }
+            in_range(
+                c,
+                COMPLIANCE,
+                "m/N or rad/(N m)",
+                &lines.at(&ctx, &format!("kinds.{k}"), 0, "compliance"),
+            )?;
         }
         if let Some(m) = &ks.yield_method {
             if m != "auto" {
@@ -391,13 +596,15 @@ fn validate(file: PipelineFile, path: &Path, bytes: Vec<u8>, root: PathBuf) -> R
     for t in &file.reports.tables {
         if !["md", "csv", "json", "tex"].contains(&t.as_str()) {
             bail!(
-                "{ctx}: reports.tables: unknown table format {t:?} (expected md, csv, json, tex)"
+                "{}: unknown table format {t:?} (expected md, csv, json, tex)",
+                lines.at(&ctx, "reports", 0, "tables")
             );
         }
     }
     if file.model.elements < 4 || file.model.elements > 2000 {
         bail!(
-            "{ctx}: model.elements must be between 4 and 2000, got {}",
+            "{}: must be between 4 and 2000, got {}",
+            lines.at(&ctx, "model", 0, "elements"),
             file.model.elements
         );
     }
@@ -406,8 +613,9 @@ fn validate(file: PipelineFile, path: &Path, bytes: Vec<u8>, root: PathBuf) -> R
         Some(v) => Some(
             v.iter()
                 .map(|s| {
-                    s.parse()
-                        .map_err(|e| anyhow!("{ctx}: diagnosis.candidates: {e}"))
+                    s.parse().map_err(|e| {
+                        anyhow!("{}: {e}", lines.at(&ctx, "diagnosis", 0, "candidates"))
+                    })
                 })
                 .collect::<Result<Vec<_>>>()?,
         ),
@@ -418,7 +626,7 @@ fn validate(file: PipelineFile, path: &Path, bytes: Vec<u8>, root: PathBuf) -> R
             v.iter()
                 .map(|s| {
                     s.parse()
-                        .map_err(|e| anyhow!("{ctx}: diagnosis.kinds: {e}"))
+                        .map_err(|e| anyhow!("{}: {e}", lines.at(&ctx, "diagnosis", 0, "kinds")))
                 })
                 .collect::<Result<Vec<_>>>()?,
         ),
@@ -426,25 +634,50 @@ fn validate(file: PipelineFile, path: &Path, bytes: Vec<u8>, root: PathBuf) -> R
     if file.inputs.is_empty() {
         bail!("{ctx}: no [[input]] groups: a campaign needs at least one");
     }
+    let out_dir = match &file.campaign.output {
+        Some(p) => root.join(p),
+        None => root.join("reports").join(&file.campaign.name),
+    };
+    let out_abs = crate::commands::canonical_or_absolute(&out_dir);
     let mut tests = Vec::new();
     let mut skipped = Vec::new();
     let mut seen = std::collections::BTreeSet::new();
     for (gi, g) in file.inputs.iter().enumerate() {
         let gctx = format!("{ctx}: input #{} (glob {:?})", gi + 1, g.glob);
-        let kind: TestKind = g.kind.parse().map_err(|e| anyhow!("{gctx}: kind: {e}"))?;
+        let kind: TestKind = g
+            .kind
+            .parse()
+            .map_err(|e| anyhow!("{}: {e}", lines.at(&ctx, "input", gi, "kind")))?;
         if kind == TestKind::Unknown {
-            bail!("{gctx}: kind must be one of tension, torsion, three_point, pure_bending");
+            bail!(
+                "{}: must be one of tension, torsion, three_point, pure_bending",
+                lines.at(&ctx, "input", gi, "kind")
+            );
         }
         let diameter_m = *diam.get(&g.specimen).ok_or_else(|| {
             anyhow!(
-                "{gctx}: specimen {:?} is not declared in a [[specimen]] table (declared: {:?})",
+                "{}: specimen {:?} is not declared in a [[specimen]] table (declared: {:?})",
+                lines.at(&ctx, "input", gi, "specimen"),
                 g.specimen,
                 diam.keys().collect::<Vec<_>>()
             )
         })?;
-        positive(g.length_mm, "length_mm", &gctx)?;
+        if let Some(l) = g.length_mm {
+            in_range(
+                l,
+                LENGTH_MM,
+                "mm",
+                &lines.at(&ctx, "input", gi, "length_mm"),
+            )?;
+        }
+        if let Some(f) = &g.format {
+            f.parse::<cablab_ingest::Format>()
+                .map_err(|e| anyhow!("{}: {e}", lines.at(&ctx, "input", gi, "format")))?;
+        }
         let pattern = root.join(&g.glob);
         let pattern = pattern.to_string_lossy().to_string();
+        refuse_output_in_input(&out_abs, &pattern)
+            .map_err(|e| anyhow!("{}: {e}", lines.at(&ctx, "input", gi, "glob")))?;
         let mut matched: Vec<PathBuf> = glob::glob(&pattern)
             .map_err(|e| anyhow!("{gctx}: bad glob: {e}"))?
             .filter_map(|r| r.ok())
@@ -475,19 +708,41 @@ fn validate(file: PipelineFile, path: &Path, bytes: Vec<u8>, root: PathBuf) -> R
                 .map(|c| c.as_os_str().to_string_lossy().to_string())
                 .collect::<Vec<_>>()
                 .join("/");
+            if crate::commands::canonical_or_absolute(&p).starts_with(&out_abs) {
+                bail!(
+                    "{}: the input {id} lies inside the output folder {}; a run would write over raw data — set [campaign] output elsewhere",
+                    lines.at(&ctx, "input", gi, "glob"),
+                    out_dir.display()
+                );
+            }
+            if let Some(why) = report_file(&p, &root) {
+                skipped.push((id, why));
+                continue;
+            }
             if !seen.insert(id.clone()) {
                 bail!("{gctx}: file {id} is matched by two input groups");
             }
             let ov = g.overrides.get(&fname).cloned().unwrap_or_default();
+            let octx = format!("input.overrides.{fname}");
             if let Some(why) = &ov.skip {
                 skipped.push((id, why.clone()));
                 continue;
             }
-            positive(
-                ov.length_mm,
-                "length_mm",
-                &format!("{gctx}: override {fname}"),
-            )?;
+            if let Some(l) = ov.length_mm {
+                in_range(l, LENGTH_MM, "mm", &lines.at(&ctx, &octx, 0, "length_mm"))?;
+            }
+            if let Some(f) = &ov.format {
+                f.parse::<cablab_ingest::Format>()
+                    .map_err(|e| anyhow!("{}: {e}", lines.at(&ctx, &octx, 0, "format")))?;
+            }
+            if let Some(b) = ov.block {
+                if !(1..=10_000).contains(&b) {
+                    bail!(
+                        "{}: blocks are numbered from 1, got {b}",
+                        lines.at(&ctx, &octx, 0, "block")
+                    );
+                }
+            }
             tests.push(PlannedTest {
                 id,
                 path: p,
@@ -504,6 +759,9 @@ fn validate(file: PipelineFile, path: &Path, bytes: Vec<u8>, root: PathBuf) -> R
             });
         }
     }
+    if tests.is_empty() {
+        bail!("{ctx}: every matched file is skipped; nothing to evaluate");
+    }
     tests.sort_by(|a, b| a.id.cmp(&b.id));
     Ok(Campaign {
         file,
@@ -515,6 +773,74 @@ fn validate(file: PipelineFile, path: &Path, bytes: Vec<u8>, root: PathBuf) -> R
         candidates,
         diagnose_kinds,
     })
+}
+
+/// Names of the files a campaign writes at the top of its report folder.
+pub const REPORT_FILES: &[&str] = &["index.html", "summary.json", "manifest.json"];
+
+/// Why `p` is a report's own file and not a test (None: it may be a test): one of
+/// [`REPORT_FILES`] or `outcome.json`, or any file inside a folder (below `root`) that holds a
+/// cablab `manifest.json` beside a `summary.json`.
+pub fn report_file(p: &Path, root: &Path) -> Option<String> {
+    let name = p.file_name()?.to_str()?;
+    if REPORT_FILES.contains(&name) || name == "outcome.json" {
+        return Some(format!("{name} is a report's own file, not a test"));
+    }
+    let root = crate::commands::canonical_or_absolute(root);
+    let mut dir = crate::commands::canonical_or_absolute(p);
+    while dir.pop() {
+        if dir.join("manifest.json").is_file() && dir.join("summary.json").is_file() {
+            return Some(format!(
+                "inside the report folder {} (not a test)",
+                dir.display()
+            ));
+        }
+        if dir == root || !dir.starts_with(&root) {
+            break;
+        }
+    }
+    None
+}
+
+/// Refuse an output folder that an input glob reads: the folder itself, or any folder inside
+/// it, matches the glob's folder part (`raw_data/cable/*` reads `raw_data/cable`; `**` reads every
+/// folder below).
+fn refuse_output_in_input(out_abs: &Path, pattern: &str) -> Result<()> {
+    let pat = Path::new(pattern);
+    let Some(dir_pat) = pat.parent() else {
+        return Ok(());
+    };
+    let dir_abs = crate::commands::canonical_or_absolute(Path::new(
+        &dir_pat
+            .components()
+            .take_while(|c| !c.as_os_str().to_string_lossy().contains(['*', '?', '[']))
+            .collect::<PathBuf>(),
+    ));
+    let rest: PathBuf = dir_pat
+        .components()
+        .skip_while(|c| !c.as_os_str().to_string_lossy().contains(['*', '?', '[']))
+        .collect();
+    let full = dir_abs.join(rest);
+    let Ok(p) = glob::Pattern::new(&full.to_string_lossy()) else {
+        return Ok(());
+    };
+    let opts = glob::MatchOptions {
+        require_literal_separator: true,
+        ..Default::default()
+    };
+    for cand in [
+        out_abs.to_path_buf(),
+        out_abs.join("tests"),
+        out_abs.join("tests").join("t"),
+    ] {
+        if p.matches_path_with(&cand, opts) {
+            bail!(
+                "the output folder {} is a folder this glob reads: the next run would take the report's own files as tests; write the report elsewhere ([campaign] output)",
+                out_abs.display()
+            );
+        }
+    }
+    Ok(())
 }
 
 #[cfg(test)]
