@@ -98,7 +98,15 @@ const NOT_TESTS_NAME: &[&str] = &[
     "readme", "license", "licence", "copying", "manifest", "truth",
 ];
 /// Folder names folder mode does not descend into.
-const NOT_TEST_DIRS: &[&str] = &["reports", "target", "pipelines", "node_modules"];
+const NOT_TEST_DIRS: &[&str] = &[
+    "reports",
+    "target",
+    "pipelines",
+    "node_modules",
+    "licenses",
+    "licences",
+    "docs",
+];
 
 /// Why a file is not a test export (None: it may be one).
 pub fn not_a_test(p: &Path) -> Option<String> {
@@ -276,13 +284,20 @@ pub fn kind_from_name(name: &str, control: Option<Dimension>) -> Option<Sourced<
     }
 }
 
-/// A metadata entry whose key contains one of `words`, as `'key: value'` (for "from what").
-fn meta_source(rec: &cablab_ingest::TestRecord, words: &[&str]) -> String {
+/// The metadata entry a length `mm` was read from, as `'key: value'` (for "from what"): a key
+/// containing one of `words` whose value's number is `mm` in mm, m or µm.
+fn meta_source(rec: &cablab_ingest::TestRecord, words: &[&str], mm: f64) -> String {
+    let same = |x: f64| (x - mm).abs() <= 1e-6 * mm.abs().max(1e-9);
     rec.metadata
         .iter()
         .find(|(k, v)| {
             let k = k.to_lowercase();
-            !v.trim().is_empty() && words.iter().any(|w| k.contains(w))
+            let n: Option<f64> = v
+                .split_whitespace()
+                .next()
+                .and_then(|t| t.replace(',', ".").parse().ok());
+            words.iter().any(|w| k.contains(w))
+                && n.is_some_and(|n| same(n) || same(n * 1e3) || same(n * 1e-3))
         })
         .map(|(k, v)| {
             format!(
@@ -369,7 +384,7 @@ pub fn survey(paths: &[PathBuf], d: &InferArgs) -> Result<Survey, CliError> {
             .free_length_m
             .map(|l| Sourced {
                 value: round_mm(l * 1e3),
-                from: meta_source(&rec, LENGTH_KEYS),
+                from: meta_source(&rec, LENGTH_KEYS, round_mm(l * 1e3)),
             })
             .or_else(|| {
                 d.length_mm.map(|l| Sourced {
@@ -382,7 +397,7 @@ pub fn survey(paths: &[PathBuf], d: &InferArgs) -> Result<Survey, CliError> {
             .diameter_m
             .map(|x| Sourced {
                 value: round_mm(x * 1e3),
-                from: meta_source(&rec, DIAMETER_KEYS),
+                from: meta_source(&rec, DIAMETER_KEYS, round_mm(x * 1e3)),
             })
             .or_else(|| {
                 d.diameter_mm.map(|x| Sourced {
@@ -804,5 +819,103 @@ pub fn root_from(out: &Path) -> Option<String> {
             })
         }
         Err(_) => Some(cwd.display().to_string()),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn k(name: &str, control: Option<Dimension>) -> Option<TestKind> {
+        kind_from_name(name, control).map(|s| s.value)
+    }
+
+    #[test]
+    fn file_name_words_state_the_kind() {
+        use TestKind::*;
+        for (name, want) in [
+            ("pulsevad__nexygen_tension_22awg_copper.txt", Tension),
+            ("Zug_Probe-3.TXT", Tension),
+            ("tensile-test 5.csv", Tension),
+            ("cable_torsion_360deg_1.dat", Torsion),
+            ("nexygen_3pb_cable_group6.txt", ThreePoint),
+            ("three_point_2mm_1.TXT", ThreePoint),
+            ("Dreipunkt-Biegung 7.csv", ThreePoint),
+            ("pure_bending_80deg_3.csv", PureBending),
+            ("reine-biegung.dat", PureBending),
+            ("rod_4pb_2.csv", PureBending),
+            ("four-point_A.txt", PureBending),
+        ] {
+            assert_eq!(k(name, None), Some(want), "{name}");
+        }
+        // Words, not substrings: "attention", "3pbx", "zugang" state nothing.
+        for name in [
+            "attention_1.csv",
+            "specimen_3pbx.dat",
+            "zugang.txt",
+            "run_7.csv",
+            "bending.csv",
+        ] {
+            assert_eq!(k(name, None), None, "{name}");
+        }
+        // Two kinds named: no guess.
+        assert_eq!(k("tension_torsion_combo.csv", None), None);
+        // A bare "bending" is settled by what the machine drives.
+        assert_eq!(
+            k("bending_1.csv", Some(Dimension::Length)),
+            Some(ThreePoint)
+        );
+        assert_eq!(
+            k("Biegung_1.csv", Some(Dimension::Angle)),
+            Some(PureBending)
+        );
+        assert_eq!(
+            k("bending_1.csv", Some(Dimension::Curvature)),
+            Some(PureBending)
+        );
+        assert_eq!(k("bending_1.csv", Some(Dimension::Force)), None);
+        let s = kind_from_name("x_3pb_y.txt", None).unwrap();
+        assert_eq!(s.from, "file name '3pb'");
+    }
+
+    #[test]
+    fn non_test_files_are_recognised() {
+        for n in [
+            "README.md",
+            "MANIFEST.toml",
+            "LICENSE",
+            "index.html",
+            "summary.json",
+            "a.svg",
+            ".hidden.csv",
+        ] {
+            assert!(not_a_test(Path::new(n)).is_some(), "{n}");
+        }
+        for n in [
+            "tension_1.TXT",
+            "x.csv",
+            "specimen.dat",
+            "daq.xml",
+            "run.txt",
+        ] {
+            assert!(not_a_test(Path::new(n)).is_none(), "{n}");
+        }
+    }
+
+    #[test]
+    fn millimetres_round_to_six_digits_and_roots_are_relative() {
+        assert_eq!(round_mm(0.05 * 1e3), 50.0);
+        assert_eq!(round_mm(2.8000000000000003), 2.8);
+        assert_eq!(round_mm(98.5), 98.5);
+        assert_eq!(root_from(Path::new("pipelines/x.toml")), None);
+        assert_eq!(
+            root_from(Path::new("reports/x/pipeline.toml")).as_deref(),
+            Some("../..")
+        );
+        assert_eq!(root_from(Path::new("x.toml")).as_deref(), Some("."));
+        assert_eq!(
+            common_prefix(&["tension_40N_1".into(), "tension_100N_2".into()]),
+            "tension_"
+        );
     }
 }

@@ -334,6 +334,9 @@ pub fn load(pipeline: &Path) -> Result<Campaign> {
 /// Parse and validate pipeline text as if read from `pipeline` (which need not exist yet: folder
 /// mode validates the pipeline it generates before writing it).
 pub fn load_str(text: &str, pipeline: &Path) -> Result<Campaign> {
+    let ctx = pipeline.display().to_string();
+    let raw: toml::Table = text.parse().map_err(|e| anyhow!("{ctx}: {e}"))?;
+    check_lists(&raw, "", 0, &Lines { text }, &ctx)?;
     let file: PipelineFile = toml::from_str(text).map_err(|e| {
         anyhow!(
             "{}: {}",
@@ -354,6 +357,60 @@ pub fn load_str(text: &str, pipeline: &Path) -> Result<Campaign> {
         None => project_root(pipeline),
     };
     validate(file, pipeline, text.as_bytes().to_vec(), root)
+}
+
+/// Lists whose shape no key accepts, found before the typed parse (which would silently use the
+/// first elements of a longer list): a list mixing numbers, strings and booleans, and a
+/// `fit_window` that is not a pair.
+fn check_lists(t: &toml::Table, table: &str, nth: usize, lines: &Lines, ctx: &str) -> Result<()> {
+    use toml::Value;
+    let sub = |k: &str| {
+        if table.is_empty() {
+            k.to_string()
+        } else {
+            format!("{table}.{k}")
+        }
+    };
+    for (k, v) in t {
+        match v {
+            Value::Table(inner) => check_lists(inner, &sub(k), 0, lines, ctx)?,
+            Value::Array(items) if items.iter().all(Value::is_table) => {
+                for (i, it) in items.iter().enumerate() {
+                    if let Value::Table(inner) = it {
+                        check_lists(inner, &sub(k), i, lines, ctx)?;
+                    }
+                }
+            }
+            Value::Array(items) => {
+                let at = || lines.at(ctx, table, nth, k);
+                let mut types: Vec<&str> = items
+                    .iter()
+                    .map(|x| match x {
+                        Value::Integer(_) | Value::Float(_) => "number",
+                        other => other.type_str(),
+                    })
+                    .collect();
+                types.sort_unstable();
+                types.dedup();
+                if types.len() > 1 {
+                    bail!(
+                        "{}: a list of one type is expected, got {} in {v}",
+                        at(),
+                        types.join(" and ")
+                    );
+                }
+                if k == "fit_window" && items.len() != 2 {
+                    bail!(
+                        "{}: give exactly two numbers [from, to], got {} values in {v}",
+                        at(),
+                        items.len()
+                    );
+                }
+            }
+            _ => {}
+        }
+    }
+    Ok(())
 }
 
 /// `a/b/../c` → `a/c` without touching the file system (the folder `b` need not exist yet).
@@ -518,12 +575,24 @@ pub const LENGTH_MM: (f64, f64) = (0.1, 100_000.0);
 /// than 1 mm/kN (1e-6 m/N); 1e-3 already means the machine, not the specimen, is being measured.
 pub const COMPLIANCE: (f64, f64) = (0.0, 1e-3);
 
+/// A number as a person would write it: `1e300`, `0.00002` → `2e-5`, `32`.
+fn short(v: f64) -> String {
+    if v != 0.0 && v.is_finite() && !(1e-3..1e6).contains(&v.abs()) {
+        format!("{v:e}")
+    } else {
+        format!("{v}")
+    }
+}
+
 /// `Ok` when `v` lies in `[lo, hi]`; else the message names the key, the value and the range.
 fn in_range(v: f64, (lo, hi): (f64, f64), unit: &str, at: &str) -> Result<()> {
     if v.is_finite() && v >= lo && v <= hi && !(lo == 0.0 && v == 0.0 && unit == "mm") {
         Ok(())
     } else {
-        bail!("{at} = {v}: outside the plausible range {lo}..{hi} {unit}")
+        bail!(
+            "{at} = {}: outside the plausible range {lo:e}..{hi:e} {unit}",
+            short(v)
+        )
     }
 }
 
@@ -557,11 +626,7 @@ fn validate(file: PipelineFile, path: &Path, bytes: Vec<u8>, root: PathBuf) -> R
             s.diameter_mm,
             DIAMETER_MM,
             "mm",
-            &format!(
-                "{} (specimen '{}')",
-                lines.at(&ctx, "specimen", si, "diameter_mm"),
-                s.label
-            ),
+            &lines.at(&ctx, "specimen", si, "diameter_mm"),
         )?;
         if diam.insert(s.label.clone(), s.diameter_mm * 1e-3).is_some() {
             bail!(
@@ -911,7 +976,10 @@ length_mm = 30
             &GOOD.replace("length_mm = 32", "length_mm = -32"),
         );
         let e = format!("{:#}", load(&p).unwrap_err());
-        assert!(e.contains("positive"), "{e}");
+        assert!(
+            e.contains("t.toml:11: [input] length_mm = -32") && e.contains("plausible"),
+            "{e}"
+        );
         let p = write(
             d.path(),
             "pipelines/t.toml",
@@ -926,5 +994,206 @@ length_mm = 30
         );
         let e = format!("{:#}", load(&p).unwrap_err());
         assert!(e.contains("shear"), "{e}");
+    }
+
+    fn load_err(d: &Path, text: &str) -> String {
+        let p = write(d, "pipelines/t.toml", text);
+        format!("{:#}", load(&p).unwrap_err())
+    }
+
+    #[test]
+    fn implausible_values_name_file_line_and_key() {
+        let d = tempfile::tempdir().unwrap();
+        write(d.path(), "raw_data/a.csv", "x");
+        write(d.path(), "raw_data/b.csv", "x");
+        // The issue's fuzz cases: each names the file, the line and the key.
+        let e = load_err(
+            d.path(),
+            &GOOD.replace("diameter_mm = 2.8", "diameter_mm = 1e300"),
+        );
+        assert!(
+            e.contains("t.toml:6: [specimen] diameter_mm = 1e300"),
+            "{e}"
+        );
+        let e = load_err(
+            d.path(),
+            &format!("{GOOD}\n[kinds.tension]\ncompliance = 1e6\n"),
+        );
+        assert!(
+            e.contains("t.toml:16: [kinds.tension] compliance = 1e6"),
+            "{e}"
+        );
+        let e = load_err(d.path(), &GOOD.replace("length_mm = 30", "length_mm = 1e9"));
+        assert!(
+            e.contains("t.toml:13: [input.overrides.b.csv] length_mm"),
+            "{e}"
+        );
+        let e = load_err(
+            d.path(),
+            &GOOD.replace("diameter_mm = 2.8", "diameter_mm = \"2.8\""),
+        );
+        assert!(e.contains("line 6") && e.contains("diameter_mm"), "{e}");
+        let e = load_err(
+            d.path(),
+            &format!("{GOOD}\n[kinds.tension]\nfit_window = [0, 0.01, \"junk\", true]\n"),
+        );
+        assert!(
+            e.contains("t.toml:16: [kinds.tension] fit_window") && e.contains("\"junk\""),
+            "{e}"
+        );
+        let e = load_err(
+            d.path(),
+            &format!("{GOOD}\n[kinds.tension]\nfit_window = [0, 0.01, 0.02]\n"),
+        );
+        assert!(
+            e.contains("t.toml:16: [kinds.tension] fit_window: give exactly two numbers"),
+            "{e}"
+        );
+        let e = load_err(d.path(), &format!("{GOOD}format = \"mts9999\"\n"));
+        assert!(
+            e.contains("[input.overrides.b.csv] format") || e.contains("format"),
+            "{e}"
+        );
+        // Values just inside the ranges load.
+        let ok = GOOD.replace("diameter_mm = 2.8", "diameter_mm = 0.01");
+        let p = write(
+            d.path(),
+            "pipelines/t.toml",
+            &format!("{ok}\n[kinds.tension]\ncompliance = 1e-3\n"),
+        );
+        load(&p).unwrap();
+    }
+
+    #[test]
+    fn misspelt_keys_get_the_nearest_known_key() {
+        let d = tempfile::tempdir().unwrap();
+        write(d.path(), "raw_data/a.csv", "x");
+        write(d.path(), "raw_data/b.csv", "x");
+        let e = load_err(d.path(), &GOOD.replace("length_mm = 32", "lenght_mm = 32"));
+        assert!(e.contains("did you mean `length_mm`?"), "{e}");
+        let e = load_err(d.path(), &GOOD.replace("diameter_mm", "diametre_mm"));
+        assert!(e.contains("did you mean `diameter_mm`?"), "{e}");
+        // Nothing close: no suggestion, the full list stays.
+        let e = load_err(d.path(), &GOOD.replace("length_mm = 32", "colour = 32"));
+        assert!(
+            !e.contains("did you mean") && e.contains("expected one of"),
+            "{e}"
+        );
+        assert_eq!(edit_distance("lenght_mm", "length_mm"), 2);
+        assert_eq!(edit_distance("", "abc"), 3);
+        assert_eq!(edit_distance("Kind", "kind"), 0);
+    }
+
+    #[test]
+    fn outputs_never_go_where_inputs_are_read() {
+        let d = tempfile::tempdir().unwrap();
+        write(d.path(), "raw_data/a.csv", "x");
+        write(d.path(), "raw_data/b.csv", "x");
+        let with_output =
+            |o: &str| GOOD.replace("name = \"t\"", &format!("name = \"t\"\noutput = \"{o}\""));
+        // The folder the glob reads, its parent (holds the inputs) and a folder inside it under `**`.
+        let e = load_err(d.path(), &with_output("raw_data"));
+        assert!(e.contains("[input] glob") && e.contains("raw_data"), "{e}");
+        let e = load_err(d.path(), &with_output("."));
+        assert!(e.contains("inside the output folder"), "{e}");
+        let e = load_err(
+            d.path(),
+            &with_output("raw_data/sub/report").replace("raw_data/*.csv", "raw_data/**/*.csv"),
+        );
+        assert!(e.contains("a folder this glob reads"), "{e}");
+        // Beside the inputs is fine.
+        let p = write(d.path(), "pipelines/t.toml", &with_output("out/t"));
+        assert_eq!(load(&p).unwrap().output_dir(), d.path().join("out/t"));
+    }
+
+    #[test]
+    fn a_reports_own_files_are_never_tests() {
+        let d = tempfile::tempdir().unwrap();
+        write(d.path(), "raw_data/a.csv", "x");
+        write(d.path(), "raw_data/b.csv", "x");
+        write(d.path(), "raw_data/old/summary.json", "{}");
+        write(d.path(), "raw_data/old/manifest.json", "{}");
+        write(d.path(), "raw_data/old/table1.csv", "x");
+        write(d.path(), "raw_data/index.html", "x");
+        let p = write(
+            d.path(),
+            "pipelines/t.toml",
+            &GOOD
+                .replace("raw_data/*.csv", "raw_data/**/*")
+                .replace("[input.overrides.\"b.csv\"]\nlength_mm = 30\n", ""),
+        );
+        let c = load(&p).unwrap();
+        let ids: Vec<_> = c.tests.iter().map(|t| t.id.as_str()).collect();
+        assert_eq!(ids, ["raw_data/a.csv", "raw_data/b.csv"]);
+        let skipped: Vec<_> = c.skipped.iter().map(|s| s.0.as_str()).collect();
+        assert_eq!(
+            skipped,
+            [
+                "raw_data/index.html",
+                "raw_data/old/manifest.json",
+                "raw_data/old/summary.json",
+                "raw_data/old/table1.csv"
+            ]
+        );
+    }
+
+    #[test]
+    fn root_key_places_globs_relative_to_a_folder_that_does_not_exist_yet() {
+        let d = tempfile::tempdir().unwrap();
+        write(d.path(), "raw_data/a.csv", "x");
+        write(d.path(), "raw_data/b.csv", "x");
+        let text = GOOD.replace("name = \"t\"", "name = \"t\"\nroot = \"../..\"");
+        let c = load_str(&text, &d.path().join("reports/t/pipeline.toml")).unwrap();
+        assert_eq!(c.root, d.path());
+        assert_eq!(c.tests.len(), 2);
+        assert_eq!(lexical(Path::new("a/b/../../../c")), PathBuf::from("../c"));
+    }
+
+    /// Every key the parser accepts has a `### \`key\`` heading in docs/pipeline.md (what
+    /// `cablab help pipeline` prints), and every heading is a key the parser accepts.
+    #[test]
+    fn the_pipeline_reference_documents_exactly_the_known_keys() {
+        let doc = crate::commands::PIPELINE_REFERENCE;
+        let documented: std::collections::BTreeSet<String> = doc
+            .lines()
+            .filter_map(|l| l.strip_prefix("### `"))
+            .filter_map(|l| l.strip_suffix('`'))
+            .map(str::to_string)
+            .collect();
+        let known: std::collections::BTreeSet<String> = known_keys().into_iter().collect();
+        assert!(known.len() >= 40, "{known:?}");
+        assert!(known.contains("input.overrides.<file>.skip") && known.contains("campaign.root"));
+        let undocumented: Vec<_> = known.difference(&documented).collect();
+        let unknown: Vec<_> = documented.difference(&known).collect();
+        assert!(
+            undocumented.is_empty(),
+            "keys missing from docs/pipeline.md: {undocumented:?}"
+        );
+        assert!(
+            unknown.is_empty(),
+            "docs/pipeline.md documents keys the parser rejects: {unknown:?}"
+        );
+        // Each key's section carries an example (a `key = value` in backticks or a code block).
+        for sec in doc.split("\n### `").skip(1) {
+            let (head, body) = sec.split_once('\n').unwrap();
+            let key = head.trim_end_matches('`').rsplit('.').next().unwrap();
+            if ![
+                "campaign",
+                "specimen",
+                "input",
+                "kinds",
+                "model",
+                "diagnosis",
+                "reports",
+                "overrides",
+            ]
+            .contains(&key)
+            {
+                assert!(
+                    body.contains(&format!("`{key} = ")),
+                    "no example for {head}"
+                );
+            }
+        }
     }
 }
