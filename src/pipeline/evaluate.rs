@@ -201,12 +201,7 @@ fn stages(
     out.format = Some(rec.provenance.format.as_str().to_string());
     out.warnings
         .extend(rec.warnings.iter().map(|w| w.to_string()));
-    let geom = crate::bridge::geometry(
-        &rec,
-        t.kind,
-        t.free_length_m.map(|l| l * 1e3),
-        Some(t.diameter_m * 1e3),
-    )?;
+    let geom = crate::bridge::geometry(&rec, t.kind, t.free_length_m, Some(t.diameter_m))?;
     out.free_length_m = Some(geom.free_length_m);
     let curve = crate::bridge::curve(&rec)?;
     out.rows = Some(curve.control.len());
