@@ -335,6 +335,38 @@ fn folder_name(p: &Path) -> String {
         .unwrap_or_else(|| "specimens".into())
 }
 
+/// A length the metadata gives (m), in mm with the entry it came from.
+fn metadata_or_flag(
+    rec: &cablab_ingest::TestRecord,
+    metres: Option<f64>,
+    keys: &[&str],
+) -> Option<Sourced<f64>> {
+    metres.map(|m| {
+        let value = round_mm(m * 1e3);
+        Sourced {
+            value,
+            from: meta_source(rec, keys, value),
+        }
+    })
+}
+
+/// A value from a command-line flag.
+fn flag(v: Option<f64>, name: &str) -> Option<Sourced<f64>> {
+    v.map(|value| Sourced {
+        value,
+        from: name.into(),
+    })
+}
+
+/// The paths as the user gave them, space-separated (for messages).
+pub fn joined(paths: &[PathBuf]) -> String {
+    paths
+        .iter()
+        .map(|p| p.display().to_string())
+        .collect::<Vec<_>>()
+        .join(" ")
+}
+
 /// Read and infer every test under `paths`.
 pub fn survey(paths: &[PathBuf], d: &InferArgs) -> Result<Survey, CliError> {
     let mut s = Survey::default();
@@ -379,32 +411,10 @@ pub fn survey(paths: &[PathBuf], d: &InferArgs) -> Result<Survey, CliError> {
                 })
             })
         };
-        let length_mm = rec
-            .specimen
-            .free_length_m
-            .map(|l| Sourced {
-                value: round_mm(l * 1e3),
-                from: meta_source(&rec, LENGTH_KEYS, round_mm(l * 1e3)),
-            })
-            .or_else(|| {
-                d.length_mm.map(|l| Sourced {
-                    value: l,
-                    from: "--length-mm".into(),
-                })
-            });
-        let diameter_mm = rec
-            .specimen
-            .diameter_m
-            .map(|x| Sourced {
-                value: round_mm(x * 1e3),
-                from: meta_source(&rec, DIAMETER_KEYS, round_mm(x * 1e3)),
-            })
-            .or_else(|| {
-                d.diameter_mm.map(|x| Sourced {
-                    value: x,
-                    from: "--diameter-mm".into(),
-                })
-            });
+        let length_mm = metadata_or_flag(&rec, rec.specimen.free_length_m, LENGTH_KEYS)
+            .or_else(|| flag(d.length_mm, "--length-mm"));
+        let diameter_mm = metadata_or_flag(&rec, rec.specimen.diameter_m, DIAMETER_KEYS)
+            .or_else(|| flag(d.diameter_mm, "--diameter-mm"));
         let label = rec.specimen.label.clone().unwrap_or_else(|| {
             path.file_stem()
                 .map(|n| n.to_string_lossy().to_string())
@@ -491,12 +501,11 @@ pub fn gaps_message(s: &Survey, paths: &[PathBuf]) -> Option<String> {
             let _ = writeln!(m, "    {f}");
         }
     }
-    let args: Vec<String> = paths.iter().map(|p| p.display().to_string()).collect();
     let _ = write!(
         m,
         "give the value for all of them (--kind K, --length-mm L, --diameter-mm D), or write a pipeline \
          and fill in each file: `cablab init {}`, or leave them out: --skip-incomplete",
-        args.join(" ")
+        joined(paths)
     );
     Some(m)
 }
@@ -751,11 +760,7 @@ pub fn run(a: InitArgs) -> CmdResult {
     if s.found.is_empty() {
         return Err(CliError::input(anyhow::anyhow!(
             "no test files under {}:\n{}",
-            a.paths
-                .iter()
-                .map(|p| p.display().to_string())
-                .collect::<Vec<_>>()
-                .join(" "),
+            joined(&a.paths),
             describe(&s)
         )));
     }
@@ -768,14 +773,7 @@ pub fn run(a: InitArgs) -> CmdResult {
     let inputs: Vec<&Path> = s.found.iter().map(|f| f.path.as_path()).collect();
     super::refuse_overwrite(&out, &inputs)?;
     let root = root_from(&out);
-    let cmd = format!(
-        "cablab init {}",
-        a.paths
-            .iter()
-            .map(|p| p.display().to_string())
-            .collect::<Vec<_>>()
-            .join(" ")
-    );
+    let cmd = format!("cablab init {}", joined(&a.paths));
     let text = render(&s, &name, root.as_deref(), &cmd);
     eprint!("cablab: inferred:\n{}", describe(&s));
     write_atomic(&out, text.as_bytes())

@@ -128,23 +128,12 @@ fn folder_campaign(a: &RunArgs) -> Result<config::Campaign, CliError> {
     if s.found.is_empty() {
         return Err(CliError::input(anyhow::anyhow!(
             "no test files to evaluate under {}",
-            a.paths
-                .iter()
-                .map(|p| p.display().to_string())
-                .collect::<Vec<_>>()
-                .join(" ")
+            init::joined(&a.paths)
         )));
     }
     let name = init::campaign_name(&a.paths, &a.infer);
     let pipeline = PathBuf::from("reports").join(&name).join("pipeline.toml");
-    let cmd = format!(
-        "cablab run {}",
-        a.paths
-            .iter()
-            .map(|p| p.display().to_string())
-            .collect::<Vec<_>>()
-            .join(" ")
-    );
+    let cmd = format!("cablab run {}", init::joined(&a.paths));
     let text = init::render(&s, &name, init::root_from(&pipeline).as_deref(), &cmd);
     config::load_str(&text, &pipeline).map_err(CliError::input)
 }

@@ -1006,54 +1006,41 @@ length_mm = 30
         let d = tempfile::tempdir().unwrap();
         write(d.path(), "raw_data/a.csv", "x");
         write(d.path(), "raw_data/b.csv", "x");
-        // The fuzz cases: each names the file, the line and the key.
-        let e = load_err(
-            d.path(),
-            &GOOD.replace("diameter_mm = 2.8", "diameter_mm = 1e300"),
-        );
-        assert!(
-            e.contains("t.toml:6: [specimen] diameter_mm = 1e300"),
-            "{e}"
-        );
-        let e = load_err(
-            d.path(),
-            &format!("{GOOD}\n[kinds.tension]\ncompliance = 1e6\n"),
-        );
-        assert!(
-            e.contains("t.toml:16: [kinds.tension] compliance = 1e6"),
-            "{e}"
-        );
-        let e = load_err(d.path(), &GOOD.replace("length_mm = 30", "length_mm = 1e9"));
-        assert!(
-            e.contains("t.toml:13: [input.overrides.b.csv] length_mm"),
-            "{e}"
-        );
-        let e = load_err(
-            d.path(),
-            &GOOD.replace("diameter_mm = 2.8", "diameter_mm = \"2.8\""),
-        );
-        assert!(e.contains("line 6") && e.contains("diameter_mm"), "{e}");
-        let e = load_err(
-            d.path(),
-            &format!("{GOOD}\n[kinds.tension]\nfit_window = [0, 0.01, \"junk\", true]\n"),
-        );
-        assert!(
-            e.contains("t.toml:16: [kinds.tension] fit_window") && e.contains("\"junk\""),
-            "{e}"
-        );
-        let e = load_err(
-            d.path(),
-            &format!("{GOOD}\n[kinds.tension]\nfit_window = [0, 0.01, 0.02]\n"),
-        );
-        assert!(
-            e.contains("t.toml:16: [kinds.tension] fit_window: give exactly two numbers"),
-            "{e}"
-        );
-        let e = load_err(d.path(), &format!("{GOOD}format = \"mts9999\"\n"));
-        assert!(
-            e.contains("[input.overrides.b.csv] format") || e.contains("format"),
-            "{e}"
-        );
+        let kinds = |extra: &str| format!("{GOOD}\n[kinds.tension]\n{extra}\n");
+        // The fuzz cases and their kin: each names the file, the line and the key.
+        for (text, want) in [
+            (
+                GOOD.replace("diameter_mm = 2.8", "diameter_mm = 1e300"),
+                "t.toml:6: [specimen] diameter_mm = 1e300: outside the plausible range",
+            ),
+            (
+                kinds("compliance = 1e6"),
+                "t.toml:16: [kinds.tension] compliance = 1e6: outside",
+            ),
+            (
+                GOOD.replace("length_mm = 30", "length_mm = 1e9"),
+                "t.toml:13: [input.overrides.b.csv] length_mm = 1e9",
+            ),
+            (
+                GOOD.replace("diameter_mm = 2.8", "diameter_mm = \"2.8\""),
+                "line 6",
+            ),
+            (
+                kinds("fit_window = [0, 0.01, \"junk\", true]"),
+                "t.toml:16: [kinds.tension] fit_window: a list of one type is expected",
+            ),
+            (
+                kinds("fit_window = [0, 0.01, 0.02]"),
+                "t.toml:16: [kinds.tension] fit_window: give exactly two numbers",
+            ),
+            (
+                format!("{GOOD}format = \"mts9999\"\n"),
+                "t.toml:14: [input.overrides.b.csv] format",
+            ),
+        ] {
+            let e = load_err(d.path(), &text);
+            assert!(e.contains(want), "want {want:?} in:\n{e}");
+        }
         // Values just inside the ranges load.
         let ok = GOOD.replace("diameter_mm = 2.8", "diameter_mm = 0.01");
         let p = write(
