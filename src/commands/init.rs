@@ -595,11 +595,12 @@ pub fn render(s: &Survey, name: &str, root: Option<&str>, command: &str) -> Stri
             q(ty)
         );
     }
-    if s.found.iter().any(|f| f.diameter_mm.is_none()) {
+    // A file whose diameter is not in its metadata is its own specimen type, to be filled in.
+    for f in s.found.iter().filter(|f| f.diameter_mm.is_none()) {
         let _ = writeln!(
             t,
-            "\n[[specimen]]\nlabel = \"{FILL_IN} specimen\"\ndiameter_mm = \"{FILL_IN}: section diameter in mm\"\n\
-             # (use this type for the files below whose diameter is not in their metadata; rename it as you like)"
+            "\n[[specimen]]\nlabel = {}\ndiameter_mm = \"{FILL_IN}: section diameter in mm\"  # not in the metadata",
+            q(&gap_type(f))
         );
     }
     // Groups.
@@ -674,6 +675,14 @@ fn input_blocks(files: &[&Found]) -> Vec<String> {
     }
 }
 
+/// The specimen type of a file without a diameter: its file stem.
+fn gap_type(f: &Found) -> String {
+    f.path
+        .file_stem()
+        .map(|n| n.to_string_lossy().to_string())
+        .unwrap_or_default()
+}
+
 fn common_prefix(names: &[String]) -> String {
     let mut p: Vec<char> = names[0].chars().collect();
     for n in &names[1..] {
@@ -700,10 +709,7 @@ fn block(files: &[&Found], glob: &str) -> String {
             let _ = writeln!(t, "specimen = {}", q(ty));
         }
         None => {
-            let _ = writeln!(
-                t,
-                "specimen = \"{FILL_IN} specimen\"  # diameter not in the metadata"
-            );
+            let _ = writeln!(t, "specimen = {}", q(&gap_type(f0)));
         }
     }
     match &f0.kind {

@@ -335,6 +335,25 @@ pub fn load(pipeline: &Path) -> Result<Campaign> {
 /// mode validates the pipeline it generates before writing it).
 pub fn load_str(text: &str, pipeline: &Path) -> Result<Campaign> {
     let ctx = pipeline.display().to_string();
+    let unfilled: Vec<String> = text
+        .lines()
+        .enumerate()
+        .filter(|(_, l)| l.split('#').next().is_some_and(|v| v.contains("\"FILL IN")))
+        .map(|(i, l)| {
+            format!(
+                "  {ctx}:{}: {}",
+                i + 1,
+                l.split('#').next().unwrap_or("").trim()
+            )
+        })
+        .collect();
+    if !unfilled.is_empty() {
+        bail!(
+            "{ctx}: {} value(s) still say FILL IN (cablab could not infer them from the files; replace each):\n{}",
+            unfilled.len(),
+            unfilled.join("\n")
+        );
+    }
     let raw: toml::Table = text.parse().map_err(|e| anyhow!("{ctx}: {e}"))?;
     check_lists(&raw, "", 0, &Lines { text }, &ctx)?;
     let file: PipelineFile = toml::from_str(text).map_err(|e| {

@@ -213,11 +213,23 @@ fn gaps_are_listed_once_and_init_marks_them() {
     );
     let r = run_in(d.path(), &["run", "pipelines/lab2.toml"]);
     assert_eq!(r.code, 2, "{}", r.stderr);
+    // One message lists every value still to fill in, with its line.
     assert!(
-        r.stderr.contains("pipelines/lab2.toml") && r.stderr.contains("line"),
+        r.stderr
+            .contains("pipelines/lab2.toml: 5 value(s) still say FILL IN"),
         "{}",
         r.stderr
     );
+    let line = |needle: &str| text.lines().position(|l| l.starts_with(needle)).unwrap() + 1;
+    assert!(
+        r.stderr.contains(&format!(
+            "pipelines/lab2.toml:{}: kind = \"FILL IN",
+            line("kind = \"FILL IN")
+        )),
+        "{}",
+        r.stderr
+    );
+    assert!(!d.path().join("reports").exists());
     let r = run_in(d.path(), &["init", "lab2"]);
     assert_eq!(r.code, 2);
     assert!(
