@@ -409,7 +409,7 @@ pub enum BenchWhat {
             value_delimiter = ',',
             default_value = "tension,torsion,pure_bending,three_point"
         )]
-        kinds: Vec<String>,
+        kinds: Vec<KindArg>,
         /// Write the report (Markdown) here as well as to stdout.
         #[arg(long, short = 'o')]
         output: Option<PathBuf>,
