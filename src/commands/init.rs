@@ -882,6 +882,35 @@ mod tests {
         assert_eq!(s.from, "file name '3pb'");
     }
 
+    /// The kind word anywhere in a name, between any separators and among filler words, is found.
+    #[test]
+    fn kind_words_are_found_in_every_position_and_separator() {
+        use TestKind::*;
+        let words = [
+            ("tension", Tension),
+            ("ZUG", Tension),
+            ("Torsion", Torsion),
+            ("3pb", ThreePoint),
+            ("three_point", ThreePoint),
+            ("pure-bending", PureBending),
+            ("4PB", PureBending),
+        ];
+        let fillers = ["cable", "A", "2024", "40N", "run7"];
+        let mut n = 0;
+        for (w, want) in words {
+            for sep in ["_", "-", " ", ".", "__"] {
+                for pos in 0..=fillers.len() {
+                    let mut parts: Vec<&str> = fillers.to_vec();
+                    parts.insert(pos, w);
+                    let name = format!("{}.csv", parts.join(sep));
+                    assert_eq!(k(&name, None), Some(want), "{name}");
+                    n += 1;
+                }
+            }
+        }
+        assert_eq!(n, 7 * 5 * 6);
+    }
+
     #[test]
     fn non_test_files_are_recognised() {
         for n in [

@@ -262,9 +262,37 @@ fn gaps_are_listed_once_and_init_marks_them() {
         "{}",
         r.stderr
     );
-    for (n, s) in stiffness_by_file(&d.path().join("reports/lab2/summary.json")) {
+    let got = stiffness_by_file(&d.path().join("reports/lab2/summary.json"));
+    assert_eq!(got.len(), 2);
+    for (n, s) in got {
         assert!((s - 1000.0).abs() < 1.0, "{n}: (EA)_T = {s}, want 1000 N");
     }
+
+    // --skip-incomplete: the file whose kind nothing states is left out with a note.
+    let r = run_in(
+        d.path(),
+        &[
+            "run",
+            "lab2",
+            "--skip-incomplete",
+            "--length-mm",
+            "50",
+            "--diameter-mm",
+            "2",
+            "--name",
+            "part",
+            "--no-diagnosis",
+        ],
+    );
+    assert_eq!(r.code, 0, "{}", r.stderr);
+    assert!(
+        r.stderr
+            .contains("skipped lab2/sample_1.csv: --skip-incomplete: no kind"),
+        "{}",
+        r.stderr
+    );
+    let got = stiffness_by_file(&d.path().join("reports/part/summary.json"));
+    assert_eq!(got.keys().collect::<Vec<_>>(), ["zug_2.csv"]);
 }
 
 /// On the real exports: every file whose manifest kind is one of cablab's gets that kind (from
