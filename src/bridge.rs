@@ -56,13 +56,13 @@ pub fn curve(rec: &TestRecord) -> Result<Curve> {
     Ok(c)
 }
 
-/// Geometry from flags (mm), else from the record's metadata. The length is required; the
-/// diameter is optional (moduli need it) unless `need_diameter`.
+/// Geometry from the caller (SI: m, settled where flags and pipelines are parsed), else from the
+/// record's metadata. The length is required; the diameter is optional (moduli need it).
 pub fn geometry(
     rec: &TestRecord,
     kind: TestKind,
-    length_mm: Option<f64>,
-    diameter_mm: Option<f64>,
+    length_m: Option<f64>,
+    diameter_m: Option<f64>,
 ) -> Result<cablab_measure::Geometry> {
     let file = &rec.provenance.path;
     let what = if kind == TestKind::ThreePoint {
@@ -70,22 +70,27 @@ pub fn geometry(
     } else {
         "free length"
     };
-    let free_length_m = match length_mm {
-        Some(l) if l.is_finite() && l > 0.0 => l * 1e-3,
-        Some(l) => bail!("--length-mm must be positive, got {l}"),
+    let free_length_m = match length_m {
+        Some(l) if l.is_finite() && l > 0.0 => l,
+        Some(l) => bail!("{file}: the {what} must be positive, got {l} m"),
         None => rec.specimen.free_length_m.ok_or_else(|| {
             anyhow!("{file}: the {what} is missing: the file's metadata does not give it; pass --length-mm")
         })?,
     };
-    let diameter_m = match diameter_mm {
-        Some(d) if d.is_finite() && d > 0.0 => Some(d * 1e-3),
-        Some(d) => bail!("--diameter-mm must be positive, got {d}"),
+    let diameter_m = match diameter_m {
+        Some(d) if d.is_finite() && d > 0.0 => Some(d),
+        Some(d) => bail!("{file}: the diameter must be positive, got {d} m"),
         None => rec.specimen.diameter_m,
     };
     Ok(cablab_measure::Geometry {
         free_length_m,
         diameter_m,
     })
+}
+
+/// Millimetres (as flags and pipelines give lengths) to metres.
+pub fn mm(v: Option<f64>) -> Option<f64> {
+    v.map(|x| x * 1e-3)
 }
 
 /// Reader options from the command line's reader flags.

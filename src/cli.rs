@@ -4,8 +4,64 @@
 //! Exit codes: 0 success; 1 the work ran but something failed (a campaign with a failing test, a
 //! `verify` that found differences); 2 bad input or usage (unreadable file, unknown option value).
 
-use clap::{Args, Parser, Subcommand};
+use cablab_core::TestKind;
+use clap::{Args, Parser, Subcommand, ValueEnum};
 use std::path::PathBuf;
+
+/// A test kind on the command line (`three-point` and `three_point` both work).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum KindArg {
+    /// Axial tension: force against elongation.
+    Tension,
+    /// Torsion: torque against twist angle.
+    Torsion,
+    /// Three-point bending: punch force against deflection.
+    #[value(alias = "three_point", alias = "3pb")]
+    ThreePoint,
+    /// Pure bending: moment against end rotation.
+    #[value(alias = "pure_bending")]
+    PureBending,
+}
+
+impl From<KindArg> for TestKind {
+    fn from(k: KindArg) -> TestKind {
+        match k {
+            KindArg::Tension => TestKind::Tension,
+            KindArg::Torsion => TestKind::Torsion,
+            KindArg::ThreePoint => TestKind::ThreePoint,
+            KindArg::PureBending => TestKind::PureBending,
+        }
+    }
+}
+
+/// A length in millimetres: a finite number > 0. Negative and zero values get a message that
+/// says what to type instead of clap's "unexpected argument '-3'".
+pub fn positive_mm(s: &str) -> Result<f64, String> {
+    let v: f64 = s
+        .trim()
+        .parse()
+        .map_err(|_| format!("{s:?} is not a number; give millimetres, e.g. 32 or 2.8"))?;
+    if v.is_finite() && v > 0.0 {
+        Ok(v)
+    } else {
+        Err(format!(
+            "{s} mm is not a length: give a positive number of millimetres, e.g. 32 (a minus sign is never needed)"
+        ))
+    }
+}
+
+/// A number ≥ 0 (radii, friction coefficients, compliances).
+pub fn non_negative(s: &str) -> Result<f64, String> {
+    let v: f64 = s
+        .trim()
+        .parse()
+        .map_err(|_| format!("{s:?} is not a number"))?;
+    if v.is_finite() && v >= 0.0 {
+        Ok(v)
+    } else {
+        Err(format!("{s} is negative: give 0 or a positive number"))
+    }
+}
 
 /// Evaluate mechanical test campaigns on cables and other slender specimens: read machine
 /// exports, characterise stiffness, yield and hysteresis, calibrate Cosserat-rod laws, simulate
@@ -15,7 +71,8 @@ use std::path::PathBuf;
     name = "cablab",
     version,
     propagate_version = true,
-    max_term_width = 100
+    max_term_width = 100,
+    disable_help_subcommand = true
 )]
 pub struct Cli {
     /// What to do.
@@ -26,11 +83,17 @@ pub struct Cli {
 /// The subcommands.
 #[derive(Debug, Subcommand)]
 pub enum Command {
-    /// Run a whole campaign (default: the bundled demo, pipelines/demo.toml) and write its report
-    /// folder under reports/.
+    /// Run a whole campaign and write its report folder under reports/: folders, files or globs
+    /// of raw exports (kind and geometry inferred from the files), or a pipeline .toml
+    /// (default: the bundled demo, pipelines/demo.toml).
     Run(RunArgs),
     /// Build a campaign's outputs from the shards of `run --shard I/N` (as one run would).
     Merge(crate::commands::merge::MergeArgs),
+    /// Write a commented pipeline (pipelines/<name>.toml) for folders/files of raw exports, with
+    /// everything cablab can infer filled in and the gaps marked.
+    Init(InitArgs),
+    /// Show help for a subcommand, or `cablab help pipeline` for every pipeline-file key.
+    Help(HelpArgs),
     /// Show what the reader finds in a raw export: layout, encoding, blocks, channels, metadata.
     Inspect(InspectArgs),
     /// Convert a raw export to the canonical record (SI units) as Parquet or CSV.
@@ -75,12 +138,38 @@ pub struct ReaderArgs {
     pub units: Vec<String>,
 }
 
+/// What folder mode (`run PATH...`, `init PATH...`) may not infer from the files themselves.
+#[derive(Debug, Clone, Args, Default)]
+pub struct InferArgs {
+    /// Campaign name (report folder reports/<NAME>/; default: the first folder's name).
+    #[arg(long, value_name = "NAME")]
+    pub name: Option<String>,
+    /// Test kind of every file whose metadata, channels and name do not say it.
+    #[arg(long, value_name = "KIND")]
+    pub kind: Option<KindArg>,
+    /// Free length (support span for three-point) in mm of every file whose metadata lacks it.
+    #[arg(long, value_name = "MM", allow_negative_numbers = true, value_parser = positive_mm)]
+    pub length_mm: Option<f64>,
+    /// Section diameter in mm of every file whose metadata lacks it.
+    #[arg(long, value_name = "MM", allow_negative_numbers = true, value_parser = positive_mm)]
+    pub diameter_mm: Option<f64>,
+}
+
 /// `cablab run`.
 #[derive(Debug, Args)]
 pub struct RunArgs {
-    /// Campaign definition (TOML). Default: pipelines/demo.toml.
-    pub pipeline: Option<PathBuf>,
-    /// Worker threads (default: all cores).
+    /// A pipeline file (.toml), or folders, files and globs of raw exports (folder mode: kind,
+    /// length and diameter from each file's metadata, channel units and name). Default:
+    /// pipelines/demo.toml.
+    #[arg(value_name = "PIPELINE.toml | PATH")]
+    pub paths: Vec<PathBuf>,
+    #[command(flatten)]
+    pub infer: InferArgs,
+    /// Folder mode: leave out files with a value that cannot be inferred (listed), instead of
+    /// stopping with the list.
+    #[arg(long)]
+    pub skip_incomplete: bool,
+    /// Worker threads (default: all cores; at most 4 per core).
     #[arg(long, short = 'j', value_name = "N")]
     pub jobs: Option<usize>,
     /// Ignore the stage cache and recompute everything.
@@ -98,6 +187,30 @@ pub struct RunArgs {
     pub shard: Option<crate::pipeline::shard::Shard>,
 }
 
+/// `cablab init`.
+#[derive(Debug, Args)]
+pub struct InitArgs {
+    /// Folders, files or globs of raw exports.
+    #[arg(required = true, value_name = "PATH")]
+    pub paths: Vec<PathBuf>,
+    #[command(flatten)]
+    pub infer: InferArgs,
+    /// Write here instead of pipelines/<name>.toml.
+    #[arg(long, short = 'o', value_name = "OUT")]
+    pub output: Option<PathBuf>,
+    /// Replace an existing pipeline file.
+    #[arg(long)]
+    pub force: bool,
+}
+
+/// `cablab help`.
+#[derive(Debug, Args)]
+pub struct HelpArgs {
+    /// `pipeline` (the pipeline-file reference) or a subcommand name.
+    #[arg(value_name = "TOPIC")]
+    pub topic: Option<String>,
+}
+
 /// `cablab inspect`.
 #[derive(Debug, Args)]
 pub struct InspectArgs {
@@ -106,9 +219,9 @@ pub struct InspectArgs {
     /// Print JSON (the keys of the scripted contract) instead of a readable summary.
     #[arg(long)]
     pub json: bool,
-    /// Set the test kind when the file does not say (tension, torsion, three-point, pure-bending).
+    /// Set the test kind when the file does not say.
     #[arg(long, value_name = "KIND")]
-    pub kind: Option<String>,
+    pub kind: Option<KindArg>,
     #[command(flatten)]
     pub reader: ReaderArgs,
 }
@@ -123,7 +236,7 @@ pub struct ConvertArgs {
     pub output: PathBuf,
     /// Set the test kind when the file does not say.
     #[arg(long, value_name = "KIND")]
-    pub kind: Option<String>,
+    pub kind: Option<KindArg>,
     #[command(flatten)]
     pub reader: ReaderArgs,
 }
@@ -133,15 +246,15 @@ pub struct ConvertArgs {
 pub struct AnalyzeArgs {
     /// The raw export of one test.
     pub file: PathBuf,
-    /// Test kind: tension, torsion, three-point or pure-bending.
+    /// Test kind.
     #[arg(long, value_name = "KIND")]
-    pub kind: String,
+    pub kind: KindArg,
     /// Free length between the clamps, or the support span for three-point bending, in mm
     /// (default: from the file's metadata).
-    #[arg(long, value_name = "MM")]
+    #[arg(long, value_name = "MM", allow_negative_numbers = true, value_parser = positive_mm)]
     pub length_mm: Option<f64>,
     /// Specimen diameter in mm, for Young's modulus (default: from the file's metadata).
-    #[arg(long, value_name = "MM")]
+    #[arg(long, value_name = "MM", allow_negative_numbers = true, value_parser = positive_mm)]
     pub diameter_mm: Option<f64>,
     /// Elastic fit window in the kind's sectional control variable (strain, twist 1/m,
     /// deflection m or curvature 1/m), as FROM,TO. Default: found automatically.
@@ -153,7 +266,7 @@ pub struct AnalyzeArgs {
     )]
     pub fit_window: Option<Vec<f64>>,
     /// Machine compliance to subtract from the control channel, in SI (m/N or rad/(N m)).
-    #[arg(long, value_name = "C")]
+    #[arg(long, value_name = "C", allow_negative_numbers = true, value_parser = non_negative)]
     pub compliance: Option<f64>,
     /// Poisson ratio used for the torsion modulus (G = E / (2 (1 + nu))).
     #[arg(long, default_value_t = 0.5, value_name = "NU")]
@@ -168,11 +281,11 @@ pub struct AnalyzeArgs {
 /// `cablab simulate`.
 #[derive(Debug, Args)]
 pub struct SimulateArgs {
-    /// Test kind: tension, torsion, three-point or pure-bending.
+    /// Test kind.
     #[arg(long, value_name = "KIND")]
-    pub kind: String,
+    pub kind: KindArg,
     /// Free length, or the support span for three-point bending, in mm.
-    #[arg(long, value_name = "MM")]
+    #[arg(long, value_name = "MM", allow_negative_numbers = true, value_parser = positive_mm)]
     pub length_mm: f64,
     /// Constitutive law: linear, piecewise_linear, elastoplastic, or an extension
     /// (kinematic_hardening, stiffness_degradation, viscoelasticity, friction_hysteresis).
@@ -197,13 +310,13 @@ pub struct SimulateArgs {
     #[arg(long, default_value_t = 40, value_name = "N")]
     pub elements: usize,
     /// Punch radius in mm (three-point; 0 = a point punch).
-    #[arg(long, default_value_t = 0.0, value_name = "MM")]
+    #[arg(long, default_value_t = 0.0, value_name = "MM", allow_negative_numbers = true, value_parser = non_negative)]
     pub punch_radius_mm: f64,
     /// Support radius in mm (three-point; 0 = point supports).
-    #[arg(long, default_value_t = 0.0, value_name = "MM")]
+    #[arg(long, default_value_t = 0.0, value_name = "MM", allow_negative_numbers = true, value_parser = non_negative)]
     pub support_radius_mm: f64,
     /// Coulomb friction coefficient at the supports (three-point).
-    #[arg(long, default_value_t = 0.0, value_name = "MU")]
+    #[arg(long, default_value_t = 0.0, value_name = "MU", allow_negative_numbers = true, value_parser = non_negative)]
     pub support_friction: f64,
     /// Print JSON with `control` and `response` arrays.
     #[arg(long)]
@@ -219,14 +332,14 @@ pub struct DiagnoseArgs {
     /// Raw exports of tests of one kind (several: a joint diagnosis).
     #[arg(required = true)]
     pub files: Vec<PathBuf>,
-    /// Test kind: tension, torsion, three-point or pure-bending.
+    /// Test kind.
     #[arg(long, value_name = "KIND")]
-    pub kind: String,
+    pub kind: KindArg,
     /// Free length or span in mm (default: from each file's metadata).
-    #[arg(long, value_name = "MM")]
+    #[arg(long, value_name = "MM", allow_negative_numbers = true, value_parser = positive_mm)]
     pub length_mm: Option<f64>,
     /// Diameter in mm (default: from the metadata; only used for reporting moduli).
-    #[arg(long, value_name = "MM")]
+    #[arg(long, value_name = "MM", allow_negative_numbers = true, value_parser = positive_mm)]
     pub diameter_mm: Option<f64>,
     /// Baseline law the candidates are added to.
     #[arg(long, default_value = "elastoplastic", value_name = "LAW")]
@@ -306,7 +419,7 @@ pub enum BenchWhat {
             value_delimiter = ',',
             default_value = "tension,torsion,pure_bending,three_point"
         )]
-        kinds: Vec<String>,
+        kinds: Vec<KindArg>,
         /// Write the report (Markdown) here as well as to stdout.
         #[arg(long, short = 'o')]
         output: Option<PathBuf>,

@@ -18,8 +18,13 @@ pub fn analyze_file(
     }
     let opts = crate::bridge::read_options(&a.reader, Some(kind)).map_err(CliError::input)?;
     let rec = cablab_ingest::read_path(&a.file, &opts).map_err(CliError::input)?;
-    let geom =
-        crate::bridge::geometry(&rec, kind, a.length_mm, a.diameter_mm).map_err(CliError::input)?;
+    let geom = crate::bridge::geometry(
+        &rec,
+        kind,
+        crate::bridge::mm(a.length_mm),
+        crate::bridge::mm(a.diameter_mm),
+    )
+    .map_err(CliError::input)?;
     let curve = crate::bridge::curve(&rec).map_err(CliError::input)?;
     let mut ao = cablab_measure::AnalyzeOptions {
         nu: a.nu,

@@ -24,7 +24,13 @@ pub fn run(a: BenchArgs) -> CmdResult {
             kinds,
             output,
             json,
-        } => crate::blind::bench(seeds, &kinds, output.as_deref(), json.as_deref()),
+        } => {
+            let kinds: Vec<String> = kinds
+                .into_iter()
+                .map(|k| cablab_core::TestKind::from(k).as_str().to_string())
+                .collect();
+            crate::blind::bench(seeds, &kinds, output.as_deref(), json.as_deref())
+        }
     }
 }
 

@@ -18,21 +18,8 @@ pub fn run(a: ConvertArgs) -> CmdResult {
             a.output.display()
         )));
     }
-    // Never overwrite the raw data: an output that is the input (after resolving links and
-    // relative paths) is refused before anything is read.
-    if let (Ok(inp), Ok(out)) = (
-        std::fs::canonicalize(&a.file),
-        std::fs::canonicalize(&a.output),
-    ) {
-        if inp == out {
-            return Err(CliError::input(anyhow::anyhow!(
-                "-o {}: the output is the input file {}; raw data is never overwritten (choose another output path)",
-                a.output.display(),
-                a.file.display()
-            )));
-        }
-    }
-    let kind = a.kind.as_deref().map(parse_kind).transpose()?;
+    super::refuse_overwrite(&a.output, &[&a.file])?;
+    let kind = a.kind.as_ref().map(parse_kind).transpose()?;
     let opts = crate::bridge::read_options(&a.reader, kind).map_err(CliError::input)?;
     let rec = cablab_ingest::read_path(&a.file, &opts).map_err(CliError::input)?;
     for w in &rec.warnings {

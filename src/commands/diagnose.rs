@@ -16,8 +16,13 @@ pub fn diag_test(
 ) -> Result<DiagTest, CliError> {
     let opts = crate::bridge::read_options(&a.reader, Some(kind)).map_err(CliError::input)?;
     let rec = cablab_ingest::read_path(path, &opts).map_err(CliError::input)?;
-    let geom =
-        crate::bridge::geometry(&rec, kind, a.length_mm, a.diameter_mm).map_err(CliError::input)?;
+    let geom = crate::bridge::geometry(
+        &rec,
+        kind,
+        crate::bridge::mm(a.length_mm),
+        crate::bridge::mm(a.diameter_mm),
+    )
+    .map_err(CliError::input)?;
     let curve = crate::bridge::curve(&rec).map_err(CliError::input)?;
     let (t, _) = crate::bridge::diag_test(kind, &geom, &curve, rec.specimen.label.clone(), None)
         .map_err(|e| CliError::input(anyhow::anyhow!("{}: {e:#}", path.display())))?;

@@ -6,7 +6,7 @@ use std::process::ExitCode;
 
 /// Run `cablab inspect`.
 pub fn run(a: InspectArgs) -> CmdResult {
-    let kind = a.kind.as_deref().map(parse_kind).transpose()?;
+    let kind = a.kind.as_ref().map(parse_kind).transpose()?;
     let mut opts = crate::bridge::read_options(&a.reader, kind).map_err(CliError::input)?;
     // Inspect shows a column whose unit cannot be read (with a warning) rather than refusing.
     opts.lenient = true;

@@ -1,14 +1,16 @@
 //! One module per subcommand: typed options in, library calls, output out. Nothing here does
 //! physics; it reads files, calls the stage crates and prints or writes what they return.
 
-use crate::cli::{Cli, Command};
+use crate::cli::{Cli, Command, HelpArgs, KindArg};
 use std::fmt;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 pub mod analyze;
 pub mod bench;
 pub mod convert;
 pub mod diagnose;
+pub mod init;
 pub mod inspect;
 pub mod merge;
 pub mod run;
@@ -60,6 +62,8 @@ pub type CmdResult = Result<ExitCode, CliError>;
 pub fn dispatch(cli: Cli) -> CmdResult {
     match cli.command {
         Command::Run(a) => run::run(a),
+        Command::Init(a) => init::run(a),
+        Command::Help(a) => help(a),
         Command::Verify(a) => run::verify(a),
         Command::Merge(a) => merge::run(a),
         Command::Inspect(a) => inspect::run(a),
@@ -72,10 +76,108 @@ pub fn dispatch(cli: Cli) -> CmdResult {
     }
 }
 
-/// Parse a kind from the command line (accepts `three-point` and `pure-bending`).
-pub fn parse_kind(s: &str) -> Result<cablab_core::TestKind, CliError> {
-    s.parse().map_err(CliError::input)
+/// A kind from the command line. Clap has already checked the spelling (a [`KindArg`] value
+/// enum, `three-point` and `three_point` alike), so this cannot fail; it stays the one place where
+/// kinds enter the commands.
+pub fn parse_kind(k: &KindArg) -> Result<cablab_core::TestKind, CliError> {
+    Ok((*k).into())
 }
+
+/// The pipeline-file reference (`docs/pipeline.md`), compiled in so that `cablab help pipeline`
+/// and the page can never disagree.
+pub const PIPELINE_REFERENCE: &str = include_str!("../../docs/pipeline.md");
+
+/// `cablab help [TOPIC]`: `pipeline` prints the pipeline reference; a subcommand name prints its
+/// help; nothing prints the overview.
+fn help(a: HelpArgs) -> CmdResult {
+    use clap::CommandFactory;
+    let mut cmd = Cli::command();
+    match a.topic.as_deref() {
+        None => cmd.print_long_help().map_err(CliError::failed)?,
+        Some("pipeline" | "pipelines" | "toml") => print!("{PIPELINE_REFERENCE}"),
+        Some(t) => {
+            let names: Vec<String> = cmd
+                .get_subcommands()
+                .map(|c| c.get_name().to_string())
+                .collect();
+            match cmd.find_subcommand_mut(t) {
+                Some(sub) => {
+                    let mut sub = sub.clone().bin_name(format!("cablab {t}"));
+                    sub.print_long_help().map_err(CliError::failed)?
+                }
+                None => {
+                    return Err(CliError::input(anyhow::anyhow!(
+                        "help: no topic {t:?}; topics: pipeline, {}",
+                        names.join(", ")
+                    )))
+                }
+            }
+        }
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+/// Refuse, before any work, to write `output` over one of the `inputs` (same file, also through
+/// links or `..`). Exit 2 naming both.
+pub fn refuse_overwrite(output: &Path, inputs: &[&Path]) -> Result<(), CliError> {
+    let out = canonical_or_absolute(output);
+    for i in inputs {
+        if canonical_or_absolute(i) == out {
+            return Err(CliError::input(anyhow::anyhow!(
+                "{}: refusing to write over the input file {} (raw data is never modified); choose another output",
+                output.display(),
+                i.display()
+            )));
+        }
+    }
+    Ok(())
+}
+
+/// The absolute, symlink-free form of a path; for a path that does not exist yet, its existing
+/// parent's canonical form joined with the rest.
+pub fn canonical_or_absolute(p: &Path) -> PathBuf {
+    if let Ok(c) = p.canonicalize() {
+        return c;
+    }
+    let abs = std::path::absolute(p).unwrap_or_else(|_| p.to_path_buf());
+    let mut tail = Vec::new();
+    let mut cur = abs.as_path();
+    while let Some(parent) = cur.parent() {
+        if let Some(n) = cur.file_name() {
+            tail.push(n.to_os_string());
+        }
+        if let Ok(c) = parent.canonicalize() {
+            let mut r = c;
+            for n in tail.iter().rev() {
+                r.push(n);
+            }
+            return r;
+        }
+        cur = parent;
+    }
+    abs
+}
+
+/// Worker threads to use: `requested` (None or 0: all cores), capped at [`JOBS_PER_CORE`] per
+/// core with a warning — more threads than that only add switching and memory (a run with
+/// `--jobs 100000` would spend minutes starting threads).
+pub fn capped_jobs(requested: Option<usize>) -> Option<usize> {
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let cap = JOBS_PER_CORE * cores;
+    match requested {
+        Some(j) if j > cap => {
+            eprintln!(
+                "cablab: warning: --jobs {j} capped at {cap} ({JOBS_PER_CORE} per core, {cores} cores)"
+            );
+            Some(cap)
+        }
+        Some(0) | None => None,
+        j => j,
+    }
+}
+
+/// Most worker threads per core `--jobs` may ask for.
+pub const JOBS_PER_CORE: usize = 4;
 
 /// Print `value` as pretty JSON on stdout.
 pub fn print_json<T: serde::Serialize>(value: &T) -> Result<(), CliError> {

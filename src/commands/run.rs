@@ -1,7 +1,8 @@
 //! `cablab run` (a campaign end to end) and `cablab verify` (rerun from a manifest and compare).
 
-use super::{CliError, CmdResult};
+use super::{init, CliError, CmdResult};
 use crate::cli::{RunArgs, VerifyArgs};
+use crate::output::write_atomic;
 use crate::pipeline::{config, runner, verify as ver};
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -9,18 +10,57 @@ use std::process::ExitCode;
 /// The demo campaign, relative to the working directory.
 pub const DEMO_PIPELINE: &str = "pipelines/demo.toml";
 
-/// Run `cablab run`.
+/// Run `cablab run`: a pipeline file (one `.toml` argument, default the demo), or folder mode
+/// over folders, files and globs of raw exports.
 pub fn run(a: RunArgs) -> CmdResult {
-    let (path, campaign) = load_campaign(a.pipeline)?;
+    let tomls = a
+        .paths
+        .iter()
+        .filter(|p| {
+            p.extension()
+                .is_some_and(|e| e.eq_ignore_ascii_case("toml"))
+        })
+        .count();
+    let folder_mode = !a.paths.is_empty() && tomls == 0;
+    if tomls > 0 && a.paths.len() > 1 {
+        return Err(CliError::input(anyhow::anyhow!(
+            "give one pipeline file, or folders/files of raw exports, not both ({} paths, {tomls} .toml)",
+            a.paths.len()
+        )));
+    }
+    let inferred = a.infer.kind.is_some()
+        || a.infer.length_mm.is_some()
+        || a.infer.diameter_mm.is_some()
+        || a.infer.name.is_some()
+        || a.skip_incomplete;
+    if !folder_mode && inferred {
+        return Err(CliError::input(anyhow::anyhow!(
+            "--name, --kind, --length-mm, --diameter-mm and --skip-incomplete are for folders of raw exports; a pipeline file sets these itself"
+        )));
+    }
+    let (campaign, source) = if folder_mode {
+        (folder_campaign(&a)?, "folder mode".to_string())
+    } else {
+        let (path, c) = load_campaign(a.paths.first().cloned())?;
+        (c, path.display().to_string())
+    };
     let quiet = a.quiet || std::env::var_os("CI").is_some();
     eprintln!(
-        "cablab: campaign '{}': {} tests from {}",
+        "cablab: campaign '{}': {} tests from {source}",
         campaign.file.campaign.name,
         campaign.tests.len(),
-        path.display()
     );
+    for (id, why) in &campaign.skipped {
+        eprintln!("cablab: skipped {id}: {why}");
+    }
+    if folder_mode && a.shard.is_some() {
+        return Err(CliError::input(anyhow::anyhow!(
+            "--shard needs a pipeline file that every shard and `cablab merge` read: write one with `cablab init {}` and run that",
+            init::joined(&a.paths)
+        )));
+    }
     let opts = runner::RunOptions {
-        jobs: a.jobs,
+        jobs: super::capped_jobs(a.jobs),
         no_cache: a.no_cache,
         quiet,
         no_diagnosis: a.no_diagnosis,
@@ -31,6 +71,15 @@ pub fn run(a: RunArgs) -> CmdResult {
         None => runner::run_campaign(&campaign, &opts),
     }
     .map_err(CliError::failed)?;
+    if folder_mode {
+        // The pipeline folder mode generated, beside the report: `cablab verify` reruns from it.
+        write_atomic(&campaign.pipeline_path, &campaign.pipeline_bytes).map_err(|e| {
+            CliError::failed(anyhow::anyhow!(
+                "{}: cannot write: {e}",
+                campaign.pipeline_path.display()
+            ))
+        })?;
+    }
     let next = match a.shard {
         Some(s) => format!("shard {s} done; `cablab merge` builds the report once all are"),
         None => format!("open {}", r.out_dir.join("index.html").display()),
@@ -38,14 +87,14 @@ pub fn run(a: RunArgs) -> CmdResult {
     Ok(print_run(&r, &next))
 }
 
-/// The campaign `run` and `merge` work on: the pipeline given, else the demo's.
+/// The campaign `merge` works on: the pipeline given, else the demo's.
 pub(crate) fn load_campaign(
     pipeline: Option<PathBuf>,
 ) -> Result<(PathBuf, config::Campaign), CliError> {
     let path = pipeline.unwrap_or_else(|| PathBuf::from(DEMO_PIPELINE));
     if !path.exists() {
         return Err(CliError::input(anyhow::anyhow!(
-            "pipeline {} not found (run from the project folder, or give a pipeline file)",
+            "pipeline {} not found (run from the project folder, or give a pipeline file or folders of raw exports)",
             path.display()
         )));
     }
@@ -78,9 +127,40 @@ pub(crate) fn print_run(r: &runner::RunReport, next: &str) -> ExitCode {
     }
 }
 
+/// Folder mode: infer every file, stop with one message listing the gaps (unless
+/// `--skip-incomplete`), then validate the generated pipeline exactly as a pipeline file is
+/// validated. The pipeline is kept as `reports/<name>/pipeline.toml` (written after the run).
+fn folder_campaign(a: &RunArgs) -> Result<config::Campaign, CliError> {
+    let mut s = init::survey(&a.paths, &a.infer)?;
+    eprint!("cablab: inferred:\n{}", init::describe(&s));
+    if let Some(m) = init::gaps_message(&s, &a.paths) {
+        if !a.skip_incomplete {
+            return Err(CliError::input(anyhow::anyhow!("{m}")));
+        }
+        let (keep, drop): (Vec<_>, Vec<_>) = s.found.into_iter().partition(|f| f.gaps().is_empty());
+        for f in drop {
+            let why = format!("--skip-incomplete: no {}", f.gaps().join(", no "));
+            eprintln!("cablab: skipped {}: {why}", f.path.display());
+            s.skipped.push((f.path, why));
+        }
+        s.found = keep;
+    }
+    if s.found.is_empty() {
+        return Err(CliError::input(anyhow::anyhow!(
+            "no test files to evaluate under {}",
+            init::joined(&a.paths)
+        )));
+    }
+    let name = init::campaign_name(&a.paths, &a.infer);
+    let pipeline = PathBuf::from("reports").join(&name).join("pipeline.toml");
+    let cmd = format!("cablab run {}", init::joined(&a.paths));
+    let text = init::render(&s, &name, init::root_from(&pipeline).as_deref(), &cmd);
+    config::load_str(&text, &pipeline).map_err(CliError::input)
+}
+
 /// Run `cablab verify`.
 pub fn verify(a: VerifyArgs) -> CmdResult {
-    let rep = ver::verify(&a.manifest, a.jobs).map_err(CliError::input)?;
+    let rep = ver::verify(&a.manifest, super::capped_jobs(a.jobs)).map_err(CliError::input)?;
     if rep.differences.is_empty() {
         println!(
             "verified: {} files match {} ({} regenerated outputs are not kept on disk)",

@@ -49,6 +49,11 @@ pub struct CampaignSection {
     /// Output folder, relative to the pipeline file's project root (the folder holding `pipelines/`).
     #[serde(default)]
     pub output: Option<PathBuf>,
+    /// Project root, relative to this file's folder (default: the parent of a `pipelines/`
+    /// folder, else the file's own folder). Folder mode writes it into the pipeline it keeps in
+    /// the report folder, so that `cablab verify` finds the inputs again.
+    #[serde(default)]
+    pub root: Option<PathBuf>,
     /// Poisson ratio for moduli from stiffnesses (the chapter: 0.5).
     #[serde(default = "default_nu")]
     pub nu: f64,
@@ -337,23 +342,297 @@ pub fn load(pipeline: &Path) -> Result<Campaign> {
         .with_context(|| format!("cannot read pipeline {}", pipeline.display()))?;
     let text = std::str::from_utf8(&bytes)
         .map_err(|e| anyhow!("{}: not UTF-8 text ({e})", pipeline.display()))?;
-    let file: PipelineFile =
-        toml::from_str(text).map_err(|e| anyhow!("{}: {}", pipeline.display(), e))?;
-    let root = project_root(pipeline);
-    validate(file, pipeline, bytes.clone(), root)
+    load_str(text, pipeline)
 }
 
-fn positive(v: Option<f64>, what: &str, ctx: &str) -> Result<()> {
-    if let Some(x) = v {
-        if !(x.is_finite() && x > 0.0) {
-            bail!("{ctx}: {what} must be a positive number, got {x}");
+/// Parse and validate pipeline text as if read from `pipeline` (which need not exist yet: folder
+/// mode validates the pipeline it generates before writing it).
+pub fn load_str(text: &str, pipeline: &Path) -> Result<Campaign> {
+    let ctx = pipeline.display().to_string();
+    let unfilled: Vec<String> = text
+        .lines()
+        .enumerate()
+        .filter(|(_, l)| l.split('#').next().is_some_and(|v| v.contains("\"FILL IN")))
+        .map(|(i, l)| {
+            format!(
+                "  {ctx}:{}: {}",
+                i + 1,
+                l.split('#').next().unwrap_or("").trim()
+            )
+        })
+        .collect();
+    if !unfilled.is_empty() {
+        bail!(
+            "{ctx}: {} value(s) still say FILL IN (cablab could not infer them from the files; replace each):\n{}",
+            unfilled.len(),
+            unfilled.join("\n")
+        );
+    }
+    let raw: toml::Table = text.parse().map_err(|e| anyhow!("{ctx}: {e}"))?;
+    check_lists(&raw, "", 0, &Lines { text }, &ctx)?;
+    let file: PipelineFile = toml::from_str(text).map_err(|e| {
+        anyhow!(
+            "{}: {}",
+            pipeline.display(),
+            with_suggestion(&e.to_string())
+        )
+    })?;
+    let root = match &file.campaign.root {
+        Some(r) => {
+            let dir = pipeline.parent().unwrap_or(Path::new("."));
+            let dir = if dir.as_os_str().is_empty() {
+                Path::new(".")
+            } else {
+                dir
+            };
+            lexical(&dir.join(r))
+        }
+        None => project_root(pipeline),
+    };
+    validate(file, pipeline, text.as_bytes().to_vec(), root)
+}
+
+/// Lists whose shape no key accepts, found before the typed parse (which would silently use the
+/// first elements of a longer list): a list mixing numbers, strings and booleans, and a
+/// `fit_window` that is not a pair.
+fn check_lists(t: &toml::Table, table: &str, nth: usize, lines: &Lines, ctx: &str) -> Result<()> {
+    use toml::Value;
+    let sub = |k: &str| {
+        if table.is_empty() {
+            k.to_string()
+        } else {
+            format!("{table}.{k}")
+        }
+    };
+    for (k, v) in t {
+        match v {
+            Value::Table(inner) => check_lists(inner, &sub(k), 0, lines, ctx)?,
+            Value::Array(items) if items.iter().all(Value::is_table) => {
+                for (i, it) in items.iter().enumerate() {
+                    if let Value::Table(inner) = it {
+                        check_lists(inner, &sub(k), i, lines, ctx)?;
+                    }
+                }
+            }
+            Value::Array(items) => {
+                let at = || lines.at(ctx, table, nth, k);
+                let mut types: Vec<&str> = items
+                    .iter()
+                    .map(|x| match x {
+                        Value::Integer(_) | Value::Float(_) => "number",
+                        other => other.type_str(),
+                    })
+                    .collect();
+                types.sort_unstable();
+                types.dedup();
+                if types.len() > 1 {
+                    bail!(
+                        "{}: a list of one type is expected, got {} in {v}",
+                        at(),
+                        types.join(" and ")
+                    );
+                }
+                if k == "fit_window" && items.len() != 2 {
+                    bail!(
+                        "{}: give exactly two numbers [from, to], got {} values in {v}",
+                        at(),
+                        items.len()
+                    );
+                }
+            }
+            _ => {}
         }
     }
     Ok(())
 }
 
+/// `a/b/../c` → `a/c` without touching the file system (the folder `b` need not exist yet).
+fn lexical(p: &Path) -> PathBuf {
+    use std::path::Component;
+    let mut out = PathBuf::new();
+    for c in p.components() {
+        match c {
+            Component::CurDir => {}
+            Component::ParentDir => {
+                let last = out.components().next_back();
+                if matches!(last, Some(Component::Normal(_))) {
+                    out.pop();
+                } else if !matches!(last, Some(Component::RootDir | Component::Prefix(_))) {
+                    out.push("..");
+                }
+            }
+            c => out.push(c.as_os_str()),
+        }
+    }
+    if out.as_os_str().is_empty() {
+        PathBuf::from(".")
+    } else {
+        out
+    }
+}
+
+/// Every key the parser accepts, as `table.key` (`[[specimen]]` → `specimen.key`, per-kind
+/// settings → `kinds.<kind>.key`, per-file overrides → `input.overrides.<file>.key`). The
+/// pipeline reference (`docs/pipeline.md`) documents each of them; a test checks that it does.
+pub fn known_keys() -> Vec<String> {
+    let mut keys = Vec::new();
+    for (prefix, names) in [
+        ("", fields::<PipelineFile>()),
+        ("campaign.", fields::<CampaignSection>()),
+        ("specimen.", fields::<SpecimenType>()),
+        ("input.", fields::<InputGroup>()),
+        ("input.overrides.<file>.", fields::<FileOverride>()),
+        ("kinds.<kind>.", fields::<KindSettings>()),
+        ("model.", fields::<ModelSettings>()),
+        ("diagnosis.", fields::<DiagnosisSettings>()),
+        ("reports.", fields::<ReportSettings>()),
+    ] {
+        keys.extend(names.into_iter().map(|n| format!("{prefix}{n}")));
+    }
+    keys
+}
+
+/// The field names serde accepts for `T`, read from the error an unknown field provokes (so the
+/// list cannot drift from the struct).
+fn fields<T: serde::de::DeserializeOwned>() -> Vec<String> {
+    let probe = "__no_such_key__ = 1";
+    let e = match toml::from_str::<T>(probe) {
+        Ok(_) => return Vec::new(),
+        Err(e) => e.to_string(),
+    };
+    expected_names(&e)
+}
+
+/// The names in "expected one of `a`, `b`" / "expected `a`" of a serde error.
+fn expected_names(e: &str) -> Vec<String> {
+    let Some(p) = e.find("expected") else {
+        return Vec::new();
+    };
+    e[p..]
+        .split('`')
+        .skip(1)
+        .step_by(2)
+        .map(str::to_string)
+        .collect()
+}
+
+/// A serde "unknown field `x`, expected one of ..." error with "did you mean `y`?" added when a
+/// known name is close to the misspelt one.
+fn with_suggestion(e: &str) -> String {
+    let Some(p) = e.find("unknown field `") else {
+        return e.to_string();
+    };
+    let rest = &e[p + "unknown field `".len()..];
+    let Some(end) = rest.find('`') else {
+        return e.to_string();
+    };
+    let given = &rest[..end];
+    let best = expected_names(rest)
+        .into_iter()
+        .map(|n| (edit_distance(given, &n), n))
+        .min();
+    match best {
+        Some((d, n)) if d <= (given.chars().count() / 3).max(2) => {
+            format!("{}\ndid you mean `{n}`?", e.trim_end())
+        }
+        _ => e.to_string(),
+    }
+}
+
+/// Levenshtein distance (insertions, deletions, substitutions), case-insensitive.
+fn edit_distance(a: &str, b: &str) -> usize {
+    let a: Vec<char> = a.to_lowercase().chars().collect();
+    let b: Vec<char> = b.to_lowercase().chars().collect();
+    let mut prev: Vec<usize> = (0..=b.len()).collect();
+    for (i, ca) in a.iter().enumerate() {
+        let mut cur = vec![i + 1; b.len() + 1];
+        for (j, cb) in b.iter().enumerate() {
+            cur[j + 1] = (prev[j] + usize::from(ca != cb))
+                .min(prev[j + 1] + 1)
+                .min(cur[j] + 1);
+        }
+        prev = cur;
+    }
+    prev[b.len()]
+}
+
+/// Finds the line of a key in the pipeline text, for messages about values that parsed but are
+/// out of range (the TOML parser only reports lines for syntax and type errors).
+struct Lines<'a> {
+    text: &'a str,
+}
+
+impl Lines<'_> {
+    /// Line (1-based) of `key = ...` inside the `nth` (0-based) table whose header is `table`
+    /// (`campaign`, `specimen`, `input`, `kinds.tension`, ...); a header that merely contains
+    /// `table` after the nth `[[input]]` counts for override sub-tables.
+    fn of(&self, table: &str, nth: usize, key: &str) -> Option<usize> {
+        let mut seen = 0usize;
+        let mut inside = false;
+        for (i, line) in self.text.lines().enumerate() {
+            let t = line.trim();
+            if t.starts_with('[') {
+                let name = t.trim_matches(|c| c == '[' || c == ']').trim();
+                let name: String = name.chars().filter(|c| *c != '"' && *c != '\'').collect();
+                inside = name == table;
+                if inside {
+                    seen += 1;
+                }
+                continue;
+            }
+            if inside && seen == nth + 1 {
+                if let Some(rest) = t.strip_prefix(key) {
+                    if rest.trim_start().starts_with('=') {
+                        return Some(i + 1);
+                    }
+                }
+            }
+        }
+        None
+    }
+
+    /// `file:line: ` or `file: ` when the line is not found.
+    fn at(&self, file: &str, table: &str, nth: usize, key: &str) -> String {
+        match self.of(table, nth, key) {
+            Some(l) => format!("{file}:{l}: [{table}] {key}"),
+            None => format!("{file}: [{table}] {key}"),
+        }
+    }
+}
+
+/// Plausible section diameters, mm: a 10 µm fibre to a 0.5 m column.
+pub const DIAMETER_MM: (f64, f64) = (0.01, 500.0);
+/// Plausible free lengths and spans, mm: 0.1 mm to 100 m.
+pub const LENGTH_MM: (f64, f64) = (0.1, 100_000.0);
+/// Plausible machine compliances, m/N or rad/(N m). Load frames and torsion heads are far stiffer
+/// than 1 mm/kN (1e-6 m/N); 1e-3 already means the machine, not the specimen, is being measured.
+pub const COMPLIANCE: (f64, f64) = (0.0, 1e-3);
+
+/// A number as a person would write it: `1e300`, `0.00002` → `2e-5`, `32`.
+fn short(v: f64) -> String {
+    if v != 0.0 && v.is_finite() && !(1e-3..1e6).contains(&v.abs()) {
+        format!("{v:e}")
+    } else {
+        format!("{v}")
+    }
+}
+
+/// `Ok` when `v` lies in `[lo, hi]`; else the message names the key, the value and the range.
+fn in_range(v: f64, (lo, hi): (f64, f64), unit: &str, at: &str) -> Result<()> {
+    if v.is_finite() && v >= lo && v <= hi && !(lo == 0.0 && v == 0.0 && unit == "mm") {
+        Ok(())
+    } else {
+        bail!(
+            "{at} = {}: outside the plausible range {lo:e}..{hi:e} {unit}",
+            short(v)
+        )
+    }
+}
+
 fn validate(file: PipelineFile, path: &Path, bytes: Vec<u8>, root: PathBuf) -> Result<Campaign> {
     let ctx = path.display().to_string();
+    let text = String::from_utf8_lossy(&bytes).to_string();
+    let lines = Lines { text: &text };
     if file.campaign.name.trim().is_empty()
         || file
             .campaign
@@ -362,25 +641,32 @@ fn validate(file: PipelineFile, path: &Path, bytes: Vec<u8>, root: PathBuf) -> R
             .any(|c| !(c.is_ascii_alphanumeric() || c == '-' || c == '_'))
     {
         bail!(
-            "{ctx}: campaign.name must be a non-empty folder name of letters, digits, '-' or '_', got {:?}",
+            "{}: must be a non-empty folder name of letters, digits, '-' or '_', got {:?}",
+            lines.at(&ctx, "campaign", 0, "name"),
             file.campaign.name
         );
     }
     if !(0.0..0.5 + 1e-12).contains(&file.campaign.nu) {
         bail!(
-            "{ctx}: campaign.nu must lie in [0, 0.5], got {}",
+            "{}: must lie in [0, 0.5], got {}",
+            lines.at(&ctx, "campaign", 0, "nu"),
             file.campaign.nu
         );
     }
     let mut diam = BTreeMap::new();
-    for s in &file.specimens {
-        positive(
-            Some(s.diameter_mm),
-            "diameter_mm",
-            &format!("{ctx}: specimen '{}'", s.label),
+    for (si, s) in file.specimens.iter().enumerate() {
+        in_range(
+            s.diameter_mm,
+            DIAMETER_MM,
+            "mm",
+            &lines.at(&ctx, "specimen", si, "diameter_mm"),
         )?;
         if diam.insert(s.label.clone(), s.diameter_mm * 1e-3).is_some() {
-            bail!("{ctx}: specimen '{}' is declared twice", s.label);
+            bail!(
+                "{}: specimen '{}' is declared twice",
+                lines.at(&ctx, "specimen", si, "label"),
+                s.label
+            );
         }
     }
     for (k, ks) in &file.kinds {
@@ -392,9 +678,12 @@ fn validate(file: PipelineFile, path: &Path, bytes: Vec<u8>, root: PathBuf) -> R
             }
         }
         if let Some(c) = ks.compliance {
-            if !(c.is_finite() && c >= 0.0) {
-                bail!("{ctx}: [kinds.{k}] compliance must be >= 0, got {c}");
-            }
+            in_range(
+                c,
+                COMPLIANCE,
+                "m/N or rad/(N m)",
+                &lines.at(&ctx, &format!("kinds.{k}"), 0, "compliance"),
+            )?;
         }
         if let Some(m) = &ks.yield_method {
             if m != "auto" {
@@ -405,7 +694,8 @@ fn validate(file: PipelineFile, path: &Path, bytes: Vec<u8>, root: PathBuf) -> R
     for t in &file.reports.tables {
         if !["md", "csv", "json", "tex"].contains(&t.as_str()) {
             bail!(
-                "{ctx}: reports.tables: unknown table format {t:?} (expected md, csv, json, tex)"
+                "{}: unknown table format {t:?} (expected md, csv, json, tex)",
+                lines.at(&ctx, "reports", 0, "tables")
             );
         }
     }
@@ -417,7 +707,8 @@ fn validate(file: PipelineFile, path: &Path, bytes: Vec<u8>, root: PathBuf) -> R
     }
     if file.model.elements < 4 || file.model.elements > 2000 {
         bail!(
-            "{ctx}: model.elements must be between 4 and 2000, got {}",
+            "{}: must be between 4 and 2000, got {}",
+            lines.at(&ctx, "model", 0, "elements"),
             file.model.elements
         );
     }
@@ -426,8 +717,9 @@ fn validate(file: PipelineFile, path: &Path, bytes: Vec<u8>, root: PathBuf) -> R
         Some(v) => Some(
             v.iter()
                 .map(|s| {
-                    s.parse()
-                        .map_err(|e| anyhow!("{ctx}: diagnosis.candidates: {e}"))
+                    s.parse().map_err(|e| {
+                        anyhow!("{}: {e}", lines.at(&ctx, "diagnosis", 0, "candidates"))
+                    })
                 })
                 .collect::<Result<Vec<_>>>()?,
         ),
@@ -438,7 +730,7 @@ fn validate(file: PipelineFile, path: &Path, bytes: Vec<u8>, root: PathBuf) -> R
             v.iter()
                 .map(|s| {
                     s.parse()
-                        .map_err(|e| anyhow!("{ctx}: diagnosis.kinds: {e}"))
+                        .map_err(|e| anyhow!("{}: {e}", lines.at(&ctx, "diagnosis", 0, "kinds")))
                 })
                 .collect::<Result<Vec<_>>>()?,
         ),
@@ -446,25 +738,50 @@ fn validate(file: PipelineFile, path: &Path, bytes: Vec<u8>, root: PathBuf) -> R
     if file.inputs.is_empty() {
         bail!("{ctx}: no [[input]] groups: a campaign needs at least one");
     }
+    let out_dir = match &file.campaign.output {
+        Some(p) => root.join(p),
+        None => root.join("reports").join(&file.campaign.name),
+    };
+    let out_abs = crate::commands::canonical_or_absolute(&out_dir);
     let mut tests = Vec::new();
     let mut skipped = Vec::new();
     let mut seen = std::collections::BTreeSet::new();
     for (gi, g) in file.inputs.iter().enumerate() {
         let gctx = format!("{ctx}: input #{} (glob {:?})", gi + 1, g.glob);
-        let kind: TestKind = g.kind.parse().map_err(|e| anyhow!("{gctx}: kind: {e}"))?;
+        let kind: TestKind = g
+            .kind
+            .parse()
+            .map_err(|e| anyhow!("{}: {e}", lines.at(&ctx, "input", gi, "kind")))?;
         if kind == TestKind::Unknown {
-            bail!("{gctx}: kind must be one of tension, torsion, three_point, pure_bending");
+            bail!(
+                "{}: must be one of tension, torsion, three_point, pure_bending",
+                lines.at(&ctx, "input", gi, "kind")
+            );
         }
         let diameter_m = *diam.get(&g.specimen).ok_or_else(|| {
             anyhow!(
-                "{gctx}: specimen {:?} is not declared in a [[specimen]] table (declared: {:?})",
+                "{}: specimen {:?} is not declared in a [[specimen]] table (declared: {:?})",
+                lines.at(&ctx, "input", gi, "specimen"),
                 g.specimen,
                 diam.keys().collect::<Vec<_>>()
             )
         })?;
-        positive(g.length_mm, "length_mm", &gctx)?;
+        if let Some(l) = g.length_mm {
+            in_range(
+                l,
+                LENGTH_MM,
+                "mm",
+                &lines.at(&ctx, "input", gi, "length_mm"),
+            )?;
+        }
+        if let Some(f) = &g.format {
+            f.parse::<cablab_ingest::Format>()
+                .map_err(|e| anyhow!("{}: {e}", lines.at(&ctx, "input", gi, "format")))?;
+        }
         let pattern = root.join(&g.glob);
         let pattern = pattern.to_string_lossy().to_string();
+        refuse_output_in_input(&out_abs, &pattern)
+            .map_err(|e| anyhow!("{}: {e}", lines.at(&ctx, "input", gi, "glob")))?;
         let mut matched: Vec<PathBuf> = glob::glob(&pattern)
             .map_err(|e| anyhow!("{gctx}: bad glob: {e}"))?
             .filter_map(|r| r.ok())
@@ -495,19 +812,41 @@ fn validate(file: PipelineFile, path: &Path, bytes: Vec<u8>, root: PathBuf) -> R
                 .map(|c| c.as_os_str().to_string_lossy().to_string())
                 .collect::<Vec<_>>()
                 .join("/");
+            if crate::commands::canonical_or_absolute(&p).starts_with(&out_abs) {
+                bail!(
+                    "{}: the input {id} lies inside the output folder {}; a run would write over raw data — set [campaign] output elsewhere",
+                    lines.at(&ctx, "input", gi, "glob"),
+                    out_dir.display()
+                );
+            }
+            if let Some(why) = report_file(&p, &root) {
+                skipped.push((id, why));
+                continue;
+            }
             if !seen.insert(id.clone()) {
                 bail!("{gctx}: file {id} is matched by two input groups");
             }
             let ov = g.overrides.get(&fname).cloned().unwrap_or_default();
+            let octx = format!("input.overrides.{fname}");
             if let Some(why) = &ov.skip {
                 skipped.push((id, why.clone()));
                 continue;
             }
-            positive(
-                ov.length_mm,
-                "length_mm",
-                &format!("{gctx}: override {fname}"),
-            )?;
+            if let Some(l) = ov.length_mm {
+                in_range(l, LENGTH_MM, "mm", &lines.at(&ctx, &octx, 0, "length_mm"))?;
+            }
+            if let Some(f) = &ov.format {
+                f.parse::<cablab_ingest::Format>()
+                    .map_err(|e| anyhow!("{}: {e}", lines.at(&ctx, &octx, 0, "format")))?;
+            }
+            if let Some(b) = ov.block {
+                if !(1..=10_000).contains(&b) {
+                    bail!(
+                        "{}: blocks are numbered from 1, got {b}",
+                        lines.at(&ctx, &octx, 0, "block")
+                    );
+                }
+            }
             tests.push(PlannedTest {
                 id,
                 path: p,
@@ -524,6 +863,9 @@ fn validate(file: PipelineFile, path: &Path, bytes: Vec<u8>, root: PathBuf) -> R
             });
         }
     }
+    if tests.is_empty() {
+        bail!("{ctx}: every matched file is skipped; nothing to evaluate");
+    }
     tests.sort_by(|a, b| a.id.cmp(&b.id));
     Ok(Campaign {
         file,
@@ -535,6 +877,74 @@ fn validate(file: PipelineFile, path: &Path, bytes: Vec<u8>, root: PathBuf) -> R
         candidates,
         diagnose_kinds,
     })
+}
+
+/// Names of the files a campaign writes at the top of its report folder.
+pub const REPORT_FILES: &[&str] = &["index.html", "summary.json", "manifest.json"];
+
+/// Why `p` is a report's own file and not a test (None: it may be a test): one of
+/// [`REPORT_FILES`] or `outcome.json`, or any file inside a folder (below `root`) that holds a
+/// cablab `manifest.json` beside a `summary.json`.
+pub fn report_file(p: &Path, root: &Path) -> Option<String> {
+    let name = p.file_name()?.to_str()?;
+    if REPORT_FILES.contains(&name) || name == "outcome.json" {
+        return Some(format!("{name} is a report's own file, not a test"));
+    }
+    let root = crate::commands::canonical_or_absolute(root);
+    let mut dir = crate::commands::canonical_or_absolute(p);
+    while dir.pop() {
+        if dir.join("manifest.json").is_file() && dir.join("summary.json").is_file() {
+            return Some(format!(
+                "inside the report folder {} (not a test)",
+                dir.display()
+            ));
+        }
+        if dir == root || !dir.starts_with(&root) {
+            break;
+        }
+    }
+    None
+}
+
+/// Refuse an output folder that an input glob reads: the folder itself, or any folder inside
+/// it, matches the glob's folder part (`raw_data/cable/*` reads `raw_data/cable`; `**` reads every
+/// folder below).
+fn refuse_output_in_input(out_abs: &Path, pattern: &str) -> Result<()> {
+    let pat = Path::new(pattern);
+    let Some(dir_pat) = pat.parent() else {
+        return Ok(());
+    };
+    let dir_abs = crate::commands::canonical_or_absolute(Path::new(
+        &dir_pat
+            .components()
+            .take_while(|c| !c.as_os_str().to_string_lossy().contains(['*', '?', '[']))
+            .collect::<PathBuf>(),
+    ));
+    let rest: PathBuf = dir_pat
+        .components()
+        .skip_while(|c| !c.as_os_str().to_string_lossy().contains(['*', '?', '[']))
+        .collect();
+    let full = dir_abs.join(rest);
+    let Ok(p) = glob::Pattern::new(&full.to_string_lossy()) else {
+        return Ok(());
+    };
+    let opts = glob::MatchOptions {
+        require_literal_separator: true,
+        ..Default::default()
+    };
+    for cand in [
+        out_abs.to_path_buf(),
+        out_abs.join("tests"),
+        out_abs.join("tests").join("t"),
+    ] {
+        if p.matches_path_with(&cand, opts) {
+            bail!(
+                "the output folder {} is a folder this glob reads: the next run would take the report's own files as tests; write the report elsewhere ([campaign] output)",
+                out_abs.display()
+            );
+        }
+    }
+    Ok(())
 }
 
 #[cfg(test)]
@@ -605,7 +1015,10 @@ length_mm = 30
             &GOOD.replace("length_mm = 32", "length_mm = -32"),
         );
         let e = format!("{:#}", load(&p).unwrap_err());
-        assert!(e.contains("positive"), "{e}");
+        assert!(
+            e.contains("t.toml:11: [input] length_mm = -32") && e.contains("plausible"),
+            "{e}"
+        );
         let p = write(
             d.path(),
             "pipelines/t.toml",
@@ -620,5 +1033,193 @@ length_mm = 30
         );
         let e = format!("{:#}", load(&p).unwrap_err());
         assert!(e.contains("shear"), "{e}");
+    }
+
+    fn load_err(d: &Path, text: &str) -> String {
+        let p = write(d, "pipelines/t.toml", text);
+        format!("{:#}", load(&p).unwrap_err())
+    }
+
+    #[test]
+    fn implausible_values_name_file_line_and_key() {
+        let d = tempfile::tempdir().unwrap();
+        write(d.path(), "raw_data/a.csv", "x");
+        write(d.path(), "raw_data/b.csv", "x");
+        let kinds = |extra: &str| format!("{GOOD}\n[kinds.tension]\n{extra}\n");
+        // The issue's fuzz cases and their kin: each names the file, the line and the key.
+        for (text, want) in [
+            (
+                GOOD.replace("diameter_mm = 2.8", "diameter_mm = 1e300"),
+                "t.toml:6: [specimen] diameter_mm = 1e300: outside the plausible range",
+            ),
+            (
+                kinds("compliance = 1e6"),
+                "t.toml:16: [kinds.tension] compliance = 1e6: outside",
+            ),
+            (
+                GOOD.replace("length_mm = 30", "length_mm = 1e9"),
+                "t.toml:13: [input.overrides.b.csv] length_mm = 1e9",
+            ),
+            (
+                GOOD.replace("diameter_mm = 2.8", "diameter_mm = \"2.8\""),
+                "line 6",
+            ),
+            (
+                kinds("fit_window = [0, 0.01, \"junk\", true]"),
+                "t.toml:16: [kinds.tension] fit_window: a list of one type is expected",
+            ),
+            (
+                kinds("fit_window = [0, 0.01, 0.02]"),
+                "t.toml:16: [kinds.tension] fit_window: give exactly two numbers",
+            ),
+            (
+                format!("{GOOD}format = \"mts9999\"\n"),
+                "t.toml:14: [input.overrides.b.csv] format",
+            ),
+        ] {
+            let e = load_err(d.path(), &text);
+            assert!(e.contains(want), "want {want:?} in:\n{e}");
+        }
+        // Values just inside the ranges load.
+        let ok = GOOD.replace("diameter_mm = 2.8", "diameter_mm = 0.01");
+        let p = write(
+            d.path(),
+            "pipelines/t.toml",
+            &format!("{ok}\n[kinds.tension]\ncompliance = 1e-3\n"),
+        );
+        load(&p).unwrap();
+    }
+
+    #[test]
+    fn misspelt_keys_get_the_nearest_known_key() {
+        let d = tempfile::tempdir().unwrap();
+        write(d.path(), "raw_data/a.csv", "x");
+        write(d.path(), "raw_data/b.csv", "x");
+        let e = load_err(d.path(), &GOOD.replace("length_mm = 32", "lenght_mm = 32"));
+        assert!(e.contains("did you mean `length_mm`?"), "{e}");
+        let e = load_err(d.path(), &GOOD.replace("diameter_mm", "diametre_mm"));
+        assert!(e.contains("did you mean `diameter_mm`?"), "{e}");
+        // Nothing close: no suggestion, the full list stays.
+        let e = load_err(d.path(), &GOOD.replace("length_mm = 32", "colour = 32"));
+        assert!(
+            !e.contains("did you mean") && e.contains("expected one of"),
+            "{e}"
+        );
+        assert_eq!(edit_distance("lenght_mm", "length_mm"), 2);
+        assert_eq!(edit_distance("", "abc"), 3);
+        assert_eq!(edit_distance("Kind", "kind"), 0);
+    }
+
+    #[test]
+    fn outputs_never_go_where_inputs_are_read() {
+        let d = tempfile::tempdir().unwrap();
+        write(d.path(), "raw_data/a.csv", "x");
+        write(d.path(), "raw_data/b.csv", "x");
+        let with_output =
+            |o: &str| GOOD.replace("name = \"t\"", &format!("name = \"t\"\noutput = \"{o}\""));
+        // The folder the glob reads, its parent (holds the inputs) and a folder inside it under `**`.
+        let e = load_err(d.path(), &with_output("raw_data"));
+        assert!(e.contains("[input] glob") && e.contains("raw_data"), "{e}");
+        let e = load_err(d.path(), &with_output("."));
+        assert!(e.contains("inside the output folder"), "{e}");
+        let e = load_err(
+            d.path(),
+            &with_output("raw_data/sub/report").replace("raw_data/*.csv", "raw_data/**/*.csv"),
+        );
+        assert!(e.contains("a folder this glob reads"), "{e}");
+        // Beside the inputs is fine.
+        let p = write(d.path(), "pipelines/t.toml", &with_output("out/t"));
+        assert_eq!(load(&p).unwrap().output_dir(), d.path().join("out/t"));
+    }
+
+    #[test]
+    fn a_reports_own_files_are_never_tests() {
+        let d = tempfile::tempdir().unwrap();
+        write(d.path(), "raw_data/a.csv", "x");
+        write(d.path(), "raw_data/b.csv", "x");
+        write(d.path(), "raw_data/old/summary.json", "{}");
+        write(d.path(), "raw_data/old/manifest.json", "{}");
+        write(d.path(), "raw_data/old/table1.csv", "x");
+        write(d.path(), "raw_data/index.html", "x");
+        let p = write(
+            d.path(),
+            "pipelines/t.toml",
+            &GOOD
+                .replace("raw_data/*.csv", "raw_data/**/*")
+                .replace("[input.overrides.\"b.csv\"]\nlength_mm = 30\n", ""),
+        );
+        let c = load(&p).unwrap();
+        let ids: Vec<_> = c.tests.iter().map(|t| t.id.as_str()).collect();
+        assert_eq!(ids, ["raw_data/a.csv", "raw_data/b.csv"]);
+        let skipped: Vec<_> = c.skipped.iter().map(|s| s.0.as_str()).collect();
+        assert_eq!(
+            skipped,
+            [
+                "raw_data/index.html",
+                "raw_data/old/manifest.json",
+                "raw_data/old/summary.json",
+                "raw_data/old/table1.csv"
+            ]
+        );
+    }
+
+    #[test]
+    fn root_key_places_globs_relative_to_a_folder_that_does_not_exist_yet() {
+        let d = tempfile::tempdir().unwrap();
+        write(d.path(), "raw_data/a.csv", "x");
+        write(d.path(), "raw_data/b.csv", "x");
+        let text = GOOD.replace("name = \"t\"", "name = \"t\"\nroot = \"../..\"");
+        let c = load_str(&text, &d.path().join("reports/t/pipeline.toml")).unwrap();
+        assert_eq!(c.root, d.path());
+        assert_eq!(c.tests.len(), 2);
+        assert_eq!(lexical(Path::new("a/b/../../../c")), PathBuf::from("../c"));
+    }
+
+    /// Every key the parser accepts has a `### \`key\`` heading in docs/pipeline.md (what
+    /// `cablab help pipeline` prints), and every heading is a key the parser accepts.
+    #[test]
+    fn the_pipeline_reference_documents_exactly_the_known_keys() {
+        let doc = crate::commands::PIPELINE_REFERENCE;
+        let documented: std::collections::BTreeSet<String> = doc
+            .lines()
+            .filter_map(|l| l.strip_prefix("### `"))
+            .filter_map(|l| l.strip_suffix('`'))
+            .map(str::to_string)
+            .collect();
+        let known: std::collections::BTreeSet<String> = known_keys().into_iter().collect();
+        assert!(known.len() >= 40, "{known:?}");
+        assert!(known.contains("input.overrides.<file>.skip") && known.contains("campaign.root"));
+        let undocumented: Vec<_> = known.difference(&documented).collect();
+        let unknown: Vec<_> = documented.difference(&known).collect();
+        assert!(
+            undocumented.is_empty(),
+            "keys missing from docs/pipeline.md: {undocumented:?}"
+        );
+        assert!(
+            unknown.is_empty(),
+            "docs/pipeline.md documents keys the parser rejects: {unknown:?}"
+        );
+        // Each key's section carries an example (a `key = value` in backticks or a code block).
+        for sec in doc.split("\n### `").skip(1) {
+            let (head, body) = sec.split_once('\n').unwrap();
+            let key = head.trim_end_matches('`').rsplit('.').next().unwrap();
+            if ![
+                "campaign",
+                "specimen",
+                "input",
+                "kinds",
+                "model",
+                "diagnosis",
+                "reports",
+                "overrides",
+            ]
+            .contains(&key)
+            {
+                assert!(
+                    body.contains(&format!("`{key} = ")),
+                    "no example for {head}"
+                );
+            }
+        }
     }
 }

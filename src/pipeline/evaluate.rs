@@ -330,12 +330,7 @@ fn stages(
     out.header = TestHeader::from_metadata(rec.specimen.label.as_deref(), &rec.metadata);
     out.warnings
         .extend(rec.warnings.iter().map(|w| w.to_string()));
-    let geom = crate::bridge::geometry(
-        &rec,
-        t.kind,
-        t.free_length_m.map(|l| l * 1e3),
-        Some(t.diameter_m * 1e3),
-    )?;
+    let geom = crate::bridge::geometry(&rec, t.kind, t.free_length_m, Some(t.diameter_m))?;
     out.free_length_m = Some(geom.free_length_m);
     let curve = crate::bridge::curve(&rec)?;
     out.rows = Some(curve.control.len());

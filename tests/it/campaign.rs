@@ -246,7 +246,7 @@ fn a_bad_pipeline_is_refused_before_any_work() {
         ),
         (
             text.replace("length_mm = 32", "length_mm = -32"),
-            "positive",
+            "demo.toml:34: [input] length_mm = -32: outside the plausible range",
         ),
         (
             text.replace("raw_data/cable/tension_*", "raw_data/cable/nothing_*"),

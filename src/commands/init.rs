@@ -1,0 +1,954 @@
+//! Folder mode: what a campaign's pipeline would say, inferred from the raw exports themselves.
+//! `cablab init PATH...` writes it as a commented `pipelines/<name>.toml` (gaps marked);
+//! `cablab run PATH...` evaluates it directly when nothing is missing.
+//!
+//! Per file, in this order of trust:
+//! - kind: the reader's own inference (`cablab_ingest`: metadata words, channel dimensions), else
+//!   the file name's words (`tension`, `zug`, `torsion`, `3pb`, `three_point`, `pure_bending`,
+//!   `4pb`; a bare `bending`/`biegung` is three-point when the machine drives a displacement and
+//!   pure bending when it drives an angle), else `--kind`;
+//! - free length (span) and diameter: the file's metadata, else `--length-mm` / `--diameter-mm`;
+//! - specimen label: the metadata's specimen name, else the file name.
+//!
+//! The specimen type a test belongs to is its folder and diameter ("cable 2.8 mm"). Files that are
+//! not test exports (READMEs, manifests, licences, a report's own files and folders) are skipped
+//! with a note; so are files the reader cannot read as a test. Does not guess a value that no
+//! file states: such a value is a gap, listed per file.
+
+use super::{CliError, CmdResult};
+use crate::cli::{InferArgs, InitArgs};
+use crate::output::write_atomic;
+use cablab_core::{Role, TestKind};
+use cablab_ingest::units::Dimension;
+use std::collections::BTreeMap;
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+/// A value and where it came from ("metadata 'Länge : 50'", "file name 'tension'", "--kind").
+#[derive(Debug, Clone, PartialEq)]
+pub struct Sourced<T> {
+    /// The value.
+    pub value: T,
+    /// Where it came from.
+    pub from: String,
+}
+
+/// What folder mode found for one file.
+#[derive(Debug, Clone)]
+pub struct Found {
+    /// The file, as reached from the given paths.
+    pub path: PathBuf,
+    /// Test kind.
+    pub kind: Option<Sourced<TestKind>>,
+    /// Free length (span for three-point), mm.
+    pub length_mm: Option<Sourced<f64>>,
+    /// Section diameter, mm.
+    pub diameter_mm: Option<Sourced<f64>>,
+    /// Specimen label (metadata specimen name, else the file stem).
+    pub label: String,
+    /// Specimen type: folder name and diameter.
+    pub specimen_type: Option<String>,
+    /// Detected layout.
+    pub format: String,
+    /// Remarks (e.g. the file name contradicts the metadata).
+    pub notes: Vec<String>,
+}
+
+impl Found {
+    /// Names of the values still missing.
+    pub fn gaps(&self) -> Vec<&'static str> {
+        let mut g = Vec::new();
+        if self.kind.is_none() {
+            g.push("kind");
+        }
+        if self.length_mm.is_none() {
+            g.push(
+                if self.kind.as_ref().map(|k| k.value) == Some(TestKind::ThreePoint) {
+                    "length_mm (support span)"
+                } else {
+                    "length_mm (free length)"
+                },
+            );
+        }
+        if self.diameter_mm.is_none() {
+            g.push("diameter_mm");
+        }
+        g
+    }
+}
+
+/// Everything folder mode found under the given paths.
+#[derive(Debug, Clone, Default)]
+pub struct Survey {
+    /// Test files, sorted by path.
+    pub found: Vec<Found>,
+    /// Files left out, with why.
+    pub skipped: Vec<(PathBuf, String)>,
+}
+
+/// Extensions of files that are never test exports.
+const NOT_TESTS_EXT: &[&str] = &[
+    "md", "toml", "json", "html", "htm", "svg", "png", "jpg", "jpeg", "gif", "pdf", "parquet",
+    "tex", "yaml", "yml", "zip", "gz", "xz", "7z", "rs", "py", "ipynb", "xlsx", "xls", "docx",
+    "lock",
+];
+/// File-name beginnings of files that are never test exports.
+const NOT_TESTS_NAME: &[&str] = &[
+    "readme", "license", "licence", "copying", "manifest", "truth",
+];
+/// Folder names folder mode does not descend into.
+const NOT_TEST_DIRS: &[&str] = &[
+    "reports",
+    "target",
+    "pipelines",
+    "node_modules",
+    "licenses",
+    "licences",
+    "docs",
+];
+
+/// Why a file is not a test export (None: it may be one).
+pub fn not_a_test(p: &Path) -> Option<String> {
+    let name = p.file_name()?.to_string_lossy().to_lowercase();
+    if name.starts_with('.') {
+        return Some("hidden file".into());
+    }
+    if let Some(stem) = NOT_TESTS_NAME.iter().find(|s| name.starts_with(*s)) {
+        return Some(format!("a {stem} file, not a test export"));
+    }
+    let ext = p
+        .extension()
+        .map(|e| e.to_string_lossy().to_lowercase())
+        .unwrap_or_default();
+    NOT_TESTS_EXT
+        .contains(&ext.as_str())
+        .then(|| format!("a .{ext} file, not a test export"))
+}
+
+/// Expand folders (recursively), files and globs into candidate files; report folders, hidden
+/// entries and non-test files go to `skipped`. A path that does not exist is an error.
+fn expand(
+    paths: &[PathBuf],
+    skipped: &mut Vec<(PathBuf, String)>,
+) -> Result<Vec<PathBuf>, CliError> {
+    let mut out = Vec::new();
+    for p in paths {
+        let s = p.to_string_lossy();
+        if p.is_dir() {
+            walk(p, &mut out, skipped)?;
+        } else if p.is_file() {
+            out.push(p.clone());
+        } else if s.contains(['*', '?', '[']) {
+            let mut n = 0;
+            for m in glob::glob(&s)
+                .map_err(|e| CliError::input(anyhow::anyhow!("{s}: bad glob: {e}")))?
+                .flatten()
+            {
+                n += 1;
+                if m.is_dir() {
+                    walk(&m, &mut out, skipped)?;
+                } else {
+                    out.push(m);
+                }
+            }
+            if n == 0 {
+                return Err(CliError::input(anyhow::anyhow!("{s}: no file matches")));
+            }
+        } else {
+            return Err(CliError::input(anyhow::anyhow!(
+                "{s}: no such file or folder"
+            )));
+        }
+    }
+    out.sort();
+    out.dedup();
+    let mut files = Vec::new();
+    for f in out {
+        match not_a_test(&f) {
+            Some(why) => skipped.push((f, why)),
+            None => match crate::pipeline::config::report_file(&f, Path::new(".")) {
+                Some(why) => skipped.push((f, why)),
+                None => files.push(f),
+            },
+        }
+    }
+    Ok(files)
+}
+
+fn walk(
+    dir: &Path,
+    out: &mut Vec<PathBuf>,
+    skipped: &mut Vec<(PathBuf, String)>,
+) -> Result<(), CliError> {
+    if dir.join("manifest.json").is_file() && dir.join("summary.json").is_file() {
+        skipped.push((
+            dir.to_path_buf(),
+            "a cablab report folder, not tests".into(),
+        ));
+        return Ok(());
+    }
+    let rd = std::fs::read_dir(dir)
+        .map_err(|e| CliError::input(anyhow::anyhow!("{}: cannot list: {e}", dir.display())))?;
+    let mut entries: Vec<PathBuf> = rd.flatten().map(|e| e.path()).collect();
+    entries.sort();
+    for e in entries {
+        let name = e
+            .file_name()
+            .map(|n| n.to_string_lossy().to_lowercase())
+            .unwrap_or_default();
+        if e.is_dir() {
+            if name.starts_with('.') || NOT_TEST_DIRS.contains(&name.as_str()) {
+                skipped.push((
+                    e,
+                    "folder not searched (hidden, reports, pipelines or build output)".into(),
+                ));
+            } else {
+                walk(&e, out, skipped)?;
+            }
+        } else if e.is_file() {
+            out.push(e);
+        }
+    }
+    Ok(())
+}
+
+/// The kind a file name states, by its words (split at anything not a letter or digit).
+/// `control` resolves a bare "bending": a driven displacement is three-point, a driven angle or
+/// curvature is pure bending. None when the name states no kind or two different ones.
+pub fn kind_from_name(name: &str, control: Option<Dimension>) -> Option<Sourced<TestKind>> {
+    let lower = name.to_lowercase();
+    let words: Vec<&str> = lower
+        .split(|c: char| !c.is_alphanumeric())
+        .filter(|w| !w.is_empty())
+        .collect();
+    let mut hits: Vec<(TestKind, String)> = Vec::new();
+    let mut hit = |k: TestKind, w: String| {
+        if !hits.iter().any(|(h, _)| *h == k) {
+            hits.push((k, format!("file name '{w}'")));
+        }
+    };
+    let mut bare_bending = None;
+    for (i, w) in words.iter().enumerate() {
+        let next = words.get(i + 1).copied().unwrap_or("");
+        let pair = format!("{w} {next}");
+        match *w {
+            "tension" | "tensile" | "zug" | "zugversuch" | "traction" | "traccion" | "trazione" => {
+                hit(TestKind::Tension, w.to_string())
+            }
+            "torsion" | "torsionsversuch" | "torsione" => hit(TestKind::Torsion, w.to_string()),
+            "3pb" | "3pt" | "3point" | "threepoint" | "dreipunkt" | "3pkt" | "tpb" => {
+                hit(TestKind::ThreePoint, w.to_string())
+            }
+            "4pb" | "4pt" | "purebending" | "fourpoint" | "vierpunkt" => {
+                hit(TestKind::PureBending, w.to_string())
+            }
+            "three" | "3" | "drei" if matches!(next, "point" | "punkt") => {
+                hit(TestKind::ThreePoint, pair)
+            }
+            "four" | "4" | "vier" if matches!(next, "point" | "punkt") => {
+                hit(TestKind::PureBending, pair)
+            }
+            "pure" | "reine" if matches!(next, "bending" | "biegung") => {
+                hit(TestKind::PureBending, pair)
+            }
+            "bending" | "biegung" | "biegeversuch" | "flexion" | "bend" => {
+                let prev = if i > 0 { words[i - 1] } else { "" };
+                if !matches!(prev, "pure" | "reine") {
+                    bare_bending.get_or_insert(w.to_string());
+                }
+            }
+            _ => {}
+        }
+    }
+    if let Some(w) = bare_bending {
+        if hits.is_empty() {
+            match control {
+                Some(Dimension::Length) => hits.push((
+                    TestKind::ThreePoint,
+                    format!("file name '{w}' and a displacement control channel (three-point)"),
+                )),
+                Some(Dimension::Angle | Dimension::Curvature) => hits.push((
+                    TestKind::PureBending,
+                    format!("file name '{w}' and a rotation control channel (pure bending)"),
+                )),
+                _ => {}
+            }
+        }
+    }
+    if hits.len() == 1 {
+        let (value, from) = hits.remove(0);
+        Some(Sourced { value, from })
+    } else {
+        None
+    }
+}
+
+/// The metadata entry a length `mm` was read from, as `'key: value'` (for "from what"): a key
+/// containing one of `words` whose value's number is `mm` in mm, m or µm.
+fn meta_source(rec: &cablab_ingest::TestRecord, words: &[&str], mm: f64) -> String {
+    let same = |x: f64| (x - mm).abs() <= 1e-6 * mm.abs().max(1e-9);
+    rec.metadata
+        .iter()
+        .find(|(k, v)| {
+            let k = k.to_lowercase();
+            let n: Option<f64> = v
+                .split_whitespace()
+                .next()
+                .and_then(|t| t.replace(',', ".").parse().ok());
+            words.iter().any(|w| k.contains(w))
+                && n.is_some_and(|n| same(n) || same(n * 1e3) || same(n * 1e-3))
+        })
+        .map(|(k, v)| {
+            format!(
+                "metadata '{}: {}'",
+                k.trim().trim_end_matches(':').trim(),
+                v.trim()
+            )
+        })
+        .unwrap_or_else(|| "metadata".into())
+}
+
+const LENGTH_KEYS: &[&str] = &[
+    "length",
+    "läng",
+    "lang",
+    "span",
+    "weite",
+    "abstand",
+    "luz",
+    "lunghezza",
+    "longitud",
+];
+const DIAMETER_KEYS: &[&str] = &["diameter", "durchmesser", "diámetro", "diametro", "d0"];
+
+/// The folder name a file sits in ("." → the working folder's name).
+fn folder_name(p: &Path) -> String {
+    let dir = p.parent().unwrap_or(Path::new("."));
+    let abs = super::canonical_or_absolute(if dir.as_os_str().is_empty() {
+        Path::new(".")
+    } else {
+        dir
+    });
+    abs.file_name()
+        .map(|n| n.to_string_lossy().to_string())
+        .unwrap_or_else(|| "specimens".into())
+}
+
+/// A length the metadata gives (m), in mm with the entry it came from.
+fn metadata_or_flag(
+    rec: &cablab_ingest::TestRecord,
+    metres: Option<f64>,
+    keys: &[&str],
+) -> Option<Sourced<f64>> {
+    metres.map(|m| {
+        let value = round_mm(m * 1e3);
+        Sourced {
+            value,
+            from: meta_source(rec, keys, value),
+        }
+    })
+}
+
+/// A value from a command-line flag.
+fn flag(v: Option<f64>, name: &str) -> Option<Sourced<f64>> {
+    v.map(|value| Sourced {
+        value,
+        from: name.into(),
+    })
+}
+
+/// The paths as the user gave them, space-separated (for messages).
+pub fn joined(paths: &[PathBuf]) -> String {
+    paths
+        .iter()
+        .map(|p| p.display().to_string())
+        .collect::<Vec<_>>()
+        .join(" ")
+}
+
+/// Read and infer every test under `paths`.
+pub fn survey(paths: &[PathBuf], d: &InferArgs) -> Result<Survey, CliError> {
+    let mut s = Survey::default();
+    let files = expand(paths, &mut s.skipped)?;
+    for path in files {
+        let rec = match cablab_ingest::read_path(&path, &Default::default()) {
+            Ok(r) => r,
+            Err(e) => {
+                s.skipped.push((path, format!("not read as a test: {e}")));
+                continue;
+            }
+        };
+        let control = rec
+            .channels
+            .iter()
+            .find(|c| c.role == Role::Control)
+            .and_then(|c| c.dimension);
+        let name = path
+            .file_name()
+            .map(|n| n.to_string_lossy().to_string())
+            .unwrap_or_default();
+        let by_name = kind_from_name(&name, control);
+        let mut notes = Vec::new();
+        let kind = if rec.kind != TestKind::Unknown {
+            if let Some(n) = &by_name {
+                if n.value != rec.kind {
+                    notes.push(format!(
+                        "the {} says {}, the file itself says {} ({}); the file's own word is taken",
+                        n.from, n.value, rec.kind, rec.kind_reason
+                    ));
+                }
+            }
+            Some(Sourced {
+                value: rec.kind,
+                from: rec.kind_reason.clone(),
+            })
+        } else {
+            by_name.or_else(|| {
+                d.kind.map(|k| Sourced {
+                    value: k.into(),
+                    from: "--kind".into(),
+                })
+            })
+        };
+        let length_mm = metadata_or_flag(&rec, rec.specimen.free_length_m, LENGTH_KEYS)
+            .or_else(|| flag(d.length_mm, "--length-mm"));
+        let diameter_mm = metadata_or_flag(&rec, rec.specimen.diameter_m, DIAMETER_KEYS)
+            .or_else(|| flag(d.diameter_mm, "--diameter-mm"));
+        let label = rec.specimen.label.clone().unwrap_or_else(|| {
+            path.file_stem()
+                .map(|n| n.to_string_lossy().to_string())
+                .unwrap_or_default()
+        });
+        let specimen_type = diameter_mm
+            .as_ref()
+            .map(|dm| format!("{} {} mm", folder_name(&path), dm.value));
+        s.found.push(Found {
+            path,
+            kind,
+            length_mm,
+            diameter_mm,
+            label,
+            specimen_type,
+            format: rec.provenance.format.as_str().to_string(),
+            notes,
+        });
+    }
+    Ok(s)
+}
+
+/// Millimetres to 6 significant digits (metres × 1e3 is not exact in binary: 0.05 m → 50.00000000000001).
+fn round_mm(v: f64) -> f64 {
+    if v == 0.0 || !v.is_finite() {
+        return v;
+    }
+    let mag = 10f64.powi(5 - v.abs().log10().floor() as i32);
+    (v * mag).round() / mag
+}
+
+/// What was inferred and from what, one line per file (stderr of `run` and `init`).
+pub fn describe(s: &Survey) -> String {
+    let mut t = String::new();
+    for f in &s.found {
+        let kind = f.kind.as_ref().map_or("kind ?".to_string(), |k| {
+            format!("{} ({})", k.value, k.from)
+        });
+        let len = f.length_mm.as_ref().map_or("length ?".to_string(), |l| {
+            format!("length {} mm ({})", l.value, l.from)
+        });
+        let dia = f
+            .diameter_mm
+            .as_ref()
+            .map_or("diameter ?".to_string(), |x| {
+                format!("diameter {} mm ({})", x.value, x.from)
+            });
+        let _ = writeln!(
+            t,
+            "  {}: {kind}; {len}; {dia}; specimen '{}'",
+            f.path.display(),
+            f.label
+        );
+        for n in &f.notes {
+            let _ = writeln!(t, "    note: {n}");
+        }
+    }
+    for (p, why) in &s.skipped {
+        let _ = writeln!(t, "  skipped {}: {why}", p.display());
+    }
+    t
+}
+
+/// One message listing which files need which value, and how to give them.
+pub fn gaps_message(s: &Survey, paths: &[PathBuf]) -> Option<String> {
+    let mut by: BTreeMap<Vec<&str>, Vec<String>> = BTreeMap::new();
+    for f in &s.found {
+        let g = f.gaps();
+        if !g.is_empty() {
+            by.entry(g).or_default().push(f.path.display().to_string());
+        }
+    }
+    if by.is_empty() {
+        return None;
+    }
+    let n: usize = by.values().map(Vec::len).sum();
+    let mut m = format!(
+        "{n} of {} files lack a value cablab cannot infer:\n",
+        s.found.len()
+    );
+    for (g, files) in &by {
+        let _ = writeln!(m, "  need {}:", g.join(", "));
+        for f in files {
+            let _ = writeln!(m, "    {f}");
+        }
+    }
+    let _ = write!(
+        m,
+        "give the value for all of them (--kind K, --length-mm L, --diameter-mm D), or write a pipeline \
+         and fill in each file: `cablab init {}`, or leave them out: --skip-incomplete",
+        joined(paths)
+    );
+    Some(m)
+}
+
+/// The campaign name: `--name`, else the first path's folder name, as a folder-safe word.
+pub fn campaign_name(paths: &[PathBuf], d: &InferArgs) -> String {
+    let raw = d.name.clone().unwrap_or_else(|| {
+        let p = paths.first().cloned().unwrap_or_else(|| PathBuf::from("."));
+        let p = if p.is_dir() { p.join("x") } else { p };
+        folder_name(&p)
+    });
+    let n: String = raw
+        .chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '-' || c == '_' {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect();
+    if n.trim_matches('_').is_empty() {
+        "campaign".into()
+    } else {
+        n
+    }
+}
+
+/// A path as a '/'-separated string relative to the working folder (kept as given when outside it).
+fn rel(p: &Path) -> String {
+    let p = p.strip_prefix(".").unwrap_or(p);
+    p.to_string_lossy().replace('\\', "/")
+}
+
+fn q(s: &str) -> String {
+    toml::Value::String(s.to_string()).to_string()
+}
+
+/// Marker written where a value is missing: loading the pipeline fails on it, naming the line.
+pub const FILL_IN: &str = "FILL IN";
+
+/// The pipeline text: a `[campaign]`, one `[[specimen]]` per specimen type, `[[input]]` groups
+/// (one glob per folder, kind, specimen type and length when a glob matches exactly that group,
+/// else one per file), each value commented with where it came from, gaps marked [`FILL_IN`].
+/// `root` is written when the pipeline will not sit in `<project>/pipelines/`.
+pub fn render(s: &Survey, name: &str, root: Option<&str>, command: &str) -> String {
+    let mut t = String::new();
+    let _ = writeln!(
+        t,
+        "# Written by `{command}`: what cablab inferred from the files, and from what."
+    );
+    let _ = writeln!(
+        t,
+        "# Every key is explained in docs/pipeline.md (`cablab help pipeline`). Values marked"
+    );
+    let _ = writeln!(t, "# \"{FILL_IN}\" could not be inferred: replace them; until then the pipeline does not load.");
+    for (p, why) in &s.skipped {
+        let _ = writeln!(t, "# skipped {}: {why}", rel(p));
+    }
+    let _ = writeln!(t, "\n[campaign]\nname = {}", q(name));
+    let _ = writeln!(
+        t,
+        "description = {}",
+        q(&format!(
+            "{} test files, inferred by folder mode",
+            s.found.len()
+        ))
+    );
+    if let Some(r) = root {
+        let _ = writeln!(
+            t,
+            "root = {}  # the project folder, relative to this file",
+            q(r)
+        );
+    }
+    // Specimen types.
+    let mut types: BTreeMap<String, (f64, String)> = BTreeMap::new();
+    for f in &s.found {
+        if let (Some(ty), Some(d)) = (&f.specimen_type, &f.diameter_mm) {
+            types.entry(ty.clone()).or_insert((d.value, d.from.clone()));
+        }
+    }
+    for (ty, (d, from)) in &types {
+        let _ = writeln!(
+            t,
+            "\n[[specimen]]\nlabel = {}\ndiameter_mm = {d}  # {from}",
+            q(ty)
+        );
+    }
+    // A file whose diameter is not in its metadata is its own specimen type, to be filled in.
+    for f in s.found.iter().filter(|f| f.diameter_mm.is_none()) {
+        let _ = writeln!(
+            t,
+            "\n[[specimen]]\nlabel = {}\ndiameter_mm = \"{FILL_IN}: section diameter in mm\"  # not in the metadata",
+            q(&gap_type(f))
+        );
+    }
+    // Groups.
+    type Key = (String, String, String, String);
+    let mut groups: BTreeMap<Key, Vec<&Found>> = BTreeMap::new();
+    for f in &s.found {
+        let dir = rel(f.path.parent().unwrap_or(Path::new("")));
+        let kind = f
+            .kind
+            .as_ref()
+            .map_or(String::new(), |k| k.value.as_str().to_string());
+        let ty = f.specimen_type.clone().unwrap_or_default();
+        let len = f
+            .length_mm
+            .as_ref()
+            .map_or(String::new(), |l| l.value.to_string());
+        let complete = f.gaps().is_empty();
+        // Files with a gap get their own [[input]] so that each can be filled in.
+        let key = if complete {
+            (dir, ty, kind, len)
+        } else {
+            (rel(&f.path), ty, kind, len)
+        };
+        groups.entry(key).or_default().push(f);
+    }
+    for files in groups.values() {
+        for block in input_blocks(files) {
+            t.push_str(&block);
+        }
+    }
+    t
+}
+
+/// The `[[input]]` table(s) for files sharing folder, type, kind and length.
+fn input_blocks(files: &[&Found]) -> Vec<String> {
+    let f0 = files[0];
+    let dir = f0.path.parent().unwrap_or(Path::new(""));
+    let names: Vec<String> = files
+        .iter()
+        .map(|f| {
+            f.path
+                .file_name()
+                .unwrap_or_default()
+                .to_string_lossy()
+                .to_string()
+        })
+        .collect();
+    let prefix = common_prefix(&names);
+    let dir_rel = rel(dir);
+    let dir_glob = if dir_rel.is_empty() {
+        String::new()
+    } else {
+        format!("{}/", glob::Pattern::escape(&dir_rel))
+    };
+    let glob = format!("{dir_glob}{}*", glob::Pattern::escape(&prefix));
+    let exact = files.len() > 1 && {
+        let mut m: Vec<PathBuf> = glob::glob(&glob)
+            .map(|g| g.flatten().filter(|p| p.is_file()).collect())
+            .unwrap_or_default();
+        m.sort();
+        let mut want: Vec<PathBuf> = files.iter().map(|f| PathBuf::from(rel(&f.path))).collect();
+        want.sort();
+        m.iter().map(|p| PathBuf::from(rel(p))).collect::<Vec<_>>() == want
+    };
+    if exact {
+        vec![block(files, &glob)]
+    } else {
+        files
+            .iter()
+            .map(|f| block(&[*f], &glob::Pattern::escape(&rel(&f.path))))
+            .collect()
+    }
+}
+
+/// The specimen type of a file without a diameter: its file stem.
+fn gap_type(f: &Found) -> String {
+    f.path
+        .file_stem()
+        .map(|n| n.to_string_lossy().to_string())
+        .unwrap_or_default()
+}
+
+fn common_prefix(names: &[String]) -> String {
+    let mut p: Vec<char> = names[0].chars().collect();
+    for n in &names[1..] {
+        let c: Vec<char> = n.chars().collect();
+        let k = p.iter().zip(&c).take_while(|(a, b)| a == b).count();
+        p.truncate(k);
+    }
+    p.into_iter().collect()
+}
+
+fn block(files: &[&Found], glob: &str) -> String {
+    let f0 = files[0];
+    let mut t = String::new();
+    let labels: Vec<&str> = files.iter().map(|f| f.label.as_str()).collect();
+    let _ = writeln!(
+        t,
+        "\n# {} file(s); specimens: {}",
+        files.len(),
+        labels.join(", ")
+    );
+    let _ = writeln!(t, "[[input]]\nglob = {}", q(glob));
+    match &f0.specimen_type {
+        Some(ty) => {
+            let _ = writeln!(t, "specimen = {}", q(ty));
+        }
+        None => {
+            let _ = writeln!(t, "specimen = {}", q(&gap_type(f0)));
+        }
+    }
+    match &f0.kind {
+        Some(k) => {
+            let _ = writeln!(t, "kind = {}  # {}", q(k.value.as_str()), k.from);
+        }
+        None => {
+            let _ = writeln!(
+                t,
+                "kind = \"{FILL_IN}: tension | torsion | three_point | pure_bending\"  # neither metadata, channels nor file name say it"
+            );
+        }
+    }
+    match &f0.length_mm {
+        Some(l) => {
+            let _ = writeln!(t, "length_mm = {}  # {}", l.value, l.from);
+        }
+        None => {
+            let what = if f0.kind.as_ref().map(|k| k.value) == Some(TestKind::ThreePoint) {
+                "support span"
+            } else {
+                "free length"
+            };
+            let _ = writeln!(
+                t,
+                "length_mm = \"{FILL_IN}: {what} in mm\"  # not in the metadata"
+            );
+        }
+    }
+    let mut layouts: Vec<&str> = files.iter().map(|f| f.format.as_str()).collect();
+    layouts.sort_unstable();
+    layouts.dedup();
+    let _ = writeln!(t, "# layout: {}", layouts.join(", "));
+    for f in files {
+        for n in &f.notes {
+            let _ = writeln!(
+                t,
+                "# note ({}): {n}",
+                f.path.file_name().unwrap_or_default().to_string_lossy()
+            );
+        }
+    }
+    t
+}
+
+/// Run `cablab init`.
+pub fn run(a: InitArgs) -> CmdResult {
+    let s = survey(&a.paths, &a.infer)?;
+    let name = campaign_name(&a.paths, &a.infer);
+    let out = a
+        .output
+        .clone()
+        .unwrap_or_else(|| PathBuf::from("pipelines").join(format!("{name}.toml")));
+    if s.found.is_empty() {
+        return Err(CliError::input(anyhow::anyhow!(
+            "no test files under {}:\n{}",
+            joined(&a.paths),
+            describe(&s)
+        )));
+    }
+    if out.exists() && !a.force {
+        return Err(CliError::input(anyhow::anyhow!(
+            "{}: already exists; pass --force to replace it",
+            out.display()
+        )));
+    }
+    let inputs: Vec<&Path> = s.found.iter().map(|f| f.path.as_path()).collect();
+    super::refuse_overwrite(&out, &inputs)?;
+    let root = root_from(&out);
+    let cmd = format!("cablab init {}", joined(&a.paths));
+    let text = render(&s, &name, root.as_deref(), &cmd);
+    eprint!("cablab: inferred:\n{}", describe(&s));
+    write_atomic(&out, text.as_bytes())
+        .map_err(|e| CliError::failed(anyhow::anyhow!("{}: cannot write: {e}", out.display())))?;
+    let gaps = s.found.iter().filter(|f| !f.gaps().is_empty()).count();
+    eprintln!(
+        "cablab: wrote {} ({} tests{}); run it with `cablab run {}`",
+        out.display(),
+        s.found.len(),
+        if gaps > 0 {
+            format!(", {gaps} with values marked {FILL_IN} to fill in")
+        } else {
+            String::new()
+        },
+        out.display()
+    );
+    Ok(ExitCode::SUCCESS)
+}
+
+/// The `root` key for a pipeline written at `out`: None when `out` sits in `./pipelines/` (the
+/// default root is then right), else the working folder relative to `out`'s folder.
+pub fn root_from(out: &Path) -> Option<String> {
+    let dir = out.parent().unwrap_or(Path::new(""));
+    let dir_rel = rel(dir);
+    if dir_rel == "pipelines" {
+        return None;
+    }
+    let cwd = super::canonical_or_absolute(Path::new("."));
+    let dir_abs = super::canonical_or_absolute(if dir.as_os_str().is_empty() {
+        Path::new(".")
+    } else {
+        dir
+    });
+    match dir_abs.strip_prefix(&cwd) {
+        Ok(r) => {
+            let up = r.components().count();
+            Some(if up == 0 {
+                ".".into()
+            } else {
+                vec![".."; up].join("/")
+            })
+        }
+        Err(_) => Some(cwd.display().to_string()),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn k(name: &str, control: Option<Dimension>) -> Option<TestKind> {
+        kind_from_name(name, control).map(|s| s.value)
+    }
+
+    #[test]
+    fn file_name_words_state_the_kind() {
+        use TestKind::*;
+        for (name, want) in [
+            ("pulsevad__nexygen_tension_22awg_copper.txt", Tension),
+            ("Zug_Probe-3.TXT", Tension),
+            ("tensile-test 5.csv", Tension),
+            ("cable_torsion_360deg_1.dat", Torsion),
+            ("nexygen_3pb_cable_group6.txt", ThreePoint),
+            ("three_point_2mm_1.TXT", ThreePoint),
+            ("Dreipunkt-Biegung 7.csv", ThreePoint),
+            ("pure_bending_80deg_3.csv", PureBending),
+            ("reine-biegung.dat", PureBending),
+            ("rod_4pb_2.csv", PureBending),
+            ("four-point_A.txt", PureBending),
+        ] {
+            assert_eq!(k(name, None), Some(want), "{name}");
+        }
+        // Words, not substrings: "attention", "3pbx", "zugang" state nothing.
+        for name in [
+            "attention_1.csv",
+            "specimen_3pbx.dat",
+            "zugang.txt",
+            "run_7.csv",
+            "bending.csv",
+        ] {
+            assert_eq!(k(name, None), None, "{name}");
+        }
+        // Two kinds named: no guess.
+        assert_eq!(k("tension_torsion_combo.csv", None), None);
+        // A bare "bending" is settled by what the machine drives.
+        assert_eq!(
+            k("bending_1.csv", Some(Dimension::Length)),
+            Some(ThreePoint)
+        );
+        assert_eq!(
+            k("Biegung_1.csv", Some(Dimension::Angle)),
+            Some(PureBending)
+        );
+        assert_eq!(
+            k("bending_1.csv", Some(Dimension::Curvature)),
+            Some(PureBending)
+        );
+        assert_eq!(k("bending_1.csv", Some(Dimension::Force)), None);
+        let s = kind_from_name("x_3pb_y.txt", None).unwrap();
+        assert_eq!(s.from, "file name '3pb'");
+    }
+
+    /// The kind word anywhere in a name, between any separators and among filler words, is found.
+    #[test]
+    fn kind_words_are_found_in_every_position_and_separator() {
+        use TestKind::*;
+        let words = [
+            ("tension", Tension),
+            ("ZUG", Tension),
+            ("Torsion", Torsion),
+            ("3pb", ThreePoint),
+            ("three_point", ThreePoint),
+            ("pure-bending", PureBending),
+            ("4PB", PureBending),
+        ];
+        let fillers = ["cable", "A", "2024", "40N", "run7"];
+        let mut n = 0;
+        for (w, want) in words {
+            for sep in ["_", "-", " ", ".", "__"] {
+                for pos in 0..=fillers.len() {
+                    let mut parts: Vec<&str> = fillers.to_vec();
+                    parts.insert(pos, w);
+                    let name = format!("{}.csv", parts.join(sep));
+                    assert_eq!(k(&name, None), Some(want), "{name}");
+                    n += 1;
+                }
+            }
+        }
+        assert_eq!(n, 7 * 5 * 6);
+    }
+
+    #[test]
+    fn non_test_files_are_recognised() {
+        for n in [
+            "README.md",
+            "MANIFEST.toml",
+            "LICENSE",
+            "index.html",
+            "summary.json",
+            "a.svg",
+            ".hidden.csv",
+        ] {
+            assert!(not_a_test(Path::new(n)).is_some(), "{n}");
+        }
+        for n in [
+            "tension_1.TXT",
+            "x.csv",
+            "specimen.dat",
+            "daq.xml",
+            "run.txt",
+        ] {
+            assert!(not_a_test(Path::new(n)).is_none(), "{n}");
+        }
+    }
+
+    #[test]
+    fn millimetres_round_to_six_digits_and_roots_are_relative() {
+        assert_eq!(round_mm(0.05 * 1e3), 50.0);
+        assert_eq!(round_mm(2.8000000000000003), 2.8);
+        assert_eq!(round_mm(98.5), 98.5);
+        assert_eq!(root_from(Path::new("pipelines/x.toml")), None);
+        assert_eq!(
+            root_from(Path::new("reports/x/pipeline.toml")).as_deref(),
+            Some("../..")
+        );
+        assert_eq!(root_from(Path::new("x.toml")).as_deref(), Some("."));
+        assert_eq!(
+            common_prefix(&["tension_40N_1".into(), "tension_100N_2".into()]),
+            "tension_"
+        );
+    }
+}

@@ -1,0 +1,441 @@
+//! Folder mode (`cablab run PATH...`, `cablab init PATH...`), the pipeline reference and the
+//! checks that keep raw data safe, driven through the binary as a user does.
+
+use crate::common::{real_logs, root};
+use cablab::cli::InferArgs;
+use cablab_core::TestKind;
+use serde_json::Value;
+use std::collections::BTreeMap;
+use std::path::Path;
+
+/// `cablab` running in `dir`.
+fn cablab_in(dir: &Path) -> assert_cmd::Command {
+    let mut c = assert_cmd::Command::cargo_bin("cablab").expect("the cablab binary is built");
+    c.current_dir(dir).env("CI", "1");
+    c
+}
+
+struct Out {
+    code: i32,
+    stdout: String,
+    stderr: String,
+}
+
+fn run_in(dir: &Path, args: &[&str]) -> Out {
+    let o = cablab_in(dir).args(args).output().expect("cablab runs");
+    Out {
+        code: o.status.code().unwrap_or(-1),
+        stdout: String::from_utf8_lossy(&o.stdout).into_owned(),
+        stderr: String::from_utf8_lossy(&o.stderr).into_owned(),
+    }
+}
+
+fn copy(from: &Path, to: &Path) {
+    std::fs::create_dir_all(to.parent().unwrap()).unwrap();
+    std::fs::copy(from, to).unwrap();
+}
+
+/// Per-test stiffness of a campaign's summary.json, keyed by file name.
+fn stiffness_by_file(summary: &Path) -> BTreeMap<String, f64> {
+    let v: Value = serde_json::from_slice(&std::fs::read(summary).unwrap()).unwrap();
+    v["tests"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|t| {
+            let id = t["id"].as_str().unwrap();
+            let name = id.rsplit('/').next().unwrap().to_string();
+            (name, t["stiffness"].as_f64().unwrap_or(f64::NAN))
+        })
+        .collect()
+}
+
+/// The demo's six tension tests in a folder with a README: folder mode infers kind, length and
+/// diameter from each file's metadata, skips the README, gives the same stiffnesses as the
+/// hand-written pipeline, keeps the pipeline it generated so `verify` reruns it, and caps
+/// `--jobs`.
+#[test]
+fn folder_mode_infers_from_the_files_and_matches_the_pipeline() {
+    let d = tempfile::tempdir().unwrap();
+    let src = root().join("raw_data/cable");
+    let mut names = Vec::new();
+    for e in std::fs::read_dir(&src).unwrap().flatten() {
+        let n = e.file_name().to_string_lossy().to_string();
+        if n.starts_with("tension_") {
+            copy(&e.path(), &d.path().join("lab/cable").join(&n));
+            names.push(n);
+        }
+    }
+    assert_eq!(names.len(), 6);
+    copy(
+        &root().join("raw_data/README.md"),
+        &d.path().join("lab/README.md"),
+    );
+    let r = run_in(d.path(), &["run", "lab", "-j", "100000"]);
+    assert_eq!(r.code, 0, "{}", r.stderr);
+    for n in &names {
+        let line = r
+            .stderr
+            .lines()
+            .find(|l| l.contains(n.as_str()))
+            .unwrap_or_else(|| panic!("{n} not described:\n{}", r.stderr));
+        assert!(
+            line.contains(": tension (metadata mentions")
+                && line.contains("length 32 mm (metadata '")
+                && line.contains("diameter 2.8 mm (metadata '"),
+            "{line}"
+        );
+    }
+    assert!(
+        r.stderr.contains("skipped lab/README.md: a readme file"),
+        "{}",
+        r.stderr
+    );
+    assert!(r.stderr.contains("--jobs 100000 capped at"), "{}", r.stderr);
+    let kept = d.path().join("reports/lab/pipeline.toml");
+    let text = std::fs::read_to_string(&kept).unwrap();
+    assert!(
+        text.contains("glob = \"lab/cable/tension_*\"") && text.contains("root = \"../..\""),
+        "{text}"
+    );
+    let folder = stiffness_by_file(&d.path().join("reports/lab/summary.json"));
+    assert_eq!(folder.len(), 6);
+
+    // The same files through a hand-written pipeline: the same numbers, bit for bit.
+    std::fs::create_dir_all(d.path().join("pipelines")).unwrap();
+    std::fs::write(
+        d.path().join("pipelines/p.toml"),
+        "[campaign]\nname = \"p\"\n[[specimen]]\nlabel = \"cable\"\ndiameter_mm = 2.8\n\
+         [[input]]\nglob = \"lab/cable/tension_*\"\nspecimen = \"cable\"\nkind = \"tension\"\nlength_mm = 32\n",
+    )
+    .unwrap();
+    let r = run_in(d.path(), &["run", "pipelines/p.toml"]);
+    assert_eq!(r.code, 0, "{}", r.stderr);
+    let piped = stiffness_by_file(&d.path().join("reports/p/summary.json"));
+    assert_eq!(folder, piped);
+    // Each test's (EA)_T within 3 % of the EA its file was generated with (raw_data/TRUTH.toml).
+    let truth: toml::Table = std::fs::read_to_string(root().join("raw_data/TRUTH.toml"))
+        .unwrap()
+        .parse()
+        .unwrap();
+    for (n, s) in &folder {
+        let ea = truth["file"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|e| e["file"].as_str() == Some(&format!("cable/{n}")))
+            .and_then(|e| e["params"]["EA"].as_float())
+            .unwrap_or_else(|| panic!("no truth for {n}"));
+        assert!((s / ea - 1.0).abs() < 0.03, "{n}: (EA)_T = {s}, truth {ea}");
+    }
+
+    let r = run_in(d.path(), &["verify", "reports/lab/manifest.json"]);
+    assert_eq!(r.code, 0, "{}{}", r.stdout, r.stderr);
+    assert!(r.stdout.contains("verified"), "{}", r.stdout);
+
+    // A report folder among the paths is never read as tests.
+    let r = run_in(
+        d.path(),
+        &["init", "lab", "reports", "-o", "pipelines/x.toml"],
+    );
+    assert_eq!(r.code, 0, "{}", r.stderr);
+    assert!(
+        r.stderr
+            .contains("skipped reports/lab: a cablab report folder"),
+        "{}",
+        r.stderr
+    );
+    let x = std::fs::read_to_string(d.path().join("pipelines/x.toml")).unwrap();
+    assert!(
+        !x.contains("summary.json") && !x.contains("= \"FILL IN"),
+        "{x}"
+    );
+}
+
+/// A tension curve with no metadata: F = EA · u / L at EA = 1000 N, L = 50 mm, loading to 1 mm
+/// and back, with a time column.
+fn bare_tension_csv() -> String {
+    let mut s = String::from("Time (s),Position (mm),Force (N)\n");
+    let ea = 1000.0;
+    let l_mm = 50.0;
+    for i in 0..=200 {
+        let u = if i <= 100 {
+            i as f64 * 0.01
+        } else {
+            (200 - i) as f64 * 0.01
+        };
+        let f = ea * u / l_mm;
+        s.push_str(&format!("{:.2},{u:.4},{f:.6}\n", i as f64 * 0.1));
+    }
+    s
+}
+
+/// Values no file states are listed in one message (exit 2, nothing written); `init` writes them
+/// as FILL IN markers that keep the pipeline from loading; flags fill them for a run, and the
+/// result is the analytical stiffness.
+#[test]
+fn gaps_are_listed_once_and_init_marks_them() {
+    let d = tempfile::tempdir().unwrap();
+    std::fs::create_dir_all(d.path().join("lab2")).unwrap();
+    std::fs::write(d.path().join("lab2/sample_1.csv"), bare_tension_csv()).unwrap();
+    std::fs::write(d.path().join("lab2/zug_2.csv"), bare_tension_csv()).unwrap();
+    let r = run_in(d.path(), &["run", "lab2"]);
+    assert_eq!(r.code, 2, "{}", r.stderr);
+    assert!(
+        r.stderr.contains("2 of 2 files lack a value")
+            && r.stderr.contains(
+                "need kind, length_mm (free length), diameter_mm:\n    lab2/sample_1.csv"
+            )
+            && r.stderr
+                .contains("need length_mm (free length), diameter_mm:\n    lab2/zug_2.csv")
+            && r.stderr.contains("cablab init lab2"),
+        "{}",
+        r.stderr
+    );
+    assert_eq!(r.stderr.matches("error:").count(), 1, "{}", r.stderr);
+    assert!(!d.path().join("reports").exists());
+
+    let r = run_in(d.path(), &["init", "lab2"]);
+    assert_eq!(r.code, 0, "{}", r.stderr);
+    let p = d.path().join("pipelines/lab2.toml");
+    let text = std::fs::read_to_string(&p).unwrap();
+    assert!(
+        text.contains("kind = \"tension\"  # file name 'zug'"),
+        "{text}"
+    );
+    assert!(
+        text.contains("kind = \"FILL IN: tension | torsion | three_point | pure_bending\""),
+        "{text}"
+    );
+    assert!(
+        text.contains("length_mm = \"FILL IN: free length in mm\""),
+        "{text}"
+    );
+    let r = run_in(d.path(), &["run", "pipelines/lab2.toml"]);
+    assert_eq!(r.code, 2, "{}", r.stderr);
+    // One message lists every value still to fill in, with its line.
+    assert!(
+        r.stderr
+            .contains("pipelines/lab2.toml: 5 value(s) still say FILL IN"),
+        "{}",
+        r.stderr
+    );
+    let line = |needle: &str| text.lines().position(|l| l.starts_with(needle)).unwrap() + 1;
+    assert!(
+        r.stderr.contains(&format!(
+            "pipelines/lab2.toml:{}: kind = \"FILL IN",
+            line("kind = \"FILL IN")
+        )),
+        "{}",
+        r.stderr
+    );
+    assert!(!d.path().join("reports").exists());
+    let r = run_in(d.path(), &["init", "lab2"]);
+    assert_eq!(r.code, 2);
+    assert!(
+        r.stderr.contains("already exists; pass --force"),
+        "{}",
+        r.stderr
+    );
+    assert_eq!(std::fs::read_to_string(&p).unwrap(), text);
+    assert_eq!(run_in(d.path(), &["init", "lab2", "--force"]).code, 0);
+
+    let r = run_in(
+        d.path(),
+        &[
+            "run",
+            "lab2",
+            "--kind",
+            "tension",
+            "--length-mm",
+            "50",
+            "--diameter-mm",
+            "2",
+            "--no-diagnosis",
+        ],
+    );
+    assert_eq!(r.code, 0, "{}", r.stderr);
+    assert!(r.stderr.contains("lab2/sample_1.csv: tension (--kind); length 50 mm (--length-mm); diameter 2 mm (--diameter-mm)"), "{}", r.stderr);
+    assert!(
+        r.stderr
+            .contains("lab2/zug_2.csv: tension (file name 'zug')"),
+        "{}",
+        r.stderr
+    );
+    let got = stiffness_by_file(&d.path().join("reports/lab2/summary.json"));
+    assert_eq!(got.len(), 2);
+    for (n, s) in got {
+        assert!((s - 1000.0).abs() < 1.0, "{n}: (EA)_T = {s}, want 1000 N");
+    }
+
+    // --skip-incomplete: the file whose kind nothing states is left out with a note.
+    let r = run_in(
+        d.path(),
+        &[
+            "run",
+            "lab2",
+            "--skip-incomplete",
+            "--length-mm",
+            "50",
+            "--diameter-mm",
+            "2",
+            "--name",
+            "part",
+            "--no-diagnosis",
+        ],
+    );
+    assert_eq!(r.code, 0, "{}", r.stderr);
+    assert!(
+        r.stderr
+            .contains("skipped lab2/sample_1.csv: --skip-incomplete: no kind"),
+        "{}",
+        r.stderr
+    );
+    let got = stiffness_by_file(&d.path().join("reports/part/summary.json"));
+    assert_eq!(got.keys().collect::<Vec<_>>(), ["zug_2.csv"]);
+}
+
+/// On the real exports: every file whose manifest kind is one of cablab's gets that kind (from
+/// its metadata, channels or name); files of other kinds (compression) get none rather than a
+/// guess; the manifest, README and licences are skipped.
+#[test]
+fn real_logs_get_the_kind_their_metadata_or_name_states() {
+    let Some(dir) = real_logs() else {
+        eprintln!("skipped: ../shared/real_logs not present");
+        return;
+    };
+    let m: toml::Table = std::fs::read_to_string(dir.join("MANIFEST.toml"))
+        .unwrap()
+        .parse()
+        .unwrap();
+    let s = cablab::commands::init::survey(&[dir.clone()], &InferArgs::default()).unwrap();
+    let found: BTreeMap<String, Option<TestKind>> = s
+        .found
+        .iter()
+        .map(|f| {
+            (
+                f.path.file_name().unwrap().to_string_lossy().to_string(),
+                f.kind.as_ref().map(|k| k.value),
+            )
+        })
+        .collect();
+    let mut stated = 0;
+    for f in m["file"].as_array().unwrap() {
+        let name = f["name"].as_str().unwrap();
+        let want = match f["test_kind"].as_str().unwrap() {
+            "tension" => Some(TestKind::Tension),
+            "three_point" => Some(TestKind::ThreePoint),
+            "moment_curvature" => Some(TestKind::PureBending),
+            "torsion" => Some(TestKind::Torsion),
+            "compression" | "cyclic_compression" => None,
+            _ => continue, // "other": axial-torsional, not one kind
+        };
+        let got = found
+            .get(name)
+            .unwrap_or_else(|| panic!("{name} not surveyed"));
+        assert_eq!(*got, want, "{name}");
+        stated += usize::from(want.is_some());
+    }
+    assert_eq!(stated, 9, "tension ×5, three-point ×3, moment-curvature ×1");
+    let skipped: Vec<String> = s
+        .skipped
+        .iter()
+        .map(|(p, _)| p.file_name().unwrap().to_string_lossy().to_string())
+        .collect();
+    for n in ["MANIFEST.toml", "README.md", "LICENSES"] {
+        assert!(
+            skipped.iter().any(|s| s == n),
+            "{n} not skipped: {skipped:?}"
+        );
+    }
+    assert_eq!(s.found.len(), 17);
+}
+
+#[test]
+fn help_pipeline_prints_the_reference() {
+    let r = run_in(&root(), &["help", "pipeline"]);
+    assert_eq!(r.code, 0);
+    assert_eq!(
+        r.stdout,
+        std::fs::read_to_string(root().join("docs/pipeline.md")).unwrap()
+    );
+    let r = run_in(&root(), &["help", "run"]);
+    assert_eq!(r.code, 0);
+    assert!(
+        r.stdout.contains("cablab run") && r.stdout.contains("--skip-incomplete"),
+        "{}",
+        r.stdout
+    );
+    let r = run_in(&root(), &["help", "pipelin"]);
+    assert_eq!(r.code, 2);
+    assert!(r.stderr.contains("topics: pipeline, run"), "{}", r.stderr);
+}
+
+/// Negative lengths say what to type; kinds are checked by clap with their spellings listed;
+/// `convert -o` over its own input is refused and the raw file is untouched.
+#[test]
+fn flags_are_checked_and_raw_files_never_overwritten() {
+    let f = "raw_data/cable/tension_40N_1.TXT";
+    for flag in ["--length-mm", "--diameter-mm"] {
+        let r = run_in(&root(), &["analyze", f, "--kind", "tension", flag, "-3"]);
+        assert_eq!(r.code, 2, "{}", r.stderr);
+        assert!(
+            r.stderr
+                .contains("-3 mm is not a length: give a positive number of millimetres"),
+            "{}",
+            r.stderr
+        );
+    }
+    let r = run_in(
+        &root(),
+        &[
+            "simulate",
+            "--kind",
+            "tension",
+            "--length-mm",
+            "0",
+            "--law",
+            "linear",
+            "--path",
+            "0,1",
+        ],
+    );
+    assert_eq!(r.code, 2);
+    assert!(r.stderr.contains("0 mm is not a length"), "{}", r.stderr);
+    let r = run_in(&root(), &["analyze", f, "--kind", "shear"]);
+    assert_eq!(r.code, 2);
+    assert!(
+        r.stderr.contains("three-point") && r.stderr.contains("pure-bending"),
+        "{}",
+        r.stderr
+    );
+    for spelling in ["three_point", "three-point", "3pb"] {
+        let r = run_in(&root(), &["inspect", f, "--kind", spelling, "--json"]);
+        assert_eq!(r.code, 0, "{spelling}: {}", r.stderr);
+        let v: Value = serde_json::from_str(&r.stdout).unwrap();
+        assert_eq!(v["kind"], "three_point");
+    }
+
+    let d = tempfile::tempdir().unwrap();
+    let raw = d.path().join("X.csv");
+    copy(&root().join("raw_data/cable/tension_40N_2.csv"), &raw);
+    let before = std::fs::read(&raw).unwrap();
+    std::fs::create_dir_all(d.path().join("sub")).unwrap();
+    for (input, out) in [
+        ("X.csv", "X.csv"),
+        ("X.csv", "./X.csv"),
+        ("./X.csv", "sub/../X.csv"),
+    ] {
+        let r = run_in(d.path(), &["convert", input, "-o", out]);
+        assert_eq!(r.code, 2, "{out}: {}", r.stderr);
+        assert!(
+            r.stderr.contains("refusing to write over the input file"),
+            "{}",
+            r.stderr
+        );
+    }
+    assert_eq!(std::fs::read(&raw).unwrap(), before);
+    let r = run_in(d.path(), &["run", "pipelines/a.toml", "X.csv"]);
+    assert_eq!(r.code, 2);
+    assert!(r.stderr.contains("not both"), "{}", r.stderr);
+}
