@@ -148,6 +148,11 @@ pub struct AnalyzeArgs {
     /// Poisson ratio used for the torsion modulus (G = E / (2 (1 + nu))).
     #[arg(long, default_value_t = 0.5, value_name = "NU")]
     pub nu: f64,
+    /// Analyse as --kind even where the file's own evidence (kind words in its metadata or
+    /// name, the units of its control and response) says otherwise; the contradiction is then
+    /// kept as a warning.
+    #[arg(long)]
+    pub force_kind: bool,
     /// Print JSON (the keys of the scripted contract).
     #[arg(long)]
     pub json: bool,
