@@ -32,7 +32,7 @@
 //! reported as the piecewise threshold K_t instead. Pure: numbers in, numbers out.
 
 use crate::condition::{
-    correct_compliance, noise_level, segment, zero_offsets, Branch, Offsets, Segment,
+    correct_compliance, glitches, noise_level, segment, zero_offsets, Branch, Offsets, Segment,
 };
 use crate::elastic::{auto_elastic_range, user_elastic_range, ElasticRange, Hinge};
 use crate::elastica::ThreePointElastica;
@@ -125,6 +125,9 @@ pub struct Stiffness {
     pub r2: f64,
     /// Samples in the window.
     pub n: usize,
+    /// Doubts about this number (poor fit, few points, wide interval, implausible modulus),
+    /// also in the analysis' `warnings`.
+    pub warnings: Vec<String>,
 }
 
 /// The yield point: the bend in the first loading path.
@@ -251,6 +254,8 @@ pub struct Analysis {
     pub segments: Vec<Segment>,
     /// Response change in every hold after the initial rest (relaxation: rate dependence).
     pub holds: Vec<HoldRelaxation>,
+    /// Samples (0-based, complete rows) excluded from the fits as isolated glitches.
+    pub excluded_samples: Vec<usize>,
     /// Warnings for the user.
     pub warnings: Vec<String>,
     /// All reasons for null quantities as one string ("key: reason; ..."), or null.
@@ -323,12 +328,63 @@ pub fn analyze(
     let mut warnings = Vec::new();
     let mut why = BTreeMap::new();
 
+    // A clock that does not run forward cannot time holds: judge them by sample index instead
+    // (and say so), rather than fail later with a symptom.
+    let time_s = match time_s {
+        Some(t) => {
+            let back = t.windows(2).filter(|w| w[1] < w[0]).count();
+            if back > 0 || t[t.len() - 1] <= t[0] {
+                warnings.push(format!(
+                    "the time column does not run forward ({}): holds are judged by sample index",
+                    if back > 0 {
+                        format!("it decreases {back} time(s)")
+                    } else {
+                        "it is constant".to_string()
+                    }
+                ));
+                None
+            } else {
+                Some(t)
+            }
+        }
+        None => None,
+    };
+
     let mut c = match opts.compliance_m_per_n {
         Some(k) if k.is_finite() => correct_compliance(control, response, k),
         Some(k) => return Err(MeasureError::BadCompliance(k)),
         None => control.to_vec(),
     };
     let mut r = response.to_vec();
+    // Isolated glitches (one sample off in one channel) are excluded from every fit: replaced,
+    // in this copy only, by the mean of their neighbours.
+    let mut excluded: Vec<usize> = glitches(&r, &c);
+    let in_control = glitches(&c, &r);
+    for &i in &excluded {
+        r[i] = 0.5 * (r[i - 1] + r[i + 1]);
+    }
+    for &i in &in_control {
+        c[i] = 0.5 * (c[i - 1] + c[i + 1]);
+    }
+    if !excluded.is_empty() || !in_control.is_empty() {
+        let show = |v: &[usize]| {
+            v.iter()
+                .take(5)
+                .map(|i| i.to_string())
+                .collect::<Vec<_>>()
+                .join(", ")
+                + if v.len() > 5 { ", ..." } else { "" }
+        };
+        warnings.push(format!(
+            "{} isolated glitch sample(s) excluded from the analysis (response at samples [{}], control at samples [{}]; 0-based complete rows)",
+            excluded.len() + in_control.len(),
+            show(&excluded),
+            show(&in_control)
+        ));
+    }
+    excluded.extend(in_control);
+    excluded.sort_unstable();
+    excluded.dedup();
     let offsets = opts.zero_offsets.then(|| zero_offsets(&mut c, &mut r));
     let noise = Noise {
         control: noise_level(&c),
@@ -436,19 +492,42 @@ pub fn analyze(
             window_automatic: e.automatic,
             r2: e.fit.r2,
             n: e.fit.n,
+            warnings: Vec::new(),
         }
     });
-    if let Some(s) = &stiffness {
-        if s.value.is_nan() || s.value <= 0.0 {
-            warnings.push(format!(
-                "the elastic slope is not positive ({} {})",
-                s.value, s.unit
-            ));
-        }
+    let first_rise = fy.iter().fold(f64::NEG_INFINITY, |m, &v| m.max(v))
+        - fy.iter().fold(f64::INFINITY, |m, &v| m.min(v));
+    let stiffness = match stiffness {
+        Some(s) => match refuse_stiffness(&s, first_rise, noise.response) {
+            Some(reason) => {
+                why.insert("stiffness".into(), reason);
+                None
+            }
+            None => Some(s),
+        },
+        None => None,
+    };
+    let mut stiffness = stiffness;
+    if let Some(s) = stiffness.as_mut() {
+        s.warnings = stiffness_doubts(s);
+        warnings.extend(s.warnings.iter().map(|w| format!("stiffness: {w}")));
     }
 
     let modulus_pa = match (&stiffness, geom.diameter_m) {
-        (Some(s), Some(d)) => modulus_from_stiffness(kind, d, s.value, opts.nu),
+        (Some(s), Some(d)) => {
+            let m = modulus_from_stiffness(kind, d, s.value, opts.nu);
+            if let Some(e) =
+                m.filter(|e| !(PLAUSIBLE_MODULUS_PA.0..=PLAUSIBLE_MODULUS_PA.1).contains(e))
+            {
+                warnings.push(format!(
+                    "modulus_pa: {e:.3e} Pa for a diameter of {:.3} mm lies outside {:.0e}–{:.0e} Pa, the range of solids from soft elastomers to diamond: check the kind, the channels (control and response swapped?), their units and the diameter",
+                    d * 1e3,
+                    PLAUSIBLE_MODULUS_PA.0,
+                    PLAUSIBLE_MODULUS_PA.1
+                ));
+            }
+            m
+        }
         (None, _) => {
             why.insert("modulus_pa".into(), "no stiffness".into());
             None
@@ -492,12 +571,12 @@ pub fn analyze(
     let permanent = cyc.iter().any(|c| c.residual_significant == Some(true));
     let behaviour = if judged.is_empty() {
         warnings.push("no unloading to judge reversibility by".into());
-        if bend.is_none() && elastic.is_some() {
+        if bend.is_none() && stiffness.is_some() {
             Behaviour::LinearElastic
         } else {
             Behaviour::Other
         }
-    } else if reversible {
+    } else if reversible && stiffness.is_some() {
         if bend.is_some() {
             Behaviour::PiecewiseLinearElastic
         } else {
@@ -634,6 +713,7 @@ pub fn analyze(
         noise,
         segments,
         holds,
+        excluded_samples: excluded,
         warnings,
         why: join_why(&why),
         why_by_key: why,
@@ -673,4 +753,61 @@ fn hold_relaxation(segments: &[Segment], control: &[f64], response: &[f64]) -> V
             }
         })
         .collect()
+}
+
+/// Young's moduli outside this range (Pa) are no solid's: from soft elastomers (~0.1 MPa) to
+/// diamond (~1.2 TPa). A modulus outside is reported with a warning, not refused.
+pub const PLAUSIBLE_MODULUS_PA: (f64, f64) = (1e5, 1.2e12);
+
+/// Fewest samples a stiffness is computed from.
+pub const MIN_STIFFNESS_SAMPLES: usize = 5;
+
+/// Why a stiffness must not be printed at all, if so: fewer than [`MIN_STIFFNESS_SAMPLES`]
+/// samples in the window, a 95% interval that contains zero, or a first loading whose response
+/// never rises beyond 10 σ of its noise (a flat response: any slope is noise).
+fn refuse_stiffness(s: &Stiffness, first_rise: f64, sigma_r: f64) -> Option<String> {
+    if s.n < MIN_STIFFNESS_SAMPLES {
+        return Some(format!(
+            "the elastic window holds only {} samples; a stiffness needs at least {MIN_STIFFNESS_SAMPLES}",
+            s.n
+        ));
+    }
+    if !(first_rise > 10.0 * sigma_r) {
+        return Some(format!(
+            "the response does not rise beyond its noise over the first loading (range {first_rise:.3e}, noise σ {sigma_r:.3e}): a flat response has no stiffness"
+        ));
+    }
+    if s.ci95[0] <= 0.0 && s.ci95[1] >= 0.0 {
+        return Some(format!(
+            "the 95 % interval of the slope [{:.4e}, {:.4e}] {} contains zero",
+            s.ci95[0], s.ci95[1], s.unit
+        ));
+    }
+    None
+}
+
+/// Doubts about a stiffness that is printed: a negative value, a poor straight-line fit
+/// (r² < 0.99), few samples (< 20), a wide interval (half-width > 5 % of the value).
+fn stiffness_doubts(s: &Stiffness) -> Vec<String> {
+    let mut out = Vec::new();
+    if !(s.value > 0.0) {
+        out.push(format!(
+            "the elastic slope is not positive ({:.4e} {})",
+            s.value, s.unit
+        ));
+    }
+    if s.r2 < 0.99 {
+        out.push(format!("poor straight-line fit (r² = {:.3})", s.r2));
+    }
+    if s.n < 20 {
+        out.push(format!("fitted on only {} samples", s.n));
+    }
+    let half = 0.5 * (s.ci95[1] - s.ci95[0]);
+    if s.value != 0.0 && half > 0.05 * s.value.abs() {
+        out.push(format!(
+            "wide 95 % interval (±{:.1} % of the value)",
+            100.0 * half / s.value.abs()
+        ));
+    }
+    out
 }

@@ -15,8 +15,8 @@
 //!   from its running extremum ([`turning_points`], a zig-zag with hysteresis). Noise on a dwell
 //!   plateau therefore never makes a reversal.
 //! * Holds: a hold is a stretch where the control stays within one reversal threshold for at
-//!   least three times as long as the neighbouring ramps need to cross that band (see
-//!   [`holds`]); time stamps are used when given, sample indices otherwise. The band that starts
+//!   least three times as long as the neighbouring ramps need to cross that band, without
+//!   creeping across it and without the response rising (see [`holds_still`]); time stamps are used when given, sample indices otherwise. The band that starts
 //!   at each sample is found for all samples at once in O(n) (running max/min queues).
 //! * Branches: between turning points the control is monotone. Moving away from zero in the
 //!   direction of the first motion it is first loading (the first time) or reloading; moving
@@ -43,6 +43,37 @@ pub fn noise_level(signal: &[f64]) -> f64 {
     let med = median(&d2);
     let abs_dev: Vec<f64> = d2.iter().map(|d| (d - med).abs()).collect();
     median(&abs_dev) / (0.674_489_750_196_081_7 * 6f64.sqrt())
+}
+
+/// Isolated glitch samples of `signal`: a sample `i` that jumps away from both neighbours in
+/// the same direction by more than 12 σ (σ = [`noise_level`], so any jump when the channel is
+/// noise-free) while its neighbours agree with each other to within half that jump, and the
+/// `partner` channel does not turn at `i` (at a sampled turning point both channels turn
+/// together; a glitch is in one channel only). A break (the response falls and stays down) is
+/// no glitch: the neighbours disagree.
+///
+/// Does not modify anything and does not find glitches of two or more consecutive samples.
+pub fn glitches(signal: &[f64], partner: &[f64]) -> Vec<usize> {
+    let n = signal.len();
+    if n < 3 || partner.len() != n {
+        return Vec::new();
+    }
+    let sigma = noise_level(signal);
+    let sigma_p = noise_level(partner);
+    let turns = |v: &[f64], i: usize, s: f64| {
+        let (a, b) = (v[i] - v[i - 1], v[i] - v[i + 1]);
+        a * b > 0.0 && a.abs().min(b.abs()) > 3.0 * s
+    };
+    (1..n - 1)
+        .filter(|&i| {
+            let (a, b) = (signal[i] - signal[i - 1], signal[i] - signal[i + 1]);
+            let m = a.abs().min(b.abs());
+            a * b > 0.0
+                && m > 12.0 * sigma
+                && (signal[i + 1] - signal[i - 1]).abs() < 0.5 * m
+                && !turns(partner, i, sigma_p)
+        })
+        .collect()
 }
 
 /// Smallest reversal that counts, as a fraction of the control's range (see
@@ -289,6 +320,21 @@ pub fn labels(segments: &[Segment], n: usize) -> Vec<Label> {
 /// sharp turn spends in it. Run rates are travel over time without holds (two passes: the first
 /// counts all time, which underestimates the rates and so finds only clear holds).
 pub fn holds(time_s: Option<&[f64]>, control: &[f64], threshold: f64) -> Vec<(usize, usize)> {
+    holds_still(time_s, control, None, threshold)
+}
+
+/// [`holds`], where, when `response` is given, a stretch also has to be still: its control must not creep (the means of
+/// its first and last tenths differ by less than half the band: a slow, smooth ramp is never a
+/// hold, however slow) and, when `response` is given, the response must not rise away from zero
+/// by more than its own reversal threshold (an elastic rise under a nearly still control, as a
+/// specimen-mounted extensometer sees it, is loading, not a hold). A response that relaxes
+/// towards zero at a still control is a hold (relaxation).
+pub fn holds_still(
+    time_s: Option<&[f64]>,
+    control: &[f64],
+    response: Option<&[f64]>,
+    threshold: f64,
+) -> Vec<(usize, usize)> {
     let n = control.len();
     if n < 3 {
         return Vec::new();
@@ -310,6 +356,31 @@ pub fn holds(time_s: Option<&[f64]>, control: &[f64], threshold: f64) -> Vec<(us
     // both passes.
     let ends = band_ends(control, threshold);
     let run: Vec<usize> = (0..n).map(run_of).collect();
+    let prefix = |v: &[f64]| {
+        let mut p = Vec::with_capacity(v.len() + 1);
+        p.push(0.0);
+        for x in v {
+            p.push(p[p.len() - 1] + if x.is_nan() { 0.0 } else { *x });
+        }
+        p
+    };
+    let pc = prefix(control);
+    let resp = response.filter(|r| r.len() == n);
+    let pr = resp.map(prefix);
+    let hr = resp.map_or(0.0, reversal_threshold);
+    let still = |i: usize, j: usize| {
+        let k = ((j - i) / 10).max(1);
+        let mean = |p: &[f64], a: usize, b: usize| (p[b] - p[a]) / (b - a) as f64;
+        let Some(p) = &pr else {
+            // Without the response: the band alone (as `holds` always did).
+            return true;
+        };
+        if (mean(&pc, j - k, j) - mean(&pc, i, i + k)).abs() > 0.5 * threshold {
+            return false;
+        }
+        let rise = mean(p, j - k, j) - mean(p, i, i + k);
+        rise * mean(p, i, j).signum() <= hr
+    };
     let mut found: Vec<(usize, usize)> = Vec::new();
     for _pass in 0..2 {
         let rates: Vec<f64> = pts
@@ -327,7 +398,7 @@ pub fn holds(time_s: Option<&[f64]>, control: &[f64], threshold: f64) -> Vec<(us
             .collect();
         let min_duration =
             |i: usize, j: usize| 1.5 * threshold * (1.0 / rates[run[i]] + 1.0 / rates[run[j]]);
-        found = hold_runs(&ends, &min_duration, &t);
+        found = hold_runs(&ends, &min_duration, &t, &still);
     }
     found
 }
@@ -395,18 +466,19 @@ fn band_ends(control: &[f64], threshold: f64) -> Vec<usize> {
 }
 
 /// Greedy left-to-right hold runs: a stretch `i..ends[i]` is a hold when it has at least three
-/// samples and lasts at least `min_duration`; the scan then continues after it.
+/// samples, lasts at least `min_duration` and is `still`; the scan then continues after it.
 fn hold_runs(
     ends: &[usize],
     min_duration: &dyn Fn(usize, usize) -> f64,
     t: &dyn Fn(usize) -> f64,
+    still: &dyn Fn(usize, usize) -> bool,
 ) -> Vec<(usize, usize)> {
     let n = ends.len();
     let mut out = Vec::new();
     let mut i = 0;
     while i < n {
         let j = ends[i];
-        if j - i >= 3 && t(j - 1) - t(i) >= min_duration(i, j - 1) {
+        if j - i >= 3 && t(j - 1) - t(i) >= min_duration(i, j - 1) && still(i, j) {
             out.push((i, j));
             i = j;
         } else {
@@ -420,9 +492,10 @@ fn hold_runs(
 /// dwell durations when given. The control should be zeroed (zero = unloaded state). Every
 /// sample belongs to exactly one segment.
 ///
-/// `response` is only checked for its length: branches come from the control alone, because a
-/// flat response is no hold (perfect plasticity, or a three-point punch that has lost contact,
-/// keep the force flat while the machine moves). Errors on unequal lengths or fewer than 3
+/// Branches come from the control; the response only vetoes holds ([`holds_still`]): a flat
+/// response is no hold (perfect plasticity, or a three-point punch that has lost contact, keep
+/// the force flat while the machine moves), and a response rising under a nearly still control
+/// is loading, not a hold. Errors on unequal lengths or fewer than 3
 /// samples.
 pub fn segment(
     time_s: Option<&[f64]>,
@@ -454,7 +527,7 @@ pub fn segment(
         });
     }
     let h = reversal_threshold(control);
-    let hold_runs = holds(time_s, control, h);
+    let hold_runs = holds_still(time_s, control, Some(response), h);
     let tps = turning_points(control, h);
 
     // Monotone runs between turning points: (start, end_exclusive, rising).
