@@ -482,12 +482,12 @@ pub(crate) fn kind_evidence(
     response: Option<usize>,
 ) -> Vec<KindEvidence> {
     let mut out: Vec<KindEvidence> = Vec::new();
-    let mut seen_words: Vec<&str> = Vec::new();
-    let mut scan = |text: &str, place: &str, out: &mut Vec<KindEvidence>| {
+    // One piece of evidence per kind family named (the first place that names it).
+    let scan = |text: &str, place: &str, out: &mut Vec<KindEvidence>| {
         let l = text.to_lowercase();
         for (w, kinds) in KIND_WORDS {
-            if !seen_words.contains(w) && has_word(&l, w) {
-                seen_words.push(w);
+            let known = out.iter().any(|e| e.kinds.as_slice() == *kinds);
+            if !known && has_word(&l, w) {
                 out.push(KindEvidence {
                     kinds: kinds.to_vec(),
                     what: format!("{place} says '{w}' (in \"{}\")", text.trim()),
@@ -795,6 +795,57 @@ mod tests {
         );
         assert!(kind_from_text(&["Kraftgeregelt 3,9 kN/s"]).is_none());
         assert!(kind_from_text(&["tension", "torsion"]).is_none());
+    }
+
+    #[test]
+    fn kind_evidence_from_words_names_and_units() {
+        let names: Vec<String> = ["Zeit", "Winkel", "Moment"].map(String::from).to_vec();
+        let units: Vec<String> = ["s", "°", "N·mm"].map(String::from).to_vec();
+        let dims = vec![
+            Some(Dimension::Time),
+            Some(Dimension::Angle),
+            Some(Dimension::Torque),
+        ];
+        let ev = kind_evidence(
+            &["Prüfart", "Torsionsversuch"],
+            "data/probe_torsion_3.csv",
+            &names,
+            &units,
+            &dims,
+            Some(1),
+            Some(2),
+        );
+        // One word (seen twice), the response and the control.
+        assert_eq!(ev.len(), 3, "{ev:?}");
+        assert!(ev.iter().all(|e| e.kinds.contains(&TestKind::Torsion)));
+        assert!(ev.iter().all(|e| !e.kinds.contains(&TestKind::Tension)));
+        assert!(ev[1].what.contains("'Moment' (N·mm)"), "{ev:?}");
+        // Whole words: "Zugabe" and "extension" are no kind words; "Zug" and a compound
+        // "Dreipunktbiegeversuch" are.
+        let none: [String; 0] = [];
+        let ev = kind_evidence(
+            &["Zugabe", "extension"],
+            "x.csv",
+            &none,
+            &none,
+            &[],
+            None,
+            None,
+        );
+        assert!(ev.is_empty(), "{ev:?}");
+        let ev = kind_evidence(
+            &["Zug"],
+            "Dreipunktbiegeversuch.txt",
+            &none,
+            &none,
+            &[],
+            None,
+            None,
+        );
+        assert_eq!(ev.len(), 2, "{ev:?}");
+        assert_eq!(ev[0].kinds, vec![TestKind::Tension]);
+        assert_eq!(ev[1].kinds, vec![TestKind::ThreePoint]);
+        assert!(ev[1].what.starts_with("the file name"), "{ev:?}");
     }
 
     #[test]

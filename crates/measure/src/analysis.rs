@@ -766,15 +766,15 @@ pub const MIN_STIFFNESS_SAMPLES: usize = 5;
 /// samples in the window, a 95% interval that contains zero, or a first loading whose response
 /// never rises beyond 10 σ of its noise (a flat response: any slope is noise).
 fn refuse_stiffness(s: &Stiffness, first_rise: f64, sigma_r: f64) -> Option<String> {
+    if !(first_rise > 10.0 * sigma_r) {
+        return Some(format!(
+            "the response does not rise beyond its noise over the first loading (range {first_rise:.3e}, noise σ {sigma_r:.3e}): a flat response has no stiffness"
+        ));
+    }
     if s.n < MIN_STIFFNESS_SAMPLES {
         return Some(format!(
             "the elastic window holds only {} samples; a stiffness needs at least {MIN_STIFFNESS_SAMPLES}",
             s.n
-        ));
-    }
-    if !(first_rise > 10.0 * sigma_r) {
-        return Some(format!(
-            "the response does not rise beyond its noise over the first loading (range {first_rise:.3e}, noise σ {sigma_r:.3e}): a flat response has no stiffness"
         ));
     }
     if s.ci95[0] <= 0.0 && s.ci95[1] >= 0.0 {

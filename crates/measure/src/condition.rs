@@ -16,7 +16,8 @@
 //!   plateau therefore never makes a reversal.
 //! * Holds: a hold is a stretch where the control stays within one reversal threshold for at
 //!   least three times as long as the neighbouring ramps need to cross that band, without
-//!   creeping across it and without the response rising (see [`holds_still`]); time stamps are used when given, sample indices otherwise. The band that starts
+//!   creeping across it and without the response rising (see [`holds_still`]); time stamps are
+//!   used when given, sample indices otherwise. The band that starts
 //!   at each sample is found for all samples at once in O(n) (running max/min queues).
 //! * Branches: between turning points the control is monotone. Moving away from zero in the
 //!   direction of the first motion it is first loading (the first time) or reloading; moving
@@ -323,10 +324,16 @@ pub fn holds(time_s: Option<&[f64]>, control: &[f64], threshold: f64) -> Vec<(us
     holds_still(time_s, control, None, threshold)
 }
 
-/// [`holds`], where, when `response` is given, a stretch also has to be still: its control must not creep (the means of
-/// its first and last tenths differ by less than half the band: a slow, smooth ramp is never a
-/// hold, however slow) and, when `response` is given, the response must not rise away from zero
-/// by more than its own reversal threshold (an elastic rise under a nearly still control, as a
+/// Creep that makes a stretch of the control band a ramp, not a hold: the mean of its fourth
+/// fifth differs from that of its second by this fraction of the band (and by more than the
+/// noise allows; a steady ramp across the band makes 0.4, one slowing to 10⁻³ of the test's mean
+/// rate in the stretch's middle about 0.1).
+pub const CREEP_FRACTION: f64 = 0.05;
+
+/// [`holds`], where, when `response` is given, a stretch also has to be still: its control must
+/// not creep across the band (the means of its second and fourth fifths differ by less than
+/// [`CREEP_FRACTION`] of the band: a slow, smooth ramp is never a hold), and the response must not rise away from zero by more than its reversal
+/// threshold or a tenth of its range (an elastic rise under a nearly still control, as a
 /// specimen-mounted extensometer sees it, is loading, not a hold). A response that relaxes
 /// towards zero at a still control is a hold (relaxation).
 pub fn holds_still(
@@ -367,19 +374,31 @@ pub fn holds_still(
     let pc = prefix(control);
     let resp = response.filter(|r| r.len() == n);
     let pr = resp.map(prefix);
-    let hr = resp.map_or(0.0, reversal_threshold);
-    let still = |i: usize, j: usize| {
-        let k = ((j - i) / 10).max(1);
+    let hr = resp.map_or(0.0, |r| {
+        let (lo, hi) = min_max(r);
+        reversal_threshold(r).max(0.1 * (hi - lo))
+    });
+    // `j`: the end of the band stretch (the creep test runs over all of it); `e` <= `j`: the
+    // end of the hold tried (the response test runs up to it).
+    let sigma_c = noise_level(control);
+    let still = |i: usize, e: usize, j: usize| {
         let mean = |p: &[f64], a: usize, b: usize| (p[b] - p[a]) / (b - a) as f64;
         let Some(p) = &pr else {
             // Without the response: the band alone (as `holds` always did).
             return true;
         };
-        if (mean(&pc, j - k, j) - mean(&pc, i, i + k)).abs() > 0.5 * threshold {
+        // Creep: the second and fourth fifths (the ends may hold the tails of the ramps that
+        // enter and leave the band) differ by a quarter of the band; a steady ramp across the
+        // band makes 0.4 of it.
+        let f = (j - i) / 5;
+        if f >= 1
+            && (mean(&pc, i + 3 * f, i + 4 * f) - mean(&pc, i + f, i + 2 * f)).abs()
+                > (CREEP_FRACTION * threshold).max(6.0 * sigma_c / (f as f64).sqrt())
+        {
             return false;
         }
-        let rise = mean(p, j - k, j) - mean(p, i, i + k);
-        rise * mean(p, i, j).signum() <= hr
+        let k = ((e - i) / 10).max(1);
+        mean(p, e - k, e).abs() - mean(p, i, i + k).abs() <= hr
     };
     let mut found: Vec<(usize, usize)> = Vec::new();
     for _pass in 0..2 {
@@ -466,23 +485,38 @@ fn band_ends(control: &[f64], threshold: f64) -> Vec<usize> {
 }
 
 /// Greedy left-to-right hold runs: a stretch `i..ends[i]` is a hold when it has at least three
-/// samples, lasts at least `min_duration` and is `still`; the scan then continues after it.
+/// samples, lasts at least `min_duration` and is `still` (`still(i, e, j)`: the hold `i..e`
+/// of the band stretch `i..j`; a stretch whose response starts to rise near its end is ended
+/// earlier, in twentieths); the scan then continues after it.
 fn hold_runs(
     ends: &[usize],
     min_duration: &dyn Fn(usize, usize) -> f64,
     t: &dyn Fn(usize) -> f64,
-    still: &dyn Fn(usize, usize) -> bool,
+    still: &dyn Fn(usize, usize, usize) -> bool,
 ) -> Vec<(usize, usize)> {
     let n = ends.len();
     let mut out = Vec::new();
     let mut i = 0;
     while i < n {
         let j = ends[i];
-        if j - i >= 3 && t(j - 1) - t(i) >= min_duration(i, j - 1) && still(i, j) {
-            out.push((i, j));
-            i = j;
-        } else {
+        let is_hold = |j: usize| j - i >= 3 && t(j - 1) - t(i) >= min_duration(i, j - 1);
+        if !is_hold(j) {
             i += 1;
+            continue;
+        }
+        // The stretch may run into the next ramp's start while the band still holds it (an
+        // elastic rise under a nearly still control): end it earlier, in twentieths, where it
+        // is still.
+        let step = ((j - i) / 20).max(1);
+        let end = std::iter::successors(Some(j), |&e| e.checked_sub(step).filter(|&e| e > i))
+            .take_while(|&e| is_hold(e))
+            .find(|&e| still(i, e, j));
+        match end {
+            Some(e) => {
+                out.push((i, e));
+                i = e;
+            }
+            None => i += 1,
         }
     }
     out
@@ -687,7 +721,7 @@ pub fn zero_offsets(control: &mut [f64], response: &mut [f64]) -> Offsets {
         };
     }
     let h = reversal_threshold(&control[..n]);
-    let rest = holds(None, &control[..n], h)
+    let rest = holds_still(None, &control[..n], Some(&response[..n]), h)
         .first()
         .filter(|r| r.0 == 0)
         .map_or(0, |r| r.1);

@@ -1,0 +1,284 @@
+//! Issue 12, item 6 ("no silently wrong number") and item 3 (holds vs slow ramps), through the
+//! `cablab analyze` binary and the measure library: a declared kind that the file contradicts,
+//! channels in the wrong roles, warnings kept on failure, isolated glitches, stiffnesses from a
+//! handful of points or a flat response, a stiff elastic rise under a nearly still extensometer.
+//!
+//! Every expected value is analytical (the straight lines are generated here) or the demo's
+//! truth (`raw_data/TRUTH.toml`: cable (EA)_T).
+
+use crate::common::cablab;
+use cablab_core::TestKind;
+use cablab_measure::{analyze, AnalyzeOptions, Branch, Geometry};
+use serde_json::Value;
+use std::path::{Path, PathBuf};
+
+const DEMO_TENSION: &str = "raw_data/cable/tension_100N_1.csv";
+
+fn json_of(out: &[u8]) -> Value {
+    serde_json::from_slice(out).expect("JSON on stdout")
+}
+
+/// A CSV export (Time, Displacement, Force in s, mm, N) in a fresh temporary directory.
+fn csv(dir: &Path, name: &str, rows: &[(f64, f64, f64)]) -> PathBuf {
+    let mut s = String::from("Time,Displacement,Force\n(s),(mm),(N)\n");
+    for (t, c, r) in rows {
+        s.push_str(&format!("{t},{c},{r}\n"));
+    }
+    let p = dir.join(name);
+    std::fs::write(&p, s).expect("write the test file");
+    p
+}
+
+/// Deterministic white pseudo-noise in [-1, 1) (SplitMix64 of the sample index).
+fn wiggle(i: usize) -> f64 {
+    let mut z = (i as u64)
+        .wrapping_add(1)
+        .wrapping_mul(0x9E37_79B9_7F4A_7C15);
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    z ^= z >> 31;
+    (z >> 11) as f64 / (1u64 << 52) as f64 - 1.0
+}
+
+#[test]
+fn a_declared_kind_that_the_file_contradicts_is_an_error_naming_the_evidence() {
+    let out = cablab()
+        .args(["analyze", DEMO_TENSION, "--kind", "torsion"])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("contradicts"), "{err}");
+    assert!(err.contains("'Force' (N) is a force"), "{err}");
+    assert!(err.contains("--force-kind"), "{err}");
+    // Forced: analysed, and the contradiction stays as a warning in the JSON.
+    let out = cablab()
+        .args([
+            "analyze",
+            DEMO_TENSION,
+            "--kind",
+            "torsion",
+            "--force-kind",
+            "--json",
+        ])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(0));
+    let v = json_of(&out.stdout);
+    let w = v["warnings"].as_array().unwrap();
+    assert!(
+        w.iter().any(|w| w.as_str().unwrap().contains("forced")),
+        "{w:?}"
+    );
+    // The right kind raises no kind warning.
+    let out = cablab()
+        .args(["analyze", DEMO_TENSION, "--kind", "tension", "--json"])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(0));
+    let v = json_of(&out.stdout);
+    assert!(!v["warnings"].to_string().contains("forced"));
+}
+
+#[test]
+fn channels_in_the_wrong_role_are_errors_naming_the_columns() {
+    for (args, expect) in [
+        (
+            vec!["--control", "Time"],
+            "the control column 'Time' (s) is a time",
+        ),
+        (
+            vec!["--response", "Displacement"],
+            "the response column 'Displacement' (mm) is a length",
+        ),
+        (
+            vec!["--control", "Force", "--response", "Displacement"],
+            "control and response look swapped",
+        ),
+    ] {
+        let out = cablab()
+            .args(["analyze", DEMO_TENSION, "--kind", "tension"])
+            .args(&args)
+            .output()
+            .unwrap();
+        assert_eq!(out.status.code(), Some(2), "{args:?}");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains(expect), "{args:?}: {err}");
+    }
+}
+
+#[test]
+fn warnings_are_in_the_json_when_the_analysis_fails() {
+    let dir = tempfile::tempdir().unwrap();
+    // The time runs backwards once and the control never moves: the reader's warning must
+    // survive the failure.
+    let rows: Vec<(f64, f64, f64)> = (0..40)
+        .map(|i| {
+            let t = if i == 20 { 0.5 } else { i as f64 * 0.1 };
+            (t, 1.0, 5.0 + 0.01 * wiggle(i))
+        })
+        .collect();
+    let p = csv(dir.path(), "still.csv", &rows);
+    let out = cablab()
+        .args(["analyze"])
+        .arg(&p)
+        .args(["--kind", "tension", "--length-mm", "100", "--json"])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    let v = json_of(&out.stdout);
+    assert!(v["error"].as_str().unwrap().contains("still.csv"), "{v}");
+    let w = v["warnings"].to_string();
+    assert!(w.contains("not strictly increasing"), "{v}");
+}
+
+#[test]
+fn one_glitch_sample_is_excluded_and_counted() {
+    let dir = tempfile::tempdir().unwrap();
+    // 100 N/mm over 100 mm: (EA) = 1e5 N/m × 0.1 m = 1e4 N.
+    let mut rows: Vec<(f64, f64, f64)> = (0..400)
+        .map(|i| {
+            let c = i as f64 * 0.01;
+            (i as f64 * 0.1, c, 100.0 * c + 0.2 * wiggle(i))
+        })
+        .collect();
+    rows[200].2 = 1e6;
+    let p = csv(dir.path(), "glitch.csv", &rows);
+    let out = cablab()
+        .args(["analyze"])
+        .arg(&p)
+        .args(["--kind", "tension", "--length-mm", "100", "--json"])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(0));
+    let v = json_of(&out.stdout);
+    let ea = v["stiffness"]["value"].as_f64().unwrap();
+    assert!((ea / 1e4 - 1.0).abs() < 0.002, "{ea}");
+    assert_eq!(v["excluded_samples"], serde_json::json!([200]));
+    assert!(
+        v["warnings"].to_string().contains("1 isolated glitch"),
+        "{v}"
+    );
+}
+
+fn tension(c: &[f64], r: &[f64], t: Option<&[f64]>) -> cablab_measure::Analysis {
+    let geom = Geometry {
+        free_length_m: 0.1,
+        diameter_m: Some(1e-3),
+    };
+    analyze(
+        TestKind::Tension,
+        &geom,
+        t,
+        c,
+        r,
+        &AnalyzeOptions::default(),
+    )
+    .unwrap()
+}
+
+#[test]
+fn no_stiffness_from_a_flat_response_or_a_handful_of_points() {
+    // A constant 5 N with one spike: the spike is excluded, the response is flat.
+    let c: Vec<f64> = (0..300).map(|i| i as f64 * 1e-5).collect();
+    let mut r: Vec<f64> = (0..300).map(|i| 5.0 + 0.01 * wiggle(i)).collect();
+    r[150] = 500.0;
+    let a = tension(&c, &r, None);
+    assert!(a.stiffness.is_none(), "{:?}", a.stiffness);
+    assert!(
+        a.why_by_key["stiffness"].contains("flat response"),
+        "{:?}",
+        a.why
+    );
+    assert_ne!(a.behaviour, cablab_measure::Behaviour::LinearElastic);
+    // A force constant after the first row: no straight elastic window of more than a few
+    // samples, so no number.
+    let r: Vec<f64> = (0..300).map(|i| if i == 0 { 0.0 } else { 5.0 }).collect();
+    let a = tension(&c, &r, None);
+    assert!(a.stiffness.is_none(), "{:?}", a.stiffness);
+    assert!(a.why_by_key.contains_key("stiffness"));
+}
+
+#[test]
+fn an_implausible_modulus_is_warned_next_to_the_number() {
+    // 1e12 N over 1 mm diameter: E ≈ 1.3e18 Pa.
+    let c: Vec<f64> = (0..200).map(|i| i as f64 * 1e-6).collect();
+    let r: Vec<f64> = c
+        .iter()
+        .enumerate()
+        .map(|(i, x)| 1e13 * x + 1e3 * wiggle(i))
+        .collect();
+    let a = tension(&c, &r, None);
+    assert!(a.stiffness.is_some());
+    assert!(
+        a.warnings.iter().any(|w| w.starts_with("modulus_pa:")),
+        "{:?}",
+        a.warnings
+    );
+}
+
+/// A hot tensile test as an extensometer sees it (HBM catman exports): a long preload dwell,
+/// then an elastic rise of 50 samples in which the force climbs to 5 kN while the specimen
+/// moves 0.025 mm, then plastic flow over millimetres. The rise is first loading, not a hold,
+/// and the stiffness comes from it.
+#[test]
+fn an_elastic_rise_under_a_nearly_still_control_is_not_a_hold() {
+    let ea_k = 2e8; // N/m: 5 kN over 25 µm
+    let (mut t, mut c, mut r) = (Vec::new(), Vec::new(), Vec::new());
+    let mut push = |x: f64, f: f64, i: usize| {
+        t.push(i as f64 * 0.02);
+        c.push(x + 2e-8 * wiggle(i));
+        r.push(f + 3.0 * wiggle(i + 7));
+    };
+    let mut i = 0;
+    for _ in 0..500 {
+        push(0.0, 50.0, i);
+        i += 1;
+    }
+    for k in 1..=50 {
+        let x = 25e-6 * k as f64 / 50.0;
+        push(x, 50.0 + ea_k * x, i);
+        i += 1;
+    }
+    for k in 1..=1500 {
+        let x = 25e-6 + 3e-3 * k as f64 / 1500.0;
+        push(x, 5050.0 + 2e5 * (x - 25e-6), i);
+        i += 1;
+    }
+    let a = tension(&c, &r, Some(&t));
+    let rise = a
+        .segments
+        .iter()
+        .find(|s| s.start <= 525 && 525 < s.end)
+        .unwrap();
+    assert_eq!(rise.branch, Branch::FirstLoading, "{:?}", a.segments);
+    let s = a.stiffness.as_ref().expect("stiffness");
+    let k = s.value / 0.1; // (EA) / l0
+    assert!((k / ea_k - 1.0).abs() < 0.03, "{k:e} vs {ea_k:e}: {s:?}");
+}
+
+/// A smooth ramp that slows to a thousandth of its mean rate and speeds up again is one first
+/// loading: no hold, and a linear specimen's stiffness is exact.
+#[test]
+fn a_slow_ramp_is_never_a_hold() {
+    let n = 3000;
+    let mut x = 0.0;
+    let (mut t, mut c, mut r) = (Vec::new(), Vec::new(), Vec::new());
+    for i in 0..n {
+        let u = i as f64 / n as f64;
+        // Rate from 1 down to 1e-3 (around the middle) and back.
+        let rate = 1e-3 + (1.0 - 1e-3) * (2.0 * u - 1.0).powi(2);
+        x += 1e-7 * rate;
+        t.push(i as f64 * 0.01);
+        c.push(x);
+        r.push(1e6 * x + 1e-3 * wiggle(i));
+    }
+    let a = tension(&c, &r, Some(&t));
+    assert!(
+        a.segments.iter().all(|s| s.branch != Branch::Hold),
+        "{:?}",
+        a.segments
+    );
+    let s = a.stiffness.as_ref().unwrap();
+    assert!((s.value / (1e6 * 0.1) - 1.0).abs() < 0.005, "{s:?}");
+}
