@@ -153,6 +153,13 @@ pub struct AnalyzeArgs {
     /// kept as a warning.
     #[arg(long)]
     pub force_kind: bool,
+    /// Yield point: auto (the bend of the virgin envelope: first loading, then every loading
+    /// beyond the earlier extremes), first-loading (the bend of the first loading only), or
+    /// offset:<value> (offset yield, the value in the kind's sectional control: strain for
+    /// tension, e.g. offset:0.002 for 0.2 %; 1/m for torsion and pure bending; m for
+    /// three-point).
+    #[arg(long, default_value = "auto", value_name = "METHOD")]
+    pub yield_method: String,
     /// Print JSON (the keys of the scripted contract).
     #[arg(long)]
     pub json: bool,

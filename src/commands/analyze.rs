@@ -40,9 +40,14 @@ pub fn analyze_file(
     let geom =
         crate::bridge::geometry(&rec, kind, a.length_mm, a.diameter_mm).map_err(CliError::input)?;
     let curve = crate::bridge::curve(&rec).map_err(CliError::input)?;
+    let yield_method: cablab_measure::YieldMethod = a
+        .yield_method
+        .parse()
+        .map_err(|e: String| CliError::input(anyhow::anyhow!("--yield-method: {e}")))?;
     let mut ao = cablab_measure::AnalyzeOptions {
         nu: a.nu,
         compliance_m_per_n: a.compliance,
+        yield_method,
         ..Default::default()
     };
     if let Some(w) = &a.fit_window {

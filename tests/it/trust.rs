@@ -282,3 +282,96 @@ fn a_slow_ramp_is_never_a_hold() {
     let s = a.stiffness.as_ref().unwrap();
     assert!((s.value / (1e6 * 0.1) - 1.0).abs() < 0.005, "{s:?}");
 }
+
+/// Strain-controlled triangles 0 → a → 0 (force floor not needed: strain back to zero) over a
+/// bilinear elastoplastic bar with linear kinematic hardening (E, σy, H: the tangent
+/// Et = E H/(E + H)); returns (elongation m, force N) for l0 = 0.1 m, A = 1 mm².
+fn step_up_test(amplitudes: &[f64], e: f64, sy: f64, h: f64, noise_n: f64) -> (Vec<f64>, Vec<f64>) {
+    let (l0, area) = (0.1, 1e-6);
+    let (mut eps_p, mut alpha) = (0.0f64, 0.0f64);
+    let (mut c, mut r) = (Vec::new(), Vec::new());
+    let mut path = vec![0.0];
+    for &a in amplitudes {
+        path.extend([a, 0.0]);
+    }
+    let mut i = 0;
+    for w in path.windows(2) {
+        for k in 0..400 {
+            let eps = w[0] + (w[1] - w[0]) * k as f64 / 400.0;
+            let trial = e * (eps - eps_p);
+            let f = (trial - alpha).abs() - sy;
+            let sigma = if f > 0.0 {
+                let dg = f / (e + h);
+                let s = (trial - alpha).signum();
+                eps_p += dg * s;
+                alpha += h * dg * s;
+                e * (eps - eps_p)
+            } else {
+                trial
+            };
+            c.push(eps * l0);
+            r.push(sigma * area + noise_n * wiggle(i));
+            i += 1;
+        }
+    }
+    (c, r)
+}
+
+/// Issue 12 item 1: amplitudes 0.5, 0.9, 2 and 3 × the yield strain in one test. The first two
+/// cycles stay elastic; the yield is the bend of the virgin envelope, in the third cycle's
+/// reloading beyond the previous maximum. The first-loading method finds none; the offset
+/// method gives the analytical crossing with the offset line.
+#[test]
+fn yield_on_the_virgin_envelope_of_a_step_up_test() {
+    let (e, sy, h) = (100e9, 400e6, 10e9);
+    let ey = sy / e;
+    let (c, r) = step_up_test(&[0.5 * ey, 0.9 * ey, 2.0 * ey, 3.0 * ey], e, sy, h, 0.2);
+    let geom = Geometry {
+        free_length_m: 0.1,
+        diameter_m: None,
+    };
+    let run = |m: &str| {
+        let o = AnalyzeOptions {
+            yield_method: m.parse().unwrap(),
+            ..Default::default()
+        };
+        analyze(TestKind::Tension, &geom, None, &c, &r, &o).unwrap()
+    };
+    let a = run("auto");
+    let st = a.stiffness.as_ref().unwrap();
+    assert!((st.value / (e * 1e-6) - 1.0).abs() < 0.01, "{st:?}");
+    assert_eq!(
+        a.behaviour,
+        cablab_measure::Behaviour::Elastoplastic,
+        "{:?}",
+        a.cycles
+    );
+    let y = a.yield_point.as_ref().expect("yield on the envelope");
+    assert!((y.response / (sy * 1e-6) - 1.0).abs() < 0.05, "{y:?}");
+    assert_eq!(
+        (y.cycle, y.branch, y.method),
+        (3, Branch::Reloading, "envelope_bend")
+    );
+    assert!(y.control_ci95[0] <= y.control && y.control <= y.control_ci95[1]);
+    // The largest force: the top of the 3× cycle, σy + Et (3 εy − εy).
+    let et = e * h / (e + h);
+    let fmax = (sy + et * 2.0 * ey) * 1e-6;
+    assert!(
+        (a.max_response.response / fmax - 1.0).abs() < 0.01,
+        "{:?}",
+        a.max_response
+    );
+    assert!((a.max_response.machine_control / (3.0 * ey * 0.1) - 1.0).abs() < 0.01);
+
+    let a = run("first-loading");
+    assert!(a.yield_point.is_none(), "{:?}", a.yield_point);
+
+    let d = 0.002;
+    let a = run("offset:0.002");
+    let y = a.yield_point.as_ref().expect("offset yield");
+    let eps = (sy - et * ey + e * d) / (e - et);
+    let want = e * (eps - d) * 1e-6;
+    assert!((y.response / want - 1.0).abs() < 0.01, "{y:?} vs {want}");
+    assert_eq!((y.method, y.offset), ("offset", Some(d)));
+    assert!("offset:-1".parse::<cablab_measure::YieldMethod>().is_err());
+}

@@ -66,6 +66,58 @@ pub struct AnalyzeOptions {
     pub zero_offsets: bool,
     /// Relative error of eq. (3) beyond which a three-point deflection counts as large (0.01).
     pub small_deflection_tolerance: f64,
+    /// How the yield point is found ([`YieldMethod::Auto`] by default).
+    pub yield_method: YieldMethod,
+}
+
+/// How the yield point is found (`--yield-method`, pipeline key `yield_method`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum YieldMethod {
+    /// The bend of the virgin envelope: the first loading followed by every later loading
+    /// beyond all earlier extremes, so a test whose amplitude grows step by step yields at
+    /// the first loading beyond the previous maximum (`auto`).
+    Auto,
+    /// The bend of the first loading path only (`first-loading`; the method before the
+    /// envelope).
+    FirstLoading,
+    /// Offset yield: where the virgin envelope meets the elastic line shifted by this offset
+    /// in the kind's sectional control (strain for tension, 1/m for torsion and pure bending,
+    /// m for three-point), e.g. `offset:0.002` (0.2 % strain) (`offset:<value>`).
+    Offset(f64),
+}
+
+impl YieldMethod {
+    /// Contract spelling of the method actually used (JSON `yield.method`).
+    pub fn as_str(self) -> &'static str {
+        match self {
+            YieldMethod::Auto => "envelope_bend",
+            YieldMethod::FirstLoading => "first_loading_bend",
+            YieldMethod::Offset(_) => "offset",
+        }
+    }
+}
+
+impl std::str::FromStr for YieldMethod {
+    type Err = String;
+    /// `auto`, `first-loading` (or `first_loading`), `offset:<value>` (value > 0).
+    fn from_str(s: &str) -> Result<Self, String> {
+        let t = s.trim().to_lowercase();
+        match t.as_str() {
+            "auto" => return Ok(YieldMethod::Auto),
+            "first-loading" | "first_loading" => return Ok(YieldMethod::FirstLoading),
+            _ => {}
+        }
+        if let Some(v) = t.strip_prefix("offset:") {
+            if let Ok(x) = v.trim().parse::<f64>() {
+                if x.is_finite() && x > 0.0 {
+                    return Ok(YieldMethod::Offset(x));
+                }
+            }
+        }
+        Err(format!(
+            "yield method {s:?}: expected auto, first-loading or offset:<value> (value > 0 in the kind's sectional control, e.g. offset:0.002 for 0.2 % strain)"
+        ))
+    }
 }
 
 impl Default for AnalyzeOptions {
@@ -76,6 +128,7 @@ impl Default for AnalyzeOptions {
             compliance_m_per_n: None,
             zero_offsets: true,
             small_deflection_tolerance: 0.01,
+            yield_method: YieldMethod::Auto,
         }
     }
 }
@@ -147,6 +200,25 @@ pub struct YieldPoint {
     pub peak_curvature: Option<f64>,
     /// Three-point only: peak moment F l₀/4 at the bend, N m.
     pub peak_moment: Option<f64>,
+    /// How it was found: `envelope_bend`, `first_loading_bend` or `offset`.
+    pub method: &'static str,
+    /// The offset of the offset method (sectional control units), else null.
+    pub offset: Option<f64>,
+    /// Cycle the yield point lies in.
+    pub cycle: usize,
+    /// Branch the yield point lies in (`first_loading` or `reloading`).
+    pub branch: Branch,
+}
+
+/// The largest response (in magnitude) of the test and where it occurs.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct MaxResponse {
+    /// Response, N or N m (original sign).
+    pub response: f64,
+    /// Machine control there (m or rad, original sign).
+    pub machine_control: f64,
+    /// Sample (0-based complete row).
+    pub sample: usize,
 }
 
 /// Reversible bilinear behaviour: threshold and the two stiffnesses (eq. (19)).
@@ -254,6 +326,8 @@ pub struct Analysis {
     pub segments: Vec<Segment>,
     /// Response change in every hold after the initial rest (relaxation: rate dependence).
     pub holds: Vec<HoldRelaxation>,
+    /// The largest response and its control.
+    pub max_response: MaxResponse,
     /// Samples (0-based, complete rows) excluded from the fits as isolated glitches.
     pub excluded_samples: Vec<usize>,
     /// Warnings for the user.
@@ -429,9 +503,15 @@ pub fn analyze(
             None => x,
         }
     };
-    let mut fx: Vec<f64> = Vec::with_capacity(first_idx.len());
-    let mut fw: Vec<f64> = Vec::with_capacity(first_idx.len());
-    for &i in &first_idx {
+    // The virgin envelope: the first loading, then every later loading from where it passes
+    // all earlier extremes by more than the reversal threshold (module doc of `condition`).
+    let env_idx: Vec<usize> = match opts.yield_method {
+        YieldMethod::FirstLoading => first_idx.clone(),
+        _ => virgin_envelope(&segments, &cm, &first_idx),
+    };
+    let mut fx: Vec<f64> = Vec::with_capacity(env_idx.len());
+    let mut fw: Vec<f64> = Vec::with_capacity(env_idx.len());
+    for &i in &env_idx {
         match to_fit_x(xs[i]).filter(|_| xs[i].abs() / l0 <= geometry_limit) {
             Some(v) => {
                 fx.push(v);
@@ -446,7 +526,7 @@ pub fn analyze(
             }
         }
     }
-    let fy: Vec<f64> = first_idx[..fx.len()].iter().map(|&i| rm[i]).collect();
+    let fy: Vec<f64> = env_idx[..fx.len()].iter().map(|&i| rm[i]).collect();
 
     let factor = stiffness_factor(kind, geom);
     let elastic: Option<ElasticRange> = match opts.fit_window {
@@ -601,6 +681,7 @@ pub fn analyze(
             } else {
                 [-b.knee_y_ci95[1], -b.knee_y_ci95[0]]
             };
+            let (cycle, branch) = label_at(&segments, &env_idx, &fw, b.knee_x);
             Some(YieldPoint {
                 control: sign * b.knee_x,
                 response: sign * b.knee_y,
@@ -609,6 +690,10 @@ pub fn analyze(
                 machine_control: sign * machine_of(b.knee_x),
                 peak_curvature: three.then(|| sign * three_point_peak_curvature(b.knee_x, l0)),
                 peak_moment: three.then(|| sign * three_point_peak_moment(b.knee_y, l0)),
+                method: opts.yield_method.as_str(),
+                offset: None,
+                cycle,
+                branch,
             })
         }
         (Some(_), _) => {
@@ -621,12 +706,62 @@ pub fn analyze(
         }
         (None, _) => {
             let reason = if elastic.is_some() {
-                "no bend in the first loading path beyond the noise"
+                "no bend in the virgin loading path beyond the noise"
             } else {
                 "no elastic range on the first loading"
             };
             why.insert("yield".into(), reason.into());
             None
+        }
+    };
+    // The offset method replaces the bend (whatever the class: the user asked for it).
+    let yield_point = match (opts.yield_method, &elastic) {
+        (YieldMethod::Offset(v), Some(e)) => {
+            why.remove("yield");
+            match offset_yield(&fx, &fy, &e.fit, v, e.window_idx.0) {
+                Some((x, y, xr)) => {
+                    let (xs_, xr_) = (from_fit_x(x), [from_fit_x(xr[0]), from_fit_x(xr[1])]);
+                    let (cycle, branch) = label_at(&segments, &env_idx, &fw, xs_);
+                    let ci = if sign > 0.0 { xr_ } else { [-xr_[1], -xr_[0]] };
+                    Some(YieldPoint {
+                        control: sign * xs_,
+                        response: sign * y,
+                        control_ci95: ci,
+                        response_ci95: [sign * y, sign * y],
+                        machine_control: sign * machine_of(xs_),
+                        peak_curvature: three.then(|| sign * three_point_peak_curvature(xs_, l0)),
+                        peak_moment: three.then(|| sign * three_point_peak_moment(y, l0)),
+                        method: opts.yield_method.as_str(),
+                        offset: Some(v),
+                        cycle,
+                        branch,
+                    })
+                }
+                None => {
+                    why.insert(
+                        "yield".into(),
+                        format!(
+                            "the virgin envelope never falls below the elastic line offset by {v}"
+                        ),
+                    );
+                    None
+                }
+            }
+        }
+        (YieldMethod::Offset(_), None) => {
+            why.insert("yield".into(), "offset yield: no elastic line".into());
+            None
+        }
+        _ => yield_point,
+    };
+    let max_response = {
+        let k = (0..r.len())
+            .max_by(|&a, &b| r[a].abs().total_cmp(&r[b].abs()))
+            .unwrap_or(0);
+        MaxResponse {
+            response: response[k],
+            machine_control: control[k],
+            sample: k,
         }
     };
     let piecewise = match (bend, behaviour) {
@@ -713,6 +848,7 @@ pub fn analyze(
         noise,
         segments,
         holds,
+        max_response,
         excluded_samples: excluded,
         warnings,
         why: join_why(&why),
@@ -810,4 +946,74 @@ fn stiffness_doubts(s: &Stiffness) -> Vec<String> {
         ));
     }
     out
+}
+
+/// Indices of the virgin envelope: the first loading, then each later loading from its first
+/// sample beyond every earlier extreme (by more than the reversal threshold, so noise on a
+/// repeated amplitude adds nothing) to its end. `cm` is the oriented control.
+fn virgin_envelope(segments: &[Segment], cm: &[f64], first_idx: &[usize]) -> Vec<usize> {
+    let h = crate::condition::reversal_threshold(cm);
+    let mut out = first_idx.to_vec();
+    let mut top = first_idx
+        .iter()
+        .map(|&i| cm[i])
+        .fold(f64::NEG_INFINITY, f64::max);
+    for s in segments.iter().filter(|s| s.branch == Branch::Reloading) {
+        // Earlier extremes include everything before this segment.
+        let before = cm[..s.start]
+            .iter()
+            .copied()
+            .fold(f64::NEG_INFINITY, f64::max);
+        top = top.max(before);
+        if let Some(j) = (s.start..s.end).find(|&j| cm[j] > top + h) {
+            // Join where the reloading reaches the previous extreme.
+            let from = (s.start..j)
+                .rev()
+                .find(|&k| cm[k] <= top)
+                .map_or(j, |k| k + 1);
+            out.extend(from..s.end);
+            top = cm[s.start..s.end].iter().copied().fold(top, f64::max);
+        }
+    }
+    out
+}
+
+/// Cycle and branch of the envelope sample nearest to the sectional control `x`.
+fn label_at(segments: &[Segment], env_idx: &[usize], fw: &[f64], x: f64) -> (usize, Branch) {
+    let k = (0..fw.len())
+        .min_by(|&a, &b| (fw[a] - x).abs().total_cmp(&(fw[b] - x).abs()))
+        .unwrap_or(0);
+    let i = env_idx.get(k).copied().unwrap_or(0);
+    segments
+        .iter()
+        .find(|s| s.start <= i && i < s.end)
+        .map_or((1, Branch::FirstLoading), |s| (s.cycle, s.branch))
+}
+
+/// Offset yield on the envelope (x, y) from the elastic `fit`: the first crossing, after the
+/// window start `from`, of y below the line y = a + k (x − offset), interpolated; with the
+/// crossings of the lines whose slopes are the ends of the slope's 95 % interval (through the
+/// same zero crossing) as the range of x.
+fn offset_yield(
+    x: &[f64],
+    y: &[f64],
+    fit: &crate::stats::Fit,
+    offset: f64,
+    from: usize,
+) -> Option<(f64, f64, [f64; 2])> {
+    let x0 = fit.x_intercept()?;
+    let cross = |k: f64| -> Option<(f64, f64)> {
+        let g = |i: usize| y[i] - k * (x[i] - x0 - offset);
+        let j = (from.max(1)..x.len()).find(|&j| g(j) <= 0.0 && g(j - 1) > 0.0)?;
+        let (g0, g1) = (g(j - 1), g(j));
+        let t = g0 / (g0 - g1);
+        Some((
+            x[j - 1] + t * (x[j] - x[j - 1]),
+            y[j - 1] + t * (y[j] - y[j - 1]),
+        ))
+    };
+    let (xc, yc) = cross(fit.slope)?;
+    let a = cross(fit.slope_ci95[0]).map_or(xc, |p| p.0);
+    let b = cross(fit.slope_ci95[1]).map_or(xc, |p| p.0);
+    Some((xc, yc, [a.min(b).min(xc), a.max(b).max(xc)]))
 }
