@@ -129,9 +129,14 @@ pub struct KindSettings {
     /// Machine compliance in m/N (or rad/(N m)) to subtract from the control channel.
     #[serde(default)]
     pub compliance: Option<f64>,
-    /// Yield detection method (`auto` is the only one so far; the key is reserved).
+    /// Yield detection method: `auto` (the bend of the virgin envelope), `first-loading` or
+    /// `offset:<value>` (offset in the kind's sectional control, e.g. `offset:0.002`).
     #[serde(default)]
     pub yield_method: Option<String>,
+    /// Analyse the files of this kind even where their own evidence (kind words in metadata or
+    /// file name, channel units) contradicts it; the contradiction stays as a warning.
+    #[serde(default)]
+    pub force_kind: Option<bool>,
 }
 
 /// `[model]`.
@@ -383,9 +388,8 @@ fn validate(file: PipelineFile, path: &Path, bytes: Vec<u8>, root: PathBuf) -> R
             }
         }
         if let Some(m) = &ks.yield_method {
-            if m != "auto" {
-                bail!("{ctx}: [kinds.{k}] yield_method: only \"auto\" is available, got {m:?}");
-            }
+            m.parse::<cablab_measure::YieldMethod>()
+                .map_err(|e| anyhow!("{ctx}: [kinds.{k}] yield_method: {e}"))?;
         }
     }
     for t in &file.reports.tables {

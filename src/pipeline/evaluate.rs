@@ -197,10 +197,23 @@ fn stages(
         response: t.response.clone(),
         kind: Some(t.kind),
     };
-    let rec = cablab_ingest::read_bytes(bytes, &t.id, &opts)?;
+    let mut rec = cablab_ingest::read_bytes(bytes, &t.id, &opts)?;
     out.format = Some(rec.provenance.format.as_str().to_string());
     out.warnings
         .extend(rec.warnings.iter().map(|w| w.to_string()));
+    // The declared kind against the file's own evidence, and the channel roles (issue 12).
+    if let Some(w) =
+        crate::bridge::check_kind(&rec, t.kind, t.settings.force_kind.unwrap_or(false))?
+    {
+        out.warnings.push(w);
+    }
+    let notes = crate::bridge::check_roles(
+        &mut rec,
+        t.kind,
+        t.control.is_some(),
+        t.settings.compliance.is_some(),
+    )?;
+    out.warnings.extend(notes);
     let geom = crate::bridge::geometry(
         &rec,
         t.kind,
@@ -218,6 +231,12 @@ fn stages(
         nu: c.file.campaign.nu,
         fit_window: t.settings.fit_window.map(|[a, b]| (a, b)),
         compliance_m_per_n: t.settings.compliance,
+        yield_method: match &t.settings.yield_method {
+            Some(m) => m
+                .parse()
+                .map_err(|e: String| anyhow!("yield_method: {e}"))?,
+            None => Default::default(),
+        },
         ..Default::default()
     };
     let an = cablab_measure::analyze(

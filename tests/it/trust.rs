@@ -375,3 +375,35 @@ fn yield_on_the_virgin_envelope_of_a_step_up_test() {
     assert_eq!((y.method, y.offset), ("offset", Some(d)));
     assert!("offset:-1".parse::<cablab_measure::YieldMethod>().is_err());
 }
+
+/// Issue 12 item 5: a monotonic test to fracture. Linear to 1 mm at 20 N/mm, then the force
+/// falls to nothing while the crosshead moves on: the break is found at the drop, the work to
+/// break is ½ k x² = 10 mJ, the maximum is 20 N at 1 mm, and there is no loop area without an
+/// unloading.
+#[test]
+fn a_monotonic_test_to_break() {
+    let (mut c, mut r) = (Vec::new(), Vec::new());
+    for i in 0..=500 {
+        let x = 1e-3 * i as f64 / 500.0;
+        c.push(x);
+        r.push(2e4 * x + 0.01 * wiggle(i));
+    }
+    for i in 1..=100 {
+        c.push(1e-3 + 2e-6 * i as f64);
+        r.push(0.05 * wiggle(1000 + i));
+    }
+    let a = tension(&c, &r, None);
+    let b = a.break_point.as_ref().expect("a break");
+    assert_eq!(b.sample, 501);
+    assert!((b.machine_control - 1.002e-3).abs() < 1e-9, "{b:?}");
+    assert!((b.work_to_break / 0.01 - 1.0).abs() < 0.01, "{b:?}");
+    assert!((a.max_response.response / 20.0 - 1.0).abs() < 0.01);
+    assert!(
+        a.cycles.iter().all(|c| c.loop_area.is_none()),
+        "{:?}",
+        a.cycles
+    );
+    // A cyclic test that unloads is no break.
+    let (c, r) = step_up_test(&[0.002, 0.004], 100e9, 1e12, 0.0, 0.01);
+    assert!(tension(&c, &r, None).break_point.is_none());
+}

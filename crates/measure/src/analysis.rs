@@ -71,11 +71,12 @@ pub struct AnalyzeOptions {
 }
 
 /// How the yield point is found (`--yield-method`, pipeline key `yield_method`).
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub enum YieldMethod {
     /// The bend of the virgin envelope: the first loading followed by every later loading
     /// beyond all earlier extremes, so a test whose amplitude grows step by step yields at
     /// the first loading beyond the previous maximum (`auto`).
+    #[default]
     Auto,
     /// The bend of the first loading path only (`first-loading`; the method before the
     /// envelope).
@@ -128,7 +129,7 @@ impl Default for AnalyzeOptions {
             compliance_m_per_n: None,
             zero_offsets: true,
             small_deflection_tolerance: 0.01,
-            yield_method: YieldMethod::Auto,
+            yield_method: YieldMethod::default(),
         }
     }
 }
@@ -209,6 +210,24 @@ pub struct YieldPoint {
     /// Branch the yield point lies in (`first_loading` or `reloading`).
     pub branch: Branch,
 }
+
+/// A break: after its maximum the response falls below [`BREAK_DROP`] of it and stays there
+/// while the control does not go back (a monotonic test to fracture; an unloading is no break).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct BreakPoint {
+    /// First sample (0-based complete row) below the drop level.
+    pub sample: usize,
+    /// Machine control at break (m or rad, original sign).
+    pub machine_control: f64,
+    /// Response just before the drop (N or N m, original sign).
+    pub response_before: f64,
+    /// Work to break, ∫ response d(machine control) from the start to the break, J.
+    pub work_to_break: f64,
+}
+
+/// Fraction of the maximum response the response must fall below, and stay below, after the
+/// maximum for a break ([`BreakPoint`]).
+pub const BREAK_DROP: f64 = 0.5;
 
 /// The largest response (in magnitude) of the test and where it occurs.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
@@ -328,6 +347,9 @@ pub struct Analysis {
     pub holds: Vec<HoldRelaxation>,
     /// The largest response and its control.
     pub max_response: MaxResponse,
+    /// Where the specimen broke, when it did.
+    #[serde(rename = "break")]
+    pub break_point: Option<BreakPoint>,
     /// Samples (0-based, complete rows) excluded from the fits as isolated glitches.
     pub excluded_samples: Vec<usize>,
     /// Warnings for the user.
@@ -764,6 +786,20 @@ pub fn analyze(
             sample: k,
         }
     };
+    let break_point = find_break(&cm, &rm).map(|(j, work)| BreakPoint {
+        sample: j,
+        machine_control: control[j],
+        response_before: response[j - 1],
+        work_to_break: work,
+    });
+    if let Some(b) = &break_point {
+        warnings.push(format!(
+            "the specimen broke at sample {} (control {:.4e}): the response fell below {:.0} % of its maximum and stayed there",
+            b.sample,
+            b.machine_control,
+            100.0 * BREAK_DROP
+        ));
+    }
     let piecewise = match (bend, behaviour) {
         (Some(b), Behaviour::PiecewiseLinearElastic) => Some(Piecewise {
             threshold_control: sign * b.knee_x,
@@ -849,6 +885,7 @@ pub fn analyze(
         segments,
         holds,
         max_response,
+        break_point,
         excluded_samples: excluded,
         warnings,
         why: join_why(&why),
@@ -1016,4 +1053,29 @@ fn offset_yield(
     let a = cross(fit.slope_ci95[0]).map_or(xc, |p| p.0);
     let b = cross(fit.slope_ci95[1]).map_or(xc, |p| p.0);
     Some((xc, yc, [a.min(b).min(xc), a.max(b).max(xc)]))
+}
+
+/// The break of an oriented test (`cm`, `rm`: control and response with the first motion
+/// positive): the first sample after the response maximum below [`BREAK_DROP`] of it, when
+/// the response stays below 0.8 of the maximum from there on and the control has not gone back
+/// below its value at the maximum by more than its reversal threshold (an unloading is no
+/// break). Returns the sample and the work
+/// ∫ rm d(cm) up to it.
+fn find_break(cm: &[f64], rm: &[f64]) -> Option<(usize, f64)> {
+    let k = (0..rm.len()).max_by(|&a, &b| rm[a].total_cmp(&rm[b]))?;
+    let top = rm[k];
+    if !(top > 0.0) {
+        return None;
+    }
+    let j = (k + 1..rm.len()).find(|&j| rm[j] < BREAK_DROP * top)?;
+    let stays = rm[j..].iter().all(|&v| v < 0.8 * top);
+    let h = crate::condition::reversal_threshold(cm);
+    let onward = cm[k..=j].iter().all(|&v| v >= cm[k] - h);
+    if !(stays && onward) {
+        return None;
+    }
+    let work = (0..j)
+        .map(|i| 0.5 * (rm[i] + rm[i + 1]) * (cm[i + 1] - cm[i]))
+        .sum();
+    Some((j, work))
 }
