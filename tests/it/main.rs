@@ -5,4 +5,5 @@ mod campaign;
 mod characterise;
 mod cli_contract;
 mod common;
+mod family;
 mod trust;
