@@ -709,7 +709,8 @@ pub struct Offsets {
 /// Removes the zero offsets. With an initial rest (a hold that starts at the first sample, see
 /// [`holds`]) the offsets are the control and response means over it. Without one, they are
 /// the values at the first sample of straight lines fitted against sample index over the first
-/// 1% of the record (at least 5 samples), so that neither a single noisy sample nor the first
+/// 1% of the record, up to where the control has moved a tenth of its range (at least 5
+/// samples), so that neither a single noisy sample nor the first
 /// rise of the curve sets the zero.
 pub fn zero_offsets(control: &mut [f64], response: &mut [f64]) -> Offsets {
     let n = control.len().min(response.len());
@@ -732,7 +733,13 @@ pub fn zero_offsets(control: &mut [f64], response: &mut [f64]) -> Offsets {
             response[..rest].iter().sum::<f64>() / k,
         )
     } else {
-        let m = (n / 100).max(5).min(n);
+        // The first 1 % of the record, but no further than where the control has moved a
+        // tenth of its range: a fast first ramp followed by a long dwell must not bend the line.
+        let (lo, hi) = min_max(&control[..n]);
+        let reach = (0..n)
+            .find(|&i| (control[i] - control[0]).abs() > 0.1 * (hi - lo))
+            .unwrap_or(n);
+        let m = (n / 100).min(reach).max(5).min(n);
         let idx: Vec<f64> = (0..m).map(|i| i as f64).collect();
         let at0 = |v: &[f64]| crate::stats::line_fit(&idx, &v[..m]).map_or(v[0], |f| f.intercept);
         (at0(control), at0(response))

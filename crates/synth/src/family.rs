@@ -115,7 +115,11 @@ pub fn family_case(seed: u64) -> FamilyCase {
     };
     let amps: Vec<f64> = match schedule {
         Schedule::Constant => {
-            let a = if elastoplastic { rng.random_range(2.0..3.0) } else { 1.0 };
+            let a = if elastoplastic {
+                rng.random_range(2.0..3.0)
+            } else {
+                1.0
+            };
             vec![a; 3]
         }
         Schedule::StepUp => vec![0.5, 0.9, 2.0, 3.0],
@@ -163,7 +167,8 @@ pub fn family_case(seed: u64) -> FamilyCase {
         },
         ..Artefacts::default()
     };
-    let layout = [Layout::TestXpert, Layout::BluehillCsv, Layout::Mts793Dat][rng.random_range(0..3)];
+    let layout =
+        [Layout::TestXpert, Layout::BluehillCsv, Layout::Mts793Dat][rng.random_range(0..3)];
     let mut params = BTreeMap::new();
     params.insert(stiff_name.to_string(), stiffness);
     if elastoplastic {
@@ -177,7 +182,12 @@ pub fn family_case(seed: u64) -> FamilyCase {
             diameter_m: Some(d),
             free_length_m: Some(l0),
         },
-        law: if elastoplastic { "elastoplastic" } else { "linear" }.into(),
+        law: if elastoplastic {
+            "elastoplastic"
+        } else {
+            "linear"
+        }
+        .into(),
         params,
         extension: None,
         rig: Default::default(),
