@@ -82,7 +82,8 @@ fn family_figures() {
     let mut errors = Vec::new();
     let mut yield_err = Vec::new();
     let mut confusion: std::collections::BTreeMap<(String, String), usize> = Default::default();
-    let mut by_kind: std::collections::BTreeMap<TestKind, (usize, usize)> = Default::default();
+    let mut by_kind: std::collections::BTreeMap<TestKind, (usize, usize, usize)> =
+        Default::default();
     for seed in 0..n {
         match measure(seed) {
             Err(e) => {
@@ -100,6 +101,7 @@ fn family_figures() {
                     covered += cov as usize;
                     within1 += (err.abs() <= 0.01) as usize;
                     k.1 += (err.abs() <= 0.01) as usize;
+                    k.2 += cov as usize;
                     if t.noise_rel <= 5e-3 {
                         low_noise += 1;
                         low_within1 += (err.abs() <= 0.01) as usize;
@@ -138,7 +140,7 @@ fn family_figures() {
             / yield_err.len().max(1) as f64
     );
     println!("  class confusion (truth -> measured): {confusion:?}");
-    println!("  per kind (cases, |error| <= 1 %): {by_kind:?}");
+    println!("  per kind (cases, |error| <= 1 %, CI holds the truth): {by_kind:?}");
     for e in errors.iter().take(10) {
         println!("  {e}");
     }

@@ -585,10 +585,26 @@ pub fn analyze(
             e.window
         };
         let w = if sign > 0.0 { win } else { [-win[1], -win[0]] };
+        // Serially correlated residuals (quantisation, dense sampling of a slightly curved
+        // window) carry fewer independent samples than they number: widen the interval by
+        // the lag-1 autocorrelation's variance factor √((1 + ρ)/(1 − ρ)) (ρ > 0 only).
+        let (a, b) = e.window_idx;
+        let inflate = if e.automatic && b > a + 3 {
+            correlation_inflation(&fx[a..b], &fy[a..b], &e.fit)
+        } else {
+            1.0
+        };
+        let half = [
+            (e.fit.slope - e.fit.slope_ci95[0]) * inflate,
+            (e.fit.slope_ci95[1] - e.fit.slope) * inflate,
+        ];
         Stiffness {
             value: e.fit.slope * factor,
             unit: kind.stiffness_unit(),
-            ci95: [e.fit.slope_ci95[0] * factor, e.fit.slope_ci95[1] * factor],
+            ci95: [
+                (e.fit.slope - half[0]) * factor,
+                (e.fit.slope + half[1]) * factor,
+            ],
             window: w,
             window_unit: sectional_unit(kind),
             window_automatic: e.automatic,
@@ -1078,4 +1094,17 @@ fn find_break(cm: &[f64], rm: &[f64]) -> Option<(usize, f64)> {
         .map(|i| 0.5 * (rm[i] + rm[i + 1]) * (cm[i + 1] - cm[i]))
         .sum();
     Some((j, work))
+}
+
+/// Variance inflation of a slope from the lag-1 autocorrelation ρ of the fit's residuals (in
+/// sample order): √((1 + ρ)/(1 − ρ)) for ρ > 0 (an AR(1) error's effective sample size), 1
+/// otherwise; ρ is capped at 0.95.
+fn correlation_inflation(x: &[f64], y: &[f64], fit: &crate::stats::Fit) -> f64 {
+    let r: Vec<f64> = x.iter().zip(y).map(|(a, b)| b - fit.at(*a)).collect();
+    let ss: f64 = r.iter().map(|v| v * v).sum();
+    if !(ss > 0.0) {
+        return 1.0;
+    }
+    let rho = (r.windows(2).map(|w| w[0] * w[1]).sum::<f64>() / ss).clamp(0.0, 0.95);
+    ((1.0 + rho) / (1.0 - rho)).sqrt()
 }
