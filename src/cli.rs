@@ -133,15 +133,12 @@ pub struct AnalyzeArgs {
     /// Specimen diameter in mm, for Young's modulus (default: from the file's metadata).
     #[arg(long, value_name = "MM")]
     pub diameter_mm: Option<f64>,
-    /// Elastic fit window in the kind's sectional control variable (strain, twist 1/m,
-    /// deflection m or curvature 1/m), as FROM,TO. Default: found automatically.
-    #[arg(
-        long,
-        value_name = "FROM,TO",
-        value_delimiter = ',',
-        allow_hyphen_values = true
-    )]
-    pub fit_window: Option<Vec<f64>>,
+    /// Elastic fit window, as FROM,TO: in the kind's sectional control variable (strain, twist
+    /// 1/m, deflection m or curvature 1/m; `0,0.0005`), in response units with a trailing `N`
+    /// or `Nm` (`100N,500N`; N m for torsion and bending), or in percent of the maximum
+    /// response (`10%,40%`). Default: found automatically.
+    #[arg(long, value_name = "FROM,TO", allow_hyphen_values = true)]
+    pub fit_window: Option<String>,
     /// Machine compliance to subtract from the control channel, in SI (m/N or rad/(N m)).
     #[arg(long, value_name = "C")]
     pub compliance: Option<f64>,

@@ -51,16 +51,10 @@ pub fn analyze_file(
         ..Default::default()
     };
     if let Some(w) = &a.fit_window {
-        match w.as_slice() {
-            [from, to] if from.is_finite() && to.is_finite() && to > from => {
-                ao.fit_window = Some((*from, *to))
-            }
-            _ => {
-                return Err(CliError::input(anyhow::anyhow!(
-                    "--fit-window: give FROM,TO with TO > FROM, e.g. 0,0.0005 (got {w:?})"
-                )))
-            }
-        }
+        let (from, to, unit) = parse_fit_window(w)
+            .map_err(|e| CliError::input(anyhow::anyhow!("--fit-window: {e}")))?;
+        ao.fit_window = Some((from, to));
+        ao.fit_window_unit = unit;
     }
     let mut an = cablab_measure::analyze(
         kind,
@@ -121,4 +115,38 @@ pub fn run(a: AnalyzeArgs) -> CmdResult {
     // The warnings are in the text, next to the numbers.
     print!("{}", crate::text::analysis_text(&rec.provenance.path, &an));
     Ok(ExitCode::SUCCESS)
+}
+
+/// A fit window `FROM,TO`: plain numbers (sectional control), numbers with `N`/`Nm`/`N m`
+/// (response units) or with `%` (percent of the maximum response); both ends in the same unit,
+/// TO > FROM.
+pub fn parse_fit_window(w: &str) -> Result<(f64, f64, cablab_measure::FitWindowUnit), String> {
+    use cablab_measure::FitWindowUnit as U;
+    let parts: Vec<&str> = w.split(',').map(str::trim).collect();
+    let [a, b] = parts.as_slice() else {
+        return Err(format!(
+            "give FROM,TO, e.g. 0,0.0005 or 10%,40% or 100N,500N (got {w:?})"
+        ));
+    };
+    let one = |s: &str| -> Option<(f64, U)> {
+        let (num, unit) = if let Some(v) = s.strip_suffix('%') {
+            (v, U::PercentOfMax)
+        } else if let Some(v) = s
+            .strip_suffix("N m")
+            .or_else(|| s.strip_suffix("Nm"))
+            .or_else(|| s.strip_suffix('N'))
+        {
+            (v, U::Response)
+        } else {
+            (s, U::Control)
+        };
+        let x: f64 = num.trim().parse().ok()?;
+        x.is_finite().then_some((x, unit))
+    };
+    match (one(a), one(b)) {
+        (Some((x, ua)), Some((y, ub))) if ua == ub && y > x => Ok((x, y, ua)),
+        _ => Err(format!(
+            "give FROM,TO in one unit with TO > FROM, e.g. 0,0.0005 or 10%,40% or 100N,500N (got {w:?})"
+        )),
+    }
 }

@@ -227,9 +227,16 @@ fn stages(
     done(0);
 
     // 2. characterise
+    let window = t
+        .settings
+        .fit_window
+        .as_ref()
+        .map(|w| w.resolve().map_err(|e| anyhow!("fit_window: {e}")))
+        .transpose()?;
     let ao = cablab_measure::AnalyzeOptions {
         nu: c.file.campaign.nu,
-        fit_window: t.settings.fit_window.map(|[a, b]| (a, b)),
+        fit_window: window.map(|(a, b, _)| (a, b)),
+        fit_window_unit: window.map(|w| w.2).unwrap_or_default(),
         compliance_m_per_n: t.settings.compliance,
         yield_method: match &t.settings.yield_method {
             Some(m) => m

@@ -29,6 +29,17 @@ fn csv(dir: &Path, name: &str, rows: &[(f64, f64, f64)]) -> PathBuf {
     p
 }
 
+/// `cablab analyze FILE --kind tension --length-mm 100 --json`: exit code and stdout JSON.
+fn analyze_tension_json(p: &Path) -> (Option<i32>, Value) {
+    let out = cablab()
+        .args(["analyze"])
+        .arg(p)
+        .args(["--kind", "tension", "--length-mm", "100", "--json"])
+        .output()
+        .unwrap();
+    (out.status.code(), json_of(&out.stdout))
+}
+
 /// Deterministic white pseudo-noise in [-1, 1) (SplitMix64 of the sample index).
 fn wiggle(i: usize) -> f64 {
     let mut z = (i as u64)
@@ -119,14 +130,8 @@ fn warnings_are_in_the_json_when_the_analysis_fails() {
         })
         .collect();
     let p = csv(dir.path(), "still.csv", &rows);
-    let out = cablab()
-        .args(["analyze"])
-        .arg(&p)
-        .args(["--kind", "tension", "--length-mm", "100", "--json"])
-        .output()
-        .unwrap();
-    assert_eq!(out.status.code(), Some(2));
-    let v = json_of(&out.stdout);
+    let (code, v) = analyze_tension_json(&p);
+    assert_eq!(code, Some(2));
     assert!(v["error"].as_str().unwrap().contains("still.csv"), "{v}");
     let w = v["warnings"].to_string();
     assert!(w.contains("not strictly increasing"), "{v}");
@@ -144,14 +149,8 @@ fn one_glitch_sample_is_excluded_and_counted() {
         .collect();
     rows[200].2 = 1e6;
     let p = csv(dir.path(), "glitch.csv", &rows);
-    let out = cablab()
-        .args(["analyze"])
-        .arg(&p)
-        .args(["--kind", "tension", "--length-mm", "100", "--json"])
-        .output()
-        .unwrap();
-    assert_eq!(out.status.code(), Some(0));
-    let v = json_of(&out.stdout);
+    let (code, v) = analyze_tension_json(&p);
+    assert_eq!(code, Some(0));
     let ea = v["stiffness"]["value"].as_f64().unwrap();
     assert!((ea / 1e4 - 1.0).abs() < 0.002, "{ea}");
     assert_eq!(v["excluded_samples"], serde_json::json!([200]));
@@ -406,4 +405,44 @@ fn a_monotonic_test_to_break() {
     // A cyclic test that unloads is no break.
     let (c, r) = step_up_test(&[0.002, 0.004], 100e9, 1e12, 0.0, 0.01);
     assert!(tension(&c, &r, None).break_point.is_none());
+}
+
+/// Fit windows in response units and in percent of the maximum response (issue 14 item 2):
+/// on the step-up test both select the elastic rise and give E A; the CLI spellings parse.
+#[test]
+fn fit_windows_in_response_units_and_percent_of_the_maximum() {
+    use cablab_measure::FitWindowUnit as U;
+    let (e, sy, h) = (100e9, 400e6, 10e9);
+    let ey = sy / e;
+    let (c, r) = step_up_test(&[0.5 * ey, 0.9 * ey, 2.0 * ey, 3.0 * ey], e, sy, h, 0.2);
+    let geom = Geometry {
+        free_length_m: 0.1,
+        diameter_m: None,
+    };
+    for (w, unit) in [
+        ((50.0, 300.0), U::Response),
+        ((10.0, 60.0), U::PercentOfMax),
+    ] {
+        let o = AnalyzeOptions {
+            fit_window: Some(w),
+            fit_window_unit: unit,
+            ..Default::default()
+        };
+        let a = analyze(TestKind::Tension, &geom, None, &c, &r, &o).unwrap();
+        let s = a.stiffness.as_ref().unwrap();
+        assert!((s.value / (e * 1e-6) - 1.0).abs() < 0.01, "{unit:?}: {s:?}");
+        assert!(!s.window_automatic);
+        // The window in strain: inside the elastic range.
+        assert!(
+            s.window[0] > 0.0 && s.window[1] < ey,
+            "{unit:?}: {:?}",
+            s.window
+        );
+    }
+    use cablab::commands::analyze::parse_fit_window as p;
+    assert_eq!(p("10%,40%"), Ok((10.0, 40.0, U::PercentOfMax)));
+    assert_eq!(p("100N, 500N"), Ok((100.0, 500.0, U::Response)));
+    assert_eq!(p("0,0.0005"), Ok((0.0, 0.0005, U::Control)));
+    assert!(p("10%,500N").is_err());
+    assert!(p("40%,10%").is_err());
 }

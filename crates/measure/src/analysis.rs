@@ -59,6 +59,8 @@ pub struct AnalyzeOptions {
     /// User-set elastic window `(from, to)` in the kind's sectional control (SI: strain, 1/m,
     /// deflection m); automatic when None.
     pub fit_window: Option<(f64, f64)>,
+    /// Unit of `fit_window` ([`FitWindowUnit::Control`] by default).
+    pub fit_window_unit: FitWindowUnit,
     /// Machine compliance in control units per response unit (m/N for tension and three-point,
     /// rad/(N m) for torsion and pure bending), removed before anything else.
     pub compliance_m_per_n: Option<f64>,
@@ -68,6 +70,18 @@ pub struct AnalyzeOptions {
     pub small_deflection_tolerance: f64,
     /// How the yield point is found ([`YieldMethod::Auto`] by default).
     pub yield_method: YieldMethod,
+}
+
+/// What the numbers of a user-set fit window are.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum FitWindowUnit {
+    /// The kind's sectional control (strain, 1/m, or deflection m for three-point).
+    #[default]
+    Control,
+    /// The response (N or N m), on the rise of the virgin envelope to its maximum.
+    Response,
+    /// Percent of the maximum response, on the rise of the virgin envelope to its maximum.
+    PercentOfMax,
 }
 
 /// How the yield point is found (`--yield-method`, pipeline key `yield_method`).
@@ -126,6 +140,7 @@ impl Default for AnalyzeOptions {
         AnalyzeOptions {
             nu: 0.5,
             fit_window: None,
+            fit_window_unit: FitWindowUnit::Control,
             compliance_m_per_n: None,
             zero_offsets: true,
             small_deflection_tolerance: 0.01,
@@ -551,7 +566,37 @@ pub fn analyze(
     let fy: Vec<f64> = env_idx[..fx.len()].iter().map(|&i| rm[i]).collect();
 
     let factor = stiffness_factor(kind, geom);
-    let elastic: Option<ElasticRange> = match opts.fit_window {
+    // A window in response units or in % of the maximum response becomes the control span
+    // of the virgin envelope's samples from the first at or above its lower end to the last
+    // at or below its upper end before the maximum.
+    let fit_window = match (opts.fit_window, opts.fit_window_unit) {
+        (Some((a, b)), FitWindowUnit::Response | FitWindowUnit::PercentOfMax) => {
+            let top_k = (0..fy.len())
+                .max_by(|&i, &j| fy[i].total_cmp(&fy[j]))
+                .unwrap_or(0);
+            let scale = match opts.fit_window_unit {
+                FitWindowUnit::PercentOfMax => fy[top_k] / 100.0,
+                _ => sign,
+            };
+            let (lo, hi) = ((a * scale).min(b * scale), (a * scale).max(b * scale));
+            let i0 = (0..=top_k).find(|&i| fy[i] >= lo);
+            let i1 = (0..=top_k).rev().find(|&i| fy[i] <= hi);
+            match (i0, i1) {
+                (Some(i0), Some(i1)) if i1 > i0 => {
+                    Some((sign * from_fit_x(fx[i0]), sign * from_fit_x(fx[i1])))
+                }
+                _ => {
+                    return Err(MeasureError::WindowTooSmall {
+                        from: a,
+                        to: b,
+                        n: 0,
+                    })
+                }
+            }
+        }
+        (w, _) => w,
+    };
+    let elastic: Option<ElasticRange> = match fit_window {
         Some((a, b)) => {
             let (ma, mb) = (sign * a, sign * b);
             let map = |v: f64| to_fit_x(v).unwrap_or(v);
