@@ -316,6 +316,17 @@ fn step_up_test(amplitudes: &[f64], e: f64, sy: f64, h: f64, noise_n: f64) -> (V
     (c, r)
 }
 
+/// The issue's step-up schedule (0.5, 0.9, 2, 3 × the yield strain) on a 0.1 m bar, 0.2 N noise.
+fn step_up_of_the_issue(e: f64, sy: f64, h: f64) -> (Vec<f64>, Vec<f64>, Geometry) {
+    let ey = sy / e;
+    let (c, r) = step_up_test(&[0.5 * ey, 0.9 * ey, 2.0 * ey, 3.0 * ey], e, sy, h, 0.2);
+    let geom = Geometry {
+        free_length_m: 0.1,
+        diameter_m: None,
+    };
+    (c, r, geom)
+}
+
 /// Issue 12 item 1: amplitudes 0.5, 0.9, 2 and 3 × the yield strain in one test. The first two
 /// cycles stay elastic; the yield is the bend of the virgin envelope, in the third cycle's
 /// reloading beyond the previous maximum. The first-loading method finds none; the offset
@@ -324,11 +335,7 @@ fn step_up_test(amplitudes: &[f64], e: f64, sy: f64, h: f64, noise_n: f64) -> (V
 fn yield_on_the_virgin_envelope_of_a_step_up_test() {
     let (e, sy, h) = (100e9, 400e6, 10e9);
     let ey = sy / e;
-    let (c, r) = step_up_test(&[0.5 * ey, 0.9 * ey, 2.0 * ey, 3.0 * ey], e, sy, h, 0.2);
-    let geom = Geometry {
-        free_length_m: 0.1,
-        diameter_m: None,
-    };
+    let (c, r, geom) = step_up_of_the_issue(e, sy, h);
     let run = |m: &str| {
         let o = AnalyzeOptions {
             yield_method: m.parse().unwrap(),
@@ -414,11 +421,7 @@ fn fit_windows_in_response_units_and_percent_of_the_maximum() {
     use cablab_measure::FitWindowUnit as U;
     let (e, sy, h) = (100e9, 400e6, 10e9);
     let ey = sy / e;
-    let (c, r) = step_up_test(&[0.5 * ey, 0.9 * ey, 2.0 * ey, 3.0 * ey], e, sy, h, 0.2);
-    let geom = Geometry {
-        free_length_m: 0.1,
-        diameter_m: None,
-    };
+    let (c, r, geom) = step_up_of_the_issue(e, sy, h);
     for (w, unit) in [
         ((50.0, 300.0), U::Response),
         ((10.0, 60.0), U::PercentOfMax),
