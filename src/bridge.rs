@@ -160,3 +160,183 @@ pub fn diag_test(
         offsets,
     ))
 }
+
+/// The declared kind checked against the file's own evidence ([`TestRecord::kind_conflict`]):
+/// a contradiction is an error naming the evidence, unless `force` (then it is returned as a
+/// warning to print next to the results).
+///
+/// Does not infer a kind: the declared one is kept or refused.
+pub fn check_kind(rec: &TestRecord, kind: TestKind, force: bool) -> Result<Option<String>> {
+    let Some(evidence) = rec.kind_conflict(kind) else {
+        return Ok(None);
+    };
+    let file = &rec.provenance.path;
+    if force {
+        return Ok(Some(format!(
+            "analysed as {} although the file says otherwise ({evidence}); forced",
+            kind.as_str()
+        )));
+    }
+    bail!(
+        "{file}: declared kind {} contradicts the file: {evidence}. If the file is right, give its kind; if the kind is right, pass --force-kind (pipelines: force_kind = true)",
+        kind.as_str()
+    )
+}
+
+/// Names of channels that sit on the specimen (extensometers, clip gauges, video or laser
+/// extensometers; German "Feindehnung", "Dehnung", MayTec sensors).
+const SPECIMEN_MOUNTED: &[&str] = &[
+    "extenso",
+    "feindehnung",
+    "dehnung",
+    "maytec",
+    "strain",
+    "clip",
+    "video",
+    "laser",
+    "gauge",
+];
+/// Names of machine travel channels (the crosshead or actuator: the load train's compliance is
+/// in them).
+const CROSSHEAD: &[&str] = &[
+    "crosshead",
+    "traverse",
+    "stroke",
+    "machine",
+    "maschine",
+    "actuator",
+    "kolben",
+    "position",
+    "standardweg",
+];
+
+fn named(c: &cablab_ingest::Channel, words: &[&str]) -> bool {
+    let n = c.name.to_lowercase();
+    words.iter().any(|w| n.contains(w))
+}
+
+/// The channel roles checked before any physics: a control or response in the wrong units (a
+/// time, a force or torque as the control; a time, length or angle as the response) or a
+/// control that is the time column itself is an error naming the columns and their units.
+/// For tension, a specimen-mounted displacement (extensometer) is made the control in place of
+/// the crosshead unless `control_given` (ISO 6892-1 / ISO 527 practice); a tension stiffness
+/// from the crosshead is flagged unless a machine compliance is removed. Returns the notes to print next to the results.
+pub fn check_roles(
+    rec: &mut TestRecord,
+    kind: TestKind,
+    control_given: bool,
+    compliance_given: bool,
+) -> Result<Vec<String>> {
+    use cablab_ingest::units::Dimension as D;
+    let file = rec.provenance.path.clone();
+    let mut notes = Vec::new();
+    let show = |c: &cablab_ingest::Channel| {
+        format!(
+            "'{}' ({})",
+            c.name,
+            if c.unit.is_empty() {
+                "no unit"
+            } else {
+                &c.unit
+            }
+        )
+    };
+    let ci = rec.channel_index(Role::Control);
+    let ri = rec.channel_index(Role::Response);
+    if let Some(i) = ci {
+        let c = &rec.channels[i];
+        match c.dimension {
+            Some(D::Time) => bail!(
+                "{file}: the control column {} is a time, not a displacement or angle; name the control with --control",
+                show(c)
+            ),
+            Some(D::Force | D::Torque) => bail!(
+                "{file}: the control column {} is a {} — control and response look swapped{}; name them with --control and --response",
+                show(c),
+                if c.dimension == Some(D::Force) { "force" } else { "torque or moment" },
+                ri.map(|r| format!(" (response {})", show(&rec.channels[r]))).unwrap_or_default()
+            ),
+            _ => {}
+        }
+    }
+    if let Some(i) = ri {
+        let c = &rec.channels[i];
+        if let Some(d @ (D::Time | D::Length | D::Angle)) = c.dimension {
+            let what = match d {
+                D::Time => "a time",
+                D::Length => "a length",
+                _ => "an angle",
+            };
+            bail!(
+                "{file}: the response column {} is {what}, not a force or moment; name the response with --response",
+                show(c)
+            );
+        }
+    }
+    // A control that is the clock.
+    if let (Some(i), Some(t)) = (ci, rec.channel_index(Role::Time)) {
+        if let (Some(cv), Some(tv)) = (rec.values(i), rec.values(t)) {
+            let pairs: Vec<(f64, f64)> = cv
+                .iter()
+                .zip(&tv)
+                .filter(|(a, b)| a.is_finite() && b.is_finite())
+                .map(|(a, b)| (*a, *b))
+                .collect();
+            let range = pairs
+                .iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), p| {
+                    (lo.min(p.1), hi.max(p.1))
+                });
+            let span = range.1 - range.0;
+            if pairs.len() >= 3
+                && span > 0.0
+                && pairs.iter().all(|(a, b)| (a - b).abs() <= 1e-9 * span)
+            {
+                bail!(
+                    "{file}: the control column {} holds the same values as the time column {}: it is a clock, not a displacement or angle; name the control with --control",
+                    show(&rec.channels[i]),
+                    show(&rec.channels[t])
+                );
+            }
+        }
+    }
+    if kind == TestKind::Tension {
+        if let Some(i) = ci {
+            let mounted = rec.channels.iter().position(|c| {
+                c.dimension == Some(D::Length)
+                    && named(c, SPECIMEN_MOUNTED)
+                    && c.role != Role::Control
+            });
+            let is_mounted = named(&rec.channels[i], SPECIMEN_MOUNTED);
+            match mounted {
+                Some(m) if !control_given && !is_mounted => {
+                    let moved = rec.values(m).is_some_and(|v| {
+                        let f: Vec<f64> = v.into_iter().filter(|x| x.is_finite()).collect();
+                        f.len() >= 3 && f.iter().any(|x| (x - f[0]).abs() > 0.0)
+                    });
+                    if moved {
+                        notes.push(format!(
+                            "the control is the specimen-mounted displacement {} rather than {} (ISO 6892-1 / ISO 527: the machine travel includes the load train's compliance)",
+                            show(&rec.channels[m]),
+                            show(&rec.channels[i])
+                        ));
+                        rec.channels[i].role = Role::Other;
+                        rec.channels[m].role = Role::Control;
+                    }
+                }
+                _ => {}
+            }
+            let now = rec.channel_index(Role::Control).unwrap_or(i);
+            if !compliance_given
+                && named(&rec.channels[now], CROSSHEAD)
+                && !named(&rec.channels[now], SPECIMEN_MOUNTED)
+            {
+                notes.push(format!(
+                    "the stiffness comes from the machine travel {}: it includes the compliance of the load train (grips, frame), so (EA) is a lower bound; use a specimen-mounted extensometer or give --compliance",
+                    show(&rec.channels[now])
+                ));
+            }
+        }
+    }
+    Ok(notes)
+}

@@ -256,21 +256,30 @@ pub struct AnalyzeArgs {
     /// Specimen diameter in mm, for Young's modulus (default: from the file's metadata).
     #[arg(long, value_name = "MM", allow_negative_numbers = true, value_parser = positive_mm)]
     pub diameter_mm: Option<f64>,
-    /// Elastic fit window in the kind's sectional control variable (strain, twist 1/m,
-    /// deflection m or curvature 1/m), as FROM,TO. Default: found automatically.
-    #[arg(
-        long,
-        value_name = "FROM,TO",
-        value_delimiter = ',',
-        allow_hyphen_values = true
-    )]
-    pub fit_window: Option<Vec<f64>>,
+    /// Elastic fit window, as FROM,TO: in the kind's sectional control variable (strain, twist
+    /// 1/m, deflection m or curvature 1/m; `0,0.0005`), in response units with a trailing `N`
+    /// or `Nm` (`100N,500N`; N m for torsion and bending), or in percent of the maximum
+    /// response (`10%,40%`). Default: found automatically.
+    #[arg(long, value_name = "FROM,TO", allow_hyphen_values = true)]
+    pub fit_window: Option<String>,
     /// Machine compliance to subtract from the control channel, in SI (m/N or rad/(N m)).
     #[arg(long, value_name = "C", allow_negative_numbers = true, value_parser = non_negative)]
     pub compliance: Option<f64>,
     /// Poisson ratio used for the torsion modulus (G = E / (2 (1 + nu))).
     #[arg(long, default_value_t = 0.5, value_name = "NU")]
     pub nu: f64,
+    /// Analyse as --kind even where the file's own evidence (kind words in its metadata or
+    /// name, the units of its control and response) says otherwise; the contradiction is then
+    /// kept as a warning.
+    #[arg(long)]
+    pub force_kind: bool,
+    /// Yield point: auto (the bend of the virgin envelope: first loading, then every loading
+    /// beyond the earlier extremes), first-loading (the bend of the first loading only), or
+    /// offset:<value> (offset yield, the value in the kind's sectional control: strain for
+    /// tension, e.g. offset:0.002 for 0.2 %; 1/m for torsion and pure bending; m for
+    /// three-point).
+    #[arg(long, default_value = "auto", value_name = "METHOD")]
+    pub yield_method: String,
     /// Print JSON (the keys of the scripted contract).
     #[arg(long)]
     pub json: bool,

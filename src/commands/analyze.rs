@@ -1,14 +1,21 @@
 //! `cablab analyze`: characterise one test (CONTRACT.md): stiffness with 95% CI, modulus, yield,
 //! cycles, behaviour class.
+//!
+//! Every warning raised on the way (the reader's, the kind and channel-role checks', the
+//! analysis') is printed and, with `--json`, in `warnings` — whether the command succeeds or
+//! fails: on failure `--json` prints `{file, error, warnings}` and the command exits 2.
 
 use super::{parse_kind, print_json, CliError, CmdResult};
 use crate::cli::AnalyzeArgs;
 use cablab_core::TestKind;
 use std::process::ExitCode;
 
-/// Read, bridge and analyse one file; shared by `analyze` and the pipeline's single-file path.
+/// Read, check, bridge and analyse one file. The warnings gathered before a failure are pushed
+/// to `warnings` so the caller can show them with the error; on success they are also at the
+/// head of the analysis' own `warnings`.
 pub fn analyze_file(
     a: &AnalyzeArgs,
+    warnings: &mut Vec<String>,
 ) -> Result<(cablab_ingest::TestRecord, cablab_measure::Analysis), CliError> {
     let kind = parse_kind(&a.kind)?;
     if kind == TestKind::Unknown {
@@ -17,7 +24,19 @@ pub fn analyze_file(
         )));
     }
     let opts = crate::bridge::read_options(&a.reader, Some(kind)).map_err(CliError::input)?;
-    let rec = cablab_ingest::read_path(&a.file, &opts).map_err(CliError::input)?;
+    let mut rec = cablab_ingest::read_path(&a.file, &opts).map_err(CliError::input)?;
+    warnings.extend(rec.warnings.iter().map(|w| w.to_string()));
+    if let Some(w) = crate::bridge::check_kind(&rec, kind, a.force_kind).map_err(CliError::input)? {
+        warnings.push(w);
+    }
+    let notes = crate::bridge::check_roles(
+        &mut rec,
+        kind,
+        a.reader.control.is_some(),
+        a.compliance.is_some(),
+    )
+    .map_err(CliError::input)?;
+    warnings.extend(notes);
     let geom = crate::bridge::geometry(
         &rec,
         kind,
@@ -26,24 +45,23 @@ pub fn analyze_file(
     )
     .map_err(CliError::input)?;
     let curve = crate::bridge::curve(&rec).map_err(CliError::input)?;
+    let yield_method: cablab_measure::YieldMethod = a
+        .yield_method
+        .parse()
+        .map_err(|e: String| CliError::input(anyhow::anyhow!("--yield-method: {e}")))?;
     let mut ao = cablab_measure::AnalyzeOptions {
         nu: a.nu,
         compliance_m_per_n: a.compliance,
+        yield_method,
         ..Default::default()
     };
     if let Some(w) = &a.fit_window {
-        match w.as_slice() {
-            [from, to] if from.is_finite() && to.is_finite() && to > from => {
-                ao.fit_window = Some((*from, *to))
-            }
-            _ => {
-                return Err(CliError::input(anyhow::anyhow!(
-                    "--fit-window: give FROM,TO with TO > FROM, e.g. 0,0.0005 (got {w:?})"
-                )))
-            }
-        }
+        let (from, to, unit) = parse_fit_window(w)
+            .map_err(|e| CliError::input(anyhow::anyhow!("--fit-window: {e}")))?;
+        ao.fit_window = Some((from, to));
+        ao.fit_window_unit = unit;
     }
-    let an = cablab_measure::analyze(
+    let mut an = cablab_measure::analyze(
         kind,
         &geom,
         curve.time_s.as_deref(),
@@ -52,15 +70,38 @@ pub fn analyze_file(
         &ao,
     )
     .map_err(|e| CliError::input(anyhow::anyhow!("{}: {e}", a.file.display())))?;
+    let mut all = warnings.clone();
+    all.append(&mut an.warnings);
+    an.warnings = all;
     Ok((rec, an))
 }
 
 /// Run `cablab analyze`.
 pub fn run(a: AnalyzeArgs) -> CmdResult {
-    let (rec, an) = analyze_file(&a)?;
-    for w in &rec.warnings {
-        eprintln!("cablab: warning: {w}");
-    }
+    let mut warnings = Vec::new();
+    let (rec, an) = match analyze_file(&a, &mut warnings) {
+        Ok(v) => v,
+        Err(e) => {
+            if a.json {
+                #[derive(serde::Serialize)]
+                struct Failed<'a> {
+                    file: String,
+                    error: String,
+                    warnings: &'a [String],
+                }
+                print_json(&Failed {
+                    file: a.file.display().to_string(),
+                    error: format!("{e:#}"),
+                    warnings: &warnings,
+                })?;
+            } else {
+                for w in &warnings {
+                    eprintln!("cablab: warning: {w}");
+                }
+            }
+            return Err(e);
+        }
+    };
     if a.json {
         #[derive(serde::Serialize)]
         struct Out<'a> {
@@ -76,6 +117,41 @@ pub fn run(a: AnalyzeArgs) -> CmdResult {
         })
         .map(|_| ExitCode::SUCCESS);
     }
+    // The warnings are in the text, next to the numbers.
     print!("{}", crate::text::analysis_text(&rec.provenance.path, &an));
     Ok(ExitCode::SUCCESS)
+}
+
+/// A fit window `FROM,TO`: plain numbers (sectional control), numbers with `N`/`Nm`/`N m`
+/// (response units) or with `%` (percent of the maximum response); both ends in the same unit,
+/// TO > FROM.
+pub fn parse_fit_window(w: &str) -> Result<(f64, f64, cablab_measure::FitWindowUnit), String> {
+    use cablab_measure::FitWindowUnit as U;
+    let parts: Vec<&str> = w.split(',').map(str::trim).collect();
+    let [a, b] = parts.as_slice() else {
+        return Err(format!(
+            "give FROM,TO, e.g. 0,0.0005 or 10%,40% or 100N,500N (got {w:?})"
+        ));
+    };
+    let one = |s: &str| -> Option<(f64, U)> {
+        let (num, unit) = if let Some(v) = s.strip_suffix('%') {
+            (v, U::PercentOfMax)
+        } else if let Some(v) = s
+            .strip_suffix("N m")
+            .or_else(|| s.strip_suffix("Nm"))
+            .or_else(|| s.strip_suffix('N'))
+        {
+            (v, U::Response)
+        } else {
+            (s, U::Control)
+        };
+        let x: f64 = num.trim().parse().ok()?;
+        x.is_finite().then_some((x, unit))
+    };
+    match (one(a), one(b)) {
+        (Some((x, ua)), Some((y, ub))) if ua == ub && y > x => Ok((x, y, ua)),
+        _ => Err(format!(
+            "give FROM,TO in one unit with TO > FROM, e.g. 0,0.0005 or 10%,40% or 100N,500N (got {w:?})"
+        )),
+    }
 }

@@ -128,15 +128,48 @@ pub struct FileOverride {
 #[derive(Debug, Clone, Default, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct KindSettings {
-    /// Elastic fit window in the kind's sectional control variable (SI); automatic when absent.
+    /// Elastic fit window; automatic when absent. `[from, to]` in the kind's sectional control
+    /// variable (SI), or a string as `--fit-window` takes it: `"100N,500N"` (response units),
+    /// `"10%,40%"` (percent of the maximum response), `"0,0.0005"`.
     #[serde(default)]
-    pub fit_window: Option<[f64; 2]>,
+    pub fit_window: Option<FitWindowKey>,
     /// Machine compliance in m/N (or rad/(N m)) to subtract from the control channel.
     #[serde(default)]
     pub compliance: Option<f64>,
-    /// Yield detection method (`auto` is the only one so far; the key is reserved).
+    /// Yield detection method: `auto` (the bend of the virgin envelope), `first-loading` or
+    /// `offset:<value>` (offset in the kind's sectional control, e.g. `offset:0.002`).
     #[serde(default)]
     pub yield_method: Option<String>,
+    /// Analyse the files of this kind even where their own evidence (kind words in metadata or
+    /// file name, channel units) contradicts it; the contradiction stays as a warning.
+    #[serde(default)]
+    pub force_kind: Option<bool>,
+}
+
+/// The `fit_window` key: two numbers (sectional control, the original form) or a string with
+/// units (see `cablab analyze --fit-window`).
+#[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
+#[serde(untagged)]
+pub enum FitWindowKey {
+    /// `[from, to]` in the kind's sectional control (SI).
+    Control([f64; 2]),
+    /// `"FROM,TO"` with `N`/`Nm` or `%` on the numbers, or plain numbers.
+    Text(String),
+}
+
+impl FitWindowKey {
+    /// (from, to, unit) for the analysis.
+    pub fn resolve(&self) -> Result<(f64, f64, cablab_measure::FitWindowUnit), String> {
+        match self {
+            FitWindowKey::Control([a, b]) if a.is_finite() && b.is_finite() && b > a => {
+                Ok((*a, *b, cablab_measure::FitWindowUnit::Control))
+            }
+            FitWindowKey::Control([a, b]) => {
+                Err(format!("must be [from, to] with to > from, got [{a}, {b}]"))
+            }
+            FitWindowKey::Text(t) => crate::commands::analyze::parse_fit_window(t),
+        }
+    }
 }
 
 /// `[model]`.
@@ -672,10 +705,9 @@ fn validate(file: PipelineFile, path: &Path, bytes: Vec<u8>, root: PathBuf) -> R
     for (k, ks) in &file.kinds {
         k.parse::<TestKind>()
             .map_err(|e| anyhow!("{ctx}: [kinds.{k}]: {e}"))?;
-        if let Some([a, b]) = ks.fit_window {
-            if !(a.is_finite() && b.is_finite() && b > a) {
-                bail!("{ctx}: [kinds.{k}] fit_window must be [from, to] with to > from, got [{a}, {b}]");
-            }
+        if let Some(w) = &ks.fit_window {
+            w.resolve()
+                .map_err(|e| anyhow!("{ctx}: [kinds.{k}] fit_window: {e}"))?;
         }
         if let Some(c) = ks.compliance {
             in_range(
@@ -686,9 +718,8 @@ fn validate(file: PipelineFile, path: &Path, bytes: Vec<u8>, root: PathBuf) -> R
             )?;
         }
         if let Some(m) = &ks.yield_method {
-            if m != "auto" {
-                bail!("{ctx}: [kinds.{k}] yield_method: only \"auto\" is available, got {m:?}");
-            }
+            m.parse::<cablab_measure::YieldMethod>()
+                .map_err(|e| anyhow!("{ctx}: [kinds.{k}] yield_method: {e}"))?;
         }
     }
     for t in &file.reports.tables {

@@ -325,11 +325,24 @@ fn stages(
         kind: Some(t.kind),
         ..Default::default()
     };
-    let rec = cablab_ingest::read_bytes(bytes, &t.id, &opts)?;
+    let mut rec = cablab_ingest::read_bytes(bytes, &t.id, &opts)?;
     out.format = Some(rec.provenance.format.as_str().to_string());
     out.header = TestHeader::from_metadata(rec.specimen.label.as_deref(), &rec.metadata);
     out.warnings
         .extend(rec.warnings.iter().map(|w| w.to_string()));
+    // The declared kind against the file's own evidence, and the channel roles (issue 12).
+    if let Some(w) =
+        crate::bridge::check_kind(&rec, t.kind, t.settings.force_kind.unwrap_or(false))?
+    {
+        out.warnings.push(w);
+    }
+    let notes = crate::bridge::check_roles(
+        &mut rec,
+        t.kind,
+        t.control.is_some(),
+        t.settings.compliance.is_some(),
+    )?;
+    out.warnings.extend(notes);
     let geom = crate::bridge::geometry(&rec, t.kind, t.free_length_m, Some(t.diameter_m))?;
     out.free_length_m = Some(geom.free_length_m);
     let curve = crate::bridge::curve(&rec)?;
@@ -338,10 +351,23 @@ fn stages(
     done(0);
 
     // 2. characterise
+    let window = t
+        .settings
+        .fit_window
+        .as_ref()
+        .map(|w| w.resolve().map_err(|e| anyhow!("fit_window: {e}")))
+        .transpose()?;
     let ao = cablab_measure::AnalyzeOptions {
         nu: c.file.campaign.nu,
-        fit_window: t.settings.fit_window.map(|[a, b]| (a, b)),
+        fit_window: window.map(|(a, b, _)| (a, b)),
+        fit_window_unit: window.map(|w| w.2).unwrap_or_default(),
         compliance_m_per_n: t.settings.compliance,
+        yield_method: match &t.settings.yield_method {
+            Some(m) => m
+                .parse()
+                .map_err(|e: String| anyhow!("yield_method: {e}"))?,
+            None => Default::default(),
+        },
         ..Default::default()
     };
     let an = cablab_measure::analyze(

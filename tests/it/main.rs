@@ -5,5 +5,7 @@ mod campaign;
 mod characterise;
 mod cli_contract;
 mod common;
+mod family;
 mod folder_mode;
 mod shards;
+mod trust;

@@ -25,6 +25,7 @@ pub use format::{Format, UnknownFormat};
 pub use record::{
     BlockInfo, Channel, InspectChannel, InspectReport, MetadataObject, Provenance, TestRecord,
 };
+pub use roles::KindEvidence;
 
 use cablab_core::TestKind;
 use sha2::{Digest, Sha256};

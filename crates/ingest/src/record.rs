@@ -8,8 +8,8 @@
 use crate::error::{Diagnostic, IngestError};
 use crate::format::Format;
 use crate::roles::{
-    assign_roles, kind_from_channels, kind_from_text, roles_of, specimen_from_metadata,
-    ChannelFacts,
+    assign_roles, kind_evidence, kind_from_channels, kind_from_text, roles_of,
+    specimen_from_metadata, ChannelFacts, KindEvidence,
 };
 use crate::table::{RawBlock, RawTable};
 use crate::units::{lookup, split_name_unit, strip_brackets, unreadable_unit, Dimension};
@@ -96,6 +96,10 @@ pub struct TestRecord {
     pub kind: TestKind,
     /// Why the kind was set.
     pub kind_reason: String,
+    /// The file's own evidence for its kind (kind words in the metadata and file name, the
+    /// dimensions of the control and response), gathered whether or not `--kind` was given, so
+    /// a declared kind can be checked against it ([`TestRecord::kind_conflict`]).
+    pub kind_evidence: Vec<KindEvidence>,
     /// Specimen geometry found in the metadata (SI).
     pub specimen: Specimen,
     /// Channels of the main block, in file order.
@@ -696,6 +700,7 @@ pub(crate) fn build(
         }
     }
     let dims: Vec<Option<Dimension>> = infos.iter().map(|i| i.map(|x| x.dimension)).collect();
+    let kind_evidence = kind_evidence(&texts, &source, &names, &units, &dims, c, r);
     let (kind, kind_reason) = match opts.kind {
         Some(k) => (k, "set by --kind".to_string()),
         None => kind_from_text(&texts)
@@ -720,6 +725,7 @@ pub(crate) fn build(
     Ok(TestRecord {
         kind,
         kind_reason,
+        kind_evidence,
         specimen,
         channels,
         data,
@@ -775,6 +781,29 @@ fn to_frame(
 }
 
 impl TestRecord {
+    /// The evidence of this file that excludes `kind`, as one sentence, or None when nothing
+    /// contradicts it. Kind words that contradict each other (an axial-torsional test's
+    /// "tension" and "torsion") are not evidence and are left out; channel dimensions always
+    /// count.
+    pub fn kind_conflict(&self, kind: TestKind) -> Option<String> {
+        let words: Vec<&KindEvidence> = self
+            .kind_evidence
+            .iter()
+            .filter(|e| !e.from_channels)
+            .collect();
+        let words_agree = TestKind::ALL
+            .iter()
+            .any(|k| words.iter().all(|e| e.kinds.contains(k)));
+        let against: Vec<&str> = self
+            .kind_evidence
+            .iter()
+            .filter(|e| !e.kinds.contains(&kind))
+            .filter(|e| words_agree || e.from_channels)
+            .map(|e| e.what.as_str())
+            .collect();
+        (!against.is_empty()).then(|| against.join("; "))
+    }
+
     /// Index of the channel with `role` (first one).
     pub fn channel_index(&self, role: Role) -> Option<usize> {
         self.channels.iter().position(|c| c.role == role)

@@ -393,6 +393,169 @@ pub(crate) fn kind_from_channels(
     }
 }
 
+/// One piece of a file's own evidence for its test kind: the kinds it allows and what it is
+/// (shown to the user when it contradicts the declared kind).
+#[derive(Debug, Clone, PartialEq, Eq, serde::Serialize)]
+pub struct KindEvidence {
+    /// The kinds this evidence is compatible with.
+    pub kinds: Vec<TestKind>,
+    /// What was seen ("the control column 'Winkel' (°) is an angle", "the file name says 'torsion'").
+    pub what: String,
+    /// Whether it comes from the channel dimensions (else from words).
+    pub from_channels: bool,
+}
+
+/// Words that name a kind family, matched as whole words (lower case) in metadata, block titles
+/// and the file name. Broader than [`kind_from_text`] (which must pick exactly one kind): a word
+/// here only has to exclude kinds. `biegung`/`bending`/`flexure` allow both bending kinds.
+const KIND_WORDS: &[(&str, &[TestKind])] = &[
+    ("tension", &[TestKind::Tension]),
+    ("tensile", &[TestKind::Tension]),
+    ("zug", &[TestKind::Tension]),
+    ("zugversuch", &[TestKind::Tension]),
+    ("zugprüfung", &[TestKind::Tension]),
+    ("zugprufung", &[TestKind::Tension]),
+    ("tracción", &[TestKind::Tension]),
+    ("traccion", &[TestKind::Tension]),
+    ("trazione", &[TestKind::Tension]),
+    ("torsion", &[TestKind::Torsion]),
+    ("torsionsversuch", &[TestKind::Torsion]),
+    ("torsión", &[TestKind::Torsion]),
+    ("torsione", &[TestKind::Torsion]),
+    ("3pb", &[TestKind::ThreePoint]),
+    ("dreipunkt", &[TestKind::ThreePoint]),
+    ("dreipunktbiegung", &[TestKind::ThreePoint]),
+    ("3-punkt", &[TestKind::ThreePoint]),
+    ("three-point", &[TestKind::ThreePoint]),
+    ("three_point", &[TestKind::ThreePoint]),
+    ("threepoint", &[TestKind::ThreePoint]),
+    ("3-point", &[TestKind::ThreePoint]),
+    ("pure bending", &[TestKind::PureBending]),
+    ("pure_bending", &[TestKind::PureBending]),
+    ("four-point", &[TestKind::PureBending]),
+    ("4-point", &[TestKind::PureBending]),
+    ("vierpunkt", &[TestKind::PureBending]),
+    ("biegung", &[TestKind::ThreePoint, TestKind::PureBending]),
+    (
+        "biegeversuch",
+        &[TestKind::ThreePoint, TestKind::PureBending],
+    ),
+    ("bending", &[TestKind::ThreePoint, TestKind::PureBending]),
+    ("flexure", &[TestKind::ThreePoint, TestKind::PureBending]),
+    ("flexural", &[TestKind::ThreePoint, TestKind::PureBending]),
+];
+
+/// Occurrence of `w` in lower-case `text` at the start of a word (no letter before it); words of
+/// up to four letters must also end there. So "tension_100N" and "Torsionsversuch" match
+/// "tension" and "torsion", "Dreipunktbiegeversuch" matches "dreipunkt", "Zug" matches "zug",
+/// but "Zugabe" does not match "zug" and "extension" does not match "tension".
+fn has_word(text: &str, w: &str) -> bool {
+    let mut start = 0;
+    while let Some(p) = text[start..].find(w) {
+        let a = start + p;
+        let b = a + w.len();
+        let before = text[..a].chars().next_back();
+        let after = text[b..].chars().next();
+        let sep = |c: Option<char>| c.is_none_or(|c| !c.is_alphabetic());
+        if sep(before) && (w.chars().count() > 4 || sep(after)) {
+            return true;
+        }
+        start = a + w.len().max(1);
+    }
+    false
+}
+
+/// The file's own evidence for its kind (see [`KindEvidence`]): kind words in the metadata,
+/// block titles and file name, and the dimensions of the control and response channels (a
+/// torque or an angle excludes tension and three-point; a force or a displacement as the pair
+/// excludes torsion and pure bending). Evidence that allows every kind is not returned.
+///
+/// Does not decide the kind: a contradiction is judged against the declared kind by
+/// `TestRecord::kind_conflict`.
+pub(crate) fn kind_evidence(
+    texts: &[&str],
+    file_name: &str,
+    names: &[String],
+    units: &[String],
+    dims: &[Option<Dimension>],
+    control: Option<usize>,
+    response: Option<usize>,
+) -> Vec<KindEvidence> {
+    let mut out: Vec<KindEvidence> = Vec::new();
+    // One piece of evidence per kind family named (the first place that names it).
+    let scan = |text: &str, place: &str, out: &mut Vec<KindEvidence>| {
+        let l = text.to_lowercase();
+        for (w, kinds) in KIND_WORDS {
+            let known = out.iter().any(|e| e.kinds.as_slice() == *kinds);
+            if !known && has_word(&l, w) {
+                out.push(KindEvidence {
+                    kinds: kinds.to_vec(),
+                    what: format!("{place} says '{w}' (in \"{}\")", text.trim()),
+                    from_channels: false,
+                });
+            }
+        }
+    };
+    for t in texts {
+        scan(t, "the metadata", &mut out);
+    }
+    let stem = file_name
+        .rsplit(['/', '\\'])
+        .next()
+        .unwrap_or(file_name)
+        .replace('_', " ");
+    scan(&stem, "the file name", &mut out);
+    let rotational = [TestKind::Torsion, TestKind::PureBending];
+    let linear = [TestKind::Tension, TestKind::ThreePoint];
+    let col = |i: usize| {
+        format!(
+            "'{}' ({})",
+            names[i],
+            if units[i].is_empty() {
+                "no unit"
+            } else {
+                &units[i]
+            }
+        )
+    };
+    if let Some(r) = response {
+        match dims[r] {
+            Some(Dimension::Torque) => out.push(KindEvidence {
+                kinds: rotational.to_vec(),
+                what: format!("the response column {} is a torque or moment", col(r)),
+                from_channels: true,
+            }),
+            Some(Dimension::Force) => out.push(KindEvidence {
+                kinds: linear.to_vec(),
+                what: format!("the response column {} is a force", col(r)),
+                from_channels: true,
+            }),
+            _ => {}
+        }
+    }
+    if let Some(c) = control {
+        match dims[c] {
+            Some(Dimension::Angle) => out.push(KindEvidence {
+                kinds: rotational.to_vec(),
+                what: format!("the control column {} is an angle", col(c)),
+                from_channels: true,
+            }),
+            Some(Dimension::Curvature) => out.push(KindEvidence {
+                kinds: vec![TestKind::PureBending],
+                what: format!("the control column {} is a curvature", col(c)),
+                from_channels: true,
+            }),
+            Some(Dimension::Length) => out.push(KindEvidence {
+                kinds: linear.to_vec(),
+                what: format!("the control column {} is a displacement", col(c)),
+                from_channels: true,
+            }),
+            _ => {}
+        }
+    }
+    out
+}
+
 fn norm_key(k: &str) -> String {
     let k = k.to_lowercase();
     let k = match k.find(['[', '(']) {
@@ -632,6 +795,57 @@ mod tests {
         );
         assert!(kind_from_text(&["Kraftgeregelt 3,9 kN/s"]).is_none());
         assert!(kind_from_text(&["tension", "torsion"]).is_none());
+    }
+
+    #[test]
+    fn kind_evidence_from_words_names_and_units() {
+        let names: Vec<String> = ["Zeit", "Winkel", "Moment"].map(String::from).to_vec();
+        let units: Vec<String> = ["s", "°", "N·mm"].map(String::from).to_vec();
+        let dims = vec![
+            Some(Dimension::Time),
+            Some(Dimension::Angle),
+            Some(Dimension::Torque),
+        ];
+        let ev = kind_evidence(
+            &["Prüfart", "Torsionsversuch"],
+            "data/probe_torsion_3.csv",
+            &names,
+            &units,
+            &dims,
+            Some(1),
+            Some(2),
+        );
+        // One word (seen twice), the response and the control.
+        assert_eq!(ev.len(), 3, "{ev:?}");
+        assert!(ev.iter().all(|e| e.kinds.contains(&TestKind::Torsion)));
+        assert!(ev.iter().all(|e| !e.kinds.contains(&TestKind::Tension)));
+        assert!(ev[1].what.contains("'Moment' (N·mm)"), "{ev:?}");
+        // Whole words: "Zugabe" and "extension" are no kind words; "Zug" and a compound
+        // "Dreipunktbiegeversuch" are.
+        let none: [String; 0] = [];
+        let ev = kind_evidence(
+            &["Zugabe", "extension"],
+            "x.csv",
+            &none,
+            &none,
+            &[],
+            None,
+            None,
+        );
+        assert!(ev.is_empty(), "{ev:?}");
+        let ev = kind_evidence(
+            &["Zug"],
+            "Dreipunktbiegeversuch.txt",
+            &none,
+            &none,
+            &[],
+            None,
+            None,
+        );
+        assert_eq!(ev.len(), 2, "{ev:?}");
+        assert_eq!(ev[0].kinds, vec![TestKind::Tension]);
+        assert_eq!(ev[1].kinds, vec![TestKind::ThreePoint]);
+        assert!(ev[1].what.starts_with("the file name"), "{ev:?}");
     }
 
     #[test]

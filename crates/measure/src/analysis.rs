@@ -32,7 +32,7 @@
 //! reported as the piecewise threshold K_t instead. Pure: numbers in, numbers out.
 
 use crate::condition::{
-    correct_compliance, noise_level, segment, zero_offsets, Branch, Offsets, Segment,
+    correct_compliance, glitches, noise_level, segment, zero_offsets, Branch, Offsets, Segment,
 };
 use crate::elastic::{auto_elastic_range, user_elastic_range, ElasticRange, Hinge};
 use crate::elastica::ThreePointElastica;
@@ -59,6 +59,8 @@ pub struct AnalyzeOptions {
     /// User-set elastic window `(from, to)` in the kind's sectional control (SI: strain, 1/m,
     /// deflection m); automatic when None.
     pub fit_window: Option<(f64, f64)>,
+    /// Unit of `fit_window` ([`FitWindowUnit::Control`] by default).
+    pub fit_window_unit: FitWindowUnit,
     /// Machine compliance in control units per response unit (m/N for tension and three-point,
     /// rad/(N m) for torsion and pure bending), removed before anything else.
     pub compliance_m_per_n: Option<f64>,
@@ -66,6 +68,71 @@ pub struct AnalyzeOptions {
     pub zero_offsets: bool,
     /// Relative error of eq. (3) beyond which a three-point deflection counts as large (0.01).
     pub small_deflection_tolerance: f64,
+    /// How the yield point is found ([`YieldMethod::Auto`] by default).
+    pub yield_method: YieldMethod,
+}
+
+/// What the numbers of a user-set fit window are.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum FitWindowUnit {
+    /// The kind's sectional control (strain, 1/m, or deflection m for three-point).
+    #[default]
+    Control,
+    /// The response (N or N m), on the rise of the virgin envelope to its maximum.
+    Response,
+    /// Percent of the maximum response, on the rise of the virgin envelope to its maximum.
+    PercentOfMax,
+}
+
+/// How the yield point is found (`--yield-method`, pipeline key `yield_method`).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub enum YieldMethod {
+    /// The bend of the virgin envelope: the first loading followed by every later loading
+    /// beyond all earlier extremes, so a test whose amplitude grows step by step yields at
+    /// the first loading beyond the previous maximum (`auto`).
+    #[default]
+    Auto,
+    /// The bend of the first loading path only (`first-loading`; the method before the
+    /// envelope).
+    FirstLoading,
+    /// Offset yield: where the virgin envelope meets the elastic line shifted by this offset
+    /// in the kind's sectional control (strain for tension, 1/m for torsion and pure bending,
+    /// m for three-point), e.g. `offset:0.002` (0.2 % strain) (`offset:<value>`).
+    Offset(f64),
+}
+
+impl YieldMethod {
+    /// Contract spelling of the method actually used (JSON `yield.method`).
+    pub fn as_str(self) -> &'static str {
+        match self {
+            YieldMethod::Auto => "envelope_bend",
+            YieldMethod::FirstLoading => "first_loading_bend",
+            YieldMethod::Offset(_) => "offset",
+        }
+    }
+}
+
+impl std::str::FromStr for YieldMethod {
+    type Err = String;
+    /// `auto`, `first-loading` (or `first_loading`), `offset:<value>` (value > 0).
+    fn from_str(s: &str) -> Result<Self, String> {
+        let t = s.trim().to_lowercase();
+        match t.as_str() {
+            "auto" => return Ok(YieldMethod::Auto),
+            "first-loading" | "first_loading" => return Ok(YieldMethod::FirstLoading),
+            _ => {}
+        }
+        if let Some(v) = t.strip_prefix("offset:") {
+            if let Ok(x) = v.trim().parse::<f64>() {
+                if x.is_finite() && x > 0.0 {
+                    return Ok(YieldMethod::Offset(x));
+                }
+            }
+        }
+        Err(format!(
+            "yield method {s:?}: expected auto, first-loading or offset:<value> (value > 0 in the kind's sectional control, e.g. offset:0.002 for 0.2 % strain)"
+        ))
+    }
 }
 
 impl Default for AnalyzeOptions {
@@ -73,9 +140,11 @@ impl Default for AnalyzeOptions {
         AnalyzeOptions {
             nu: 0.5,
             fit_window: None,
+            fit_window_unit: FitWindowUnit::Control,
             compliance_m_per_n: None,
             zero_offsets: true,
             small_deflection_tolerance: 0.01,
+            yield_method: YieldMethod::default(),
         }
     }
 }
@@ -125,6 +194,9 @@ pub struct Stiffness {
     pub r2: f64,
     /// Samples in the window.
     pub n: usize,
+    /// Doubts about this number (poor fit, few points, wide interval, implausible modulus),
+    /// also in the analysis' `warnings`.
+    pub warnings: Vec<String>,
 }
 
 /// The yield point: the bend in the first loading path.
@@ -144,6 +216,43 @@ pub struct YieldPoint {
     pub peak_curvature: Option<f64>,
     /// Three-point only: peak moment F l₀/4 at the bend, N m.
     pub peak_moment: Option<f64>,
+    /// How it was found: `envelope_bend`, `first_loading_bend` or `offset`.
+    pub method: &'static str,
+    /// The offset of the offset method (sectional control units), else null.
+    pub offset: Option<f64>,
+    /// Cycle the yield point lies in.
+    pub cycle: usize,
+    /// Branch the yield point lies in (`first_loading` or `reloading`).
+    pub branch: Branch,
+}
+
+/// A break: after its maximum the response falls below [`BREAK_DROP`] of it and stays there
+/// while the control does not go back (a monotonic test to fracture; an unloading is no break).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct BreakPoint {
+    /// First sample (0-based complete row) below the drop level.
+    pub sample: usize,
+    /// Machine control at break (m or rad, original sign).
+    pub machine_control: f64,
+    /// Response just before the drop (N or N m, original sign).
+    pub response_before: f64,
+    /// Work to break, ∫ response d(machine control) from the start to the break, J.
+    pub work_to_break: f64,
+}
+
+/// Fraction of the maximum response the response must fall below, and stay below, after the
+/// maximum for a break ([`BreakPoint`]).
+pub const BREAK_DROP: f64 = 0.5;
+
+/// The largest response (in magnitude) of the test and where it occurs.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct MaxResponse {
+    /// Response, N or N m (original sign).
+    pub response: f64,
+    /// Machine control there (m or rad, original sign).
+    pub machine_control: f64,
+    /// Sample (0-based complete row).
+    pub sample: usize,
 }
 
 /// Reversible bilinear behaviour: threshold and the two stiffnesses (eq. (19)).
@@ -251,6 +360,13 @@ pub struct Analysis {
     pub segments: Vec<Segment>,
     /// Response change in every hold after the initial rest (relaxation: rate dependence).
     pub holds: Vec<HoldRelaxation>,
+    /// The largest response and its control.
+    pub max_response: MaxResponse,
+    /// Where the specimen broke, when it did.
+    #[serde(rename = "break")]
+    pub break_point: Option<BreakPoint>,
+    /// Samples (0-based, complete rows) excluded from the fits as isolated glitches.
+    pub excluded_samples: Vec<usize>,
     /// Warnings for the user.
     pub warnings: Vec<String>,
     /// All reasons for null quantities as one string ("key: reason; ..."), or null.
@@ -323,12 +439,63 @@ pub fn analyze(
     let mut warnings = Vec::new();
     let mut why = BTreeMap::new();
 
+    // A clock that does not run forward cannot time holds: judge them by sample index instead
+    // (and say so), rather than fail later with a symptom.
+    let time_s = match time_s {
+        Some(t) => {
+            let back = t.windows(2).filter(|w| w[1] < w[0]).count();
+            if back > 0 || t[t.len() - 1] <= t[0] {
+                warnings.push(format!(
+                    "the time column does not run forward ({}): holds are judged by sample index",
+                    if back > 0 {
+                        format!("it decreases {back} time(s)")
+                    } else {
+                        "it is constant".to_string()
+                    }
+                ));
+                None
+            } else {
+                Some(t)
+            }
+        }
+        None => None,
+    };
+
     let mut c = match opts.compliance_m_per_n {
         Some(k) if k.is_finite() => correct_compliance(control, response, k),
         Some(k) => return Err(MeasureError::BadCompliance(k)),
         None => control.to_vec(),
     };
     let mut r = response.to_vec();
+    // Isolated glitches (one sample off in one channel) are excluded from every fit: replaced,
+    // in this copy only, by the mean of their neighbours.
+    let mut excluded: Vec<usize> = glitches(&r, &c);
+    let in_control = glitches(&c, &r);
+    for &i in &excluded {
+        r[i] = 0.5 * (r[i - 1] + r[i + 1]);
+    }
+    for &i in &in_control {
+        c[i] = 0.5 * (c[i - 1] + c[i + 1]);
+    }
+    if !excluded.is_empty() || !in_control.is_empty() {
+        let show = |v: &[usize]| {
+            v.iter()
+                .take(5)
+                .map(|i| i.to_string())
+                .collect::<Vec<_>>()
+                .join(", ")
+                + if v.len() > 5 { ", ..." } else { "" }
+        };
+        warnings.push(format!(
+            "{} isolated glitch sample(s) excluded from the analysis (response at samples [{}], control at samples [{}]; 0-based complete rows)",
+            excluded.len() + in_control.len(),
+            show(&excluded),
+            show(&in_control)
+        ));
+    }
+    excluded.extend(in_control);
+    excluded.sort_unstable();
+    excluded.dedup();
     let offsets = opts.zero_offsets.then(|| zero_offsets(&mut c, &mut r));
     let noise = Noise {
         control: noise_level(&c),
@@ -373,9 +540,15 @@ pub fn analyze(
             None => x,
         }
     };
-    let mut fx: Vec<f64> = Vec::with_capacity(first_idx.len());
-    let mut fw: Vec<f64> = Vec::with_capacity(first_idx.len());
-    for &i in &first_idx {
+    // The virgin envelope: the first loading, then every later loading from where it passes
+    // all earlier extremes by more than the reversal threshold (module doc of `condition`).
+    let env_idx: Vec<usize> = match opts.yield_method {
+        YieldMethod::FirstLoading => first_idx.clone(),
+        _ => virgin_envelope(&segments, &cm, &first_idx),
+    };
+    let mut fx: Vec<f64> = Vec::with_capacity(env_idx.len());
+    let mut fw: Vec<f64> = Vec::with_capacity(env_idx.len());
+    for &i in &env_idx {
         match to_fit_x(xs[i]).filter(|_| xs[i].abs() / l0 <= geometry_limit) {
             Some(v) => {
                 fx.push(v);
@@ -390,10 +563,40 @@ pub fn analyze(
             }
         }
     }
-    let fy: Vec<f64> = first_idx[..fx.len()].iter().map(|&i| rm[i]).collect();
+    let fy: Vec<f64> = env_idx[..fx.len()].iter().map(|&i| rm[i]).collect();
 
     let factor = stiffness_factor(kind, geom);
-    let elastic: Option<ElasticRange> = match opts.fit_window {
+    // A window in response units or in % of the maximum response becomes the control span
+    // of the virgin envelope's samples from the first at or above its lower end to the last
+    // at or below its upper end before the maximum.
+    let fit_window = match (opts.fit_window, opts.fit_window_unit) {
+        (Some((a, b)), FitWindowUnit::Response | FitWindowUnit::PercentOfMax) => {
+            let top_k = (0..fy.len())
+                .max_by(|&i, &j| fy[i].total_cmp(&fy[j]))
+                .unwrap_or(0);
+            let scale = match opts.fit_window_unit {
+                FitWindowUnit::PercentOfMax => fy[top_k] / 100.0,
+                _ => sign,
+            };
+            let (lo, hi) = ((a * scale).min(b * scale), (a * scale).max(b * scale));
+            let i0 = (0..=top_k).find(|&i| fy[i] >= lo);
+            let i1 = (0..=top_k).rev().find(|&i| fy[i] <= hi);
+            match (i0, i1) {
+                (Some(i0), Some(i1)) if i1 > i0 => {
+                    Some((sign * from_fit_x(fx[i0]), sign * from_fit_x(fx[i1])))
+                }
+                _ => {
+                    return Err(MeasureError::WindowTooSmall {
+                        from: a,
+                        to: b,
+                        n: 0,
+                    })
+                }
+            }
+        }
+        (w, _) => w,
+    };
+    let elastic: Option<ElasticRange> = match fit_window {
         Some((a, b)) => {
             let (ma, mb) = (sign * a, sign * b);
             let map = |v: f64| to_fit_x(v).unwrap_or(v);
@@ -427,28 +630,67 @@ pub fn analyze(
             e.window
         };
         let w = if sign > 0.0 { win } else { [-win[1], -win[0]] };
+        // Serially correlated residuals (quantisation, dense sampling of a slightly curved
+        // window) carry fewer independent samples than they number: widen the interval by
+        // the lag-1 autocorrelation's variance factor √((1 + ρ)/(1 − ρ)) (ρ > 0 only).
+        let (a, b) = e.window_idx;
+        let inflate = if e.automatic && b > a + 3 {
+            correlation_inflation(&fx[a..b], &fy[a..b], &e.fit)
+        } else {
+            1.0
+        };
+        let half = [
+            (e.fit.slope - e.fit.slope_ci95[0]) * inflate,
+            (e.fit.slope_ci95[1] - e.fit.slope) * inflate,
+        ];
         Stiffness {
             value: e.fit.slope * factor,
             unit: kind.stiffness_unit(),
-            ci95: [e.fit.slope_ci95[0] * factor, e.fit.slope_ci95[1] * factor],
+            ci95: [
+                (e.fit.slope - half[0]) * factor,
+                (e.fit.slope + half[1]) * factor,
+            ],
             window: w,
             window_unit: sectional_unit(kind),
             window_automatic: e.automatic,
             r2: e.fit.r2,
             n: e.fit.n,
+            warnings: Vec::new(),
         }
     });
-    if let Some(s) = &stiffness {
-        if s.value.is_nan() || s.value <= 0.0 {
-            warnings.push(format!(
-                "the elastic slope is not positive ({} {})",
-                s.value, s.unit
-            ));
-        }
+    let first_rise = fy.iter().fold(f64::NEG_INFINITY, |m, &v| m.max(v))
+        - fy.iter().fold(f64::INFINITY, |m, &v| m.min(v));
+    let stiffness = match stiffness {
+        Some(s) => match refuse_stiffness(&s, first_rise, noise.response) {
+            Some(reason) => {
+                why.insert("stiffness".into(), reason);
+                None
+            }
+            None => Some(s),
+        },
+        None => None,
+    };
+    let mut stiffness = stiffness;
+    if let Some(s) = stiffness.as_mut() {
+        s.warnings = stiffness_doubts(s);
+        warnings.extend(s.warnings.iter().map(|w| format!("stiffness: {w}")));
     }
 
     let modulus_pa = match (&stiffness, geom.diameter_m) {
-        (Some(s), Some(d)) => modulus_from_stiffness(kind, d, s.value, opts.nu),
+        (Some(s), Some(d)) => {
+            let m = modulus_from_stiffness(kind, d, s.value, opts.nu);
+            if let Some(e) =
+                m.filter(|e| !(PLAUSIBLE_MODULUS_PA.0..=PLAUSIBLE_MODULUS_PA.1).contains(e))
+            {
+                warnings.push(format!(
+                    "modulus_pa: {e:.3e} Pa for a diameter of {:.3} mm lies outside {:.0e}–{:.0e} Pa, the range of solids from soft elastomers to diamond: check the kind, the channels (control and response swapped?), their units and the diameter",
+                    d * 1e3,
+                    PLAUSIBLE_MODULUS_PA.0,
+                    PLAUSIBLE_MODULUS_PA.1
+                ));
+            }
+            m
+        }
         (None, _) => {
             why.insert("modulus_pa".into(), "no stiffness".into());
             None
@@ -492,12 +734,12 @@ pub fn analyze(
     let permanent = cyc.iter().any(|c| c.residual_significant == Some(true));
     let behaviour = if judged.is_empty() {
         warnings.push("no unloading to judge reversibility by".into());
-        if bend.is_none() && elastic.is_some() {
+        if bend.is_none() && stiffness.is_some() {
             Behaviour::LinearElastic
         } else {
             Behaviour::Other
         }
-    } else if reversible {
+    } else if reversible && stiffness.is_some() {
         if bend.is_some() {
             Behaviour::PiecewiseLinearElastic
         } else {
@@ -522,6 +764,7 @@ pub fn analyze(
             } else {
                 [-b.knee_y_ci95[1], -b.knee_y_ci95[0]]
             };
+            let (cycle, branch) = label_at(&segments, &env_idx, &fw, b.knee_x);
             Some(YieldPoint {
                 control: sign * b.knee_x,
                 response: sign * b.knee_y,
@@ -530,6 +773,10 @@ pub fn analyze(
                 machine_control: sign * machine_of(b.knee_x),
                 peak_curvature: three.then(|| sign * three_point_peak_curvature(b.knee_x, l0)),
                 peak_moment: three.then(|| sign * three_point_peak_moment(b.knee_y, l0)),
+                method: opts.yield_method.as_str(),
+                offset: None,
+                cycle,
+                branch,
             })
         }
         (Some(_), _) => {
@@ -542,7 +789,7 @@ pub fn analyze(
         }
         (None, _) => {
             let reason = if elastic.is_some() {
-                "no bend in the first loading path beyond the noise"
+                "no bend in the virgin loading path beyond the noise"
             } else {
                 "no elastic range on the first loading"
             };
@@ -550,6 +797,70 @@ pub fn analyze(
             None
         }
     };
+    // The offset method replaces the bend (whatever the class: the user asked for it).
+    let yield_point = match (opts.yield_method, &elastic) {
+        (YieldMethod::Offset(v), Some(e)) => {
+            why.remove("yield");
+            match offset_yield(&fx, &fy, &e.fit, v, e.window_idx.0) {
+                Some((x, y, xr)) => {
+                    let (xs_, xr_) = (from_fit_x(x), [from_fit_x(xr[0]), from_fit_x(xr[1])]);
+                    let (cycle, branch) = label_at(&segments, &env_idx, &fw, xs_);
+                    let ci = if sign > 0.0 { xr_ } else { [-xr_[1], -xr_[0]] };
+                    Some(YieldPoint {
+                        control: sign * xs_,
+                        response: sign * y,
+                        control_ci95: ci,
+                        response_ci95: [sign * y, sign * y],
+                        machine_control: sign * machine_of(xs_),
+                        peak_curvature: three.then(|| sign * three_point_peak_curvature(xs_, l0)),
+                        peak_moment: three.then(|| sign * three_point_peak_moment(y, l0)),
+                        method: opts.yield_method.as_str(),
+                        offset: Some(v),
+                        cycle,
+                        branch,
+                    })
+                }
+                None => {
+                    why.insert(
+                        "yield".into(),
+                        format!(
+                            "the virgin envelope never falls below the elastic line offset by {v}"
+                        ),
+                    );
+                    None
+                }
+            }
+        }
+        (YieldMethod::Offset(_), None) => {
+            why.insert("yield".into(), "offset yield: no elastic line".into());
+            None
+        }
+        _ => yield_point,
+    };
+    let max_response = {
+        let k = (0..r.len())
+            .max_by(|&a, &b| r[a].abs().total_cmp(&r[b].abs()))
+            .unwrap_or(0);
+        MaxResponse {
+            response: response[k],
+            machine_control: control[k],
+            sample: k,
+        }
+    };
+    let break_point = find_break(&cm, &rm).map(|(j, work)| BreakPoint {
+        sample: j,
+        machine_control: control[j],
+        response_before: response[j - 1],
+        work_to_break: work,
+    });
+    if let Some(b) = &break_point {
+        warnings.push(format!(
+            "the specimen broke at sample {} (control {:.4e}): the response fell below {:.0} % of its maximum and stayed there",
+            b.sample,
+            b.machine_control,
+            100.0 * BREAK_DROP
+        ));
+    }
     let piecewise = match (bend, behaviour) {
         (Some(b), Behaviour::PiecewiseLinearElastic) => Some(Piecewise {
             threshold_control: sign * b.knee_x,
@@ -634,6 +945,9 @@ pub fn analyze(
         noise,
         segments,
         holds,
+        max_response,
+        break_point,
+        excluded_samples: excluded,
         warnings,
         why: join_why(&why),
         why_by_key: why,
@@ -673,4 +987,169 @@ fn hold_relaxation(segments: &[Segment], control: &[f64], response: &[f64]) -> V
             }
         })
         .collect()
+}
+
+/// Young's moduli outside this range (Pa) are no solid's: from soft elastomers (~0.1 MPa) to
+/// diamond (~1.2 TPa). A modulus outside is reported with a warning, not refused.
+pub const PLAUSIBLE_MODULUS_PA: (f64, f64) = (1e5, 1.2e12);
+
+/// Fewest samples a stiffness is computed from.
+pub const MIN_STIFFNESS_SAMPLES: usize = 5;
+
+/// Why a stiffness must not be printed at all, if so: fewer than [`MIN_STIFFNESS_SAMPLES`]
+/// samples in the window, a 95% interval that contains zero, or a first loading whose response
+/// never rises beyond 10 σ of its noise (a flat response: any slope is noise).
+fn refuse_stiffness(s: &Stiffness, first_rise: f64, sigma_r: f64) -> Option<String> {
+    if !(first_rise > 10.0 * sigma_r) {
+        return Some(format!(
+            "the response does not rise beyond its noise over the first loading (range {first_rise:.3e}, noise σ {sigma_r:.3e}): a flat response has no stiffness"
+        ));
+    }
+    if s.n < MIN_STIFFNESS_SAMPLES {
+        return Some(format!(
+            "the elastic window holds only {} samples; a stiffness needs at least {MIN_STIFFNESS_SAMPLES}",
+            s.n
+        ));
+    }
+    if s.ci95[0] <= 0.0 && s.ci95[1] >= 0.0 {
+        return Some(format!(
+            "the 95 % interval of the slope [{:.4e}, {:.4e}] {} contains zero",
+            s.ci95[0], s.ci95[1], s.unit
+        ));
+    }
+    None
+}
+
+/// Doubts about a stiffness that is printed: a negative value, a poor straight-line fit
+/// (r² < 0.99), few samples (< 20), a wide interval (half-width > 5 % of the value).
+fn stiffness_doubts(s: &Stiffness) -> Vec<String> {
+    let mut out = Vec::new();
+    if !(s.value > 0.0) {
+        out.push(format!(
+            "the elastic slope is not positive ({:.4e} {})",
+            s.value, s.unit
+        ));
+    }
+    if s.r2 < 0.99 {
+        out.push(format!("poor straight-line fit (r² = {:.3})", s.r2));
+    }
+    if s.n < 20 {
+        out.push(format!("fitted on only {} samples", s.n));
+    }
+    let half = 0.5 * (s.ci95[1] - s.ci95[0]);
+    if s.value != 0.0 && half > 0.05 * s.value.abs() {
+        out.push(format!(
+            "wide 95 % interval (±{:.1} % of the value)",
+            100.0 * half / s.value.abs()
+        ));
+    }
+    out
+}
+
+/// Indices of the virgin envelope: the first loading, then each later loading from its first
+/// sample beyond every earlier extreme (by more than the reversal threshold, so noise on a
+/// repeated amplitude adds nothing) to its end. `cm` is the oriented control.
+fn virgin_envelope(segments: &[Segment], cm: &[f64], first_idx: &[usize]) -> Vec<usize> {
+    let h = crate::condition::reversal_threshold(cm);
+    let mut out = first_idx.to_vec();
+    let mut top = first_idx
+        .iter()
+        .map(|&i| cm[i])
+        .fold(f64::NEG_INFINITY, f64::max);
+    for s in segments.iter().filter(|s| s.branch == Branch::Reloading) {
+        // Earlier extremes include everything before this segment.
+        let before = cm[..s.start]
+            .iter()
+            .copied()
+            .fold(f64::NEG_INFINITY, f64::max);
+        top = top.max(before);
+        if let Some(j) = (s.start..s.end).find(|&j| cm[j] > top + h) {
+            // Join where the reloading reaches the previous extreme.
+            let from = (s.start..j)
+                .rev()
+                .find(|&k| cm[k] <= top)
+                .map_or(j, |k| k + 1);
+            out.extend(from..s.end);
+            top = cm[s.start..s.end].iter().copied().fold(top, f64::max);
+        }
+    }
+    out
+}
+
+/// Cycle and branch of the envelope sample nearest to the sectional control `x`.
+fn label_at(segments: &[Segment], env_idx: &[usize], fw: &[f64], x: f64) -> (usize, Branch) {
+    let k = (0..fw.len())
+        .min_by(|&a, &b| (fw[a] - x).abs().total_cmp(&(fw[b] - x).abs()))
+        .unwrap_or(0);
+    let i = env_idx.get(k).copied().unwrap_or(0);
+    segments
+        .iter()
+        .find(|s| s.start <= i && i < s.end)
+        .map_or((1, Branch::FirstLoading), |s| (s.cycle, s.branch))
+}
+
+/// Offset yield on the envelope (x, y) from the elastic `fit`: the first crossing, after the
+/// window start `from`, of y below the line y = a + k (x − offset), interpolated; with the
+/// crossings of the lines whose slopes are the ends of the slope's 95 % interval (through the
+/// same zero crossing) as the range of x.
+fn offset_yield(
+    x: &[f64],
+    y: &[f64],
+    fit: &crate::stats::Fit,
+    offset: f64,
+    from: usize,
+) -> Option<(f64, f64, [f64; 2])> {
+    let x0 = fit.x_intercept()?;
+    let cross = |k: f64| -> Option<(f64, f64)> {
+        let g = |i: usize| y[i] - k * (x[i] - x0 - offset);
+        let j = (from.max(1)..x.len()).find(|&j| g(j) <= 0.0 && g(j - 1) > 0.0)?;
+        let (g0, g1) = (g(j - 1), g(j));
+        let t = g0 / (g0 - g1);
+        Some((
+            x[j - 1] + t * (x[j] - x[j - 1]),
+            y[j - 1] + t * (y[j] - y[j - 1]),
+        ))
+    };
+    let (xc, yc) = cross(fit.slope)?;
+    let a = cross(fit.slope_ci95[0]).map_or(xc, |p| p.0);
+    let b = cross(fit.slope_ci95[1]).map_or(xc, |p| p.0);
+    Some((xc, yc, [a.min(b).min(xc), a.max(b).max(xc)]))
+}
+
+/// The break of an oriented test (`cm`, `rm`: control and response with the first motion
+/// positive): the first sample after the response maximum below [`BREAK_DROP`] of it, when
+/// the response stays below 0.8 of the maximum from there on and the control has not gone back
+/// below its value at the maximum by more than its reversal threshold (an unloading is no
+/// break). Returns the sample and the work
+/// ∫ rm d(cm) up to it.
+fn find_break(cm: &[f64], rm: &[f64]) -> Option<(usize, f64)> {
+    let k = (0..rm.len()).max_by(|&a, &b| rm[a].total_cmp(&rm[b]))?;
+    let top = rm[k];
+    if !(top > 0.0) {
+        return None;
+    }
+    let j = (k + 1..rm.len()).find(|&j| rm[j] < BREAK_DROP * top)?;
+    let stays = rm[j..].iter().all(|&v| v < 0.8 * top);
+    let h = crate::condition::reversal_threshold(cm);
+    let onward = cm[k..=j].iter().all(|&v| v >= cm[k] - h);
+    if !(stays && onward) {
+        return None;
+    }
+    let work = (0..j)
+        .map(|i| 0.5 * (rm[i] + rm[i + 1]) * (cm[i + 1] - cm[i]))
+        .sum();
+    Some((j, work))
+}
+
+/// Variance inflation of a slope from the lag-1 autocorrelation ρ of the fit's residuals (in
+/// sample order): √((1 + ρ)/(1 − ρ)) for ρ > 0 (an AR(1) error's effective sample size), 1
+/// otherwise; ρ is capped at 0.95.
+fn correlation_inflation(x: &[f64], y: &[f64], fit: &crate::stats::Fit) -> f64 {
+    let r: Vec<f64> = x.iter().zip(y).map(|(a, b)| b - fit.at(*a)).collect();
+    let ss: f64 = r.iter().map(|v| v * v).sum();
+    if !(ss > 0.0) {
+        return 1.0;
+    }
+    let rho = (r.windows(2).map(|w| w[0] * w[1]).sum::<f64>() / ss).clamp(0.0, 0.95);
+    ((1.0 + rho) / (1.0 - rho)).sqrt()
 }

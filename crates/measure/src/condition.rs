@@ -15,8 +15,9 @@
 //!   from its running extremum ([`turning_points`], a zig-zag with hysteresis). Noise on a dwell
 //!   plateau therefore never makes a reversal.
 //! * Holds: a hold is a stretch where the control stays within one reversal threshold for at
-//!   least three times as long as the neighbouring ramps need to cross that band (see
-//!   [`holds`]); time stamps are used when given, sample indices otherwise. The band that starts
+//!   least three times as long as the neighbouring ramps need to cross that band, without
+//!   creeping across it and without the response rising (see [`holds_still`]); time stamps are
+//!   used when given, sample indices otherwise. The band that starts
 //!   at each sample is found for all samples at once in O(n) (running max/min queues).
 //! * Branches: between turning points the control is monotone. Moving away from zero in the
 //!   direction of the first motion it is first loading (the first time) or reloading; moving
@@ -43,6 +44,37 @@ pub fn noise_level(signal: &[f64]) -> f64 {
     let med = median(&d2);
     let abs_dev: Vec<f64> = d2.iter().map(|d| (d - med).abs()).collect();
     median(&abs_dev) / (0.674_489_750_196_081_7 * 6f64.sqrt())
+}
+
+/// Isolated glitch samples of `signal`: a sample `i` that jumps away from both neighbours in
+/// the same direction by more than 12 σ (σ = [`noise_level`], so any jump when the channel is
+/// noise-free) while its neighbours agree with each other to within half that jump, and the
+/// `partner` channel does not turn at `i` (at a sampled turning point both channels turn
+/// together; a glitch is in one channel only). A break (the response falls and stays down) is
+/// no glitch: the neighbours disagree.
+///
+/// Does not modify anything and does not find glitches of two or more consecutive samples.
+pub fn glitches(signal: &[f64], partner: &[f64]) -> Vec<usize> {
+    let n = signal.len();
+    if n < 3 || partner.len() != n {
+        return Vec::new();
+    }
+    let sigma = noise_level(signal);
+    let sigma_p = noise_level(partner);
+    let turns = |v: &[f64], i: usize, s: f64| {
+        let (a, b) = (v[i] - v[i - 1], v[i] - v[i + 1]);
+        a * b > 0.0 && a.abs().min(b.abs()) > 3.0 * s
+    };
+    (1..n - 1)
+        .filter(|&i| {
+            let (a, b) = (signal[i] - signal[i - 1], signal[i] - signal[i + 1]);
+            let m = a.abs().min(b.abs());
+            a * b > 0.0
+                && m > 12.0 * sigma
+                && (signal[i + 1] - signal[i - 1]).abs() < 0.5 * m
+                && !turns(partner, i, sigma_p)
+        })
+        .collect()
 }
 
 /// Smallest reversal that counts, as a fraction of the control's range (see
@@ -289,6 +321,27 @@ pub fn labels(segments: &[Segment], n: usize) -> Vec<Label> {
 /// sharp turn spends in it. Run rates are travel over time without holds (two passes: the first
 /// counts all time, which underestimates the rates and so finds only clear holds).
 pub fn holds(time_s: Option<&[f64]>, control: &[f64], threshold: f64) -> Vec<(usize, usize)> {
+    holds_still(time_s, control, None, threshold)
+}
+
+/// Creep that makes a stretch of the control band a ramp, not a hold: the mean of its fourth
+/// fifth differs from that of its second by this fraction of the band (and by more than the
+/// noise allows; a steady ramp across the band makes 0.4, one slowing to 10⁻³ of the test's mean
+/// rate in the stretch's middle about 0.1).
+pub const CREEP_FRACTION: f64 = 0.05;
+
+/// [`holds`], where, when `response` is given, a stretch also has to be still: its control must
+/// not creep across the band (the means of its second and fourth fifths differ by less than
+/// [`CREEP_FRACTION`] of the band: a slow, smooth ramp is never a hold), and the response must not rise away from zero by more than its reversal
+/// threshold or a tenth of its range (an elastic rise under a nearly still control, as a
+/// specimen-mounted extensometer sees it, is loading, not a hold). A response that relaxes
+/// towards zero at a still control is a hold (relaxation).
+pub fn holds_still(
+    time_s: Option<&[f64]>,
+    control: &[f64],
+    response: Option<&[f64]>,
+    threshold: f64,
+) -> Vec<(usize, usize)> {
     let n = control.len();
     if n < 3 {
         return Vec::new();
@@ -310,6 +363,43 @@ pub fn holds(time_s: Option<&[f64]>, control: &[f64], threshold: f64) -> Vec<(us
     // both passes.
     let ends = band_ends(control, threshold);
     let run: Vec<usize> = (0..n).map(run_of).collect();
+    let prefix = |v: &[f64]| {
+        let mut p = Vec::with_capacity(v.len() + 1);
+        p.push(0.0);
+        for x in v {
+            p.push(p[p.len() - 1] + if x.is_nan() { 0.0 } else { *x });
+        }
+        p
+    };
+    let pc = prefix(control);
+    let resp = response.filter(|r| r.len() == n);
+    let pr = resp.map(prefix);
+    let hr = resp.map_or(0.0, |r| {
+        let (lo, hi) = min_max(r);
+        reversal_threshold(r).max(0.1 * (hi - lo))
+    });
+    // `j`: the end of the band stretch (the creep test runs over all of it); `e` <= `j`: the
+    // end of the hold tried (the response test runs up to it).
+    let sigma_c = noise_level(control);
+    let still = |i: usize, e: usize, j: usize| {
+        let mean = |p: &[f64], a: usize, b: usize| (p[b] - p[a]) / (b - a) as f64;
+        let Some(p) = &pr else {
+            // Without the response: the band alone (as `holds` always did).
+            return true;
+        };
+        // Creep: the second and fourth fifths (the ends may hold the tails of the ramps that
+        // enter and leave the band) differ by a quarter of the band; a steady ramp across the
+        // band makes 0.4 of it.
+        let f = (j - i) / 5;
+        if f >= 1
+            && (mean(&pc, i + 3 * f, i + 4 * f) - mean(&pc, i + f, i + 2 * f)).abs()
+                > (CREEP_FRACTION * threshold).max(6.0 * sigma_c / (f as f64).sqrt())
+        {
+            return false;
+        }
+        let k = ((e - i) / 10).max(1);
+        mean(p, e - k, e).abs() - mean(p, i, i + k).abs() <= hr
+    };
     let mut found: Vec<(usize, usize)> = Vec::new();
     for _pass in 0..2 {
         let rates: Vec<f64> = pts
@@ -327,7 +417,7 @@ pub fn holds(time_s: Option<&[f64]>, control: &[f64], threshold: f64) -> Vec<(us
             .collect();
         let min_duration =
             |i: usize, j: usize| 1.5 * threshold * (1.0 / rates[run[i]] + 1.0 / rates[run[j]]);
-        found = hold_runs(&ends, &min_duration, &t);
+        found = hold_runs(&ends, &min_duration, &t, &still);
     }
     found
 }
@@ -395,22 +485,38 @@ fn band_ends(control: &[f64], threshold: f64) -> Vec<usize> {
 }
 
 /// Greedy left-to-right hold runs: a stretch `i..ends[i]` is a hold when it has at least three
-/// samples and lasts at least `min_duration`; the scan then continues after it.
+/// samples, lasts at least `min_duration` and is `still` (`still(i, e, j)`: the hold `i..e`
+/// of the band stretch `i..j`; a stretch whose response starts to rise near its end is ended
+/// earlier, in twentieths); the scan then continues after it.
 fn hold_runs(
     ends: &[usize],
     min_duration: &dyn Fn(usize, usize) -> f64,
     t: &dyn Fn(usize) -> f64,
+    still: &dyn Fn(usize, usize, usize) -> bool,
 ) -> Vec<(usize, usize)> {
     let n = ends.len();
     let mut out = Vec::new();
     let mut i = 0;
     while i < n {
         let j = ends[i];
-        if j - i >= 3 && t(j - 1) - t(i) >= min_duration(i, j - 1) {
-            out.push((i, j));
-            i = j;
-        } else {
+        let is_hold = |j: usize| j - i >= 3 && t(j - 1) - t(i) >= min_duration(i, j - 1);
+        if !is_hold(j) {
             i += 1;
+            continue;
+        }
+        // The stretch may run into the next ramp's start while the band still holds it (an
+        // elastic rise under a nearly still control): end it earlier, in twentieths, where it
+        // is still.
+        let step = ((j - i) / 20).max(1);
+        let end = std::iter::successors(Some(j), |&e| e.checked_sub(step).filter(|&e| e > i))
+            .take_while(|&e| is_hold(e))
+            .find(|&e| still(i, e, j));
+        match end {
+            Some(e) => {
+                out.push((i, e));
+                i = e;
+            }
+            None => i += 1,
         }
     }
     out
@@ -420,9 +526,10 @@ fn hold_runs(
 /// dwell durations when given. The control should be zeroed (zero = unloaded state). Every
 /// sample belongs to exactly one segment.
 ///
-/// `response` is only checked for its length: branches come from the control alone, because a
-/// flat response is no hold (perfect plasticity, or a three-point punch that has lost contact,
-/// keep the force flat while the machine moves). Errors on unequal lengths or fewer than 3
+/// Branches come from the control; the response only vetoes holds ([`holds_still`]): a flat
+/// response is no hold (perfect plasticity, or a three-point punch that has lost contact, keep
+/// the force flat while the machine moves), and a response rising under a nearly still control
+/// is loading, not a hold. Errors on unequal lengths or fewer than 3
 /// samples.
 pub fn segment(
     time_s: Option<&[f64]>,
@@ -454,7 +561,7 @@ pub fn segment(
         });
     }
     let h = reversal_threshold(control);
-    let hold_runs = holds(time_s, control, h);
+    let hold_runs = holds_still(time_s, control, Some(response), h);
     let tps = turning_points(control, h);
 
     // Monotone runs between turning points: (start, end_exclusive, rising).
@@ -602,7 +709,8 @@ pub struct Offsets {
 /// Removes the zero offsets. With an initial rest (a hold that starts at the first sample, see
 /// [`holds`]) the offsets are the control and response means over it. Without one, they are
 /// the values at the first sample of straight lines fitted against sample index over the first
-/// 1% of the record (at least 5 samples), so that neither a single noisy sample nor the first
+/// 1% of the record, up to where the control has moved a tenth of its range (at least 5
+/// samples), so that neither a single noisy sample nor the first
 /// rise of the curve sets the zero.
 pub fn zero_offsets(control: &mut [f64], response: &mut [f64]) -> Offsets {
     let n = control.len().min(response.len());
@@ -614,7 +722,7 @@ pub fn zero_offsets(control: &mut [f64], response: &mut [f64]) -> Offsets {
         };
     }
     let h = reversal_threshold(&control[..n]);
-    let rest = holds(None, &control[..n], h)
+    let rest = holds_still(None, &control[..n], Some(&response[..n]), h)
         .first()
         .filter(|r| r.0 == 0)
         .map_or(0, |r| r.1);
@@ -625,7 +733,13 @@ pub fn zero_offsets(control: &mut [f64], response: &mut [f64]) -> Offsets {
             response[..rest].iter().sum::<f64>() / k,
         )
     } else {
-        let m = (n / 100).max(5).min(n);
+        // The first 1 % of the record, but no further than where the control has moved a
+        // tenth of its range: a fast first ramp followed by a long dwell must not bend the line.
+        let (lo, hi) = min_max(&control[..n]);
+        let reach = (0..n)
+            .find(|&i| (control[i] - control[0]).abs() > 0.1 * (hi - lo))
+            .unwrap_or(n);
+        let m = (n / 100).min(reach).max(5).min(n);
         let idx: Vec<f64> = (0..m).map(|i| i as f64).collect();
         let at0 = |v: &[f64]| crate::stats::line_fit(&idx, &v[..m]).map_or(v[0], |f| f.intercept);
         (at0(control), at0(response))

@@ -48,6 +48,9 @@ pub struct CycleResult {
     pub unloading_stiffness: Option<f64>,
     /// Initial reloading slope converted to the kind's stiffness unit (N or N m²).
     pub reloading_stiffness: Option<f64>,
+    /// Cycle stiffness, the mean of the reloading and unloading stiffnesses (the MTS
+    /// convention for a cycle modulus), when both are known.
+    pub cycle_stiffness: Option<f64>,
     /// Whether loading and unloading paths coincide within the noise.
     pub coincide: Option<bool>,
     /// Area between the cycle's loading and unloading branch over their common range, J.
@@ -167,6 +170,7 @@ pub fn cycles(inp: &CycleInputs) -> Vec<CycleResult> {
             residual_extrapolated: false,
             unloading_stiffness: None,
             reloading_stiffness: None,
+            cycle_stiffness: None,
             coincide: None,
             branch_gap_area: None,
             contact_loss_control: None,
@@ -301,7 +305,9 @@ pub fn cycles(inp: &CycleInputs) -> Vec<CycleResult> {
                 );
             }
         } else {
-            for k in ["residual", "unloading_stiffness", "coincide"] {
+            // No unloading, no loop: the area under a monotonic curve is work, not hysteresis.
+            r.loop_area = None;
+            for k in ["residual", "unloading_stiffness", "coincide", "loop_area"] {
                 why.insert(k.into(), "this cycle has no unloading branch".into());
             }
         }
@@ -323,6 +329,10 @@ pub fn cycles(inp: &CycleInputs) -> Vec<CycleResult> {
                 "the first cycle has no reloading".into(),
             );
         }
+        r.cycle_stiffness = match (r.reloading_stiffness, r.unloading_stiffness) {
+            (Some(a), Some(b)) => Some(0.5 * (a + b)),
+            _ => None,
+        };
         r.why = crate::analysis::join_why(&why);
         r.why_by_key = why;
         out.push(r);

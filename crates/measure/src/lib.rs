@@ -25,8 +25,9 @@ pub mod stats;
 pub mod table;
 
 pub use analysis::{
-    analyze, Analysis, AnalyzeOptions, Behaviour, HoldRelaxation, LargeDeflection, Noise,
-    Piecewise, Stiffness, Toe, YieldPoint, THREE_POINT_GEOMETRY_LIMIT,
+    analyze, Analysis, AnalyzeOptions, Behaviour, BreakPoint, FitWindowUnit, HoldRelaxation,
+    LargeDeflection, MaxResponse, Noise, Piecewise, Stiffness, Toe, YieldMethod, YieldPoint,
+    BREAK_DROP, THREE_POINT_GEOMETRY_LIMIT,
 };
 pub use condition::{
     correct_compliance, labels, noise_level, quantum, resolution, reversal_threshold, segment,

@@ -15,6 +15,7 @@
 
 pub mod artefacts;
 pub mod error;
+pub mod family;
 pub mod layout;
 pub mod protocol;
 pub mod recipe;

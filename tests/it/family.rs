@@ -1,0 +1,161 @@
+//! Issue 12 item 7: the characterisation over the protocol-diverse generated family
+//! (`cablab_synth::family`), written through the real export layouts and read back by the real
+//! readers. A bounded property test runs in CI; `family_figures` (ignored, run by hand with
+//! `cargo test -p cablab --test it family_figures -- --ignored --nocapture`) measures the
+//! figures of README's measured table over 500 cases.
+
+use cablab_core::TestKind;
+use cablab_measure::{analyze, Analysis, AnalyzeOptions, Geometry};
+use cablab_synth::family::{family_case, FamilyTruth};
+use proptest::prelude::*;
+
+/// Generate case `seed`, write it, read it back and analyse it.
+fn measure(seed: u64) -> Result<(FamilyTruth, Analysis), String> {
+    let case = family_case(seed);
+    let out = cablab_synth::generate(&case.spec).map_err(|e| format!("generate: {e}"))?;
+    let opts = cablab_ingest::ReadOptions {
+        kind: Some(case.spec.kind),
+        ..Default::default()
+    };
+    let rec = cablab_ingest::read_bytes(&out.bytes, &out.file_name, &opts)
+        .map_err(|e| format!("read: {e}"))?;
+    let curve = cablab::bridge::curve(&rec).map_err(|e| format!("curve: {e}"))?;
+    let geom = Geometry {
+        free_length_m: case.spec.specimen.free_length_m.unwrap_or(0.1),
+        diameter_m: case.spec.specimen.diameter_m,
+    };
+    let a = analyze(
+        case.spec.kind,
+        &geom,
+        curve.time_s.as_deref(),
+        &curve.control,
+        &curve.response,
+        &AnalyzeOptions::default(),
+    )
+    .map_err(|e| format!("analyze: {e}"))?;
+    Ok((case.truth, a))
+}
+
+/// Relative stiffness error and whether the CI holds the truth, when there is a stiffness.
+fn stiffness_check(t: &FamilyTruth, a: &Analysis) -> Option<(f64, bool)> {
+    let s = a.stiffness.as_ref()?;
+    Some((
+        s.value / t.stiffness - 1.0,
+        s.ci95[0] <= t.stiffness && t.stiffness <= s.ci95[1],
+    ))
+}
+
+proptest! {
+    // A fixed RNG seed: the same 16 cases on every run (CI must not flake); the ignored
+    // `family_figures` measures the rates over 500.
+    #![proptest_config(ProptestConfig {
+        cases: 16,
+        failure_persistence: None,
+        rng_seed: proptest::test_runner::RngSeed::Fixed(12),
+        ..ProptestConfig::default()
+    })]
+    /// Every generated case is read back and analysed without a panic or an error; where the
+    /// noise is at most 0.5 % of full scale and a stiffness is given, it is within 5 % of the
+    /// truth (three-point excepted: its generated truth is the rod solver's, which the
+    /// elastica correction does not reproduce to 5 % yet; see the figures), and an
+    /// elastoplastic law's yield is found within 5 %.
+    #[test]
+    fn family_cases_analyse_cleanly(seed in 0u64..1_000_000) {
+        let three = family_case(seed).spec.kind == TestKind::ThreePoint;
+        let (t, a) = measure(seed).map_err(TestCaseError::fail)?;
+        if let (Some(y), Some(p)) = (t.yield_response, a.yield_point.as_ref()) {
+            prop_assert!((p.response.abs() / y - 1.0).abs() < 0.05, "seed {}: yield {:?} vs {}", seed, p, y);
+        }
+        if let Some((err, _)) = stiffness_check(&t, &a) {
+            if t.noise_rel <= 5e-3 && !three {
+                prop_assert!(err.abs() < 0.05, "seed {}: stiffness error {:.3} ({:?})", seed, err, t);
+            }
+        }
+    }
+}
+
+#[test]
+#[ignore = "measures the README figures over 500 generated logs (minutes)"]
+fn family_figures() {
+    let n = 500u64;
+    let (mut with_s, mut covered, mut within1, mut low_noise, mut low_within1) = (0, 0, 0, 0, 0);
+    let mut errors = Vec::new();
+    let mut yield_err = Vec::new();
+    let mut confusion: std::collections::BTreeMap<(String, String), usize> = Default::default();
+    let mut by_kind: std::collections::BTreeMap<TestKind, (usize, usize, usize)> =
+        Default::default();
+    for seed in 0..n {
+        match measure(seed) {
+            Err(e) => {
+                errors.push(format!("seed {seed}: {e}"));
+                *confusion.entry(("?".into(), "error".into())).or_default() += 1;
+            }
+            Ok((t, a)) => {
+                *confusion
+                    .entry((t.class.to_string(), a.behaviour.as_str().to_string()))
+                    .or_default() += 1;
+                let k = by_kind.entry(a.kind).or_default();
+                k.0 += 1;
+                if let Some((err, cov)) = stiffness_check(&t, &a) {
+                    with_s += 1;
+                    covered += cov as usize;
+                    within1 += (err.abs() <= 0.01) as usize;
+                    k.1 += (err.abs() <= 0.01) as usize;
+                    k.2 += cov as usize;
+                    if t.noise_rel <= 5e-3 {
+                        low_noise += 1;
+                        low_within1 += (err.abs() <= 0.01) as usize;
+                    }
+                }
+                if let (Some(y), Some(p)) = (t.yield_response, a.yield_point.as_ref()) {
+                    yield_err.push((p.response.abs() / y - 1.0).abs());
+                }
+            }
+        }
+    }
+    yield_err.sort_by(f64::total_cmp);
+    let q = |v: &[f64], p: f64| {
+        v.get(((v.len() as f64 - 1.0) * p) as usize)
+            .copied()
+            .unwrap_or(f64::NAN)
+    };
+    println!("family figures over {n} generated logs:");
+    println!("  analysed without error: {}", n as usize - errors.len());
+    println!("  with a stiffness: {with_s}");
+    println!(
+        "  95 % CI holds the truth: {:.1} %",
+        100.0 * covered as f64 / with_s as f64
+    );
+    println!(
+        "  |error| <= 1 %: {:.1} % (all), {:.1} % of {low_noise} at noise <= 0.5 % FS",
+        100.0 * within1 as f64 / with_s as f64,
+        100.0 * low_within1 as f64 / low_noise.max(1) as f64
+    );
+    println!(
+        "  yield |error|: n {}, median {:.3}, 90 % {:.3}, share <= 5 %: {:.1} %",
+        yield_err.len(),
+        q(&yield_err, 0.5),
+        q(&yield_err, 0.9),
+        100.0 * yield_err.iter().filter(|e| **e <= 0.05).count() as f64
+            / yield_err.len().max(1) as f64
+    );
+    println!("  class confusion (truth -> measured): {confusion:?}");
+    println!("  per kind (cases, |error| <= 1 %, CI holds the truth): {by_kind:?}");
+    for e in errors.iter().take(10) {
+        println!("  {e}");
+    }
+}
+
+#[test]
+#[ignore = "debugging aid: FAMILY_SEED=<n> writes that case to the temp dir and prints its spec"]
+fn family_write_case() {
+    let seed: u64 = std::env::var("FAMILY_SEED")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(0);
+    let case = family_case(seed);
+    let out = cablab_synth::generate(&case.spec).unwrap();
+    let p = std::env::temp_dir().join(&out.file_name);
+    std::fs::write(&p, &out.bytes).unwrap();
+    println!("{}\n{:?}\n{:?}", p.display(), case.spec, case.truth);
+}

@@ -1,0 +1,451 @@
+//! Issue 12, item 6 ("no silently wrong number") and item 3 (holds vs slow ramps), through the
+//! `cablab analyze` binary and the measure library: a declared kind that the file contradicts,
+//! channels in the wrong roles, warnings kept on failure, isolated glitches, stiffnesses from a
+//! handful of points or a flat response, a stiff elastic rise under a nearly still extensometer.
+//!
+//! Every expected value is analytical (the straight lines are generated here) or the demo's
+//! truth (`raw_data/TRUTH.toml`: cable (EA)_T).
+
+use crate::common::cablab;
+use cablab_core::TestKind;
+use cablab_measure::{analyze, AnalyzeOptions, Branch, Geometry};
+use serde_json::Value;
+use std::path::{Path, PathBuf};
+
+const DEMO_TENSION: &str = "raw_data/cable/tension_100N_1.csv";
+
+fn json_of(out: &[u8]) -> Value {
+    serde_json::from_slice(out).expect("JSON on stdout")
+}
+
+/// A CSV export (Time, Displacement, Force in s, mm, N) in a fresh temporary directory.
+fn csv(dir: &Path, name: &str, rows: &[(f64, f64, f64)]) -> PathBuf {
+    let mut s = String::from("Time,Displacement,Force\n(s),(mm),(N)\n");
+    for (t, c, r) in rows {
+        s.push_str(&format!("{t},{c},{r}\n"));
+    }
+    let p = dir.join(name);
+    std::fs::write(&p, s).expect("write the test file");
+    p
+}
+
+/// `cablab analyze FILE --kind tension --length-mm 100 --json`: exit code and stdout JSON.
+fn analyze_tension_json(p: &Path) -> (Option<i32>, Value) {
+    let out = cablab()
+        .args(["analyze"])
+        .arg(p)
+        .args(["--kind", "tension", "--length-mm", "100", "--json"])
+        .output()
+        .unwrap();
+    (out.status.code(), json_of(&out.stdout))
+}
+
+/// Deterministic white pseudo-noise in [-1, 1) (SplitMix64 of the sample index).
+fn wiggle(i: usize) -> f64 {
+    let mut z = (i as u64)
+        .wrapping_add(1)
+        .wrapping_mul(0x9E37_79B9_7F4A_7C15);
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    z ^= z >> 31;
+    (z >> 11) as f64 / (1u64 << 52) as f64 - 1.0
+}
+
+#[test]
+fn a_declared_kind_that_the_file_contradicts_is_an_error_naming_the_evidence() {
+    let out = cablab()
+        .args(["analyze", DEMO_TENSION, "--kind", "torsion"])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("contradicts"), "{err}");
+    assert!(err.contains("'Force' (N) is a force"), "{err}");
+    assert!(err.contains("--force-kind"), "{err}");
+    // Forced: analysed, and the contradiction stays as a warning in the JSON.
+    let out = cablab()
+        .args([
+            "analyze",
+            DEMO_TENSION,
+            "--kind",
+            "torsion",
+            "--force-kind",
+            "--json",
+        ])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(0));
+    let v = json_of(&out.stdout);
+    let w = v["warnings"].as_array().unwrap();
+    assert!(
+        w.iter().any(|w| w.as_str().unwrap().contains("forced")),
+        "{w:?}"
+    );
+    // The right kind raises no kind warning.
+    let out = cablab()
+        .args(["analyze", DEMO_TENSION, "--kind", "tension", "--json"])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(0));
+    let v = json_of(&out.stdout);
+    assert!(!v["warnings"].to_string().contains("forced"));
+}
+
+#[test]
+fn channels_in_the_wrong_role_are_errors_naming_the_columns() {
+    for (args, expect) in [
+        (
+            vec!["--control", "Time"],
+            "the control column 'Time' (s) is a time",
+        ),
+        (
+            vec!["--response", "Displacement"],
+            "the response column 'Displacement' (mm) is a length",
+        ),
+        (
+            vec!["--control", "Force", "--response", "Displacement"],
+            "control and response look swapped",
+        ),
+    ] {
+        let out = cablab()
+            .args(["analyze", DEMO_TENSION, "--kind", "tension"])
+            .args(&args)
+            .output()
+            .unwrap();
+        assert_eq!(out.status.code(), Some(2), "{args:?}");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains(expect), "{args:?}: {err}");
+    }
+}
+
+#[test]
+fn warnings_are_in_the_json_when_the_analysis_fails() {
+    let dir = tempfile::tempdir().unwrap();
+    // The time runs backwards once and the control never moves: the reader's warning must
+    // survive the failure.
+    let rows: Vec<(f64, f64, f64)> = (0..40)
+        .map(|i| {
+            let t = if i == 20 { 0.5 } else { i as f64 * 0.1 };
+            (t, 1.0, 5.0 + 0.01 * wiggle(i))
+        })
+        .collect();
+    let p = csv(dir.path(), "still.csv", &rows);
+    let (code, v) = analyze_tension_json(&p);
+    assert_eq!(code, Some(2));
+    assert!(v["error"].as_str().unwrap().contains("still.csv"), "{v}");
+    let w = v["warnings"].to_string();
+    assert!(w.contains("not strictly increasing"), "{v}");
+}
+
+#[test]
+fn one_glitch_sample_is_excluded_and_counted() {
+    let dir = tempfile::tempdir().unwrap();
+    // 100 N/mm over 100 mm: (EA) = 1e5 N/m × 0.1 m = 1e4 N.
+    let mut rows: Vec<(f64, f64, f64)> = (0..400)
+        .map(|i| {
+            let c = i as f64 * 0.01;
+            (i as f64 * 0.1, c, 100.0 * c + 0.2 * wiggle(i))
+        })
+        .collect();
+    rows[200].2 = 1e6;
+    let p = csv(dir.path(), "glitch.csv", &rows);
+    let (code, v) = analyze_tension_json(&p);
+    assert_eq!(code, Some(0));
+    let ea = v["stiffness"]["value"].as_f64().unwrap();
+    assert!((ea / 1e4 - 1.0).abs() < 0.002, "{ea}");
+    assert_eq!(v["excluded_samples"], serde_json::json!([200]));
+    assert!(
+        v["warnings"].to_string().contains("1 isolated glitch"),
+        "{v}"
+    );
+}
+
+fn tension(c: &[f64], r: &[f64], t: Option<&[f64]>) -> cablab_measure::Analysis {
+    let geom = Geometry {
+        free_length_m: 0.1,
+        diameter_m: Some(1e-3),
+    };
+    analyze(
+        TestKind::Tension,
+        &geom,
+        t,
+        c,
+        r,
+        &AnalyzeOptions::default(),
+    )
+    .unwrap()
+}
+
+#[test]
+fn no_stiffness_from_a_flat_response_or_a_handful_of_points() {
+    // A constant 5 N with one spike: the spike is excluded, the response is flat.
+    let c: Vec<f64> = (0..300).map(|i| i as f64 * 1e-5).collect();
+    let mut r: Vec<f64> = (0..300).map(|i| 5.0 + 0.01 * wiggle(i)).collect();
+    r[150] = 500.0;
+    let a = tension(&c, &r, None);
+    assert!(a.stiffness.is_none(), "{:?}", a.stiffness);
+    assert!(
+        a.why_by_key["stiffness"].contains("flat response"),
+        "{:?}",
+        a.why
+    );
+    assert_ne!(a.behaviour, cablab_measure::Behaviour::LinearElastic);
+    // A force constant after the first row: no straight elastic window of more than a few
+    // samples, so no number.
+    let r: Vec<f64> = (0..300).map(|i| if i == 0 { 0.0 } else { 5.0 }).collect();
+    let a = tension(&c, &r, None);
+    assert!(a.stiffness.is_none(), "{:?}", a.stiffness);
+    assert!(a.why_by_key.contains_key("stiffness"));
+}
+
+#[test]
+fn an_implausible_modulus_is_warned_next_to_the_number() {
+    // 1e12 N over 1 mm diameter: E ≈ 1.3e18 Pa.
+    let c: Vec<f64> = (0..200).map(|i| i as f64 * 1e-6).collect();
+    let r: Vec<f64> = c
+        .iter()
+        .enumerate()
+        .map(|(i, x)| 1e13 * x + 1e3 * wiggle(i))
+        .collect();
+    let a = tension(&c, &r, None);
+    assert!(a.stiffness.is_some());
+    assert!(
+        a.warnings.iter().any(|w| w.starts_with("modulus_pa:")),
+        "{:?}",
+        a.warnings
+    );
+}
+
+/// A hot tensile test as an extensometer sees it (HBM catman exports): a long preload dwell,
+/// then an elastic rise of 50 samples in which the force climbs to 5 kN while the specimen
+/// moves 0.025 mm, then plastic flow over millimetres. The rise is first loading, not a hold,
+/// and the stiffness comes from it.
+#[test]
+fn an_elastic_rise_under_a_nearly_still_control_is_not_a_hold() {
+    let ea_k = 2e8; // N/m: 5 kN over 25 µm
+    let (mut t, mut c, mut r) = (Vec::new(), Vec::new(), Vec::new());
+    let mut push = |x: f64, f: f64, i: usize| {
+        t.push(i as f64 * 0.02);
+        c.push(x + 2e-8 * wiggle(i));
+        r.push(f + 3.0 * wiggle(i + 7));
+    };
+    let mut i = 0;
+    for _ in 0..500 {
+        push(0.0, 50.0, i);
+        i += 1;
+    }
+    for k in 1..=50 {
+        let x = 25e-6 * k as f64 / 50.0;
+        push(x, 50.0 + ea_k * x, i);
+        i += 1;
+    }
+    for k in 1..=1500 {
+        let x = 25e-6 + 3e-3 * k as f64 / 1500.0;
+        push(x, 5050.0 + 2e5 * (x - 25e-6), i);
+        i += 1;
+    }
+    let a = tension(&c, &r, Some(&t));
+    let rise = a
+        .segments
+        .iter()
+        .find(|s| s.start <= 525 && 525 < s.end)
+        .unwrap();
+    assert_eq!(rise.branch, Branch::FirstLoading, "{:?}", a.segments);
+    let s = a.stiffness.as_ref().expect("stiffness");
+    let k = s.value / 0.1; // (EA) / l0
+    assert!((k / ea_k - 1.0).abs() < 0.03, "{k:e} vs {ea_k:e}: {s:?}");
+}
+
+/// A smooth ramp that slows to a thousandth of its mean rate and speeds up again is one first
+/// loading: no hold, and a linear specimen's stiffness is exact.
+#[test]
+fn a_slow_ramp_is_never_a_hold() {
+    let n = 3000;
+    let mut x = 0.0;
+    let (mut t, mut c, mut r) = (Vec::new(), Vec::new(), Vec::new());
+    for i in 0..n {
+        let u = i as f64 / n as f64;
+        // Rate from 1 down to 1e-3 (around the middle) and back.
+        let rate = 1e-3 + (1.0 - 1e-3) * (2.0 * u - 1.0).powi(2);
+        x += 1e-7 * rate;
+        t.push(i as f64 * 0.01);
+        c.push(x);
+        r.push(1e6 * x + 1e-3 * wiggle(i));
+    }
+    let a = tension(&c, &r, Some(&t));
+    assert!(
+        a.segments.iter().all(|s| s.branch != Branch::Hold),
+        "{:?}",
+        a.segments
+    );
+    let s = a.stiffness.as_ref().unwrap();
+    assert!((s.value / (1e6 * 0.1) - 1.0).abs() < 0.005, "{s:?}");
+}
+
+/// Strain-controlled triangles 0 → a → 0 (force floor not needed: strain back to zero) over a
+/// bilinear elastoplastic bar with linear kinematic hardening (E, σy, H: the tangent
+/// Et = E H/(E + H)); returns (elongation m, force N) for l0 = 0.1 m, A = 1 mm².
+fn step_up_test(amplitudes: &[f64], e: f64, sy: f64, h: f64, noise_n: f64) -> (Vec<f64>, Vec<f64>) {
+    let (l0, area) = (0.1, 1e-6);
+    let (mut eps_p, mut alpha) = (0.0f64, 0.0f64);
+    let (mut c, mut r) = (Vec::new(), Vec::new());
+    let mut path = vec![0.0];
+    for &a in amplitudes {
+        path.extend([a, 0.0]);
+    }
+    let mut i = 0;
+    for w in path.windows(2) {
+        for k in 0..400 {
+            let eps = w[0] + (w[1] - w[0]) * k as f64 / 400.0;
+            let trial = e * (eps - eps_p);
+            let f = (trial - alpha).abs() - sy;
+            let sigma = if f > 0.0 {
+                let dg = f / (e + h);
+                let s = (trial - alpha).signum();
+                eps_p += dg * s;
+                alpha += h * dg * s;
+                e * (eps - eps_p)
+            } else {
+                trial
+            };
+            c.push(eps * l0);
+            r.push(sigma * area + noise_n * wiggle(i));
+            i += 1;
+        }
+    }
+    (c, r)
+}
+
+/// The issue's step-up schedule (0.5, 0.9, 2, 3 × the yield strain) on a 0.1 m bar, 0.2 N noise.
+fn step_up_of_the_issue(e: f64, sy: f64, h: f64) -> (Vec<f64>, Vec<f64>, Geometry) {
+    let ey = sy / e;
+    let (c, r) = step_up_test(&[0.5 * ey, 0.9 * ey, 2.0 * ey, 3.0 * ey], e, sy, h, 0.2);
+    let geom = Geometry {
+        free_length_m: 0.1,
+        diameter_m: None,
+    };
+    (c, r, geom)
+}
+
+/// Issue 12 item 1: amplitudes 0.5, 0.9, 2 and 3 × the yield strain in one test. The first two
+/// cycles stay elastic; the yield is the bend of the virgin envelope, in the third cycle's
+/// reloading beyond the previous maximum. The first-loading method finds none; the offset
+/// method gives the analytical crossing with the offset line.
+#[test]
+fn yield_on_the_virgin_envelope_of_a_step_up_test() {
+    let (e, sy, h) = (100e9, 400e6, 10e9);
+    let ey = sy / e;
+    let (c, r, geom) = step_up_of_the_issue(e, sy, h);
+    let run = |m: &str| {
+        let o = AnalyzeOptions {
+            yield_method: m.parse().unwrap(),
+            ..Default::default()
+        };
+        analyze(TestKind::Tension, &geom, None, &c, &r, &o).unwrap()
+    };
+    let a = run("auto");
+    let st = a.stiffness.as_ref().unwrap();
+    assert!((st.value / (e * 1e-6) - 1.0).abs() < 0.01, "{st:?}");
+    assert_eq!(
+        a.behaviour,
+        cablab_measure::Behaviour::Elastoplastic,
+        "{:?}",
+        a.cycles
+    );
+    let y = a.yield_point.as_ref().expect("yield on the envelope");
+    assert!((y.response / (sy * 1e-6) - 1.0).abs() < 0.05, "{y:?}");
+    assert_eq!(
+        (y.cycle, y.branch, y.method),
+        (3, Branch::Reloading, "envelope_bend")
+    );
+    assert!(y.control_ci95[0] <= y.control && y.control <= y.control_ci95[1]);
+    // The largest force: the top of the 3× cycle, σy + Et (3 εy − εy).
+    let et = e * h / (e + h);
+    let fmax = (sy + et * 2.0 * ey) * 1e-6;
+    assert!(
+        (a.max_response.response / fmax - 1.0).abs() < 0.01,
+        "{:?}",
+        a.max_response
+    );
+    assert!((a.max_response.machine_control / (3.0 * ey * 0.1) - 1.0).abs() < 0.01);
+
+    let a = run("first-loading");
+    assert!(a.yield_point.is_none(), "{:?}", a.yield_point);
+
+    let d = 0.002;
+    let a = run("offset:0.002");
+    let y = a.yield_point.as_ref().expect("offset yield");
+    let eps = (sy - et * ey + e * d) / (e - et);
+    let want = e * (eps - d) * 1e-6;
+    assert!((y.response / want - 1.0).abs() < 0.01, "{y:?} vs {want}");
+    assert_eq!((y.method, y.offset), ("offset", Some(d)));
+    assert!("offset:-1".parse::<cablab_measure::YieldMethod>().is_err());
+}
+
+/// Issue 12 item 5: a monotonic test to fracture. Linear to 1 mm at 20 N/mm, then the force
+/// falls to nothing while the crosshead moves on: the break is found at the drop, the work to
+/// break is ½ k x² = 10 mJ, the maximum is 20 N at 1 mm, and there is no loop area without an
+/// unloading.
+#[test]
+fn a_monotonic_test_to_break() {
+    let (mut c, mut r) = (Vec::new(), Vec::new());
+    for i in 0..=500 {
+        let x = 1e-3 * i as f64 / 500.0;
+        c.push(x);
+        r.push(2e4 * x + 0.01 * wiggle(i));
+    }
+    for i in 1..=100 {
+        c.push(1e-3 + 2e-6 * i as f64);
+        r.push(0.05 * wiggle(1000 + i));
+    }
+    let a = tension(&c, &r, None);
+    let b = a.break_point.as_ref().expect("a break");
+    assert_eq!(b.sample, 501);
+    assert!((b.machine_control - 1.002e-3).abs() < 1e-9, "{b:?}");
+    assert!((b.work_to_break / 0.01 - 1.0).abs() < 0.01, "{b:?}");
+    assert!((a.max_response.response / 20.0 - 1.0).abs() < 0.01);
+    assert!(
+        a.cycles.iter().all(|c| c.loop_area.is_none()),
+        "{:?}",
+        a.cycles
+    );
+    // A cyclic test that unloads is no break.
+    let (c, r) = step_up_test(&[0.002, 0.004], 100e9, 1e12, 0.0, 0.01);
+    assert!(tension(&c, &r, None).break_point.is_none());
+}
+
+/// Fit windows in response units and in percent of the maximum response (issue 14 item 2):
+/// on the step-up test both select the elastic rise and give E A; the CLI spellings parse.
+#[test]
+fn fit_windows_in_response_units_and_percent_of_the_maximum() {
+    use cablab_measure::FitWindowUnit as U;
+    let (e, sy, h) = (100e9, 400e6, 10e9);
+    let ey = sy / e;
+    let (c, r, geom) = step_up_of_the_issue(e, sy, h);
+    for (w, unit) in [
+        ((50.0, 300.0), U::Response),
+        ((10.0, 60.0), U::PercentOfMax),
+    ] {
+        let o = AnalyzeOptions {
+            fit_window: Some(w),
+            fit_window_unit: unit,
+            ..Default::default()
+        };
+        let a = analyze(TestKind::Tension, &geom, None, &c, &r, &o).unwrap();
+        let s = a.stiffness.as_ref().unwrap();
+        assert!((s.value / (e * 1e-6) - 1.0).abs() < 0.01, "{unit:?}: {s:?}");
+        assert!(!s.window_automatic);
+        // The window in strain: inside the elastic range.
+        assert!(
+            s.window[0] > 0.0 && s.window[1] < ey,
+            "{unit:?}: {:?}",
+            s.window
+        );
+    }
+    use cablab::commands::analyze::parse_fit_window as p;
+    assert_eq!(p("10%,40%"), Ok((10.0, 40.0, U::PercentOfMax)));
+    assert_eq!(p("100N, 500N"), Ok((100.0, 500.0, U::Response)));
+    assert_eq!(p("0,0.0005"), Ok((0.0, 0.0005, U::Control)));
+    assert!(p("10%,500N").is_err());
+    assert!(p("40%,10%").is_err());
+}
