@@ -21,6 +21,18 @@ pub fn diag_test(
     let curve = crate::bridge::curve(&rec).map_err(CliError::input)?;
     let (t, _) = crate::bridge::diag_test(kind, &geom, &curve, rec.specimen.label.clone(), None)
         .map_err(|e| CliError::input(anyhow::anyhow!("{}: {e:#}", path.display())))?;
+    // A log the diagnosis cannot use (a flat response, too few samples) is bad input: say which
+    // file, before any fitting.
+    t.validate(0).map_err(|e| {
+        let why = match e {
+            cablab_diagnose::DiagError::BadTest { why, .. } => why,
+            other => other.to_string(),
+        };
+        CliError::input(anyhow::anyhow!(
+            "{}: cannot be diagnosed: {why}",
+            path.display()
+        ))
+    })?;
     Ok(t)
 }
 

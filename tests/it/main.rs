@@ -5,3 +5,4 @@ mod campaign;
 mod characterise;
 mod cli_contract;
 mod common;
+mod diagnosis;
