@@ -232,8 +232,8 @@ pub fn gap_svgs(
             cablab_report::gap::span_residual_svg(&view)?,
         ));
     }
-    let bars: Vec<cablab_report::gap::CandidateBar> = d
-        .effects
+    let (ok, failed): (Vec<_>, Vec<_>) = d.effects.iter().partition(|e| e.fit_failed.is_none());
+    let bars: Vec<cablab_report::gap::CandidateBar> = ok
         .iter()
         .map(|e| cablab_report::gap::CandidateBar {
             effect: e.effect.as_str().to_string(),
@@ -241,10 +241,14 @@ pub fn gap_svgs(
             after: e.gap_after_rel,
         })
         .collect();
-    if !bars.is_empty() {
+    let failed: Vec<String> = failed
+        .iter()
+        .map(|e| e.effect.as_str().to_string())
+        .collect();
+    if !bars.is_empty() || !failed.is_empty() {
         out.push((
             "gap_which.svg".to_string(),
-            cablab_report::gap::gap_which_svg(&bars)?,
+            cablab_report::gap::gap_which_with_failures_svg(&bars, &failed)?,
         ));
     }
     let mut steps = Vec::new();

@@ -178,7 +178,11 @@ fn ladder_climbs_from_linear_elasticity_to_the_noise_floor() {
         "{l:?}"
     );
     for r in &l {
-        assert!(r.gap_after_rel < r.gap_before_rel, "{r:?}");
+        assert!(
+            r.gap_after_rel < r.gap_before_rel,
+            "{r:?} in {l:#?} noise {}",
+            d.verdict.noise_rel
+        );
     }
     // The greedy path here takes friction elements first (they close most of the linear law's
     // gap), then plasticity; the laws stack, so kinematic hardening follows and the ladder ends
@@ -196,7 +200,6 @@ fn ladder_climbs_from_linear_elasticity_to_the_noise_floor() {
     );
 }
 
-
 /// A log whose force never leaves zero (a load cell left unplugged) is bad input: `diagnose` says
 /// which file and why, and exits 2, before any fitting.
 #[test]
@@ -212,7 +215,14 @@ fn diagnose_of_a_flat_force_log_names_the_file_and_exits_2() {
     }
     std::fs::write(&p, text).unwrap();
     let out = crate::common::cablab()
-        .args(["diagnose", p.to_str().unwrap(), "--kind", "tension", "--length-mm", "32"])
+        .args([
+            "diagnose",
+            p.to_str().unwrap(),
+            "--kind",
+            "tension",
+            "--length-mm",
+            "32",
+        ])
         .output()
         .unwrap();
     let stderr = String::from_utf8_lossy(&out.stderr);

@@ -268,12 +268,23 @@ pub fn calibrate(
     })
 }
 
-/// Starting points: the warm point (if any, else the data-informed initial values), the
-/// data-informed initial values, then alternately perturbations of the first point (±30 % of each
-/// axis) and points anywhere in the bounds. Every start keeps 2 % off the bounds, where the
-/// sine map of the bounds has no gradient and a fit would stay stuck.
+/// Starting points: the warm point (if any: the warm values, the data-informed initial values
+/// for the parameters it does not name; else the initial values), the data-informed initial
+/// values, then alternately perturbations of the first point (±30 % of each axis) and points
+/// anywhere in the bounds. Every start keeps 2 % off the bounds, where the sine map of the bounds
+/// has no gradient and a fit would stay stuck.
+///
+/// Nested start. A warm point is a fitted special case of the model (the baseline, or the model
+/// one effect smaller): one more start puts the parameters it does not name
+/// where their effect is switched off ([`switched_off`]; 0.1 % off the bounds, where the gradient
+/// is still √0.001 ≈ 3 % of its largest), so that start *is* the special case and
+/// Levenberg–Marquardt, which never increases the cost, cannot end worse than it. It comes last
+/// and does not replace the others: a yield strength switched off is out of the data's reach and
+/// has no gradient, and where the other starts end as well (ties go to the earlier start) their
+/// result is kept.
 fn make_starts(specs: &[ParamSpec], warm: Option<&ParamMap>, n: usize, seed: u64) -> Vec<Vec<f64>> {
     let inside = |s: &ParamSpec, p: f64| s.at_fraction(s.fraction(p).clamp(0.02, 0.98));
+    let near = |s: &ParamSpec, p: f64| s.at_fraction(s.fraction(p).clamp(1e-3, 1.0 - 1e-3));
     let initial: Vec<f64> = specs.iter().map(|s| inside(s, s.initial)).collect();
     let first: Vec<f64> = specs
         .iter()
@@ -309,5 +320,42 @@ fn make_starts(specs: &[ParamSpec], warm: Option<&ParamMap>, n: usize, seed: u64
         out.push(p);
         k += 1;
     }
+    if let Some(w) = warm {
+        let nested: Vec<f64> = specs.iter().map(|s| near(s, switched_off(s, w))).collect();
+        if nested != first {
+            out.push(nested);
+        }
+    }
     out
+}
+
+/// The value at which a parameter of an extended model reproduces its special case `warm` (the
+/// fitted values of the smaller model, by name): the warm value itself when named; a stiffness
+/// of a piecewise law (`EA1`, `EA2`) takes the special case's stiffness (`EA`: one slope, the
+/// linear law); a yield strength ([`YIELD_PARAMS`](crate::select::YIELD_PARAMS)) its upper bound
+/// (out of the data's reach: no plastic flow); a parameter whose range holds 0 (a hardening
+/// modulus, a Maxwell or friction stiffness or strength, a compliance, a drift rate, a friction
+/// coefficient) 0; a friction stiffness on a log axis its lower bound. Other parameters (a
+/// relaxation time, a threshold strain, a number of elements) do not act once their effect is
+/// off and keep their initial value.
+pub(crate) fn switched_off(s: &ParamSpec, warm: &ParamMap) -> f64 {
+    let named = |n: &str| warm.0.iter().find(|(k, _)| k == n).map(|p| p.1);
+    if let Some(v) = named(&s.name) {
+        return v;
+    }
+    let stem = s.name.trim_end_matches(['1', '2']);
+    if stem != s.name && !stem.ends_with('_') {
+        if let Some(v) = named(stem) {
+            return v;
+        }
+    }
+    if crate::select::YIELD_PARAMS.contains(&s.name.as_str()) {
+        s.upper
+    } else if s.lower <= 0.0 && s.upper >= 0.0 {
+        0.0
+    } else if s.log_scale && s.name.ends_with("_f") {
+        s.lower
+    } else {
+        s.initial
+    }
 }

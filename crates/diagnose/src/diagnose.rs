@@ -48,7 +48,7 @@ use crate::holdout::HoldoutSummary;
 use crate::ladder::{ladder, Rung};
 use crate::locate::{span_of_baseline, Located};
 use crate::model::{DiagTest, ModelSpec};
-use crate::select::{choose, compare, elastic_limit, score};
+use crate::select::{choose, compare, elastic_limit, fit_failure, score};
 use cablab_core::{Effect, TestKind};
 use serde::Serialize;
 
@@ -120,6 +120,10 @@ pub struct EffectScore {
     /// instrument cannot tell it from the baseline, so it takes no part in the verdict (listed
     /// after the others).
     pub below_resolution: bool,
+    /// Why the candidate's calibration counts as failed (`null`: it did not fail): it ended worse
+    /// than the baseline on the training samples. Such a candidate takes no part in the verdict
+    /// and is listed last.
+    pub fit_failed: Option<String>,
     /// Share of the baseline's held-out squared gap above the noise floor that the effect
     /// removes, 1 − (g² − 1)/(g₀² − 1) with g in noise units (above 1 when it fits below the
     /// estimated floor; 0 when the baseline has no excess). Below [`MIN_EXPLAINED_SHARE`] the
@@ -271,7 +275,13 @@ pub fn diagnose(
         .iter()
         .map(|c| !rounding_like(tests, &base.all_resid, &c.all_resid, &held, &resolution))
         .collect();
-    let choice = choose(&base, &scored, &resolved);
+    let fit_failed: Vec<Option<String>> = scored.iter().map(|c| fit_failure(&base, c)).collect();
+    let usable: Vec<bool> = resolved
+        .iter()
+        .zip(&fit_failed)
+        .map(|(&r, f)| r && f.is_none())
+        .collect();
+    let choice = choose(&base, &scored, &usable);
 
     let abs_rms = |r: &[Vec<f64>]| {
         let n: usize = r.iter().map(Vec::len).sum();
@@ -281,7 +291,8 @@ pub fn diagnose(
     let mut effects: Vec<EffectScore> = scored
         .iter()
         .zip(shifts.iter().zip(&resolved))
-        .map(|(s, (&shift, &res))| {
+        .zip(fit_failed)
+        .map(|((s, (&shift, &res)), fit_failed)| {
             let ga = abs_rms(&s.held_resid);
             EffectScore {
                 effect: s.effect,
@@ -298,6 +309,7 @@ pub fn diagnose(
                 delta_ic: choice.ic_of(s) - choice.ic_best,
                 shift_res: shift,
                 below_resolution: !res,
+                fit_failed,
                 excess_explained: excess_explained(
                     (base.rss_noise / base.n_held as f64).sqrt(),
                     (s.rss_noise / s.n_held as f64).sqrt(),
@@ -306,8 +318,8 @@ pub fn diagnose(
         })
         .collect();
     effects.sort_by(|a, b| {
-        a.below_resolution
-            .cmp(&b.below_resolution)
+        (a.fit_failed.is_some(), a.below_resolution)
+            .cmp(&(b.fit_failed.is_some(), b.below_resolution))
             .then(a.delta_ic.total_cmp(&b.delta_ic))
     });
 

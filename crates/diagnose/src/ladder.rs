@@ -4,7 +4,7 @@ use crate::error::DiagError;
 use crate::floors::{resolution_floor, rounding_like};
 use crate::model::{DiagTest, ModelSpec};
 use crate::options::{Context, DiagnoseOptions};
-use crate::select::{applicable, choose, compare, score, Scored, NOISE_FLOOR_FIT};
+use crate::select::{applicable, choose, compare, fit_failure, score, Scored, NOISE_FLOOR_FIT};
 use cablab_core::Effect;
 use rayon::prelude::*;
 use serde::Serialize;
@@ -64,7 +64,12 @@ pub(crate) fn ladder(
             .iter()
             .map(|c| !rounding_like(tests, &cur.all_resid, &c.all_resid, held, &resolution))
             .collect();
-        let choice = choose(&cur, &scored, &resolved);
+        let usable: Vec<bool> = scored
+            .iter()
+            .zip(&resolved)
+            .map(|(c, &r)| r && fit_failure(&cur, c).is_none())
+            .collect();
+        let choice = choose(&cur, &scored, &usable);
         if choice.effect == Effect::None {
             break;
         }

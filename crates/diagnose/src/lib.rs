@@ -36,9 +36,9 @@ pub mod stats;
 
 pub use calibration::{calibrate, CalibrateOptions, Calibration};
 pub use diagnose::{diagnose, Diagnosis};
-pub use options::{Context, DiagnoseOptions, HoldoutPolicy};
 pub use error::DiagError;
 pub use model::{DiagTest, ModelSpec, SegLabel};
+pub use options::{Context, DiagnoseOptions, HoldoutPolicy};
 
 #[cfg(test)]
 mod tests;

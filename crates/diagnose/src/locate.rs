@@ -243,4 +243,3 @@ pub fn locate_span(
     out.sort_by(|a, b| b.share.total_cmp(&a.share));
     out
 }
-

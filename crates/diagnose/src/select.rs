@@ -277,8 +277,8 @@ pub(crate) fn ic(s: &Scored, n_eff: f64, n_held: usize) -> f64 {
 }
 
 /// Parsimony on the held-out data (module doc), among the baseline and the candidates the
-/// instrument can tell from it (`resolved`, one flag per candidate) that remove at least
-/// [`MIN_EXPLAINED_SHARE`] of its excess gap.
+/// instrument can tell from it and whose fit did not fail (`resolved`, one flag per candidate)
+/// that remove at least [`MIN_EXPLAINED_SHARE`] of its excess gap.
 pub(crate) fn choose(base: &Scored, scored: &[Scored], resolved: &[bool]) -> Choice {
     let n_held = base.n_held;
     let g = |s: &Scored| (s.rss_noise / s.n_held.max(1) as f64).sqrt();
@@ -340,5 +340,37 @@ pub(crate) fn choose(base: &Scored, scored: &[Scored], resolved: &[bool]) -> Cho
         n_eff,
         ic_best,
         n_held,
+    }
+}
+
+/// Why a candidate's calibration counts as failed, if it does: it ends worse on the training
+/// samples (the cost the fit minimises) than the baseline by more than a part in 10³ (plus one
+/// noise unit squared). An extension that contains the baseline as its special case starts from
+/// it ([nested starts](crate::calibration)) and cannot end there; one that replaces the
+/// baseline's law (piecewise elasticity) can, and then does not follow the data as well as the
+/// baseline. Either way it is no explanation: it takes no part in the verdict and is shown apart.
+pub(crate) fn fit_failure(base: &Scored, s: &Scored) -> Option<String> {
+    let (cb, cs) = (base.cal.chi2, s.cal.chi2);
+    if !cs.is_finite() || cs > cb * (1.0 + 1e-3) + 1.0 {
+        let n = base.cal.n_fit.max(1) as f64;
+        let nested = base.model.effects().iter().all(|e| s.model.has(*e));
+        Some(if nested {
+            format!(
+                "its calibration failed: χ²/n {:.3} on the training samples, worse than the \
+                 baseline's {:.3}, which it contains as a special case",
+                cs / n,
+                cb / n
+            )
+        } else {
+            format!(
+                "it fits the training samples worse than the baseline (χ²/n {:.3} against \
+                 {:.3}): {} replaces the baseline's law and cannot follow these data",
+                cs / n,
+                cb / n,
+                s.model.label()
+            )
+        })
+    } else {
+        None
     }
 }

@@ -457,3 +457,71 @@ fn replicate_scatter_is_a_specimen_factor_not_an_effect() {
     let ea = get("EA").unwrap();
     assert!((ea / TRUTH[0].1 - 1.0).abs() < 0.01, "EA {ea}");
 }
+
+#[test]
+fn nested_starts_switch_each_extension_off_at_the_fitted_special_case() {
+    use crate::calibration::{switched_off, ParamMap};
+    use crate::params::ParamSpec;
+    let warm = ParamMap(vec![
+        ("EA".into(), 8e4),
+        ("F_y".into(), 50.0),
+        ("H".into(), 2e3),
+    ]);
+    let off = |s: ParamSpec| switched_off(&s, &warm);
+    // Named: the special case's value.
+    assert_eq!(off(ParamSpec::log("EA", 1e3, 1e6, 5e4)), 8e4);
+    // Both slopes of a piecewise law: the special case's stiffness (one slope, linear).
+    assert_eq!(off(ParamSpec::log("EA1", 1e3, 1e6, 5e4)), 8e4);
+    assert_eq!(off(ParamSpec::log("EA2", 1.0, 1e6, 5e4)), 8e4);
+    // Moduli, strengths, compliances, drift rates whose range holds 0: 0.
+    assert_eq!(off(ParamSpec::linear("H_kin", 0.0, 1.6e5, 4e3)), 0.0);
+    assert_eq!(off(ParamSpec::linear("drift_per_s", -1.0, 1.0, 0.3)), 0.0);
+    // A yield strength the smaller model lacks (linear → elastoplastic): out of reach.
+    let lin = ParamMap(vec![("EA".into(), 8e4)]);
+    assert_eq!(
+        switched_off(&ParamSpec::log("F_y", 0.05, 150.0, 25.0), &lin),
+        150.0
+    );
+    // A friction stiffness on a log axis: its lower bound; a relaxation time: its initial value.
+    assert_eq!(off(ParamSpec::log("EA_f", 8.0, 8e5, 2e4)), 8.0);
+    assert_eq!(off(ParamSpec::log("tau_v1", 0.1, 5e5, 5.0)), 5.0);
+}
+
+#[test]
+fn no_extension_ends_worse_than_the_baseline_it_contains() {
+    // Kinematic hardening withheld: every candidate that contains elastoplasticity starts from
+    // the fitted baseline and ends at or below its training cost; none is flagged as failed.
+    let t = tension(
+        "elastoplastic",
+        &TRUTH,
+        Some(("kinematic_hardening", vec![("H_kin", 8e3)])),
+        Artefacts {
+            noise_rel: 0.003,
+            ..Artefacts::default()
+        },
+    );
+    let d = diagnose(ctx(), &[t], &DiagnoseOptions::default()).unwrap();
+    for e in &d.effects {
+        if e.effect != Effect::PiecewiseElasticity {
+            assert!(e.fit_failed.is_none(), "{:?}: {:?}", e.effect, e.fit_failed);
+            assert!(
+                e.gap_after_rel < 1.05 * e.gap_before_rel,
+                "{:?}: {} → {}",
+                e.effect,
+                e.gap_before_rel,
+                e.gap_after_rel
+            );
+        }
+    }
+    assert_eq!(d.verdict.effect, Effect::KinematicHardening);
+    // Piecewise elasticity replaces the law: it cannot follow plastic flow and is flagged, listed
+    // after every candidate that did not fail.
+    let pw = d
+        .effects
+        .iter()
+        .position(|e| e.effect == Effect::PiecewiseElasticity)
+        .unwrap();
+    if d.effects[pw].fit_failed.is_some() {
+        assert!(d.effects[pw..].iter().all(|e| e.fit_failed.is_some()));
+    }
+}
