@@ -3,8 +3,8 @@
 //!
 //! `cargo run --example diagnose_speed [-- --skip-three-point]`
 
-use cablab_core::{Effect, TestKind};
 use cablab::blind::cases::generate_case_at;
+use cablab_core::{Effect, TestKind};
 use cablab_diagnose::registry::{Registry, Rod};
 use cablab_diagnose::{diagnose, Context, DiagnoseOptions};
 use cablab_synth::Layout;

@@ -15,8 +15,8 @@ pub mod score;
 
 use crate::commands::{CliError, CmdResult};
 use cablab_core::TestKind;
-use cases::BlindCase;
 use cablab_diagnose::registry::{Registry, Rod};
+use cases::BlindCase;
 use std::process::ExitCode;
 
 /// Replace each test by what the readers get back from its written file (conditioned and

@@ -320,4 +320,3 @@ pub fn render(r: &BlindReport) -> String {
     }
     s
 }
-
