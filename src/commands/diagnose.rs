@@ -78,15 +78,30 @@ pub fn run(a: DiagnoseArgs) -> CmdResult {
         print_json(&d)?;
     } else {
         println!("{}", crate::pipeline::evaluate::words(&d));
+        if let Some(w) = &d.verdict.unexplained {
+            println!();
+            println!("{w}");
+        }
         println!();
+        println!(
+            "held-out gap of the baseline {:.3}% of the largest response",
+            100.0 * d.verdict.gap_rel
+        );
         println!("{:<24} {:>12} {:>12}", "effect", "gap before", "gap after");
         for e in &d.effects {
-            println!(
-                "{:<24} {:>11.3}% {:>11.3}%",
-                e.effect.as_str(),
-                100.0 * e.gap_before_rel,
-                100.0 * e.gap_after_rel
-            );
+            match &e.fit_failed {
+                None => println!(
+                    "{:<24} {:>11.3}% {:>11.3}%",
+                    e.effect.as_str(),
+                    100.0 * e.gap_before_rel,
+                    100.0 * e.gap_after_rel
+                ),
+                Some(why) => println!(
+                    "{:<24} {:>11.3}%  fit failed: {why}",
+                    e.effect.as_str(),
+                    100.0 * e.gap_before_rel
+                ),
+            }
         }
         println!(
             "noise floor {:.3}% of the largest response",

@@ -61,7 +61,9 @@ fn found(truth: Effect) {
             .map(|e| (e.effect, e.gap_after_noise, e.delta_ic))
             .collect::<Vec<_>>()
     );
+    assert_eq!(d.verdict.effects, vec![truth]);
     let e = d.effects.iter().find(|e| e.effect == truth).unwrap();
+    assert_eq!(d.verdict.gap_after_rel, e.gap_after_rel);
     assert!(
         e.gap_after <= 1.5 * d.verdict.noise,
         "gap after {} vs noise {}",
@@ -158,6 +160,8 @@ fn diagnosis_json_has_the_contract_keys() {
         assert!(e["effect"].as_str().unwrap().parse::<Effect>().is_ok());
     }
     assert_eq!(v["verdict"]["effect"], "none");
+    assert_eq!(v["verdict"]["effects"], serde_json::json!([]));
+    assert_eq!(v["verdict"]["gap_rel"], v["baseline"]["gap_heldout_rel"]);
     assert!(v["verdict"]["equivalent"].is_array());
     assert!(v["verdict"]["noise_rel"].as_f64().unwrap() > 0.0);
 }

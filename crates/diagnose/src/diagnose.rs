@@ -143,10 +143,25 @@ pub struct Separation {
 /// The verdict.
 #[derive(Debug, Clone, Serialize)]
 pub struct Verdict {
-    /// The simplest sufficient explanation (`none`: the baseline fits to the noise floor).
+    /// The simplest sufficient explanation: `none` when the baseline fits to the noise floor (or
+    /// its gap is within [`UNEXPLAINED_GAP`] of it and nothing closes it), `unexplained` when a
+    /// gap well above the floor remains that no candidate closes, otherwise the effect.
     pub effect: Effect,
+    /// The set of effects the verdict names (CONTRACT.md): `[effect]`, or `[]` for `none` and
+    /// `unexplained`.
+    pub effects: Vec<Effect>,
     /// Effects that explain the held-out data as well.
     pub equivalent: Vec<Effect>,
+    /// The test's gap, defined once: RMS of the baseline's held-out residual / largest |measured
+    /// response| (the same figure as `baseline.gap_heldout_rel` and every `gap_before_rel`).
+    pub gap_rel: f64,
+    /// The held-out gap left by the verdict's model, same units (= `gap_rel` for `none` and
+    /// `unexplained`).
+    pub gap_after_rel: f64,
+    /// For `unexplained`: in plain words, how far above the noise floor the gap is, where the
+    /// residual lies and what was tried.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub unexplained: Option<String>,
     /// Noise floor / largest |measured response|.
     pub noise_rel: f64,
     /// Noise floor (response units, RMS over tests).
@@ -156,6 +171,12 @@ pub struct Verdict {
     /// Experiments that would separate the verdict from its equivalents.
     pub separating: Vec<Separation>,
 }
+
+/// A held-out baseline gap (RMS in noise units) at or above this that no candidate closes is
+/// `unexplained`, not `none`: the systematic part is at least 1.1 × the noise (√(1.5² − 1)), well
+/// beyond what the noise estimate's uncertainty or a readings' rounding leave (the blind check's
+/// null cases reach 1.38 at most).
+pub const UNEXPLAINED_GAP: f64 = 1.5;
 
 /// The result of `cablab diagnose` (CONTRACT.md keys plus extras).
 #[derive(Debug, Clone, Serialize)]
@@ -262,7 +283,7 @@ pub fn diagnose(
         Some(c) => c
             .iter()
             .copied()
-            .filter(|e| *e != Effect::None && !base_model.has(*e))
+            .filter(|e| !matches!(e, Effect::None | Effect::Unexplained) && !base_model.has(*e))
             .collect(),
         None => applicable(ctx, kind, &base_model),
     };
@@ -337,6 +358,18 @@ pub fn diagnose(
         located.sort_by(|a, b| b.share.total_cmp(&a.share));
     }
     let all_gap = abs_rms(&base.all_resid);
+    let g0 = (base.rss_noise / base.n_held.max(1) as f64).sqrt();
+    let unexplained = (choice.effect == Effect::None && g0 >= UNEXPLAINED_GAP)
+        .then(|| unexplained_words(g0, &located, &effects, &failed));
+    let verdict_effect = if unexplained.is_some() {
+        Effect::Unexplained
+    } else {
+        choice.effect
+    };
+    let gap_after = effects
+        .iter()
+        .find(|e| e.effect == verdict_effect)
+        .map_or(gap_before, |e| e.gap_after);
     let ladder = if opts.ladder {
         Some(ladder(ctx, tests, &train, &held, &noise, opts, scale)?)
     } else {
@@ -356,8 +389,16 @@ pub fn diagnose(
         located,
         effects,
         verdict: Verdict {
-            effect: choice.effect,
+            effect: verdict_effect,
+            effects: if matches!(verdict_effect, Effect::None | Effect::Unexplained) {
+                vec![]
+            } else {
+                vec![verdict_effect]
+            },
             equivalent: choice.equivalent,
+            gap_rel: gap_before / scale,
+            gap_after_rel: gap_after / scale,
+            unexplained,
             noise_rel: noise_rms / scale,
             noise: noise_rms,
             n_eff: choice.n_eff,
@@ -371,4 +412,52 @@ pub fn diagnose(
         },
         failed,
     })
+}
+
+/// The `unexplained` verdict in plain words: how far above the noise floor the held-out gap is
+/// (`g0`, noise units), where the baseline's residual lies (the largest share of the first
+/// breakdown), and what was tried (candidates scored, failed fits, candidates that could not be
+/// fitted).
+fn unexplained_words(
+    g0: f64,
+    located: &[Located],
+    effects: &[EffectScore],
+    failed: &[Failed],
+) -> String {
+    let mut s = format!(
+        "The baseline's held-out gap is {g0:.1} times the noise floor and no candidate closes it."
+    );
+    if let Some(top) = located.iter().find(|l| l.by != "span").or(located.first()) {
+        s.push_str(&format!(
+            " The largest share of the squared residual, {:.0} %, lies in {}.",
+            100.0 * top.share,
+            top.where_
+        ));
+    }
+    let tried: Vec<&str> = effects.iter().map(|e| e.effect.as_str()).collect();
+    if !tried.is_empty() {
+        s.push_str(&format!(" Tried: {}", tried.join(", ")));
+        let best = effects
+            .iter()
+            .filter(|e| e.fit_failed.is_none())
+            .min_by(|a, b| a.gap_after_noise.total_cmp(&b.gap_after_noise));
+        if let Some(b) = best {
+            s.push_str(&format!(
+                " (the best, {}, leaves {:.1} times the noise floor)",
+                b.effect, b.gap_after_noise
+            ));
+        }
+        s.push('.');
+    }
+    let n_failed = effects.iter().filter(|e| e.fit_failed.is_some()).count() + failed.len();
+    if n_failed > 0 {
+        s.push_str(&format!(
+            " {n_failed} candidate(s) could not be fitted or fitted worse than the baseline."
+        ));
+    }
+    s.push_str(
+        " Look for what the vocabulary does not cover: scatter between specimens diagnosed \
+         together, a fixture or data problem (a slipping grip, a broken wire), or another effect.",
+    );
+    s
 }

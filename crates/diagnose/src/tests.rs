@@ -5,7 +5,9 @@
 //! case design lives: `tests/it/diagnosis.rs`.) Sample rates are kept low (≈1,500 samples per test) so each test runs in a
 //! second or two.
 
-use crate::diagnose::{calibrate, diagnose, CalibrateOptions, Context, DiagnoseOptions};
+use crate::diagnose::{
+    calibrate, diagnose, CalibrateOptions, Context, DiagnoseOptions, UNEXPLAINED_GAP,
+};
 use crate::model::{DiagTest, ModelSpec};
 use cablab_core::{Effect, Specimen, TestKind};
 use cablab_synth::{Artefacts, Extension, Layout, Protocol, Step, SynthSpec};
@@ -524,4 +526,48 @@ fn no_extension_ends_worse_than_the_baseline_it_contains() {
     if d.effects[pw].fit_failed.is_some() {
         assert!(d.effects[pw..].iter().all(|e| e.fit_failed.is_some()));
     }
+}
+
+#[test]
+fn a_gap_no_candidate_closes_is_unexplained_not_none() {
+    // A slow oscillation of the load reading (a cable of the rig swinging against the load cell,
+    // 0.2 Hz, 3 % of the peak): far above the noise, and nothing in the vocabulary moves with time
+    // like that.
+    let mut t = tension(
+        "elastoplastic",
+        &TRUTH,
+        None,
+        Artefacts {
+            noise_rel: 0.003,
+            ..Artefacts::default()
+        },
+    );
+    let peak = t.response_scale();
+    for (r, &s) in t.response.iter_mut().zip(&t.time_s) {
+        *r += 0.03 * peak * (2.0 * std::f64::consts::PI * 0.2 * s).sin();
+    }
+    let d = diagnose(ctx(), &[t], &DiagnoseOptions::default()).unwrap();
+    assert_eq!(
+        d.verdict.effect,
+        Effect::Unexplained,
+        "{:?}",
+        d.effects
+            .iter()
+            .map(|e| (e.effect, e.gap_after_noise, e.excess_explained))
+            .collect::<Vec<_>>()
+    );
+    assert!(d.verdict.effects.is_empty());
+    let words = d.verdict.unexplained.as_deref().unwrap();
+    assert!(
+        words.contains("times the noise floor") && words.contains("Tried:"),
+        "{words}"
+    );
+    // One gap figure: the verdict's, the baseline's held-out gap and every candidate's "before".
+    assert_eq!(d.verdict.gap_rel, d.baseline.gap_heldout_rel);
+    assert_eq!(d.verdict.gap_after_rel, d.verdict.gap_rel);
+    assert!(d
+        .effects
+        .iter()
+        .all(|e| e.gap_before_rel == d.verdict.gap_rel));
+    assert!(d.verdict.gap_rel > UNEXPLAINED_GAP * d.verdict.noise_rel);
 }
