@@ -181,13 +181,25 @@ pub fn gap_svgs(
     span_m: Option<f64>,
 ) -> Result<Vec<(String, String)>> {
     let mut out = Vec::new();
-    let shares: Vec<(String, f64)> = d
+    // One breakdown per chart (by cycle and branch), the smallest shares summed into one row so
+    // that the chart adds up to 100 %.
+    let by_cycle: Vec<&cablab_diagnose::diagnose::Located> = d
         .located
         .iter()
-        .filter(|l| l.by != "test" && l.by != "span")
-        .take(12)
+        .filter(|l| l.by == "cycle_branch")
+        .collect();
+    let mut shares: Vec<(String, f64)> = by_cycle
+        .iter()
+        .take(11)
         .map(|l| (l.where_.clone(), l.share))
         .collect();
+    if by_cycle.len() > 11 {
+        let rest: f64 = by_cycle[11..].iter().map(|l| l.share).sum();
+        shares.push((
+            format!("the other {} cycles and branches", by_cycle.len() - 11),
+            rest,
+        ));
+    }
     if !shares.is_empty() {
         out.push((
             "gap_where.svg".to_string(),

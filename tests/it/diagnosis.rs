@@ -234,3 +234,27 @@ fn diagnose_of_a_flat_force_log_names_the_file_and_exits_2() {
     assert!(stderr.contains("unplugged_load_cell.txt"), "{stderr}");
     assert!(stderr.contains("response is identically zero"), "{stderr}");
 }
+
+/// "Where" in words, one breakdown per chart: tests numbered from 1, amplitude bands named as
+/// such, and the chart's shares (cycle and branch only, the rest in one row) adding up to 100 %.
+#[test]
+fn where_chart_holds_one_breakdown_that_sums_to_one_hundred_percent() {
+    let c = case(Effect::MachineCompliance, 2);
+    let d = diagnose(ctx(), &c.tests, &DiagnoseOptions::default()).unwrap();
+    let by = |b: &'static str| d.located.iter().filter(move |l| l.by == b);
+    let mut tests: Vec<&str> = by("test").map(|l| l.where_.as_str()).collect();
+    tests.sort();
+    assert_eq!(tests, ["test 1", "test 2"]);
+    assert!(by("control_range")
+        .all(|l| l.where_.starts_with("amplitude ") && l.where_.ends_with("% of the largest")));
+    let svgs = cablab::pipeline::views::gap_svgs(&d, None).unwrap();
+    let svg = &svgs.iter().find(|(n, _)| n == "gap_where.svg").unwrap().1;
+    assert!(!svg.contains("amplitude"), "one breakdown per chart");
+    // The value texts are `12.3 %` (a no-break space before the sign).
+    let total: f64 = svg
+        .split('>')
+        .filter_map(|t| t.trim_start().split_once("\u{a0}%\n<"))
+        .filter_map(|(v, _)| v.trim().parse::<f64>().ok())
+        .sum();
+    assert!((total - 100.0).abs() < 1.0, "shares sum to {total} %");
+}

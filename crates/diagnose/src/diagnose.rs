@@ -44,9 +44,8 @@
 //! What it does not do: read files or print (the CLI does), or simulate (see `model`).
 
 use crate::error::DiagError;
-use crate::holdout::HoldoutSummary;
-use crate::ladder::{ladder, Rung};
-use crate::locate::{span_of_baseline, Located};
+use crate::ladder::ladder;
+use crate::locate::span_of_baseline;
 use crate::model::{DiagTest, ModelSpec};
 use crate::select::{choose, compare, elastic_limit, fit_failure, score};
 use cablab_core::{Effect, TestKind};
@@ -55,8 +54,9 @@ use serde::Serialize;
 // The diagnosis' parts, at the paths they had before the split.
 pub use crate::calibration::{calibrate, CalibrateOptions, Calibration, OptParamMap, ParamMap};
 pub use crate::floors::{noise_floor, resolution_floor, rounding_like, shift_in_resolution};
-pub use crate::holdout::{split, Split};
-pub use crate::locate::{locate, locate_span, SpanShares, SPAN_GROUPS};
+pub use crate::holdout::{split, HoldoutSummary, Split};
+pub use crate::ladder::Rung;
+pub use crate::locate::{locate, locate_span, Located, SpanShares, SPAN_GROUPS};
 pub use crate::options::{Context, DiagnoseOptions, HoldoutPolicy};
 pub use crate::select::{
     applicable, excess_explained, separating_experiment, MIN_EXPLAINED_SHARE, NOISE_FLOOR_FIT,

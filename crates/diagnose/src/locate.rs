@@ -8,7 +8,8 @@ use serde::Serialize;
 /// One entry of the "where" breakdown.
 #[derive(Debug, Clone, Serialize)]
 pub struct Located {
-    /// Where (`test 0 cycle 3 unloading`, `control 75–100 % of range`).
+    /// Where, in words (`test 1 cycle 3 unloading`, `amplitude 75–100 % of the largest`; tests
+    /// are numbered from 1).
     #[serde(rename = "where")]
     pub where_: String,
     /// Fraction of the squared residual (within its breakdown).
@@ -50,7 +51,7 @@ pub fn locate(tests: &[DiagTest], resid: &[Vec<f64>]) -> Vec<Located> {
         for (i, r) in resid.iter().enumerate() {
             let s: f64 = r.iter().map(|v| v * v).sum();
             out.push(Located {
-                where_: format!("test {i}"),
+                where_: format!("test {}", i + 1),
                 share: s / total,
                 by: "test",
                 n: r.len(),
@@ -81,7 +82,7 @@ pub fn locate(tests: &[DiagTest], resid: &[Vec<f64>]) -> Vec<Located> {
     }
     for ((ti, c, b), (s, n)) in cb {
         let prefix = if multi {
-            format!("test {ti} ")
+            format!("test {} ", ti + 1)
         } else {
             String::new()
         };
@@ -95,7 +96,7 @@ pub fn locate(tests: &[DiagTest], resid: &[Vec<f64>]) -> Vec<Located> {
     }
     for (bin, (s, n)) in cr {
         out.push(Located {
-            where_: format!("|control| {}–{} % of its range", bin * 25, bin * 25 + 25),
+            where_: format!("amplitude {}–{} % of the largest", bin * 25, bin * 25 + 25),
             share: s / total,
             by: "control_range",
             n,
@@ -139,7 +140,7 @@ pub(crate) fn span_of_baseline(
         };
         if let Ok(Some(h)) = rod.span_history(t, law.as_ref(), mu) {
             let prefix = if multi {
-                format!("test {ti} ")
+                format!("test {} ", ti + 1)
             } else {
                 String::new()
             };

@@ -203,7 +203,8 @@ fn hbar_svg(
 }
 
 /// "Where": the share of the squared residual per location (`cycle 3 unloading`, ...), one bar
-/// per entry in the given order (the contract lists them largest first). Shares are fractions.
+/// per entry in the given order (the contract lists them largest first). Shares are fractions of
+/// one breakdown (they should add up to 1: give a row for the rest rather than mixing breakdowns).
 pub fn gap_where_svg(shares: &[(String, f64)]) -> Result<String, ReportError> {
     if shares.iter().all(|s| !s.1.is_finite()) {
         return Err(ReportError::NoData {
