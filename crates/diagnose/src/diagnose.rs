@@ -44,7 +44,7 @@
 //! What it does not do: read files or print (the CLI does), or simulate (see `model`).
 
 use crate::error::DiagError;
-use crate::ladder::ladder;
+use crate::ladder::{climb, ladder};
 use crate::locate::span_of_baseline;
 use crate::model::{DiagTest, ModelSpec};
 use crate::select::{choose, compare, elastic_limit, fit_failure, score};
@@ -147,9 +147,14 @@ pub struct Verdict {
     /// its gap is within [`UNEXPLAINED_GAP`] of it and nothing closes it), `unexplained` when a
     /// gap well above the floor remains that no candidate closes, otherwise the effect.
     pub effect: Effect,
-    /// The set of effects the verdict names (CONTRACT.md): `[effect]`, or `[]` for `none` and
-    /// `unexplained`.
+    /// The set of effects the verdict names (CONTRACT.md): `[]` for `none` and `unexplained`;
+    /// `[effect]` when one effect leaves less than [`UNEXPLAINED_GAP`] × the noise floor;
+    /// otherwise the simplest set found from it by forward selection (up to three effects, each
+    /// step scored on held-out data by the same rules) and backward elimination, `effect` first.
     pub effects: Vec<Effect>,
+    /// "How far" over the set: the held-out gap after each step from the baseline (the first
+    /// step adds `effect`; `drop` steps remove an effect the set does not need).
+    pub steps: Vec<Rung>,
     /// Effects that explain the held-out data as well.
     pub equivalent: Vec<Effect>,
     /// The test's gap, defined once: RMS of the baseline's held-out residual / largest |measured
@@ -366,10 +371,66 @@ pub fn diagnose(
     } else {
         choice.effect
     };
-    let gap_after = effects
+    let mut gap_after = effects
         .iter()
         .find(|e| e.effect == verdict_effect)
         .map_or(gap_before, |e| e.gap_after);
+    // Sets of effects: when the best single effect leaves a gap well above the noise floor,
+    // climb from it (forward selection, then backward elimination over the whole set).
+    let mut set = vec![];
+    let mut steps = vec![];
+    let mut verdict_effect = verdict_effect;
+    if let Some(first) = scored.iter().find(|s| s.effect == verdict_effect) {
+        set.push(verdict_effect);
+        steps.push(Rung {
+            step: "add",
+            effect: verdict_effect,
+            model: first.model.label(),
+            gap_before_rel: gap_before / scale,
+            gap_after_rel: gap_after / scale,
+        });
+        let g1 = (first.rss_noise / first.n_held.max(1) as f64).sqrt();
+        if g1 >= UNEXPLAINED_GAP {
+            let start = crate::select::Scored {
+                effect: Effect::None,
+                ..first.clone()
+            };
+            let (all, last) = climb(
+                ctx,
+                tests,
+                start,
+                steps.clone(),
+                2,
+                opts.candidates.as_deref(),
+                &train,
+                &held,
+                &noise,
+                opts,
+                scale,
+            );
+            set.clear();
+            for r in &all {
+                if r.step == "add" {
+                    set.push(r.effect);
+                } else {
+                    set.retain(|e| *e != r.effect);
+                }
+            }
+            gap_after = abs_rms(&last.held_resid);
+            steps = all;
+            // The member that explains most on its own first.
+            set.sort_by(|a, b| {
+                let g = |e: &Effect| {
+                    effects
+                        .iter()
+                        .find(|s| s.effect == *e)
+                        .map_or(f64::INFINITY, |s| s.gap_after)
+                };
+                g(a).total_cmp(&g(b))
+            });
+            verdict_effect = set.first().copied().unwrap_or(verdict_effect);
+        }
+    }
     let ladder = if opts.ladder {
         Some(ladder(ctx, tests, &train, &held, &noise, opts, scale)?)
     } else {
@@ -390,11 +451,8 @@ pub fn diagnose(
         effects,
         verdict: Verdict {
             effect: verdict_effect,
-            effects: if matches!(verdict_effect, Effect::None | Effect::Unexplained) {
-                vec![]
-            } else {
-                vec![verdict_effect]
-            },
+            effects: set,
+            steps,
             equivalent: choice.equivalent,
             gap_rel: gap_before / scale,
             gap_after_rel: gap_after / scale,

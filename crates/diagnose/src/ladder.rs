@@ -35,9 +35,7 @@ pub(crate) fn ladder(
     opts: &DiagnoseOptions,
     scale: f64,
 ) -> Result<Vec<Rung>, DiagError> {
-    let kind = tests[0].kind;
-    let resolution = resolution_floor(tests);
-    let mut cur = score(
+    let start = score(
         ctx,
         tests,
         &ModelSpec::law("linear"),
@@ -49,16 +47,58 @@ pub(crate) fn ladder(
         None,
         opts,
     )?;
-    let mut rungs = Vec::new();
+    let (rungs, _) = climb(
+        ctx,
+        tests,
+        start,
+        vec![],
+        6,
+        None,
+        train,
+        held,
+        noise,
+        opts,
+        scale,
+    );
+    Ok(rungs)
+}
+
+/// Forward selection from `start`, adding at most `max_add` effects (each the best by the
+/// parsimony rule among the applicable ones, on held-out data, failed fits and unresolved
+/// candidates excluded; only `allowed` ones if given) until the held-out gap reaches the noise
+/// floor or nothing helps; then
+/// backward elimination of the added effects the rule finds redundant (those of the `prior`
+/// rungs that led to `start` included). Returns the rungs (`prior` first) and the final model.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn climb(
+    ctx: Context,
+    tests: &[DiagTest],
+    start: Scored,
+    prior: Vec<Rung>,
+    max_add: usize,
+    allowed: Option<&[Effect]>,
+    train: &[Vec<usize>],
+    held: &[Vec<usize>],
+    noise: &[f64],
+    opts: &DiagnoseOptions,
+    scale: f64,
+) -> (Vec<Rung>, Scored) {
+    let kind = tests[0].kind;
+    let resolution = resolution_floor(tests);
+    let mut cur = start;
+    let mut rungs = prior;
     let rms_abs = |s: &Scored| {
         (s.held_resid.iter().flatten().map(|v| v * v).sum::<f64>() / s.n_held.max(1) as f64).sqrt()
     };
-    for _ in 0..6 {
+    for _ in 0..max_add {
         let g = (cur.rss_noise / cur.n_held as f64).sqrt();
         if g <= NOISE_FLOOR_FIT {
             break;
         }
-        let cands = applicable(ctx, kind, &cur.model);
+        let cands: Vec<Effect> = applicable(ctx, kind, &cur.model)
+            .into_iter()
+            .filter(|e| allowed.is_none_or(|c| c.contains(e)))
+            .collect();
         let (scored, _) = compare(ctx, tests, &cur, &cands, train, held, noise, opts);
         let resolved: Vec<bool> = scored
             .iter()
@@ -140,5 +180,5 @@ pub(crate) fn ladder(
         });
         cur = smaller;
     }
-    Ok(rungs)
+    (rungs, cur)
 }

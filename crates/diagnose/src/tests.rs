@@ -571,3 +571,42 @@ fn a_gap_no_candidate_closes_is_unexplained_not_none() {
         .all(|e| e.gap_before_rel == d.verdict.gap_rel));
     assert!(d.verdict.gap_rel > UNEXPLAINED_GAP * d.verdict.noise_rel);
 }
+
+#[test]
+fn two_withheld_effects_are_named_as_a_set_with_its_waterfall() {
+    // Stiffness degradation and a Maxwell branch at once (0.3 % noise): no single effect closes
+    // the held-out gap; the verdict names both, the member that explains most first, and the
+    // steps from the baseline end near the noise floor.
+    let mut params = TRUTH.to_vec();
+    params.extend([("D_inf", 0.35), ("alpha_D", 1.5e-3)]);
+    let t = tension(
+        "stiffness_degradation",
+        &params,
+        Some(("viscoelasticity", vec![("EA_v1", 2.4e4), ("tau_v1", 1.5)])),
+        Artefacts {
+            noise_rel: 0.003,
+            ..Artefacts::default()
+        },
+    );
+    let d = diagnose(ctx(), &[t], &DiagnoseOptions::default()).unwrap();
+    let mut set = d.verdict.effects.clone();
+    set.sort();
+    assert_eq!(
+        set,
+        [Effect::StiffnessDegradation, Effect::Viscoelasticity],
+        "{:?}",
+        d.verdict.steps
+    );
+    assert_eq!(d.verdict.effects[0], d.verdict.effect);
+    let steps = &d.verdict.steps;
+    assert_eq!(steps[0].gap_before_rel, d.verdict.gap_rel);
+    assert_eq!(steps.last().unwrap().gap_after_rel, d.verdict.gap_after_rel);
+    assert!(steps
+        .windows(2)
+        .all(|w| w[1].gap_before_rel == w[0].gap_after_rel));
+    assert!(
+        d.verdict.gap_after_rel <= 1.5 * d.verdict.noise_rel,
+        "{steps:?} noise {}",
+        d.verdict.noise_rel
+    );
+}
