@@ -25,7 +25,9 @@ pub struct CaseOutcome {
     pub verdict: Option<Effect>,
     /// Equivalent explanations reported.
     pub equivalent: Vec<Effect>,
-    /// Verdict equals the truth.
+    /// The set of effects the verdict names (`verdict.effects`).
+    pub effects: Vec<Effect>,
+    /// Verdict equals the truth, and the set it names is the truth alone (empty for `none`).
     pub right: bool,
     /// The truth is the verdict or among the reported equivalents.
     pub right_or_equivalent: bool,
@@ -110,6 +112,7 @@ pub fn run_matrix_observed(
                 truth: c.truth,
                 verdict: None,
                 equivalent: vec![],
+                effects: vec![],
                 right: false,
                 right_or_equivalent: false,
                 noise_rel: c.noise_rel,
@@ -122,7 +125,13 @@ pub fn run_matrix_observed(
                 Ok(d) => {
                     let v = d.verdict.effect;
                     o.verdict = Some(v);
-                    o.right = v == c.truth;
+                    let want: Vec<Effect> = if c.truth == Effect::None {
+                        vec![]
+                    } else {
+                        vec![c.truth]
+                    };
+                    o.right = v == c.truth && d.verdict.effects == want;
+                    o.effects = d.verdict.effects.clone();
                     o.right_or_equivalent = o.right || d.verdict.equivalent.contains(&c.truth);
                     o.equivalent = d.verdict.equivalent.clone();
                     let noise = d.verdict.noise.max(f64::MIN_POSITIVE);
