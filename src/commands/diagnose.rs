@@ -26,6 +26,18 @@ pub fn diag_test(
     let curve = crate::bridge::curve(&rec).map_err(CliError::input)?;
     let (t, _) = crate::bridge::diag_test(kind, &geom, &curve, rec.specimen.label.clone(), None)
         .map_err(|e| CliError::input(anyhow::anyhow!("{}: {e:#}", path.display())))?;
+    // A log the diagnosis cannot use (a flat response, too few samples) is bad input: say which
+    // file, before any fitting.
+    t.validate(0).map_err(|e| {
+        let why = match e {
+            cablab_diagnose::DiagError::BadTest { why, .. } => why,
+            other => other.to_string(),
+        };
+        CliError::input(anyhow::anyhow!(
+            "{}: cannot be diagnosed: {why}",
+            path.display()
+        ))
+    })?;
     Ok(t)
 }
 
@@ -71,15 +83,30 @@ pub fn run(a: DiagnoseArgs) -> CmdResult {
         print_json(&d)?;
     } else {
         println!("{}", crate::pipeline::evaluate::words(&d));
+        if let Some(w) = &d.verdict.unexplained {
+            println!();
+            println!("{w}");
+        }
         println!();
+        println!(
+            "held-out gap of the baseline {:.3}% of the largest response",
+            100.0 * d.verdict.gap_rel
+        );
         println!("{:<24} {:>12} {:>12}", "effect", "gap before", "gap after");
         for e in &d.effects {
-            println!(
-                "{:<24} {:>11.3}% {:>11.3}%",
-                e.effect.as_str(),
-                100.0 * e.gap_before_rel,
-                100.0 * e.gap_after_rel
-            );
+            match &e.fit_failed {
+                None => println!(
+                    "{:<24} {:>11.3}% {:>11.3}%",
+                    e.effect.as_str(),
+                    100.0 * e.gap_before_rel,
+                    100.0 * e.gap_after_rel
+                ),
+                Some(why) => println!(
+                    "{:<24} {:>11.3}%  fit failed: {why}",
+                    e.effect.as_str(),
+                    100.0 * e.gap_before_rel
+                ),
+            }
         }
         println!(
             "noise floor {:.3}% of the largest response",

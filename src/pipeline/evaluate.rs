@@ -610,7 +610,11 @@ pub fn words(d: &cablab_diagnose::Diagnosis) -> String {
         baseline_law: d.baseline.law.clone(),
         gap_before_rel: d.baseline.gap_heldout_rel,
         verdict_effect: verdict.as_str().to_string(),
-        gap_after_rel: if verdict == Effect::None { None } else { after },
+        gap_after_rel: if matches!(verdict, Effect::None | Effect::Unexplained) {
+            None
+        } else {
+            after
+        },
         equivalent: d
             .verdict
             .equivalent

@@ -203,13 +203,25 @@ pub fn gap_svgs(
     span_m: Option<f64>,
 ) -> Result<Vec<(String, String)>> {
     let mut out = Vec::new();
-    let shares: Vec<(String, f64)> = d
+    // One breakdown per chart (by cycle and branch), the smallest shares summed into one row so
+    // that the chart adds up to 100 %.
+    let by_cycle: Vec<&cablab_diagnose::diagnose::Located> = d
         .located
         .iter()
-        .filter(|l| l.by != "test" && l.by != "span")
-        .take(12)
+        .filter(|l| l.by == "cycle_branch")
+        .collect();
+    let mut shares: Vec<(String, f64)> = by_cycle
+        .iter()
+        .take(11)
         .map(|l| (l.where_.clone(), l.share))
         .collect();
+    if by_cycle.len() > 11 {
+        let rest: f64 = by_cycle[11..].iter().map(|l| l.share).sum();
+        shares.push((
+            format!("the other {} cycles and branches", by_cycle.len() - 11),
+            rest,
+        ));
+    }
     if !shares.is_empty() {
         out.push((
             "gap_where.svg".to_string(),
@@ -254,8 +266,8 @@ pub fn gap_svgs(
             cablab_report::gap::span_residual_svg(&view)?,
         ));
     }
-    let bars: Vec<cablab_report::gap::CandidateBar> = d
-        .effects
+    let (ok, failed): (Vec<_>, Vec<_>) = d.effects.iter().partition(|e| e.fit_failed.is_none());
+    let bars: Vec<cablab_report::gap::CandidateBar> = ok
         .iter()
         .map(|e| cablab_report::gap::CandidateBar {
             effect: e.effect.as_str().to_string(),
@@ -263,10 +275,14 @@ pub fn gap_svgs(
             after: e.gap_after_rel,
         })
         .collect();
-    if !bars.is_empty() {
+    let failed: Vec<String> = failed
+        .iter()
+        .map(|e| e.effect.as_str().to_string())
+        .collect();
+    if !bars.is_empty() || !failed.is_empty() {
         out.push((
             "gap_which.svg".to_string(),
-            cablab_report::gap::gap_which_svg(&bars)?,
+            cablab_report::gap::gap_which_with_failures_svg(&bars, &failed)?,
         ));
     }
     let mut steps = Vec::new();

@@ -5,6 +5,7 @@ mod campaign;
 mod characterise;
 mod cli_contract;
 mod common;
+mod diagnosis;
 mod family;
 mod folder_mode;
 mod shards;

@@ -222,12 +222,17 @@ pub enum Effect {
     SensorDrift,
     /// Coulomb friction where the rod slides over the three-point supports.
     SupportFriction,
+    /// A gap well above the noise floor remains that no candidate closes (a verdict, never a
+    /// candidate). Last, so that the other variants keep their discriminants (the blind check
+    /// seeds its draws with them).
+    Unexplained,
 }
 
 impl Effect {
     /// Every name, in vocabulary order.
-    pub const ALL: [Effect; 10] = [
+    pub const ALL: [Effect; 11] = [
         Effect::None,
+        Effect::Unexplained,
         Effect::Plasticity,
         Effect::KinematicHardening,
         Effect::StiffnessDegradation,
@@ -243,6 +248,7 @@ impl Effect {
     pub fn as_str(self) -> &'static str {
         match self {
             Effect::None => "none",
+            Effect::Unexplained => "unexplained",
             Effect::Plasticity => "plasticity",
             Effect::KinematicHardening => "kinematic_hardening",
             Effect::StiffnessDegradation => "stiffness_degradation",
@@ -268,7 +274,7 @@ impl FromStr for Effect {
         let t = s.trim().to_ascii_lowercase().replace('-', "_");
         Effect::ALL.iter().copied().find(|e| e.as_str() == t).ok_or(UnknownName {
             given: s.to_string(),
-            expected: "none, plasticity, kinematic_hardening, stiffness_degradation, viscoelasticity, friction_hysteresis, piecewise_elasticity, machine_compliance, sensor_drift, support_friction",
+            expected: "none, unexplained, plasticity, kinematic_hardening, stiffness_degradation, viscoelasticity, friction_hysteresis, piecewise_elasticity, machine_compliance, sensor_drift, support_friction",
         })
     }
 }

@@ -276,8 +276,16 @@ impl LeastSquaresProblem<f64, Dyn, Dyn> for Problem<'_> {
     }
 }
 
+/// Ends of two starts whose costs (χ² in noise units) differ by less than this, and by less than
+/// a part in 10³, are a tie: one noise unit squared over the whole record is far below what the
+/// information criterion resolves (the relative part keeps noise-free fits exact).
+pub const COST_TIE: f64 = 1.0;
+
 /// Fit the forward model to the data from each start (physical parameter vectors), keep the best,
-/// and compute uncertainties there.
+/// and compute uncertainties there. "Best" is the earliest start that ends within a tie
+/// ([`COST_TIE`]) of the lowest cost: ends closer than that are not told apart by the data, and
+/// the caller orders its starts by preference (the data-informed or warm point first; a nested
+/// start, which only guarantees the special case, last).
 pub fn fit(fwd: &dyn Forward, data: &FitData, starts: &[Vec<f64>], opts: &FitOptions) -> Fit {
     let specs = fwd.specs();
     let runs: Vec<(Vec<f64>, f64, usize)> = starts
@@ -310,9 +318,10 @@ pub fn fit(fwd: &dyn Forward, data: &FitData, starts: &[Vec<f64>], opts: &FitOpt
         })
         .collect();
     let evaluations = runs.iter().map(|r| r.2).sum();
+    let lowest = runs.iter().map(|r| r.1).fold(f64::INFINITY, f64::min);
     let best = runs
         .iter()
-        .min_by(|a, b| a.1.total_cmp(&b.1))
+        .find(|r| r.1 <= lowest + COST_TIE.min(1e-3 * lowest))
         .cloned()
         .unwrap_or_else(|| (specs.iter().map(|s| s.initial).collect(), f64::INFINITY, 0));
     let (params, cost) = (best.0, best.1);

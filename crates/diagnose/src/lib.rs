@@ -1,33 +1,44 @@
 //! The sim-to-real gap diagnosis (SPEC.md, "The sim-to-real gap diagnosis"; CONTRACT.md,
 //! `cablab diagnose`): calibration of sectional laws to measured tests, where the residual lies,
-//! which unmodelled effect closes it on held-out data, how far, and the blind check on data whose
-//! effect is withheld.
+//! which unmodelled effect closes it on held-out data, how far. (The blind check on virtual-lab
+//! data whose effect is withheld is the CLI's: `cablab bench blind`.)
 //!
 //! - [`params`]: bounded parameters and their unbounded coordinates.
 //! - [`calibrate`]: the one fitting routine (bounded Levenberg–Marquardt, several starts, uncertainties).
 //! - [`model`]: measured tests, models, and the forward model with the test-level effects.
-//! - [`diagnose`]: where / which / how far, the verdict and the ladder.
-//! - [`blind`]: the blind check on virtual-lab cases whose effect is withheld.
+//! - [`diagnose`]: where / which / how far: the verdict and its output types.
+//! - [`options`]: settings, and the law registry and rod the diagnosis works with.
+//! - [`calibration`]: calibration of a model to measured tests (starts, pinned parameters).
+//! - [`floors`]: the noise and resolution floors a gap is measured against.
+//! - [`holdout`]: the split into training and held-out samples.
+//! - [`select`]: scoring on held-out data and the choice among models.
+//! - [`locate`]: where the residual lies.
+//! - [`ladder`]: the ladder from linear elasticity.
 //! - [`stats`]: residual statistics (RMS, lag-1 autocorrelation, effective sample size, noise).
 //! - [`registry`]: the project's law registry and rod as the diagnosis sees them.
 //!
 //! Pure: numbers in, numbers out; no files, no printing.
 
-pub mod blind;
 pub mod calibrate;
+pub mod calibration;
 pub mod diagnose;
 pub mod error;
+pub mod floors;
+pub mod holdout;
+pub mod ladder;
+pub mod locate;
 pub mod model;
+pub mod options;
 pub mod params;
 pub mod registry;
+pub mod select;
 pub mod stats;
 
-pub use diagnose::{
-    calibrate, diagnose, CalibrateOptions, Calibration, Context, DiagnoseOptions, Diagnosis,
-    HoldoutPolicy,
-};
+pub use calibration::{calibrate, CalibrateOptions, Calibration};
+pub use diagnose::{diagnose, Diagnosis};
 pub use error::DiagError;
 pub use model::{DiagTest, ModelSpec, SegLabel};
+pub use options::{Context, DiagnoseOptions, HoldoutPolicy};
 
 #[cfg(test)]
 mod tests;

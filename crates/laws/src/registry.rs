@@ -91,7 +91,8 @@ pub fn loaded_component(kind: TestKind) -> usize {
 /// `plasticity` → `elastoplastic`, `piecewise_elasticity` → `piecewise_linear`, the four
 /// extensions → their own names, `none` → `elastoplastic` (the baseline itself). `None` for the
 /// effects that are not sectional laws (`machine_compliance`, `sensor_drift`,
-/// `support_friction`: they belong to the test set-up, not to the section).
+/// `support_friction`: they belong to the test set-up, not to the section) and for the verdict
+/// `unexplained`.
 pub fn law_for_effect(effect: Effect) -> Option<&'static str> {
     match effect {
         Effect::None | Effect::Plasticity => Some("elastoplastic"),
@@ -100,7 +101,10 @@ pub fn law_for_effect(effect: Effect) -> Option<&'static str> {
         Effect::StiffnessDegradation => Some("stiffness_degradation"),
         Effect::Viscoelasticity => Some("viscoelasticity"),
         Effect::FrictionHysteresis => Some("friction_hysteresis"),
-        Effect::MachineCompliance | Effect::SensorDrift | Effect::SupportFriction => None,
+        Effect::MachineCompliance
+        | Effect::SensorDrift
+        | Effect::SupportFriction
+        | Effect::Unexplained => None,
     }
 }
 

@@ -203,7 +203,8 @@ fn hbar_svg(
 }
 
 /// "Where": the share of the squared residual per location (`cycle 3 unloading`, ...), one bar
-/// per entry in the given order (the contract lists them largest first). Shares are fractions.
+/// per entry in the given order (the contract lists them largest first). Shares are fractions of
+/// one breakdown (they should add up to 1: give a row for the rest rather than mixing breakdowns).
 pub fn gap_where_svg(shares: &[(String, f64)]) -> Result<String, ReportError> {
     if shares.iter().all(|s| !s.1.is_finite()) {
         return Err(ReportError::NoData {
@@ -233,9 +234,20 @@ pub fn gap_where_svg(shares: &[(String, f64)]) -> Result<String, ReportError> {
 /// "Which": per candidate effect, the held-out relative gap before (light bar) and after (dark
 /// bar) adding it, in the given order (the contract lists them best first).
 pub fn gap_which_svg(candidates: &[CandidateBar]) -> Result<String, ReportError> {
+    gap_which_with_failures_svg(candidates, &[])
+}
+
+/// [`gap_which_svg`] with the candidates whose calibration failed (`fit_failed` in the
+/// contract: it ended worse than the baseline) drawn apart: one row each after the others,
+/// named, without bars (their "gap after" is no result), and left out of the axis range.
+pub fn gap_which_with_failures_svg(
+    candidates: &[CandidateBar],
+    failed: &[String],
+) -> Result<String, ReportError> {
     if candidates
         .iter()
         .all(|c| !c.before.is_finite() && !c.after.is_finite())
+        && failed.is_empty()
     {
         return Err(ReportError::NoData {
             what: "candidate gaps".into(),
@@ -268,6 +280,12 @@ pub fn gap_which_svg(candidates: &[CandidateBar]) -> Result<String, ReportError>
             ),
             text_at: c.before.max(c.after) * 100.0,
         })
+        .chain(failed.iter().map(|effect| Row {
+            label: format!("{effect}: calibration failed, not drawn"),
+            segs: vec![],
+            value_text: String::new(),
+            text_at: f64::NAN,
+        }))
         .collect();
     let title = "Which effect closes it: held-out gap before and after";
     let svg = hbar_svg(
@@ -500,4 +518,32 @@ pub fn span_residual_svg(view: &SpanResidual) -> Result<String, ReportError> {
         root.present().map_err(draw_err)?;
     }
     Ok(add_title(&buf, &view.title))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `fill="#RRGGBB"` of a colour, as plotters writes it.
+    fn fill(c: RGBColor) -> String {
+        format!("fill=\"#{:02X}{:02X}{:02X}\"", c.0, c.1, c.2)
+    }
+
+    #[test]
+    fn failed_calibrations_are_named_apart_without_bars() {
+        let bar = |e: &str, b, a| CandidateBar {
+            effect: e.into(),
+            before: b,
+            after: a,
+        };
+        let ok = [bar("kinematic_hardening", 0.002, 0.001)];
+        let with = gap_which_with_failures_svg(&ok, &["piecewise_elasticity".into()]).unwrap();
+        let without = gap_which_svg(&ok).unwrap();
+        assert!(with.contains("piecewise_elasticity: calibration failed, not drawn"));
+        // The same bars either way (one per drawn candidate and colour, plus the legend's).
+        for c in [style::BEFORE, style::AFTER] {
+            assert_eq!(with.matches(&fill(c)).count(), 2, "{}", fill(c));
+            assert_eq!(without.matches(&fill(c)).count(), 2);
+        }
+    }
 }

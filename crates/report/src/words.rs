@@ -92,6 +92,16 @@ pub fn diagnosis_words(s: &DiagnosisSummary) -> String {
             fmt_percent(s.noise_rel, 1)
         ))
         }
+        ("unexplained", _) => paras.push(format!(
+            "Which: unexplained. The {baseline}'s held-out gap is {} of the largest measured \
+             response, well above the noise level of {}, and no effect of the vocabulary closes \
+             it. Look for what the candidates do not cover: scatter between specimens diagnosed \
+             together beyond their own stiffness and yield (diagnose them one by one), a fixture \
+             or data problem (a slipping grip, a broken wire), or an effect outside the \
+             vocabulary.",
+            fmt_percent(s.gap_before_rel, 1),
+            fmt_percent(s.noise_rel, 1)
+        )),
         ("none", _) | ("", _) => paras.push(format!(
             "Which: none of the candidates. The {baseline}'s held-out gap is {} of the largest \
              measured response, above the noise level of {}, but no effect of the vocabulary \
@@ -165,6 +175,12 @@ mod tests {
         let w = diagnosis_words(&s);
         assert!(w.starts_with("Which: none of the candidates."), "{w}");
         assert!(!w.contains("already fits"), "{w}");
+        let w = diagnosis_words(&DiagnosisSummary {
+            verdict_effect: "unexplained".into(),
+            ..s
+        });
+        assert!(w.starts_with("Which: unexplained."), "{w}");
+        assert!(w.contains("1.1\u{a0}%") && w.contains("0.2\u{a0}%"), "{w}");
     }
 
     #[test]

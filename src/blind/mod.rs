@@ -5,13 +5,18 @@
 //! write) the confusion matrix, the share of right verdicts, false claims on null cases and
 //! the gap shrink.
 //!
-//! The case design (truth effects per kind, parameter draws, protocols) is the diagnosis crate's
-//! (`cablab_diagnose::blind`); this module adds the write → read leg and the report.
+//! - [`cases`]: the case design (truth effects per kind, parameter draws, protocols, layouts).
+//! - [`score`]: the diagnosis of each case, timed, and the report.
+//!
+//! This module adds the write → read leg and the command.
+
+pub mod cases;
+pub mod score;
 
 use crate::commands::{CliError, CmdResult};
 use cablab_core::TestKind;
-use cablab_diagnose::blind::{self, BlindCase};
 use cablab_diagnose::registry::{Registry, Rod};
+use cases::BlindCase;
 use std::process::ExitCode;
 
 /// Replace each test by what the readers get back from its written file (conditioned and
@@ -64,7 +69,7 @@ pub fn bench(
         }
     }
     let seed_list: Vec<u64> = (1..=seeds).collect();
-    let (mut cases, gen_errors) = blind::standard_matrix(&kinds, &[0.003, 0.01], &seed_list);
+    let (mut cases, gen_errors) = cases::standard_matrix(&kinds, &[0.003, 0.01], &seed_list);
     let mut errors = gen_errors;
     cases.retain_mut(|c| match through_readers(c) {
         Ok(()) => true,
@@ -87,7 +92,7 @@ pub fn bench(
         .progress_chars("=> "),
     );
     let wrong = std::sync::atomic::AtomicUsize::new(0);
-    let report = blind::run_matrix_observed(ctx, &cases, &Default::default(), &|o| {
+    let report = score::run_matrix_observed(ctx, &cases, &Default::default(), &|o| {
         if !o.right {
             let n = wrong.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
             bar.set_message(format!("{n} not right"));
@@ -106,7 +111,7 @@ pub fn bench(
         kinds_text.join(","),
         rod.max_points
     );
-    text.push_str(&blind::render(&report));
+    text.push_str(&score::render(&report));
     text.push_str("```\n");
     if !errors.is_empty() {
         text.push_str(&format!(

@@ -1,10 +1,10 @@
 //! Speed of the gap diagnosis: one uniform-state test of about 5,000 samples with every candidate
 //! (target < 2 s), and one three-point test (target < 30 s). Prints wall times.
 //!
-//! `cargo run -p cablab-diagnose --example speed [-- --skip-three-point]`
+//! `cargo run --example diagnose_speed [-- --skip-three-point]`
 
+use cablab::blind::cases::generate_case_at;
 use cablab_core::{Effect, TestKind};
-use cablab_diagnose::blind::generate_case_at;
 use cablab_diagnose::registry::{Registry, Rod};
 use cablab_diagnose::{diagnose, Context, DiagnoseOptions};
 use cablab_synth::Layout;

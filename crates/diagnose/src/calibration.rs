@@ -1,0 +1,361 @@
+//! Calibration of a model to measured tests: the wrapper around the one fitting routine
+//! ([`crate::calibrate`]) that builds the forward model, its starts, pinned parameters and the
+//! response offsets, and reports the fitted values with their uncertainties.
+
+use crate::calibrate::{self, FitData, FitOptions, Forward};
+use crate::error::DiagError;
+use crate::floors::noise_floor;
+use crate::model::{DiagTest, ModelForward, ModelSpec};
+use crate::options::Context;
+use crate::params::ParamSpec;
+use crate::stats;
+use rand::{Rng, SeedableRng};
+use serde::ser::{SerializeMap, Serializer};
+use serde::Serialize;
+
+/// Parameter name → value, serialised as a JSON object in the model's parameter order.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct ParamMap(pub Vec<(String, f64)>);
+
+impl Serialize for ParamMap {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        let mut m = s.serialize_map(Some(self.0.len()))?;
+        for (k, v) in &self.0 {
+            m.serialize_entry(k, v)?;
+        }
+        m.end()
+    }
+}
+
+/// Like [`ParamMap`] with `null` where a value is unknown.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct OptParamMap(pub Vec<(String, Option<f64>)>);
+
+impl Serialize for OptParamMap {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        let mut m = s.serialize_map(Some(self.0.len()))?;
+        for (k, v) in &self.0 {
+            m.serialize_entry(k, v)?;
+        }
+        m.end()
+    }
+}
+
+/// A calibrated model.
+#[derive(Debug, Clone, Serialize)]
+pub struct Calibration {
+    /// The model (`law+effect…`).
+    pub model: String,
+    /// Fitted parameters (SI).
+    pub params: ParamMap,
+    /// One standard error per parameter (`null`: not identified).
+    pub std_err: OptParamMap,
+    /// Parameters that sit at a bound, with the bound (`lower`/`upper`).
+    pub at_bound: Vec<(String, &'static str)>,
+    /// RMS of (measured − simulated) per test over the fitted samples (response units).
+    pub gap_rms: Vec<f64>,
+    /// χ² of the fit in noise units, and its number of samples.
+    pub chi2: f64,
+    /// Number of fitted samples.
+    pub n_fit: usize,
+    /// Effective sample size of the fitted residuals.
+    pub n_eff: f64,
+    /// Residual evaluations spent.
+    pub evaluations: usize,
+    #[serde(skip)]
+    pub(crate) values: Vec<f64>,
+    #[serde(skip)]
+    pub(crate) specs: Vec<ParamSpec>,
+    #[serde(skip)]
+    pub(crate) std: Vec<Option<f64>>,
+    /// Directions of parameter space the data determine.
+    pub k_eff: usize,
+    /// Constant response offset per test added to the simulation (response units; zeros unless
+    /// the offset was profiled out, [`CalibrateOptions::free_offset`]).
+    pub response_offset: Vec<f64>,
+}
+
+impl Calibration {
+    /// Parameter values in the model's order.
+    pub fn values(&self) -> &[f64] {
+        &self.values
+    }
+    /// Value of a named parameter.
+    pub fn get(&self, name: &str) -> Option<f64> {
+        self.params.0.iter().find(|(n, _)| n == name).map(|p| p.1)
+    }
+    /// Standard error of a named parameter.
+    pub fn std_err_of(&self, name: &str) -> Option<f64> {
+        self.std_err
+            .0
+            .iter()
+            .find(|(n, _)| n == name)
+            .and_then(|p| p.1)
+    }
+    /// Effective number of parameters (see the module doc): the directions of parameter space
+    /// the data determine (free parameters only: one at a bound does not count), less the
+    /// parameters whose 2σ interval contains the value at which their effect vanishes (0, for
+    /// linear-axis parameters whose range includes or starts at 0).
+    pub fn effective_params(&self) -> usize {
+        let neutral = self
+            .specs
+            .iter()
+            .zip(&self.values)
+            .zip(&self.std)
+            .filter(|((s, &p), se)| {
+                !s.log_scale
+                    && s.lower <= 0.0
+                    && s.upper >= 0.0
+                    && !s.at_bound(p, 1e-3)
+                    && se.is_some_and(|se| p.abs() <= 2.0 * se)
+            })
+            .count();
+        self.k_eff.saturating_sub(neutral)
+    }
+}
+
+/// Settings of a single calibration.
+#[derive(Debug, Clone)]
+pub struct CalibrateOptions {
+    /// Starts (first: the specs' initial values or `warm`; the rest quasi-random).
+    pub starts: usize,
+    /// Seed of the random starts.
+    pub seed: u64,
+    /// Levenberg–Marquardt settings.
+    pub fit: FitOptions,
+    /// Samples per test the fit sees (`None`: all).
+    pub fit_idx: Option<Vec<Vec<usize>>>,
+    /// Noise floor per test (`None`: estimated).
+    pub noise: Option<Vec<f64>>,
+    /// Warm start: named values to start from (others from the specs).
+    pub warm: Option<ParamMap>,
+    /// Parameters held at given values (not fitted; reported without a standard error).
+    pub pinned: Option<ParamMap>,
+    /// Profile out a constant response offset per test (the residual error of the zeroing).
+    pub free_offset: bool,
+}
+
+impl Default for CalibrateOptions {
+    fn default() -> Self {
+        CalibrateOptions {
+            starts: 3,
+            seed: 1,
+            fit: FitOptions::default(),
+            fit_idx: None,
+            noise: None,
+            warm: None,
+            pinned: None,
+            free_offset: false,
+        }
+    }
+}
+
+/// Calibrate `model` to `tests` jointly (shared parameters), replaying each measured control
+/// history: bounded Levenberg–Marquardt from several starts, with standard errors.
+pub fn calibrate(
+    ctx: Context,
+    tests: &[DiagTest],
+    model: &ModelSpec,
+    opts: &CalibrateOptions,
+) -> Result<Calibration, DiagError> {
+    for (i, t) in tests.iter().enumerate() {
+        t.validate(i)?;
+    }
+    let full = ModelForward::new(tests, model, ctx.catalog, ctx.rod)?;
+    let pinned = match &opts.pinned {
+        Some(p) => Some(
+            calibrate::Pinned::new(&full, &p.0).map_err(|why| DiagError::Model {
+                model: model.label(),
+                why,
+            })?,
+        ),
+        None => None,
+    };
+    let fwd: &dyn Forward = match &pinned {
+        Some(p) => p,
+        None => &full,
+    };
+    let noise = opts.noise.clone().unwrap_or_else(|| noise_floor(tests));
+    let fit_idx = opts.fit_idx.clone().unwrap_or_else(|| {
+        tests
+            .iter()
+            .map(|t| (0..t.control.len()).collect())
+            .collect()
+    });
+    if fit_idx.iter().map(Vec::len).sum::<usize>() <= fwd.specs().len() {
+        return Err(DiagError::NotEnoughData(format!(
+            "{} fitted samples for {} parameters",
+            fit_idx.iter().map(Vec::len).sum::<usize>(),
+            fwd.specs().len()
+        )));
+    }
+    let data = FitData {
+        measured: tests.iter().map(|t| t.response.as_slice()).collect(),
+        weight: noise
+            .iter()
+            .map(|s| 1.0 / s.max(f64::MIN_POSITIVE))
+            .collect(),
+        fit_idx,
+        free_offset: opts.free_offset,
+    };
+    let starts = make_starts(fwd.specs(), opts.warm.as_ref(), opts.starts, opts.seed);
+    let mut f = calibrate::fit(fwd, &data, &starts, &opts.fit);
+    if let Some(p) = &pinned {
+        // Back to the whole model: pinned parameters carry no standard error; one pinned at a
+        // bound is reported there.
+        let specs = full.specs();
+        let mut std_err = vec![None; specs.len()];
+        let mut at_bound: Vec<Option<&'static str>> = specs
+            .iter()
+            .zip(p.expand(&f.params))
+            .map(|(s, v)| s.which_bound(v, 1e-3))
+            .collect();
+        for (c, &j) in p.free().iter().enumerate() {
+            std_err[j] = f.std_err[c];
+            at_bound[j] = f.at_bound[c];
+        }
+        f.params = p.expand(&f.params);
+        f.names = specs.iter().map(|s| s.name.clone()).collect();
+        f.std_err = std_err;
+        f.at_bound = at_bound;
+    }
+    let mut sims = full.simulate_all(&f.params)?;
+    let response_offset = calibrate::offsets(&data, &sims);
+    for (s, c) in sims.iter_mut().zip(&response_offset) {
+        s.iter_mut().for_each(|v| *v += c);
+    }
+    let gap_rms = tests
+        .iter()
+        .zip(&sims)
+        .zip(&data.fit_idx)
+        .map(|((t, s), idx)| {
+            let r: Vec<f64> = idx.iter().map(|&i| t.response[i] - s[i]).collect();
+            stats::rms(&r)
+        })
+        .collect();
+    Ok(Calibration {
+        model: model.label(),
+        params: ParamMap(
+            f.names
+                .iter()
+                .cloned()
+                .zip(f.params.iter().copied())
+                .collect(),
+        ),
+        std_err: OptParamMap(
+            f.names
+                .iter()
+                .cloned()
+                .zip(f.std_err.iter().copied())
+                .collect(),
+        ),
+        at_bound: f
+            .names
+            .iter()
+            .zip(&f.at_bound)
+            .filter_map(|(n, b)| b.map(|b| (n.clone(), b)))
+            .collect(),
+        gap_rms,
+        chi2: f.cost,
+        n_fit: f.n_fit,
+        n_eff: f.n_eff,
+        evaluations: f.evaluations,
+        values: f.params,
+        specs: full.specs().to_vec(),
+        std: f.std_err,
+        k_eff: f.k_eff,
+        response_offset,
+    })
+}
+
+/// Starting points: the warm point (if any: the warm values, the data-informed initial values
+/// for the parameters it does not name; else the initial values), the data-informed initial
+/// values, then alternately perturbations of the first point (±30 % of each axis) and points
+/// anywhere in the bounds. Every start keeps 2 % off the bounds, where the sine map of the bounds
+/// has no gradient and a fit would stay stuck.
+///
+/// Nested start. A warm point is a fitted special case of the model (the baseline, or the model
+/// one effect smaller): one more start puts the parameters it does not name
+/// where their effect is switched off ([`switched_off`]; 0.1 % off the bounds, where the gradient
+/// is still √0.001 ≈ 3 % of its largest), so that start *is* the special case and
+/// Levenberg–Marquardt, which never increases the cost, cannot end worse than it. It comes last
+/// and does not replace the others: a yield strength switched off is out of the data's reach and
+/// has no gradient, and where the other starts end as well (ties go to the earlier start) their
+/// result is kept.
+fn make_starts(specs: &[ParamSpec], warm: Option<&ParamMap>, n: usize, seed: u64) -> Vec<Vec<f64>> {
+    let inside = |s: &ParamSpec, p: f64| s.at_fraction(s.fraction(p).clamp(0.02, 0.98));
+    let near = |s: &ParamSpec, p: f64| s.at_fraction(s.fraction(p).clamp(1e-3, 1.0 - 1e-3));
+    let initial: Vec<f64> = specs.iter().map(|s| inside(s, s.initial)).collect();
+    let first: Vec<f64> = specs
+        .iter()
+        .zip(&initial)
+        .map(|(s, &p0)| {
+            warm.and_then(|w| {
+                w.0.iter()
+                    .find(|(k, _)| *k == s.name)
+                    .map(|p| inside(s, p.1))
+            })
+            .unwrap_or(p0)
+        })
+        .collect();
+    let mut out = vec![first.clone()];
+    if first != initial {
+        out.push(initial);
+    }
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+    let mut k = 1;
+    while out.len() < n.max(1) {
+        let p = specs
+            .iter()
+            .zip(&first)
+            .map(|(s, &p0)| {
+                let u = if k % 2 == 1 {
+                    (s.fraction(p0) + rng.random_range(-0.3..0.3)).clamp(0.02, 0.98)
+                } else {
+                    rng.random_range(0.05..0.95)
+                };
+                s.at_fraction(u)
+            })
+            .collect();
+        out.push(p);
+        k += 1;
+    }
+    if let Some(w) = warm {
+        let nested: Vec<f64> = specs.iter().map(|s| near(s, switched_off(s, w))).collect();
+        if nested != first {
+            out.push(nested);
+        }
+    }
+    out
+}
+
+/// The value at which a parameter of an extended model reproduces its special case `warm` (the
+/// fitted values of the smaller model, by name): the warm value itself when named; a stiffness
+/// of a piecewise law (`EA1`, `EA2`) takes the special case's stiffness (`EA`: one slope, the
+/// linear law); a yield strength ([`YIELD_PARAMS`](crate::select::YIELD_PARAMS)) its upper bound
+/// (out of the data's reach: no plastic flow); a parameter whose range holds 0 (a hardening
+/// modulus, a Maxwell or friction stiffness or strength, a compliance, a drift rate, a friction
+/// coefficient) 0; a friction stiffness on a log axis its lower bound. Other parameters (a
+/// relaxation time, a threshold strain, a number of elements) do not act once their effect is
+/// off and keep their initial value.
+pub(crate) fn switched_off(s: &ParamSpec, warm: &ParamMap) -> f64 {
+    let named = |n: &str| warm.0.iter().find(|(k, _)| k == n).map(|p| p.1);
+    if let Some(v) = named(&s.name) {
+        return v;
+    }
+    let stem = s.name.trim_end_matches(['1', '2']);
+    if stem != s.name && !stem.ends_with('_') {
+        if let Some(v) = named(stem) {
+            return v;
+        }
+    }
+    if crate::select::YIELD_PARAMS.contains(&s.name.as_str()) {
+        s.upper
+    } else if s.lower <= 0.0 && s.upper >= 0.0 {
+        0.0
+    } else if s.log_scale && s.name.ends_with("_f") {
+        s.lower
+    } else {
+        s.initial
+    }
+}

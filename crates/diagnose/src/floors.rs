@@ -1,0 +1,111 @@
+//! The floors a gap is measured against: the noise of the readings and the resolution of the
+//! instrument, and whether two models differ by more than the readings' rounding.
+
+use crate::model::DiagTest;
+
+/// Noise floor per test: σ of the response noise estimated from the data itself
+/// (`cablab_measure::noise_level`: MAD of the second differences, robust to turning points).
+pub fn noise_floor(tests: &[DiagTest]) -> Vec<f64> {
+    tests
+        .iter()
+        .map(|t| {
+            let s = cablab_measure::noise_level(&t.response);
+            // The control is measured too: its noise, or the rounding of a quantised encoder
+            // (uniform over one count: σ = q/√12), reaches the simulated response through the
+            // stiffness. A 0.1 µm encoder on a 32 mm cable is ~0.25 N per count.
+            let q = cablab_measure::quantum(&t.control);
+            let sc = cablab_measure::noise_level(&t.control).max(q / 12f64.sqrt());
+            let k = crate::model::initial_slope(&t.control, &t.response).unwrap_or(0.0);
+            let s = (s * s + (k * sc).powi(2)).sqrt();
+            // Never below a part in 10⁶ of the range (noise-free synthetic data).
+            s.max(1e-6 * t.response_scale())
+        })
+        .collect()
+}
+
+/// Measurement resolution per test, in response units: the rounding of the control's encoder
+/// carried through the initial stiffness, and the rounding of the response's ADC, each as the
+/// RMS error of rounding to its quantum (q/√12), combined in quadrature. The quanta are read from
+/// the data (`cablab_measure::resolution`: the smallest step between samples; for unquantised
+/// channels a tiny fraction of the noise).
+///
+/// Why it matters beyond the noise floor: when the control moves a whole number of counts per
+/// sample (a 0.1 µm encoder at 2 µm/s and 20 Hz), the rounding error is not noise but a
+/// constant along each branch, set by where the branch started between two counts. Loading
+/// and unloading branches then sit a fraction of a count apart: a loop of up to k·q wide that
+/// any loading/unloading-dependent law (friction, a fast Maxwell branch) can fit, although the
+/// material has none. Two models whose predictions differ by less than this resolution cannot be
+/// told apart by the instrument.
+pub fn resolution_floor(tests: &[DiagTest]) -> Vec<f64> {
+    tests
+        .iter()
+        .map(|t| {
+            let qc = cablab_measure::quantum(&t.control);
+            let qr = cablab_measure::quantum(&t.response);
+            let k = crate::model::initial_slope(&t.control, &t.response).unwrap_or(0.0);
+            ((k * qc).powi(2) + qr * qr).sqrt() / 12f64.sqrt()
+        })
+        .collect()
+}
+
+/// RMS over the samples `idx` of the difference of two residual histories (per test, all
+/// samples), in units of each test's `resolution`: how far apart two models' predictions are,
+/// measured in what the instrument can resolve. Infinite where a test's resolution is 0 and the
+/// predictions differ.
+pub fn shift_in_resolution(
+    a: &[Vec<f64>],
+    b: &[Vec<f64>],
+    idx: &[Vec<usize>],
+    resolution: &[f64],
+) -> f64 {
+    let (mut ss, mut n) = (0.0, 0usize);
+    for (((ra, rb), ix), &q) in a.iter().zip(b).zip(idx).zip(resolution) {
+        for &i in ix {
+            let d = ra[i] - rb[i];
+            ss += if d == 0.0 { 0.0 } else { (d / q).powi(2) };
+            n += 1;
+        }
+    }
+    if n == 0 {
+        0.0
+    } else {
+        (ss / n as f64).sqrt()
+    }
+}
+
+/// Whether two models' held-out predictions differ only as the readings' rounding can make
+/// them differ: by a constant along each branch (cycle and branch of [`SegLabel`]) of at most
+/// half a count (√3 × the RMS `resolution`), with what varies within the branches below half
+/// the RMS resolution. A commensurate encoder leaves exactly such a pattern (one rounding error
+/// per branch); a material effect of that size varies along the branch with the load.
+pub fn rounding_like(
+    tests: &[DiagTest],
+    a: &[Vec<f64>],
+    b: &[Vec<f64>],
+    idx: &[Vec<usize>],
+    resolution: &[f64],
+) -> bool {
+    use std::collections::BTreeMap;
+    let (mut within, mut n) = (0.0, 0usize);
+    for (ti, t) in tests.iter().enumerate() {
+        let q = resolution[ti];
+        let labels = t.labels_or_derived();
+        let mut groups: BTreeMap<(usize, &'static str), Vec<f64>> = BTreeMap::new();
+        for &i in &idx[ti] {
+            let l = labels[i];
+            groups
+                .entry((l.cycle, l.branch.as_str()))
+                .or_default()
+                .push(a[ti][i] - b[ti][i]);
+        }
+        for d in groups.values() {
+            let m = d.iter().sum::<f64>() / d.len() as f64;
+            if m.abs() > 3f64.sqrt() * q {
+                return false;
+            }
+            within += d.iter().map(|v| ((v - m) / q).powi(2)).sum::<f64>();
+            n += d.len();
+        }
+    }
+    n == 0 || (within / n as f64).sqrt() <= 0.5
+}

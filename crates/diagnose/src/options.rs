@@ -1,0 +1,90 @@
+//! Settings of the diagnosis and the law registry and rod it works with.
+
+use crate::calibrate::FitOptions;
+use crate::model::{LawCatalog, RodSimulator};
+use cablab_core::Effect;
+use serde::Serialize;
+
+/// Which samples the fits do not see.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum HoldoutPolicy {
+    /// The last cycle of every test (the last 30 % of samples of a test without cycles).
+    LastCycle,
+    /// The last fraction of samples of every test.
+    LastFraction(f64),
+    /// Whole tests (indices), e.g. a second specimen length; the fits see the others.
+    Tests(Vec<usize>),
+}
+
+/// The law registry and rod solver the diagnosis works with.
+#[derive(Clone, Copy)]
+pub struct Context<'a> {
+    /// Sectional laws.
+    pub catalog: &'a dyn LawCatalog,
+    /// The rod, for three-point tests.
+    pub rod: Option<&'a dyn RodSimulator>,
+}
+
+static PROJECT_REGISTRY: crate::registry::Registry = crate::registry::Registry;
+static PROJECT_ROD: crate::registry::Rod = crate::registry::Rod {
+    max_points: crate::registry::DEFAULT_ROD_POINTS,
+};
+
+impl Context<'static> {
+    /// The project's law registry (`cablab-laws`) and rod (`cablab-rod`).
+    pub fn project() -> Self {
+        Context {
+            catalog: &PROJECT_REGISTRY,
+            rod: Some(&PROJECT_ROD),
+        }
+    }
+}
+
+/// Settings of calibration and diagnosis.
+#[derive(Debug, Clone)]
+pub struct DiagnoseOptions {
+    /// Baseline law (registry name), default `elastoplastic`.
+    pub baseline: String,
+    /// Candidate effects to try (`None`: every effect that applies to the kind and baseline).
+    pub candidates: Option<Vec<Effect>>,
+    /// Also run the ladder from linear elasticity, one effect at a time.
+    pub ladder: bool,
+    /// What the fits do not see.
+    pub holdout: HoldoutPolicy,
+    /// Starts per fit (the first is data-informed or warm, the rest quasi-random in the bounds).
+    pub starts: usize,
+    /// Starts per fit for tests through the rod (three-point), where a simulation is costly.
+    pub rod_starts: usize,
+    /// Seed of the random starts.
+    pub seed: u64,
+    /// Levenberg–Marquardt settings.
+    pub fit: FitOptions,
+    /// Noise floor per test (response units) if known; `None`: estimated from the data.
+    pub noise: Option<Vec<f64>>,
+    /// Profile out a constant response offset per test in every model (default on): the zero
+    /// a caller removed is an estimate from a few samples (≈ 0.2–0.4 σ off without a rest at
+    /// the start), and a model that cannot shift its response would otherwise pay for it on
+    /// the held-out cycle while a trend (sensor drift) absorbs part of it.
+    pub free_offset: bool,
+    /// Try the baseline's elastic limit (yield out of the data's reach, see `elastic_limit`).
+    pub elastic_limit: bool,
+}
+
+impl Default for DiagnoseOptions {
+    fn default() -> Self {
+        DiagnoseOptions {
+            baseline: "elastoplastic".into(),
+            candidates: None,
+            ladder: false,
+            holdout: HoldoutPolicy::LastCycle,
+            starts: 4,
+            rod_starts: 2,
+            seed: 1,
+            fit: FitOptions::default(),
+            noise: None,
+            free_offset: true,
+            elastic_limit: true,
+        }
+    }
+}

@@ -1,0 +1,376 @@
+//! Scoring on held-out data and the choice among models (the rules in [`crate::diagnose`]'s
+//! module doc): fit a model on the training samples, score it on the held-out ones, and pick the
+//! simplest adequate one under the information criterion, materiality and resolution rules.
+
+use crate::calibration::{calibrate, CalibrateOptions, Calibration, ParamMap};
+use crate::diagnose::Failed;
+use crate::error::DiagError;
+use crate::floors::shift_in_resolution;
+use crate::model::{DiagTest, ModelForward, ModelSpec, TEST_LEVEL};
+use crate::options::{Context, DiagnoseOptions};
+use crate::stats;
+use cablab_core::{Effect, TestKind};
+use rayon::prelude::*;
+
+/// Yield parameters of the project's elastoplastic laws (tension; torsion and bending): above
+/// the data's reach the law never leaves its elastic range.
+pub const YIELD_PARAMS: [&str; 2] = ["F_y", "M_y"];
+
+/// The baseline's elastic limit: when the baseline has a yield parameter, refit it with the
+/// yield pinned at its upper bound (three times the largest measured stress resultant: out of
+/// the data's reach). Data that stay elastic leave the yield unidentifiable and a free fit parks
+/// it just under the peak, where a trace of spurious plastic flow fits a few counts of the
+/// readings' rounding; that is not evidence of yield. The elastic limit replaces the free fit when
+/// it fits the training samples at least as well, or when the two predict the training samples
+/// within the measurement resolution ([`resolution_floor`]): parsimony, a yield that never
+/// engages costs nothing. Returns the baseline to use and whether it is the elastic limit.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn elastic_limit(
+    ctx: Context,
+    tests: &[DiagTest],
+    base: Scored,
+    train: &[Vec<usize>],
+    held: &[Vec<usize>],
+    noise: &[f64],
+    resolution: &[f64],
+    opts: &DiagnoseOptions,
+) -> (Scored, bool) {
+    if !opts.elastic_limit {
+        return (base, false);
+    }
+    let Some(j) = base
+        .cal
+        .specs
+        .iter()
+        .position(|s| YIELD_PARAMS.contains(&s.name.as_str()))
+    else {
+        return (base, false);
+    };
+    let spec = &base.cal.specs[j];
+    if spec.which_bound(base.cal.values[j], 1e-3) == Some("upper") {
+        return (base, true);
+    }
+    let pinned = ParamMap(vec![(spec.name.clone(), spec.upper)]);
+    let Ok(el) = score(
+        ctx,
+        tests,
+        &base.model,
+        Effect::None,
+        train,
+        held,
+        noise,
+        Some(&base.cal.params),
+        Some(&pinned),
+        opts,
+    ) else {
+        return (base, false);
+    };
+    let shift = shift_in_resolution(&base.all_resid, &el.all_resid, train, resolution);
+    if el.cal.chi2 <= base.cal.chi2 || shift <= 1.0 {
+        (el, true)
+    } else {
+        (base, false)
+    }
+}
+
+/// The smallest share of the baseline's excess gap (squared, above the noise floor) an effect
+/// must remove to be an explanation. A model far from the data leaves a gap of many noise
+/// units; with hundreds of held-out samples a candidate that removes 1 % of it is still
+/// "significant", and naming it would be wrong (a real MTS 793 export: 16.1 % → 16.1 %).
+pub const MIN_EXPLAINED_SHARE: f64 = 0.25;
+
+/// [`EffectScore::excess_explained`] from held-out gaps in noise units.
+pub fn excess_explained(g_base: f64, g: f64) -> f64 {
+    let excess = g_base * g_base - 1.0;
+    if excess <= 0.0 {
+        0.0
+    } else {
+        1.0 - (g * g - 1.0) / excess
+    }
+}
+
+/// A model scored on held-out data.
+#[derive(Clone)]
+pub(crate) struct Scored {
+    pub(crate) effect: Effect,
+    pub(crate) model: ModelSpec,
+    pub(crate) cal: Calibration,
+    /// Held-out residuals per test (measured − simulated).
+    pub(crate) held_resid: Vec<Vec<f64>>,
+    /// Residuals on all samples.
+    pub(crate) all_resid: Vec<Vec<f64>>,
+    pub(crate) rss_noise: f64,
+    pub(crate) n_held: usize,
+}
+
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn score(
+    ctx: Context,
+    tests: &[DiagTest],
+    model: &ModelSpec,
+    effect: Effect,
+    train: &[Vec<usize>],
+    held: &[Vec<usize>],
+    noise: &[f64],
+    warm: Option<&ParamMap>,
+    pinned: Option<&ParamMap>,
+    opts: &DiagnoseOptions,
+) -> Result<Scored, DiagError> {
+    let copts = CalibrateOptions {
+        starts: if tests[0].kind == TestKind::ThreePoint {
+            opts.rod_starts
+        } else {
+            opts.starts
+        },
+        seed: opts.seed,
+        fit: opts.fit,
+        fit_idx: Some(train.to_vec()),
+        noise: Some(noise.to_vec()),
+        warm: warm.cloned(),
+        pinned: pinned.cloned(),
+        free_offset: opts.free_offset,
+    };
+    let cal = calibrate(ctx, tests, model, &copts)?;
+    let fwd = ModelForward::new(tests, model, ctx.catalog, ctx.rod)?;
+    let sims = fwd.simulate_all(cal.values())?;
+    let all_resid: Vec<Vec<f64>> = tests
+        .iter()
+        .zip(&sims)
+        .zip(&cal.response_offset)
+        .map(|((t, s), c)| t.response.iter().zip(s).map(|(m, s)| m - s - c).collect())
+        .collect();
+    let held_resid: Vec<Vec<f64>> = all_resid
+        .iter()
+        .zip(held)
+        .map(|(r, idx)| idx.iter().map(|&i| r[i]).collect())
+        .collect();
+    let rss_noise = held_resid
+        .iter()
+        .zip(noise)
+        .map(|(r, s)| r.iter().map(|v| (v / s).powi(2)).sum::<f64>())
+        .sum();
+    let n_held = held.iter().map(Vec::len).sum();
+    Ok(Scored {
+        effect,
+        model: model.clone(),
+        cal,
+        held_resid,
+        all_resid,
+        rss_noise,
+        n_held,
+    })
+}
+
+/// Effects that apply to `kind` on top of `base` (law extensions from the catalog, test-level
+/// effects of the rig), excluding what the model already has.
+pub fn applicable(ctx: Context, kind: TestKind, base: &ModelSpec) -> Vec<Effect> {
+    let mut v: Vec<Effect> = Vec::new();
+    if base.law == "linear" {
+        v.push(Effect::Plasticity);
+    }
+    for e in ctx.catalog.law_effects(kind, &base.law) {
+        if !v.contains(&e) {
+            v.push(e);
+        }
+    }
+    for e in TEST_LEVEL {
+        if e != Effect::SupportFriction || kind == TestKind::ThreePoint {
+            v.push(e);
+        }
+    }
+    v.retain(|e| *e != Effect::None && !base.has(*e));
+    v
+}
+
+/// The experiment that separates two explanations (SPEC: a hold, a second rate, a second length).
+pub fn separating_experiment(a: Effect, b: Effect) -> &'static str {
+    use Effect::*;
+    let has = |e: Effect| a == e || b == e;
+    if has(Viscoelasticity) {
+        "a hold at constant control (relaxation) or the same cycles at a second rate"
+    } else if has(MachineCompliance) {
+        "the same protocol on a second specimen length"
+    } else if has(SensorDrift) {
+        "a hold at zero load (the response must stay at zero)"
+    } else if has(SupportFriction) {
+        "a second support span, or lubricated supports"
+    } else if has(FrictionHysteresis) {
+        "small cycles well inside the elastic range (friction loops open, plasticity does not)"
+    } else if has(PiecewiseElasticity) {
+        "unloading from beyond the threshold (piecewise elasticity retraces its loading path)"
+    } else if has(StiffnessDegradation) && has(KinematicHardening) {
+        "unloading-stiffness measurement after cycles of growing amplitude"
+    } else {
+        "a cycle to a larger amplitude with a reversed loading"
+    }
+}
+
+/// Fit and score every candidate (in parallel), warm-started from the base model's parameters.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn compare(
+    ctx: Context,
+    tests: &[DiagTest],
+    base: &Scored,
+    cands: &[Effect],
+    train: &[Vec<usize>],
+    held: &[Vec<usize>],
+    noise: &[f64],
+    opts: &DiagnoseOptions,
+) -> (Vec<Scored>, Vec<Failed>) {
+    let results: Vec<(Effect, Result<Scored, DiagError>)> = cands
+        .par_iter()
+        .filter(|&&e| base.model.with(e) != base.model)
+        .map(|&e| {
+            let m = base.model.with(e);
+            let r = score(
+                ctx,
+                tests,
+                &m,
+                e,
+                train,
+                held,
+                noise,
+                Some(&base.cal.params),
+                None,
+                opts,
+            );
+            (e, r)
+        })
+        .collect();
+    let mut scored = Vec::new();
+    let mut failed = Vec::new();
+    for (e, r) in results {
+        match r {
+            Ok(s) => scored.push(s),
+            Err(err) => failed.push(Failed {
+                effect: e,
+                why: err.to_string(),
+            }),
+        }
+    }
+    (scored, failed)
+}
+
+/// A held-out gap (RMS in noise units) at or below this "fits to the noise floor": the
+/// systematic part is below half the noise (√(1.1² − 1) ≈ 0.46), which is about what an
+/// unmodelled encoder quantisation or the uncertainty of the noise estimate leaves.
+pub const NOISE_FLOOR_FIT: f64 = 1.1;
+
+/// The outcome of the comparison.
+pub(crate) struct Choice {
+    pub(crate) effect: Effect,
+    pub(crate) equivalent: Vec<Effect>,
+    pub(crate) n_eff: f64,
+    pub(crate) ic_best: f64,
+    pub(crate) n_held: usize,
+}
+
+impl Choice {
+    pub(crate) fn ic_of(&self, s: &Scored) -> f64 {
+        ic(s, self.n_eff, self.n_held)
+    }
+}
+
+pub(crate) fn ic(s: &Scored, n_eff: f64, n_held: usize) -> f64 {
+    n_eff * (s.rss_noise / n_held as f64).max(f64::MIN_POSITIVE).ln()
+        + n_eff.max(2.0).ln() * s.cal.effective_params() as f64
+}
+
+/// Parsimony on the held-out data (module doc), among the baseline and the candidates the
+/// instrument can tell from it and whose fit did not fail (`resolved`, one flag per candidate)
+/// that remove at least [`MIN_EXPLAINED_SHARE`] of its excess gap.
+pub(crate) fn choose(base: &Scored, scored: &[Scored], resolved: &[bool]) -> Choice {
+    let n_held = base.n_held;
+    let g = |s: &Scored| (s.rss_noise / s.n_held.max(1) as f64).sqrt();
+    let scored: Vec<&Scored> = scored
+        .iter()
+        .zip(resolved)
+        .filter(|(s, &r)| r && excess_explained(g(base), g(s)) >= MIN_EXPLAINED_SHARE)
+        .map(|(s, _)| s)
+        .collect();
+    // n_eff from the residuals of the best-fitting model (closest to white noise), with the
+    // noise's correlation read from their differences (`stats::noise_lag1_from_differences`).
+    let best = scored
+        .iter()
+        .copied()
+        .chain(std::iter::once(base))
+        .min_by(|a, b| a.rss_noise.total_cmp(&b.rss_noise))
+        .unwrap_or(base);
+    let series: Vec<&[f64]> = best.held_resid.iter().map(Vec::as_slice).collect();
+    let rho = stats::noise_lag1_from_differences(&series);
+    let n_eff = stats::effective_sample_size(n_held, rho);
+    let all: Vec<&Scored> = std::iter::once(base)
+        .chain(scored.iter().copied())
+        .collect();
+    let ics: Vec<f64> = all.iter().map(|s| ic(s, n_eff, n_held)).collect();
+    let ic_best = ics.iter().copied().fold(f64::INFINITY, f64::min);
+    // Indistinguishable: within twice the price of one parameter (plus 2) of the best. Twice,
+    // because the AR(1) n_eff and the estimated noise floor both flatter small improvements.
+    let tol = 2.0 * n_eff.max(2.0).ln() + 2.0;
+    let g0 = (base.rss_noise / n_held as f64).sqrt();
+    // The set of models indistinguishable from the best.
+    let mut set: Vec<usize> = (0..all.len())
+        .filter(|&i| ics[i] - ic_best <= tol)
+        .collect();
+    if g0 <= NOISE_FLOOR_FIT {
+        set = vec![0];
+    }
+    set.sort_by(|&a, &b| {
+        let (sa, sb) = (all[a], all[b]);
+        sa.cal
+            .effective_params()
+            .cmp(&sb.cal.effective_params())
+            .then(sa.cal.values().len().cmp(&sb.cal.values().len()))
+            .then(ics[a].total_cmp(&ics[b]))
+    });
+    let pick = set[0];
+    let effect = all[pick].effect;
+    let equivalent = if effect == Effect::None {
+        vec![]
+    } else {
+        set.iter()
+            .skip(1)
+            .map(|&i| all[i].effect)
+            .filter(|e| *e != Effect::None)
+            .collect()
+    };
+    Choice {
+        effect,
+        equivalent,
+        n_eff,
+        ic_best,
+        n_held,
+    }
+}
+
+/// Why a candidate's calibration counts as failed, if it does: it ends worse on the training
+/// samples (the cost the fit minimises) than the baseline by more than a part in 10³ (plus one
+/// noise unit squared). An extension that contains the baseline as its special case starts from
+/// it ([nested starts](crate::calibration)) and cannot end there; one that replaces the
+/// baseline's law (piecewise elasticity) can, and then does not follow the data as well as the
+/// baseline. Either way it is no explanation: it takes no part in the verdict and is shown apart.
+pub(crate) fn fit_failure(base: &Scored, s: &Scored) -> Option<String> {
+    let (cb, cs) = (base.cal.chi2, s.cal.chi2);
+    if !cs.is_finite() || cs > cb * (1.0 + 1e-3) + 1.0 {
+        let n = base.cal.n_fit.max(1) as f64;
+        let nested = base.model.effects().iter().all(|e| s.model.has(*e));
+        Some(if nested {
+            format!(
+                "its calibration failed: χ²/n {:.3} on the training samples, worse than the \
+                 baseline's {:.3}, which it contains as a special case",
+                cs / n,
+                cb / n
+            )
+        } else {
+            format!(
+                "it fits the training samples worse than the baseline (χ²/n {:.3} against \
+                 {:.3}): {} replaces the baseline's law and cannot follow these data",
+                cs / n,
+                cb / n,
+                s.model.label()
+            )
+        })
+    } else {
+        None
+    }
+}

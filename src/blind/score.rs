@@ -1,0 +1,331 @@
+//! Scoring of the blind check: each case diagnosed without its truth (timed), the confusion
+//! matrix, the share of right verdicts, false claims on null cases and how far the right effect
+//! shrinks the held-out gap relative to the noise floor; [`render`] writes the report as text.
+//! [`run_matrix`] only sees [`DiagTest`](cablab_diagnose::DiagTest)s and the truth label, so any
+//! source of cases can be scored.
+
+use super::cases::BlindCase;
+use cablab_core::{Effect, TestKind};
+use cablab_diagnose::{diagnose, Context, DiagnoseOptions};
+use rayon::prelude::*;
+use serde::Serialize;
+use std::collections::BTreeMap;
+use std::time::Instant;
+
+/// What the diagnosis said about one case.
+#[derive(Debug, Clone, Serialize)]
+pub struct CaseOutcome {
+    /// Case name.
+    pub name: String,
+    /// Kind.
+    pub kind: TestKind,
+    /// Truth.
+    pub truth: Effect,
+    /// Verdict (`None` when the diagnosis failed; see `error`).
+    pub verdict: Option<Effect>,
+    /// Equivalent explanations reported.
+    pub equivalent: Vec<Effect>,
+    /// The set of effects the verdict names (`verdict.effects`).
+    pub effects: Vec<Effect>,
+    /// Verdict equals the truth, and the set it names is the truth alone (empty for `none`).
+    pub right: bool,
+    /// The truth is the verdict or among the reported equivalents.
+    pub right_or_equivalent: bool,
+    /// Generator noise (fraction of full scale).
+    pub noise_rel: f64,
+    /// Held-out baseline gap / estimated noise floor.
+    pub gap_before_over_noise: f64,
+    /// Held-out gap after the true effect / estimated noise floor (when it was scored).
+    pub gap_after_over_noise: Option<f64>,
+    /// Wall time of the diagnosis, s.
+    pub seconds: f64,
+    /// Why the diagnosis failed, if it did.
+    pub error: Option<String>,
+}
+
+/// Quantiles of the gap shrink over the cases whose verdict was right.
+#[derive(Debug, Clone, Serialize)]
+pub struct Shrink {
+    /// Cases counted (right verdict, truth not `none`).
+    pub n: usize,
+    /// Median held-out gap before / noise floor.
+    pub median_before_over_noise: f64,
+    /// Median held-out gap after / noise floor.
+    pub median_after_over_noise: f64,
+    /// Largest held-out gap after / noise floor.
+    pub max_after_over_noise: f64,
+    /// Share of those cases with gap after ≤ 1.5 × noise floor.
+    pub within_1_5: f64,
+}
+
+/// The scored matrix.
+#[derive(Debug, Clone, Serialize)]
+pub struct BlindReport {
+    /// Every case.
+    pub outcomes: Vec<CaseOutcome>,
+    /// Confusion counts: truth → verdict → count (`error` for failed diagnoses).
+    pub confusion: BTreeMap<String, BTreeMap<String, usize>>,
+    /// Share of cases whose verdict equals the truth.
+    pub right_share: f64,
+    /// Share of cases whose truth is the verdict or a reported equivalent.
+    pub right_or_equivalent_share: f64,
+    /// Null cases.
+    pub null_cases: usize,
+    /// Null cases on which an effect was claimed.
+    pub null_false_claims: usize,
+    /// Gap shrink where the right effect was found.
+    pub shrink: Shrink,
+    /// Total wall time, s.
+    pub seconds: f64,
+}
+
+fn median(v: &mut [f64]) -> f64 {
+    if v.is_empty() {
+        return f64::NAN;
+    }
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
+
+/// Diagnose every case (in parallel) and score the verdicts against the truths.
+pub fn run_matrix(ctx: Context, cases: &[BlindCase], opts: &DiagnoseOptions) -> BlindReport {
+    run_matrix_observed(ctx, cases, opts, &|_| {})
+}
+
+/// [`run_matrix`], calling `on_case` as each case is done (from the worker threads, in the
+/// order they finish): for a progress display.
+pub fn run_matrix_observed(
+    ctx: Context,
+    cases: &[BlindCase],
+    opts: &DiagnoseOptions,
+    on_case: &(dyn Fn(&CaseOutcome) + Sync),
+) -> BlindReport {
+    let t0 = Instant::now();
+    let outcomes: Vec<CaseOutcome> = cases
+        .par_iter()
+        .map(|c| {
+            let t = Instant::now();
+            let kind = c.tests.first().map_or(TestKind::Unknown, |t| t.kind);
+            let mut o = CaseOutcome {
+                name: c.name.clone(),
+                kind,
+                truth: c.truth,
+                verdict: None,
+                equivalent: vec![],
+                effects: vec![],
+                right: false,
+                right_or_equivalent: false,
+                noise_rel: c.noise_rel,
+                gap_before_over_noise: f64::NAN,
+                gap_after_over_noise: None,
+                seconds: 0.0,
+                error: None,
+            };
+            match diagnose(ctx, &c.tests, opts) {
+                Ok(d) => {
+                    let v = d.verdict.effect;
+                    o.verdict = Some(v);
+                    let want: Vec<Effect> = if c.truth == Effect::None {
+                        vec![]
+                    } else {
+                        vec![c.truth]
+                    };
+                    o.right = v == c.truth && d.verdict.effects == want;
+                    o.effects = d.verdict.effects.clone();
+                    o.right_or_equivalent = o.right || d.verdict.equivalent.contains(&c.truth);
+                    o.equivalent = d.verdict.equivalent.clone();
+                    let noise = d.verdict.noise.max(f64::MIN_POSITIVE);
+                    o.gap_before_over_noise = d.baseline.gap_heldout_rel * d.verdict.noise
+                        / d.verdict.noise_rel.max(f64::MIN_POSITIVE)
+                        / noise;
+                    o.gap_after_over_noise = if c.truth == Effect::None {
+                        Some(o.gap_before_over_noise)
+                    } else {
+                        d.effects
+                            .iter()
+                            .find(|e| e.effect == c.truth)
+                            .map(|e| e.gap_after / noise)
+                    };
+                }
+                Err(e) => o.error = Some(e.to_string()),
+            }
+            o.seconds = t.elapsed().as_secs_f64();
+            on_case(&o);
+            o
+        })
+        .collect();
+    let mut confusion: BTreeMap<String, BTreeMap<String, usize>> = BTreeMap::new();
+    for o in &outcomes {
+        let v = o
+            .verdict
+            .map_or("error".to_string(), |v| v.as_str().to_string());
+        *confusion
+            .entry(o.truth.as_str().to_string())
+            .or_default()
+            .entry(v)
+            .or_default() += 1;
+    }
+    let n = outcomes.len().max(1) as f64;
+    let right = outcomes.iter().filter(|o| o.right).count() as f64;
+    let right_eq = outcomes.iter().filter(|o| o.right_or_equivalent).count() as f64;
+    let nulls: Vec<&CaseOutcome> = outcomes
+        .iter()
+        .filter(|o| o.truth == Effect::None)
+        .collect();
+    let null_false = nulls
+        .iter()
+        .filter(|o| o.verdict != Some(Effect::None))
+        .count();
+    let found: Vec<&CaseOutcome> = outcomes
+        .iter()
+        .filter(|o| o.right && o.truth != Effect::None)
+        .collect();
+    let mut before: Vec<f64> = found.iter().map(|o| o.gap_before_over_noise).collect();
+    let mut after: Vec<f64> = found
+        .iter()
+        .filter_map(|o| o.gap_after_over_noise)
+        .collect();
+    let within = after.iter().filter(|&&a| a <= 1.5).count() as f64 / after.len().max(1) as f64;
+    let max_after = after.iter().copied().fold(f64::NAN, f64::max);
+    BlindReport {
+        confusion,
+        right_share: right / n,
+        right_or_equivalent_share: right_eq / n,
+        null_cases: nulls.len(),
+        null_false_claims: null_false,
+        shrink: Shrink {
+            n: found.len(),
+            median_before_over_noise: median(&mut before),
+            median_after_over_noise: median(&mut after),
+            max_after_over_noise: max_after,
+            within_1_5: within,
+        },
+        outcomes,
+        seconds: t0.elapsed().as_secs_f64(),
+    }
+}
+
+/// The report as text: the confusion matrix (rows: truth, columns: verdict), the shares, the
+/// gap shrink and the cases that went wrong.
+pub fn render(r: &BlindReport) -> String {
+    use std::fmt::Write;
+    let mut cols: Vec<String> = Vec::new();
+    for row in r.confusion.values() {
+        for k in row.keys() {
+            if !cols.contains(k) {
+                cols.push(k.clone());
+            }
+        }
+    }
+    let order = |s: &str| {
+        Effect::ALL
+            .iter()
+            .position(|e| e.as_str() == s)
+            .unwrap_or(99)
+    };
+    cols.sort_by_key(|c| order(c));
+    let mut rows: Vec<&String> = r.confusion.keys().collect();
+    rows.sort_by_key(|c| order(c));
+    let short = |s: &str| -> String {
+        s.split('_')
+            .map(|w| &w[..w.len().min(4)])
+            .collect::<Vec<_>>()
+            .join("_")
+    };
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "blind check: {} cases, {:.1} s",
+        r.outcomes.len(),
+        r.seconds
+    );
+    let _ = writeln!(s, "confusion matrix (rows: truth, columns: verdict)");
+    let _ = write!(s, "{:<22}", "truth \\ verdict");
+    for c in &cols {
+        let _ = write!(s, "{:>11}", short(c));
+    }
+    let _ = writeln!(s, "{:>8}", "right");
+    for t in rows {
+        let row = &r.confusion[t];
+        let _ = write!(s, "{:<22}", t);
+        let total: usize = row.values().sum();
+        for c in &cols {
+            let _ = write!(
+                s,
+                "{:>11}",
+                row.get(c).map_or("·".to_string(), |v| v.to_string())
+            );
+        }
+        let _ = writeln!(s, "{:>5}/{:<2}", row.get(t).copied().unwrap_or(0), total);
+    }
+    let _ = writeln!(
+        s,
+        "right verdicts: {:.1} % (right or reported equivalent: {:.1} %)",
+        100.0 * r.right_share,
+        100.0 * r.right_or_equivalent_share
+    );
+    let _ = writeln!(
+        s,
+        "null cases: {}, effect claimed on {}",
+        r.null_cases, r.null_false_claims
+    );
+    let sh = &r.shrink;
+    let _ = writeln!(
+        s,
+        "gap shrink where the right effect was found ({} cases): held-out gap / noise floor median {:.2} -> {:.2}, max after {:.2}, within 1.5x noise: {:.1} %",
+        sh.n, sh.median_before_over_noise, sh.median_after_over_noise, sh.max_after_over_noise, 100.0 * sh.within_1_5
+    );
+    let mut kinds: Vec<TestKind> = r.outcomes.iter().map(|o| o.kind).collect();
+    kinds.sort_by_key(|k| TestKind::ALL.iter().position(|a| a == k));
+    kinds.dedup();
+    if kinds.len() > 1 {
+        let _ = writeln!(s, "by kind:");
+        for k in kinds {
+            let of: Vec<&CaseOutcome> = r.outcomes.iter().filter(|o| o.kind == k).collect();
+            let right = of.iter().filter(|o| o.right).count();
+            let nulls: Vec<&&CaseOutcome> = of.iter().filter(|o| o.truth == Effect::None).collect();
+            let claimed = nulls
+                .iter()
+                .filter(|o| o.verdict != Some(Effect::None))
+                .count();
+            let after = of
+                .iter()
+                .filter(|o| o.right && o.truth != Effect::None)
+                .filter_map(|o| o.gap_after_over_noise)
+                .fold(f64::NAN, f64::max);
+            let secs = of.iter().map(|o| o.seconds).fold(0.0, f64::max);
+            let _ = writeln!(
+                s,
+                "  {:<13} {:>4}/{:<4} right ({:.1} %), null claimed {}/{}, max gap after {:.2}, slowest case {:.1} s",
+                k.as_str(),
+                right,
+                of.len(),
+                100.0 * right as f64 / of.len().max(1) as f64,
+                claimed,
+                nulls.len(),
+                after,
+                secs
+            );
+        }
+    }
+    let wrong: Vec<&CaseOutcome> = r.outcomes.iter().filter(|o| !o.right).collect();
+    if !wrong.is_empty() {
+        let _ = writeln!(s, "cases not right:");
+        for o in wrong {
+            let v = o.verdict.map_or("error".to_string(), |v| v.to_string());
+            let eq: Vec<&str> = o.equivalent.iter().map(|e| e.as_str()).collect();
+            let _ = writeln!(
+                s,
+                "  {:<48} verdict {:<22} equivalent [{}] gap/noise {:.2}{}",
+                o.name,
+                v,
+                eq.join(", "),
+                o.gap_before_over_noise,
+                o.error
+                    .as_ref()
+                    .map_or(String::new(), |e| format!(" error: {e}"))
+            );
+        }
+    }
+    s
+}
