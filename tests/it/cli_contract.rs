@@ -784,6 +784,32 @@ fn simulate_linear_tension_and_unknown_names() {
     assert!(msg.contains("lots"), "{msg}");
 }
 
+/// A machine compliance C in series: tension and pure bending of a linear specimen of stiffness
+/// k = EA/l₀ or EI/l₀ respond R = u / (1/k + C) to the machine's reading u (springs in series);
+/// a negative compliance exits 2 naming the option.
+#[test]
+fn simulate_machine_compliance_is_a_spring_in_series() {
+    for (kind, param, stiffness, u) in [
+        ("tension", "EA", 7.96e4, 1e-3),
+        ("pure-bending", "EI", 1.37e-3, 0.5),
+    ] {
+        let l = 0.032;
+        let k = stiffness / l;
+        let c = 0.7 / k;
+        let s = run_json(&cmd(&format!(
+            "simulate --kind {kind} --length-mm 32 --law linear --param {param}={stiffness} \
+             --machine-compliance {c} --path 0,{u} --json"
+        )));
+        let r = last(&s, "response");
+        let expected = u / (1.0 / k + c);
+        assert!(close(r, expected, 1e-6), "{kind}: R = {r}, expected {expected}");
+    }
+    let msg = run_fails_2(&cmd(
+        "simulate --kind tension --length-mm 32 --law linear --param EA=1 --path 0,1e-4 --machine-compliance=-1",
+    ));
+    assert!(msg.contains("--machine-compliance"), "{msg}");
+}
+
 /// Torsion: M = GJ φ / l₀ (eq. (2)); three-point bending at w/l₀ = 0.0018: F = 48 EI w / l₀³
 /// (eq. (3)) within 0.1 %; a bad `-o` extension exits 2 and writes nothing.
 #[test]
