@@ -289,6 +289,10 @@ pub enum BenchWhat {
         /// Keep the generated campaign in this folder (default: a temporary one).
         #[arg(long)]
         keep: Option<PathBuf>,
+        /// Also run the gap diagnosis of every test (per test, so peak memory stays bounded by
+        /// `--jobs`).
+        #[arg(long)]
+        diagnosis: bool,
     },
     /// The blind check of the diagnosis: withheld effects × noise × seeds × layouts + null cases.
     Blind {
