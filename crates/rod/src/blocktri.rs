@@ -57,6 +57,46 @@ where
     Ok(())
 }
 
+/// Move a prescribed increment `delta` of unknown `d` of node `i` to the right-hand side:
+/// `rhs −= A(:, (i, d)) · delta` (the column reaches nodes i − 1, i, i + 1).
+pub(crate) fn subtract_column<const D: usize>(
+    diag: &[SMatrix<f64, D, D>],
+    upper: &[SMatrix<f64, D, D>],
+    lower: &[SMatrix<f64, D, D>],
+    rhs: &mut [SVector<f64, D>],
+    (i, d): (usize, usize),
+    delta: f64,
+) {
+    rhs[i] -= diag[i].column(d) * delta;
+    if i > 0 {
+        rhs[i - 1] -= upper[i - 1].column(d) * delta;
+    }
+    if i + 1 < diag.len() {
+        rhs[i + 1] -= lower[i].column(d) * delta;
+    }
+}
+
+/// Turn unknown `d` of node `i` into a prescribed one: its row and column become those of the
+/// identity (the caller sets its right-hand side to the prescribed increment).
+pub(crate) fn constrain<const D: usize>(
+    diag: &mut [SMatrix<f64, D, D>],
+    upper: &mut [SMatrix<f64, D, D>],
+    lower: &mut [SMatrix<f64, D, D>],
+    (i, d): (usize, usize),
+) {
+    diag[i].row_mut(d).fill(0.0);
+    diag[i].column_mut(d).fill(0.0);
+    diag[i][(d, d)] = 1.0;
+    if i + 1 < diag.len() {
+        upper[i].row_mut(d).fill(0.0);
+        lower[i].column_mut(d).fill(0.0);
+    }
+    if i > 0 {
+        lower[i - 1].row_mut(d).fill(0.0);
+        upper[i - 1].column_mut(d).fill(0.0);
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

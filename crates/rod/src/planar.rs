@@ -26,7 +26,7 @@
 //!
 //! Does not: 3D loading (torsion coupled with bending), dynamics, distributed loads.
 
-use crate::blocktri::solve_block_tridiagonal;
+use crate::blocktri::{constrain, solve_block_tridiagonal, subtract_column};
 use crate::newton::NewtonSystem;
 use crate::RodError;
 use cablab_laws::Law;
@@ -827,17 +827,14 @@ impl NewtonSystem for PlanarRod<'_> {
                 };
                 let delta = v - self.q[i][d];
                 if pending && delta != 0.0 {
-                    // rhs_j −= K_{j,(i,d)} δ for neighbours j.
-                    let col_d = self.diag[i].column(d) * delta;
-                    self.rhs[i] -= col_d;
-                    if i > 0 {
-                        let c = self.upper[i - 1].column(d) * delta;
-                        self.rhs[i - 1] -= c;
-                    }
-                    if i + 1 < n {
-                        let c = self.lower[i].column(d) * delta;
-                        self.rhs[i + 1] -= c;
-                    }
+                    subtract_column(
+                        &self.diag,
+                        &self.upper,
+                        &self.lower,
+                        &mut self.rhs,
+                        (i, d),
+                        delta,
+                    );
                 }
             }
         }
@@ -846,17 +843,7 @@ impl NewtonSystem for PlanarRod<'_> {
                 let Some(v) = self.prescribed[i][d] else {
                     continue;
                 };
-                self.diag[i].row_mut(d).fill(0.0);
-                self.diag[i].column_mut(d).fill(0.0);
-                self.diag[i][(d, d)] = 1.0;
-                if i + 1 < n {
-                    self.upper[i].row_mut(d).fill(0.0);
-                    self.lower[i].column_mut(d).fill(0.0);
-                }
-                if i > 0 {
-                    self.lower[i - 1].row_mut(d).fill(0.0);
-                    self.upper[i - 1].column_mut(d).fill(0.0);
-                }
+                constrain(&mut self.diag, &mut self.upper, &mut self.lower, (i, d));
                 self.rhs[i][d] = v - self.q[i][d];
             }
         }

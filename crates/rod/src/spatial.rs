@@ -49,7 +49,7 @@
 //! Pure physics: numbers in, numbers out. Does not: contact, distributed loads, dynamics,
 //! arc-length control (limit points under load control are not passed).
 
-use crate::blocktri::solve_block_tridiagonal;
+use crate::blocktri::{constrain, solve_block_tridiagonal, subtract_column};
 use crate::newton::NewtonSystem;
 use crate::planar::{SolverOptions, SMALL_CORRECTION};
 use crate::RodError;
@@ -887,30 +887,14 @@ impl NewtonSystem for SpatialRod<'_> {
                     if !self.fixed[i][d] || delta == 0.0 {
                         continue;
                     }
-                    dq[i] -= self.diag[i].column(d) * delta;
-                    if i > 0 {
-                        dq[i - 1] -= self.upper[i - 1].column(d) * delta;
-                    }
-                    if i + 1 < n {
-                        dq[i + 1] -= self.lower[i].column(d) * delta;
-                    }
+                    subtract_column(&self.diag, &self.upper, &self.lower, dq, (i, d), delta);
                 }
             }
         }
         for i in 0..n {
             for d in 0..6 {
                 if self.fixed[i][d] {
-                    self.diag[i].row_mut(d).fill(0.0);
-                    self.diag[i].column_mut(d).fill(0.0);
-                    self.diag[i][(d, d)] = 1.0;
-                    if i + 1 < n {
-                        self.upper[i].row_mut(d).fill(0.0);
-                        self.lower[i].column_mut(d).fill(0.0);
-                    }
-                    if i > 0 {
-                        self.lower[i - 1].row_mut(d).fill(0.0);
-                        self.upper[i - 1].column_mut(d).fill(0.0);
-                    }
+                    constrain(&mut self.diag, &mut self.upper, &mut self.lower, (i, d));
                     dq[i][d] = if pending { pres[i][d] } else { 0.0 };
                 }
             }
