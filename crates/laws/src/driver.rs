@@ -143,6 +143,37 @@ mod tests {
         }
     }
 
+    /// A trial does not touch the committed state (a Newton may try any strain), a commit does:
+    /// elastoplastic bending (EI, M_y, HI) tried far into yield, then tried elastically, answers
+    /// EI κ; committed at yield, it unloads to zero moment at the plastic curvature, not at 0.
+    #[test]
+    fn trials_leave_the_committed_state_and_commits_move_it() {
+        let p: BTreeMap<String, f64> = [("EI", 1e-3), ("M_y", 0.01), ("HI", 1e-4)]
+            .into_iter()
+            .map(|(k, v)| (k.to_string(), v))
+            .collect();
+        let law = build(TestKind::PureBending, "elastoplastic", &p).unwrap();
+        let mut s = UniformSection::new(law.as_ref(), 3);
+        let (m_plastic, k_plastic) = s.trial(40.0, 0.0);
+        // κ_y = M_y/EI = 10; hardening tangent EI·HI/(EI + HI) beyond it.
+        let m_expected = 0.01 + (40.0 - 10.0) * 1e-3 * 1e-4 / (1e-3 + 1e-4);
+        assert!((m_plastic - m_expected).abs() < 1e-12, "{m_plastic}");
+        assert!(
+            (k_plastic - 1e-3 * 1e-4 / 1.1e-3).abs() < 1e-15,
+            "{k_plastic}"
+        );
+        let (m, k) = s.trial(2.0, 0.0);
+        assert!(
+            (m - 2e-3).abs() < 1e-15 && (k - 1e-3).abs() < 1e-15,
+            "{m} {k}"
+        );
+        s.trial(40.0, 0.0);
+        s.commit();
+        // Unloading is elastic from (40, m_expected): zero moment at κ = 40 − m_expected/EI.
+        let (m0, _) = s.trial(40.0 - m_expected / 1e-3, 0.0);
+        assert!(m0.abs() < 1e-12, "{m0}");
+    }
+
     #[test]
     fn out_of_range_component_and_short_time() {
         let law = crate::LinearElastic::new(crate::SectionStiffness::CHAPTER_CABLE);
