@@ -21,6 +21,7 @@ struct BlockLu<const D: usize> {
 }
 
 impl<const D: usize> BlockLu<D> {
+    #[inline(always)]
     fn new(mut m: SMatrix<f64, D, D>) -> Self {
         let mut swaps = [0; D];
         for i in 0..D {
@@ -63,6 +64,7 @@ impl<const D: usize> BlockLu<D> {
     }
 
     /// Solve in place; false when the block is singular (a zero on the upper factor's diagonal).
+    #[inline(always)]
     fn solve_mut(&self, b: &mut SVector<f64, D>) -> bool {
         for (i, &p) in self.swaps.iter().enumerate() {
             if p != i {
