@@ -56,7 +56,7 @@ impl<const D: usize> BlockLu<D> {
                 }
                 let p = m[(i, k)];
                 for r in i + 1..D {
-                    m[(r, k)] = -p * m[(r, i)] + m[(r, k)];
+                    m[(r, k)] += -p * m[(r, i)];
                 }
             }
         }
@@ -74,7 +74,7 @@ impl<const D: usize> BlockLu<D> {
         for i in 0..D.saturating_sub(1) {
             let coeff = b[i];
             for r in i + 1..D {
-                b[r] = -coeff * self.lu[(r, i)] + b[r];
+                b[r] += -coeff * self.lu[(r, i)];
             }
         }
         for i in (0..D).rev() {
@@ -85,7 +85,7 @@ impl<const D: usize> BlockLu<D> {
             let coeff = b[i] / diag;
             b[i] = coeff;
             for r in 0..i {
-                b[r] = -coeff * self.lu[(r, i)] + b[r];
+                b[r] += -coeff * self.lu[(r, i)];
             }
         }
         true
