@@ -186,18 +186,22 @@ mod tests {
     use super::*;
     use nalgebra::{DMatrix, Matrix3, Vector3};
 
+    /// Numbers in [−0.5, 0.5) from a 64-bit linear congruential generator (deterministic).
+    fn uniform(mut seed: u64) -> impl FnMut() -> f64 {
+        move || {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            ((seed >> 11) as f64) / (1u64 << 53) as f64 - 0.5
+        }
+    }
+
     /// The block LU gives nalgebra's LU solve bit for bit: random 3×3 and 6×6 blocks whose
     /// entries span ten orders of magnitude (a rod's forces against its moments), permuted so
     /// that every pivot order occurs, plus singular and NaN blocks.
     #[test]
     fn block_lu_is_nalgebras_lu_bit_for_bit() {
-        let mut seed = 7u64;
-        let mut rnd = || {
-            seed = seed
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            ((seed >> 11) as f64) / (1u64 << 53) as f64 - 0.5
-        };
+        let mut rnd = uniform(7);
         fn check<const D: usize>(m: SMatrix<f64, D, D>, b: SVector<f64, D>)
         where
             nalgebra::Const<D>: nalgebra::ToTypenum
@@ -254,13 +258,7 @@ mod tests {
         let mut upper = Vec::new();
         let mut lower = Vec::new();
         let mut rhs = Vec::new();
-        let mut seed = 1u64;
-        let mut rnd = || {
-            seed = seed
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            ((seed >> 33) as f64) / (1u64 << 31) as f64 - 0.5
-        };
+        let mut rnd = uniform(1);
         for i in 0..n {
             let mut d = Matrix3::from_fn(|_, _| rnd());
             d += Matrix3::identity() * 4.0;
