@@ -327,6 +327,11 @@ pub struct SimulateArgs {
     /// Coulomb friction coefficient at the supports (three-point).
     #[arg(long, default_value_t = 0.0, value_name = "MU", allow_negative_numbers = true, value_parser = non_negative)]
     pub support_friction: f64,
+    /// Machine compliance in series with the specimen, SI control per response unit (m/N for
+    /// tension and three-point, rad/(N m) for torsion and pure bending); the path is then the
+    /// machine's reading. 0 = a rigid machine.
+    #[arg(long, default_value_t = 0.0, value_name = "C")]
+    pub machine_compliance: f64,
     /// Print JSON with `control` and `response` arrays.
     #[arg(long)]
     pub json: bool,
@@ -416,6 +421,10 @@ pub enum BenchWhat {
         /// Keep the generated campaign in this folder (default: a temporary one).
         #[arg(long)]
         keep: Option<PathBuf>,
+        /// Also run the gap diagnosis of every test (per test, so peak memory stays bounded by
+        /// `--jobs`).
+        #[arg(long)]
+        diagnosis: bool,
     },
     /// The blind check of the diagnosis: withheld effects × noise × seeds × layouts + null cases.
     Blind {

@@ -49,6 +49,12 @@ pub fn run(a: SimulateArgs) -> CmdResult {
             "--path needs at least one value"
         )));
     }
+    if !(a.machine_compliance.is_finite() && a.machine_compliance >= 0.0) {
+        return Err(CliError::input(anyhow::anyhow!(
+            "--machine-compliance must be a finite number ≥ 0 (SI control per response unit), got {}",
+            a.machine_compliance
+        )));
+    }
     let params = parse_params(&a.params)?;
     let law = cablab_laws::build(kind, &a.law, &params).map_err(CliError::input)?;
     let mut setup = cablab_rod::TestSetup::new(kind, a.length_mm * 1e-3);
@@ -56,6 +62,7 @@ pub fn run(a: SimulateArgs) -> CmdResult {
     setup.punch_radius_m = a.punch_radius_mm * 1e-3;
     setup.support_radius_m = a.support_radius_mm * 1e-3;
     setup.support_friction = a.support_friction;
+    setup.machine_compliance = a.machine_compliance;
     let curve = cablab_rod::simulate_path(&setup, law.as_ref(), &a.path, a.max_increment)
         .map_err(CliError::failed)?;
     #[derive(serde::Serialize)]

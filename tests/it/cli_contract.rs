@@ -807,6 +807,35 @@ fn simulate_linear_tension_and_unknown_names() {
     assert!(msg.contains("lots"), "{msg}");
 }
 
+/// A machine compliance C in series: tension and pure bending of a linear specimen of stiffness
+/// k = EA/l₀ or EI/l₀ respond R = u / (1/k + C) to the machine's reading u (springs in series);
+/// a negative compliance exits 2 naming the option.
+#[test]
+fn simulate_machine_compliance_is_a_spring_in_series() {
+    for (kind, param, stiffness, u) in [
+        ("tension", "EA", 7.96e4, 1e-3),
+        ("pure-bending", "EI", 1.37e-3, 0.5),
+    ] {
+        let l = 0.032;
+        let k = stiffness / l;
+        let c = 0.7 / k;
+        let s = run_json(&cmd(&format!(
+            "simulate --kind {kind} --length-mm 32 --law linear --param {param}={stiffness} \
+             --machine-compliance {c} --path 0,{u} --json"
+        )));
+        let r = last(&s, "response");
+        let expected = u / (1.0 / k + c);
+        assert!(
+            close(r, expected, 1e-6),
+            "{kind}: R = {r}, expected {expected}"
+        );
+    }
+    let msg = run_fails_2(&cmd(
+        "simulate --kind tension --length-mm 32 --law linear --param EA=1 --path 0,1e-4 --machine-compliance=-1",
+    ));
+    assert!(msg.contains("--machine-compliance"), "{msg}");
+}
+
 /// Torsion: M = GJ φ / l₀ (eq. (2)); three-point bending at w/l₀ = 0.0018: F = 48 EI w / l₀³
 /// (eq. (3)) within 0.1 %; a bad `-o` extension exits 2 and writes nothing.
 #[test]
@@ -996,6 +1025,45 @@ fn bench_blind_torsion_seed_1_meets_the_targets() {
             assert!(after <= 1.5, "{o}");
         }
     }
+}
+
+/// `cablab bench scale --diagnosis` on a small campaign: every generated test is characterised
+/// and diagnosed (a per-test verdict in its result.json), and the table row says so.
+#[test]
+fn bench_scale_with_the_diagnosis_diagnoses_every_test() {
+    let dir = tempfile::tempdir().unwrap();
+    let keep = dir.path().join("scale");
+    let r = run(&[
+        "bench".as_ref(),
+        "scale".as_ref(),
+        "--tests".as_ref(),
+        "3".as_ref(),
+        "--samples".as_ref(),
+        "1000".as_ref(),
+        "--jobs".as_ref(),
+        "1".as_ref(),
+        "--diagnosis".as_ref(),
+        "--keep".as_ref(),
+        keep.as_os_str(),
+    ]);
+    assert_eq!(r.code, 0, "{}", r.stderr);
+    let row = r.stdout.lines().last().unwrap();
+    assert!(
+        row.starts_with("| 3 | 1001 |") && row.contains("| 1 | yes |"),
+        "{row}"
+    );
+    assert!(row.ends_with("| 0 |"), "no failed test: {row}");
+    let tests = keep.join("reports/scale/tests");
+    let mut n = 0;
+    for e in std::fs::read_dir(&tests).unwrap() {
+        let v: Value =
+            serde_json::from_slice(&std::fs::read(e.unwrap().path().join("result.json")).unwrap())
+                .unwrap();
+        assert_eq!(v["diagnosis"]["kind"], "tension", "{v}");
+        assert!(v["diagnosis"]["verdict"]["effect"].is_string(), "{v}");
+        n += 1;
+    }
+    assert_eq!(n, 3);
 }
 
 /// A real MTS 793 cyclic export the elastoplastic baseline misses by ~40 noise units: an effect

@@ -2,10 +2,11 @@
 //! law-level effects, test-level effects) and the forward model that replays a test's measured
 //! control history through a model ([`ModelForward`]).
 //!
-//! Test-level effects are implemented here, on top of whatever the law and rod give:
-//! - `machine_compliance`: the machine reads control = specimen deformation + C·response; each
-//!   sample solves that implicit relation (Newton on the sectional strain with the law's tangent
-//!   for uniformly loaded sections; inside each rod step for three-point, by the rod's driver);
+//! The forward model is `cablab-rod`'s: [`cablab_rod::replay_uniform`] for tension, torsion and
+//! pure bending, the rod (through a [`RodSimulator`]) for three-point bending. This module only
+//! maps a model's parameters onto a law and the rod's set-up:
+//! - `machine_compliance`: the set-up's machine compliance in series (the machine reads
+//!   control = specimen deformation + C·response; the rod's drivers solve it per sample);
 //! - `sensor_drift`: the response sensor adds d·(t − t₀);
 //! - `support_friction`: the rod's support friction coefficient μ (three-point only).
 //!
@@ -16,7 +17,7 @@ use crate::calibrate::Forward;
 use crate::error::DiagError;
 use crate::params::ParamSpec;
 use cablab_core::{Effect, TestKind};
-use cablab_laws::{Law, Strain6};
+use cablab_laws::Law;
 use serde::Serialize;
 
 /// Which branch of a cyclic history a sample belongs to (SPEC: first loading, unloading,
@@ -347,16 +348,6 @@ pub struct SpanHistory {
     pub curvature_per_m: Vec<Vec<f64>>,
 }
 
-/// Index of the strain/stress component a uniformly loaded test drives, `None` for three-point.
-pub fn uniform_component(kind: TestKind) -> Option<usize> {
-    match kind {
-        TestKind::Tension => Some(2),
-        TestKind::Torsion => Some(5),
-        TestKind::PureBending => Some(3),
-        _ => None,
-    }
-}
-
 /// Data scales of a set of tests (all of one kind).
 pub fn data_scales(tests: &[DiagTest]) -> DataScales {
     let mut k_sum = 0.0;
@@ -651,15 +642,15 @@ impl Forward for ModelForward<'_> {
             .map_err(|e| e.to_string())?;
         let law: &dyn Law = law.as_ref();
         let c = self.i_compliance.map_or(0.0, |i| p[i]);
-        match uniform_component(t.kind) {
-            Some(comp) => {
-                drive_uniform_compliant(law, comp, t.free_length_m, c, &t.time_s, &t.control, out)?
-            }
-            None => {
-                let rod = self.rod.ok_or("no rod solver")?;
-                let mu = self.i_friction.map_or(0.0, |i| p[i]);
-                rod.simulate(t, law, &t.control, mu, c, out)?;
-            }
+        if cablab_rod::uniform::is_uniform(t.kind) {
+            let mut setup = cablab_rod::TestSetup::new(t.kind, t.free_length_m);
+            setup.machine_compliance = c;
+            cablab_rod::replay_uniform(&setup, law, &t.control, &t.time_s, out)
+                .map_err(|e| e.to_string())?;
+        } else {
+            let rod = self.rod.ok_or("no rod solver")?;
+            let mu = self.i_friction.map_or(0.0, |i| p[i]);
+            rod.simulate(t, law, &t.control, mu, c, out)?;
         }
         if let Some(i) = self.i_drift {
             let t0 = t.time_s[0];
@@ -669,76 +660,4 @@ impl Forward for ModelForward<'_> {
         }
         Ok(())
     }
-}
-
-/// Drive a uniformly loaded section through a machine control history with machine compliance
-/// `c` (control per response unit) in series: per sample, solve l₀ ε + c σ(ε) = u for the
-/// sectional strain ε by Newton with the law's consistent tangent (c = 0: ε = u/l₀ directly).
-/// Writes the response σ (the `comp` stress resultant) into `out`.
-pub fn drive_uniform_compliant(
-    law: &dyn Law,
-    comp: usize,
-    free_length_m: f64,
-    c: f64,
-    time_s: &[f64],
-    control: &[f64],
-    out: &mut [f64],
-) -> Result<(), String> {
-    let n = law.n_state();
-    let mut old = vec![0.0; n];
-    law.init_state(&mut old);
-    let mut new = old.clone();
-    let l0 = free_length_m;
-    let mut eps = Strain6::zeros();
-    let mut t_prev = time_s.first().copied().unwrap_or(0.0);
-    let mut k_prev = law.elastic_tangent()[(comp, comp)];
-    let umax = control
-        .iter()
-        .fold(0.0f64, |m, u| m.max(u.abs()))
-        .max(f64::MIN_POSITIVE);
-    let mut u_prev = 0.0;
-    for (i, &u) in control.iter().enumerate() {
-        let dt = (time_s[i] - t_prev).max(0.0);
-        let s;
-        if c == 0.0 {
-            eps[comp] = u / l0;
-            // One loaded component: the laws' scalar fast path (identical to `update`).
-            s = law.update_component(comp, eps[comp], dt, &old, &mut new).0;
-            k_prev = 0.0;
-        } else {
-            // Predictor with the last tangent, then Newton on g(ε) = l₀ε + cσ(ε) − u.
-            eps[comp] += (u - u_prev) / (l0 + c * k_prev);
-            let mut converged = false;
-            let mut sigma = 0.0;
-            for _ in 0..30 {
-                let (sg, k) = law.update_component(comp, eps[comp], dt, &old, &mut new);
-                sigma = sg;
-                let g = l0 * eps[comp] + c * sigma - u;
-                let dg = l0 + c * k.max(0.0);
-                k_prev = k.max(0.0);
-                if g.abs() <= 1e-12 * umax {
-                    converged = true;
-                    break;
-                }
-                eps[comp] -= g / dg;
-            }
-            if !converged {
-                return Err(format!(
-                    "machine compliance: no convergence at sample {i} (control {u})"
-                ));
-            }
-            s = sigma;
-        }
-        if !s.is_finite() {
-            return Err(format!(
-                "law '{}' gave a non-finite response at sample {i}",
-                law.name()
-            ));
-        }
-        out[i] = s;
-        std::mem::swap(&mut old, &mut new);
-        t_prev = time_s[i];
-        u_prev = u;
-    }
-    Ok(())
 }

@@ -2,12 +2,63 @@
 //! (other strain components held at 0). Exact for tension, torsion and pure bending, whose section
 //! state is uniform along the rod; for three-point bending it is only the section at the punch.
 //!
-//! No allocation per step: two state buffers are swapped, and each step is the law's uniaxial
-//! [`Law::update_component`] (a scalar return mapping, no 6×6 work): 20,000 samples cost about
+//! [`UniformSection`] is the one stepping mechanism (a committed and a trial state, each step the
+//! law's uniaxial [`Law::update_component`]: a scalar return mapping, no 6×6 work). It drives
+//! [`drive_uniform`] here (strain in, stress out) and the tests as the machine runs them in
+//! `cablab-rod` (control in, with machine compliance in series), which the diagnosis replays.
+//!
+//! No allocation per step: two state buffers are swapped on commit. 20,000 samples cost about
 //! 0.07 ms (linear), 0.5 ms (elastoplastic) and 1.9 ms (stiffness degradation, whose return map
 //! is a Newton solve) on the project's 2-core machine (`cargo bench -p cablab-laws`).
+//!
+//! Does not: convert a machine's control into strain, or know a test's geometry (`cablab-rod`).
 
 use crate::law::Law;
+
+/// One integration point loaded in one strain component (the others held at 0): committed state,
+/// trial steps from it, and commit. A trial may be repeated from the same committed state (a
+/// Newton on the strain, e.g. for machine compliance) before it is committed.
+#[derive(Debug)]
+pub struct UniformSection<'a> {
+    law: &'a dyn Law,
+    component: usize,
+    old: Vec<f64>,
+    new: Vec<f64>,
+}
+
+impl<'a> UniformSection<'a> {
+    /// `law` in its virgin state, loaded in `component` (0..6; a larger index gives NaN stresses).
+    pub fn new(law: &'a dyn Law, component: usize) -> Self {
+        let mut old = vec![0.0; law.n_state()];
+        law.init_state(&mut old);
+        let new = old.clone();
+        UniformSection {
+            law,
+            component,
+            old,
+            new,
+        }
+    }
+
+    /// The law.
+    pub fn law(&self) -> &'a dyn Law {
+        self.law
+    }
+
+    /// Stress and diagonal tangent ∂σ/∂ε at `strain` after a step of `dt` s from the committed
+    /// state (the trial state is kept for [`commit`](Self::commit)).
+    #[inline]
+    pub fn trial(&mut self, strain: f64, dt: f64) -> (f64, f64) {
+        self.law
+            .update_component(self.component, strain, dt, &self.old, &mut self.new)
+    }
+
+    /// Make the last trial the committed state.
+    #[inline]
+    pub fn commit(&mut self) {
+        std::mem::swap(&mut self.old, &mut self.new);
+    }
+}
 
 /// Response in `component` (0..6) of `law` driven from the virgin state through `strain` at times
 /// `time_s` (s). The first sample is reached from the unloaded state in zero time; `dt` of later
@@ -33,18 +84,15 @@ pub fn drive_uniform_into(
         return;
     }
     out.reserve(strain.len());
-    let n = law.n_state();
-    let mut old = vec![0.0; n];
-    law.init_state(&mut old);
-    let mut new = old.clone();
+    let mut section = UniformSection::new(law, component);
     let mut t_prev = time_s.first().copied().unwrap_or(0.0);
     for (i, &e) in strain.iter().enumerate() {
         let t = time_s.get(i).copied().unwrap_or(t_prev);
         let dt = if t > t_prev { t - t_prev } else { 0.0 };
         t_prev = t.max(t_prev);
-        let (s, _) = law.update_component(component, e, dt, &old, &mut new);
+        let (s, _) = section.trial(e, dt);
         out.push(s);
-        std::mem::swap(&mut old, &mut new);
+        section.commit();
     }
 }
 
@@ -93,6 +141,37 @@ mod tests {
             assert_eq!(m.len(), n);
             assert!(m.iter().all(|x| x.is_finite()), "{name}");
         }
+    }
+
+    /// A trial does not touch the committed state (a Newton may try any strain), a commit does:
+    /// elastoplastic bending (EI, M_y, HI) tried far into yield, then tried elastically, answers
+    /// EI κ; committed at yield, it unloads to zero moment at the plastic curvature, not at 0.
+    #[test]
+    fn trials_leave_the_committed_state_and_commits_move_it() {
+        let p: BTreeMap<String, f64> = [("EI", 1e-3), ("M_y", 0.01), ("HI", 1e-4)]
+            .into_iter()
+            .map(|(k, v)| (k.to_string(), v))
+            .collect();
+        let law = build(TestKind::PureBending, "elastoplastic", &p).unwrap();
+        let mut s = UniformSection::new(law.as_ref(), 3);
+        let (m_plastic, k_plastic) = s.trial(40.0, 0.0);
+        // κ_y = M_y/EI = 10; hardening tangent EI·HI/(EI + HI) beyond it.
+        let m_expected = 0.01 + (40.0 - 10.0) * 1e-3 * 1e-4 / (1e-3 + 1e-4);
+        assert!((m_plastic - m_expected).abs() < 1e-12, "{m_plastic}");
+        assert!(
+            (k_plastic - 1e-3 * 1e-4 / 1.1e-3).abs() < 1e-15,
+            "{k_plastic}"
+        );
+        let (m, k) = s.trial(2.0, 0.0);
+        assert!(
+            (m - 2e-3).abs() < 1e-15 && (k - 1e-3).abs() < 1e-15,
+            "{m} {k}"
+        );
+        s.trial(40.0, 0.0);
+        s.commit();
+        // Unloading is elastic from (40, m_expected): zero moment at κ = 40 − m_expected/EI.
+        let (m0, _) = s.trial(40.0 - m_expected / 1e-3, 0.0);
+        assert!(m0.abs() < 1e-12, "{m0}");
     }
 
     #[test]

@@ -4,7 +4,8 @@
 //!   along the rod, Γ₃ = Δl/l₀ or K₃ = θ/l₀ with every other strain held at zero by the clamps, so
 //!   the sectional law evaluated once per step *is* the rod solution (exact, not an approximation;
 //!   `uniform_shortcuts_match_the_spatial_rod` in `tests/spatial.rs` replays elastoplastic cycles
-//!   through the 3D rod [`crate::spatial::SpatialRod`] and gets the same numbers).
+//!   through the 3D rod [`crate::spatial::SpatialRod`] and gets the same numbers). Driven by
+//!   [`crate::uniform`], the diagnosis's forward model too.
 //! - `pure_bending` (one end rotated, both ends free to slide, no shear force): the rod is solved
 //!   by [`simulate_path`] (node 0 clamped to remove rigid motion, end rotation prescribed at the
 //!   other end, its position free: no force) — its answer is a uniform-curvature arc K = θ/l₀. For
@@ -19,9 +20,16 @@
 //!   contact point slides continuously. Control: punch deflection w; response: total punch force.
 //!   Penalty stiffness k = `penalty_factor`·EI/span³ (default 10⁷: deflection error ≈ 2.4·10⁻⁶ w).
 //!
+//! Every kind honours [`TestSetup::machine_compliance`]: the control is the machine's reading,
+//! solved for the specimen's own deformation by the one series solver of [`crate::series`]
+//! (with the law's tangent for the uniform states, with the secant of the rod's response for the
+//! rod).
+//!
 //! Does not: read files, choose laws or parameters (the caller builds the law).
 
 use crate::planar::{PlanarRod, Punch, SolverOptions, Support};
+use crate::series::{Failure, Series};
+use crate::uniform::{is_uniform, UniformDriver};
 use crate::RodError;
 use cablab_core::TestKind;
 use cablab_laws::Law;
@@ -45,8 +53,9 @@ pub struct TestSetup {
     /// Coulomb friction coefficient at the supports (0 = frictionless).
     pub support_friction: f64,
     /// Machine compliance in series with the specimen (control per response unit: m/N for
-    /// three-point, rad/(N m) for pure bending; 0 = a rigid machine). The control is then the
-    /// machine's reading u = w + C·R(w): each step solves for the specimen's own deflection w.
+    /// tension and three-point, rad/(N m) for torsion and pure bending; 0 = a rigid machine), for
+    /// every kind. The control is then the machine's reading u = w + C·R(w): each step solves for
+    /// the specimen's own deformation w.
     pub machine_compliance: f64,
     /// Rod (cable) radius, m: offsets the contact surfaces from the centreline (0 = centreline contact).
     pub rod_radius_m: f64,
@@ -169,14 +178,8 @@ impl SimCurve {
 
 /// Law-driven state machine behind both entry points.
 enum Driver<'a> {
-    /// Direct sectional evaluation of a uniform state; `index` picks the strain/stress component.
-    Uniform {
-        law: &'a dyn Law,
-        index: usize,
-        length_m: f64,
-        state: Vec<f64>,
-        trial: Vec<f64>,
-    },
+    /// Direct sectional evaluation of a uniform state.
+    Uniform(UniformDriver<'a>),
     /// The rod solver.
     Rod {
         rod: Box<PlanarRod<'a>>,
@@ -196,20 +199,6 @@ enum Driver<'a> {
 }
 
 impl<'a> Driver<'a> {
-    fn uniform(setup: &TestSetup, law: &'a dyn Law) -> Self {
-        // Tension Γ₃, torsion K₃, bending K₁ (as in the planar rod).
-        let index = cablab_laws::loaded_component(setup.kind);
-        let mut state = vec![0.0; law.n_state()];
-        law.init_state(&mut state);
-        Driver::Uniform {
-            law,
-            index,
-            length_m: setup.free_length_m,
-            trial: state.clone(),
-            state,
-        }
-    }
-
     fn rod(
         setup: &TestSetup,
         law: &'a dyn Law,
@@ -296,27 +285,7 @@ impl<'a> Driver<'a> {
         iterations: &mut usize,
     ) -> Result<f64, RodError> {
         match self {
-            Driver::Uniform {
-                law,
-                index,
-                length_m,
-                state,
-                trial,
-            } => {
-                // One loaded component, the others held at zero: the laws' scalar fast path
-                // (identical to the full update, tested in cablab-laws).
-                let (v, _) = law.update_component(*index, target / *length_m, dt, state, trial);
-                state.copy_from_slice(trial);
-                if !v.is_finite() {
-                    return Err(RodError::NotConverged {
-                        step,
-                        iterations: 0,
-                        residual: f64::NAN,
-                        reason: format!("law '{}' returned a non-finite stress", law.name()),
-                    });
-                }
-                Ok(v)
-            }
+            Driver::Uniform(u) => u.step_to(target, dt, step),
             Driver::Rod {
                 rod,
                 kind,
@@ -394,8 +363,8 @@ impl<'a> Driver<'a> {
     }
 
     /// One step of the machine's control by `du` with compliance `C` in series: find the
-    /// specimen's control w with w + C·R(w) = u by a secant iteration on the uncommitted step
-    /// (every trial re-solves from the committed state, so history-dependent laws see one step).
+    /// specimen's control w with w + C·R(w) = u ([`Series`], secant slopes: every trial
+    /// re-solves the rod from the committed state, so history-dependent laws see one step).
     /// Returns the Newton iterations and w.
     fn solve_compliant(
         rod: &mut PlanarRod<'_>,
@@ -407,34 +376,22 @@ impl<'a> Driver<'a> {
     ) -> Result<(usize, f64), RodError> {
         let u = w0 + c * r0 + du;
         let tol = (1e-8 * (u.abs() + du.abs())).max(f64::MIN_POSITIVE);
-        let (mut wa, mut ra) = (w0, r0);
-        let mut k = k0.max(0.0);
-        let mut w = w0 + du / (1.0 + c * k);
         let mut total = 0;
-        for _ in 0..40 {
+        let solved = Series { a: 1.0, c }.solve(u, du, (w0, r0, k0), tol, |w| {
             Self::apply_control(rod, kind, w);
             total += rod.solve(dt, step)?;
-            let r = Self::response(rod, kind);
-            let g = u - c * r - w;
-            if g.abs() <= tol {
-                return Ok((total, w));
-            }
-            if (w - wa).abs() > 0.0 {
-                let ks = (r - ra) / (w - wa);
-                if ks.is_finite() {
-                    k = ks.max(0.0);
-                }
-            }
-            wa = w;
-            ra = r;
-            w += g / (1.0 + c * k);
+            Ok((Self::response(rod, kind), None))
+        });
+        match solved {
+            Ok(s) => Ok((total, s.x)),
+            Err(Failure::Eval(e)) => Err(e),
+            Err(Failure::NotConverged) => Err(RodError::NotConverged {
+                step,
+                iterations: total,
+                residual: f64::NAN,
+                reason: "machine compliance: the specimen's deflection did not converge".into(),
+            }),
         }
-        Err(RodError::NotConverged {
-            step,
-            iterations: total,
-            residual: f64::NAN,
-            reason: "machine compliance: the specimen's deflection did not converge".into(),
-        })
     }
 
     fn response(rod: &PlanarRod<'_>, kind: TestKind) -> f64 {
@@ -508,7 +465,9 @@ pub fn simulate_path(
         )));
     }
     let mut driver = match setup.kind {
-        TestKind::Tension | TestKind::Torsion => Driver::uniform(setup, law),
+        TestKind::Tension | TestKind::Torsion => {
+            Driver::Uniform(UniformDriver::new(setup, law, scale))
+        }
         _ => Driver::rod(setup, law, Some(inc))?,
     };
     let mut curve = SimCurve::new(setup.kind);
@@ -553,8 +512,9 @@ pub fn simulate_path(
 /// Replay a measured control history sample by sample (`control[i]` reached at `time_s[i]`),
 /// starting unloaded at control 0 (the approach to `control[0]` takes no time). One output entry
 /// per sample. Tension, torsion and pure bending: direct sectional evaluation of the uniform state
-/// (exact for a homogeneous rod; this is the calibration's hot loop). Three-point: the rod, with
-/// internal sub-steps of at most `setup.max_substep` (default 0.5 % of the span).
+/// (exact for a homogeneous rod; [`crate::replay_uniform`] is the same without the curve, the
+/// calibration's hot loop). Three-point: the rod, with internal sub-steps of at most
+/// `setup.max_substep` (default 0.5 % of the span). Machine compliance in series for every kind.
 pub fn simulate_history(
     setup: &TestSetup,
     law: &dyn Law,
@@ -571,9 +531,11 @@ pub fn simulate_history(
             time_s.len()
         )));
     }
-    let mut driver = match setup.kind {
-        TestKind::ThreePoint => Driver::rod(setup, law, None)?,
-        _ => Driver::uniform(setup, law),
+    let mut driver = if is_uniform(setup.kind) {
+        let scale = control.iter().fold(0.0f64, |m, u| m.max(u.abs()));
+        Driver::Uniform(UniformDriver::new(setup, law, scale))
+    } else {
+        Driver::rod(setup, law, None)?
     };
     let mut curve = SimCurve::new(setup.kind);
     curve.control.reserve(control.len());
@@ -611,6 +573,6 @@ pub fn deformed_shape(
     }
     match driver {
         Driver::Rod { rod, .. } => Ok(rod.q.clone()),
-        Driver::Uniform { .. } => Err(RodError::UnsupportedKind(setup.kind)),
+        Driver::Uniform(_) => Err(RodError::UnsupportedKind(setup.kind)),
     }
 }

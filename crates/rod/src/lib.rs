@@ -4,7 +4,10 @@
 //!   reduction of the 3D rod for in-plane loading), penalty contact with rigid supports and punch,
 //!   Newton with line search and step bisection, internal law variables per integration point.
 //! - [`drivers`]: the tests as run — tension, torsion, pure bending, three-point bending —
-//!   replaying a control path ([`simulate_path`]) or a measured history ([`simulate_history`]).
+//!   replaying a control path ([`simulate_path`]) or a measured history ([`simulate_history`]),
+//!   machine compliance in series solved in one place (`series`).
+//! - [`uniform`]: the uniformly loaded tests' driver and [`replay_uniform`], the diagnosis's
+//!   forward model for tension, torsion and pure bending.
 //! - [`spatial`]: the same rod in space (positions + unit quaternions, multiplicative
 //!   rotation-vector increments, analytic consistent tangent, block-tridiagonal Newton solve,
 //!   load and displacement control with step cutting): the 3D rod against which the planar
@@ -28,9 +31,12 @@ pub mod drivers;
 pub mod planar;
 pub mod scenarios;
 pub mod spatial;
+pub mod uniform;
 
 mod blocktri;
 mod linesearch;
+mod newton;
+mod series;
 #[cfg(test)]
 mod test_laws;
 #[cfg(test)]
@@ -38,6 +44,7 @@ mod verification;
 
 pub use drivers::{deformed_shape, simulate_history, simulate_path, SimCurve, TestSetup};
 pub use planar::{PlanarRod, Punch, SolverOptions, Support};
+pub use uniform::replay_uniform;
 
 use thiserror::Error;
 

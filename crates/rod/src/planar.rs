@@ -26,7 +26,8 @@
 //!
 //! Does not: 3D loading (torsion coupled with bending), dynamics, distributed loads.
 
-use crate::blocktri::solve_block_tridiagonal;
+use crate::blocktri::{constrain, solve_block_tridiagonal, subtract_column};
+use crate::newton::NewtonSystem;
 use crate::RodError;
 use cablab_laws::Law;
 use nalgebra::{Matrix2, Matrix3, SMatrix, SVector, Vector2, Vector3, Vector6};
@@ -36,8 +37,6 @@ type Vec6 = SVector<f64, 6>;
 /// converged: with EA ≫ EI/L² the residual has a round-off floor (ε·EA·L/l₀ per element) above a
 /// purely relative residual test, while the configuration is already exact to ~10⁻⁹.
 pub(crate) const SMALL_CORRECTION: f64 = 1e-9;
-/// Newton iterations without line search before the safeguarded phase starts.
-const PLAIN_NEWTON_ITERATIONS: usize = 8;
 /// Law 6-vector index of the planar (shear γ, axial Γ₃, bending K₁) components, and their sign.
 const LAW_INDEX: [usize; 3] = [1, 2, 3];
 const LAW_SIGN: [f64; 3] = [-1.0, 1.0, 1.0];
@@ -197,7 +196,9 @@ pub struct PlanarRod<'a> {
     upper: Vec<Matrix3<f64>>,
     lower: Vec<Matrix3<f64>>,
     work: Vec<Matrix3<f64>>,
+    /// The Newton correction, and the configuration it starts from.
     rhs: Vec<Vector3<f64>>,
+    q0: Vec<Vector3<f64>>,
 }
 
 /// Kinematics of one element: strains (γ, Γ₃, K), B = ∂ε/∂q (3×6) and the midpoint directors.
@@ -413,6 +414,7 @@ impl<'a> PlanarRod<'a> {
             lower: vec![Matrix3::zeros(); elements],
             work: Vec::with_capacity(nodes),
             rhs: vec![Vector3::zeros(); nodes],
+            q0: Vec::with_capacity(nodes),
         })
     }
 
@@ -774,169 +776,8 @@ impl<'a> PlanarRod<'a> {
     }
 
     fn solve_newton(&mut self, dt: f64, step: usize) -> Result<usize, RodError> {
-        let n = self.nodes();
-        let fail = |iterations: usize, residual: f64, reason: String| RodError::NotConverged {
-            step,
-            iterations,
-            residual,
-            reason,
-        };
-        self.assemble(dt, true);
-        for it in 0..self.options.max_iterations {
-            // Right-hand side: −R on free dofs; the prescribed increment on the constrained ones
-            // (moved to the right-hand side through the tangent's columns, then rows/cols zeroed).
-            let mut any_prescribed_increment = false;
-            for i in 0..n {
-                self.rhs[i] = -self.res[i];
-            }
-            for i in 0..n {
-                for d in 0..3 {
-                    let Some(v) = self.prescribed[i][d] else {
-                        continue;
-                    };
-                    let delta = v - self.q[i][d];
-                    if delta != 0.0 {
-                        any_prescribed_increment = true;
-                        // rhs_j −= K_{j,(i,d)} δ for neighbours j.
-                        let col_d = self.diag[i].column(d) * delta;
-                        self.rhs[i] -= col_d;
-                        if i > 0 {
-                            let c = self.upper[i - 1].column(d) * delta;
-                            self.rhs[i - 1] -= c;
-                        }
-                        if i + 1 < n {
-                            let c = self.lower[i].column(d) * delta;
-                            self.rhs[i + 1] -= c;
-                        }
-                    }
-                }
-            }
-            for i in 0..n {
-                for d in 0..3 {
-                    let Some(v) = self.prescribed[i][d] else {
-                        continue;
-                    };
-                    self.diag[i].row_mut(d).fill(0.0);
-                    self.diag[i].column_mut(d).fill(0.0);
-                    self.diag[i][(d, d)] = 1.0;
-                    if i + 1 < n {
-                        self.upper[i].row_mut(d).fill(0.0);
-                        self.lower[i].column_mut(d).fill(0.0);
-                    }
-                    if i > 0 {
-                        self.lower[i - 1].row_mut(d).fill(0.0);
-                        self.upper[i - 1].column_mut(d).fill(0.0);
-                    }
-                    self.rhs[i][d] = v - self.q[i][d];
-                }
-            }
-            let r0 = self.free_residual_norm();
-            let f_ref = self.reference_force();
-            if !r0.is_finite() {
-                return Err(fail(
-                    it,
-                    r0,
-                    "residual is not finite (law or contact returned NaN/inf)".into(),
-                ));
-            }
-            if !any_prescribed_increment && r0 <= self.options.tolerance * f_ref {
-                return Ok(it);
-            }
-            if let Err(block) = solve_block_tridiagonal(
-                &self.diag,
-                &self.upper,
-                &self.lower,
-                &mut self.rhs,
-                &mut self.work,
-            ) {
-                return Err(fail(
-                    it,
-                    r0,
-                    format!("singular tangent at node {block} (mechanism or lost support)"),
-                ));
-            }
-            let dq = std::mem::take(&mut self.rhs);
-            let small = dq.iter().all(|d| {
-                d.xy().amax() <= SMALL_CORRECTION * self.length_scale
-                    && d[2].abs() <= SMALL_CORRECTION
-            });
-            let q0 = self.q.clone();
-            // Plain Newton first: stiff rods (EA ≫ EI/L²) overshoot the residual norm by orders of
-            // magnitude in early iterations (membrane terms) and still converge quadratically, so
-            // a residual-decrease line search from the start only stalls them. After
-            // PLAIN_NEWTON_ITERATIONS the slack line search on s(α) = Δ·R(q₀ + αΔ) (Crisfield)
-            // takes over: a step is accepted when |s| or ‖R‖ dropped enough, else α follows the
-            // secant root of s. A step moving prescribed values is taken in full (a partial step
-            // would only partly apply them); failing steps are bisected by the caller.
-            let s0 = self.directional(&dq);
-            let mut alpha = 1.0;
-            self.move_from(&q0, &dq, alpha);
-            self.assemble(dt, true);
-            if !any_prescribed_increment && it >= PLAIN_NEWTON_ITERATIONS {
-                for _ in 0..8 {
-                    let r1 = self.free_residual_norm();
-                    let s1 = self.directional(&dq);
-                    if crate::linesearch::accept(s0, s1, r0, r1) {
-                        break;
-                    }
-                    alpha = crate::linesearch::next_alpha(alpha, s0, s1, true);
-                    self.move_from(&q0, &dq, alpha);
-                    self.assemble(dt, true);
-                }
-            }
-            self.rhs = dq;
-            let r1 = self.free_residual_norm();
-            if small && !any_prescribed_increment && r1.is_finite() {
-                return Ok(it + 1);
-            }
-            if !r1.is_finite() {
-                self.q = q0;
-                self.assemble(dt, true);
-                return Err(fail(
-                    it,
-                    f64::INFINITY,
-                    "residual became non-finite along the Newton direction".into(),
-                ));
-            }
-        }
-        let r = self.free_residual_norm();
-        let f_ref = self.reference_force();
-        if r <= self.options.tolerance * f_ref {
-            return Ok(self.options.max_iterations);
-        }
-        Err(fail(
-            self.options.max_iterations,
-            r / f_ref,
-            format!(
-                "no convergence in {} Newton iterations",
-                self.options.max_iterations
-            ),
-        ))
-    }
-
-    /// Σ over free dofs of Δ·R (the line-search function), at the last evaluation.
-    fn directional(&self, dq: &[Vector3<f64>]) -> f64 {
-        let mut s = 0.0;
-        for (i, (r, d)) in self.res.iter().zip(dq).enumerate() {
-            for k in 0..3 {
-                if self.prescribed[i][k].is_none() {
-                    s += r[k] * d[k];
-                }
-            }
-        }
-        s
-    }
-
-    /// Set q = q₀ + α Δ, with prescribed values exactly.
-    fn move_from(&mut self, q0: &[Vector3<f64>], dq: &[Vector3<f64>], alpha: f64) {
-        for i in 0..q0.len() {
-            self.q[i] = q0[i] + dq[i] * alpha;
-            for d in 0..3 {
-                if let Some(v) = self.prescribed[i][d] {
-                    self.q[i][d] = v;
-                }
-            }
-        }
+        let options = self.options;
+        crate::newton::solve(self, &options, dt, step)
     }
 
     /// Accept the converged step: trial law states and friction stick points become committed.
@@ -948,6 +789,110 @@ impl<'a> PlanarRod<'a> {
         for s in &mut self.supports {
             (s.contact_s_m, s.contact_point, s.tangential_force_n) = s.trial;
         }
+    }
+}
+
+impl NewtonSystem for PlanarRod<'_> {
+    fn prescribe(&mut self) -> bool {
+        self.prescribed
+            .iter()
+            .zip(&self.q)
+            .any(|(p, q)| (0..3).any(|d| p[d].is_some_and(|v| v != q[d])))
+    }
+
+    fn assemble(&mut self, dt: f64) -> Result<(), String> {
+        PlanarRod::assemble(self, dt, true);
+        Ok(())
+    }
+
+    fn free_residual_norm(&self) -> f64 {
+        PlanarRod::free_residual_norm(self)
+    }
+
+    fn reference_force(&self) -> f64 {
+        PlanarRod::reference_force(self)
+    }
+
+    /// Right-hand side: −R on free dofs; the prescribed increment on the constrained ones (moved
+    /// to the right-hand side through the tangent's columns, then rows/cols zeroed).
+    fn correction(&mut self, pending: bool) -> Result<(), usize> {
+        let n = self.nodes();
+        for i in 0..n {
+            self.rhs[i] = -self.res[i];
+        }
+        for i in 0..n {
+            for d in 0..3 {
+                let Some(v) = self.prescribed[i][d] else {
+                    continue;
+                };
+                let delta = v - self.q[i][d];
+                if pending && delta != 0.0 {
+                    subtract_column(
+                        &self.diag,
+                        &self.upper,
+                        &self.lower,
+                        &mut self.rhs,
+                        (i, d),
+                        delta,
+                    );
+                }
+            }
+        }
+        for i in 0..n {
+            for d in 0..3 {
+                let Some(v) = self.prescribed[i][d] else {
+                    continue;
+                };
+                constrain(&mut self.diag, &mut self.upper, &mut self.lower, (i, d));
+                self.rhs[i][d] = v - self.q[i][d];
+            }
+        }
+        solve_block_tridiagonal(
+            &self.diag,
+            &self.upper,
+            &self.lower,
+            &mut self.rhs,
+            &mut self.work,
+        )
+    }
+
+    fn correction_is_small(&self) -> bool {
+        self.rhs.iter().all(|d| {
+            d.xy().amax() <= SMALL_CORRECTION * self.length_scale && d[2].abs() <= SMALL_CORRECTION
+        })
+    }
+
+    fn save(&mut self) {
+        self.q0.clone_from(&self.q);
+    }
+
+    fn restore(&mut self) {
+        self.q.clone_from(&self.q0);
+    }
+
+    /// q = q₀ + α Δ, with prescribed values exactly.
+    fn move_along(&mut self, alpha: f64) {
+        for i in 0..self.q0.len() {
+            self.q[i] = self.q0[i] + self.rhs[i] * alpha;
+            for d in 0..3 {
+                if let Some(v) = self.prescribed[i][d] {
+                    self.q[i][d] = v;
+                }
+            }
+        }
+    }
+
+    /// Σ over free dofs of Δ·R (the line-search function), at the last evaluation.
+    fn directional(&self) -> f64 {
+        let mut s = 0.0;
+        for (i, (r, d)) in self.res.iter().zip(&self.rhs).enumerate() {
+            for k in 0..3 {
+                if self.prescribed[i][k].is_none() {
+                    s += r[k] * d[k];
+                }
+            }
+        }
+        s
     }
 }
 

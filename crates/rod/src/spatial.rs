@@ -49,7 +49,8 @@
 //! Pure physics: numbers in, numbers out. Does not: contact, distributed loads, dynamics,
 //! arc-length control (limit points under load control are not passed).
 
-use crate::blocktri::solve_block_tridiagonal;
+use crate::blocktri::{constrain, solve_block_tridiagonal, subtract_column};
+use crate::newton::NewtonSystem;
 use crate::planar::{SolverOptions, SMALL_CORRECTION};
 use crate::RodError;
 use cablab_laws::Law;
@@ -63,8 +64,6 @@ type B6x12 = SMatrix<f64, 6, 12>;
 /// Largest relative rotation of the two end frames of one element (rad). The rotation-vector
 /// logarithm is unique below π; beyond this the mesh is too coarse for the deformation.
 pub const MAX_ELEMENT_ROTATION_RAD: f64 = 2.5;
-/// Newton iterations taken in full before the line search is switched on.
-const PLAIN_NEWTON_ITERATIONS: usize = 6;
 /// Below this angle the SO(3) Jacobian coefficients are evaluated by their Taylor series.
 const SERIES_BELOW_RAD: f64 = 0.05;
 
@@ -379,6 +378,7 @@ pub struct SpatialRod<'a> {
     work: Vec<Matrix6<f64>>,
     force_scale: f64,
     length_scale: f64,
+    newton: NewtonBuffers,
 }
 
 impl<'a> SpatialRod<'a> {
@@ -457,6 +457,7 @@ impl<'a> SpatialRod<'a> {
             work: Vec::with_capacity(nodes),
             force_scale: ei / (length * length),
             length_scale: length,
+            newton: NewtonBuffers::default(),
         })
     }
 
@@ -682,36 +683,6 @@ impl<'a> SpatialRod<'a> {
         f
     }
 
-    /// Σ over free dofs of Δ·R, the line-search function.
-    fn directional(&self, dq: &[Vector6<f64>]) -> f64 {
-        let mut s = 0.0;
-        for (i, (r, d)) in self.res.iter().zip(dq).enumerate() {
-            for k in 0..6 {
-                if !self.fixed[i][k] {
-                    s += r[k] * d[k];
-                }
-            }
-        }
-        s
-    }
-
-    /// Configuration (x₀, q₀) moved by α Δ (spins applied multiplicatively, spatially).
-    fn move_from(
-        &mut self,
-        x0: &[Vector3<f64>],
-        q0: &[UnitQuaternion<f64>],
-        dq: &[Vector6<f64>],
-        alpha: f64,
-    ) {
-        for i in 0..x0.len() {
-            let d = dq[i] * alpha;
-            self.x[i] = x0[i] + Vector3::new(d[0], d[1], d[2]);
-            let mut q = UnitQuaternion::from_scaled_axis(Vector3::new(d[3], d[4], d[5])) * q0[i];
-            q.renormalize_fast();
-            self.rot[i] = q;
-        }
-    }
-
     /// Check that a set of controls fits the rod and its constraints.
     fn check_controls(&self, c: &Controls) -> Result<(), RodError> {
         let n = self.l0.len() + 1;
@@ -850,177 +821,164 @@ impl<'a> SpatialRod<'a> {
         Ok(stats)
     }
 
-    /// Newton's method for the loads and prescribed values in `self.current`.
-    #[allow(clippy::needless_range_loop)] // several per-node arrays indexed together
+    /// Newton's method for the loads and prescribed values in `self.current`
+    /// ([`crate::newton::solve`]).
     fn newton(&mut self, dt: f64, step: usize) -> Result<usize, RodError> {
-        let n = self.nodes();
-        let fail = |iterations: usize, residual: f64, reason: String| RodError::NotConverged {
-            step,
-            iterations,
-            residual,
-            reason,
-        };
-        let too_big = |(e, a): (usize, f64)| {
-            format!(
-                "element {e} turned by {a:.3} rad (> {MAX_ELEMENT_ROTATION_RAD} rad) relative to its neighbour: refine the mesh"
-            )
-        };
-        // Prescribed increments (first iteration only).
-        let mut pres = vec![Vector6::zeros(); n];
-        for i in 0..n {
-            if let Some(p) = self.current.position[i] {
-                for k in 0..3 {
-                    if self.fixed[i][k] {
-                        pres[i][k] = p[k] - self.x[i][k];
-                    }
-                }
-            }
-            if let Some(r) = self.current.rotation[i] {
-                let w = rotation_vector(&(r * self.rot[i].inverse()));
-                pres[i].fixed_rows_mut::<3>(3).copy_from(&w);
-            }
-        }
-        let mut pending = pres.iter().any(|p| p.iter().any(|&v| v != 0.0));
-        if let Err(t) = self.assemble(dt, true) {
-            return Err(fail(0, f64::NAN, too_big(t)));
-        }
-        let mut rhs = vec![Vector6::zeros(); n];
-        for it in 0..self.options.max_iterations {
-            let r0 = self.free_residual_norm();
-            let f_ref = self.reference_force();
-            if !r0.is_finite() {
-                return Err(fail(
-                    it,
-                    r0,
-                    "residual is not finite (law returned NaN/inf)".into(),
-                ));
-            }
-            if !pending && r0 <= self.options.tolerance * f_ref {
-                return Ok(it);
-            }
-            for i in 0..n {
-                rhs[i] = -self.res[i];
-            }
-            if pending {
-                // Move the prescribed increments to the right-hand side through the tangent.
-                for i in 0..n {
-                    for d in 0..6 {
-                        let delta = pres[i][d];
-                        if !self.fixed[i][d] || delta == 0.0 {
-                            continue;
-                        }
-                        rhs[i] -= self.diag[i].column(d) * delta;
-                        if i > 0 {
-                            rhs[i - 1] -= self.upper[i - 1].column(d) * delta;
-                        }
-                        if i + 1 < n {
-                            rhs[i + 1] -= self.lower[i].column(d) * delta;
-                        }
-                    }
-                }
-            }
-            for i in 0..n {
-                for d in 0..6 {
-                    if self.fixed[i][d] {
-                        self.diag[i].row_mut(d).fill(0.0);
-                        self.diag[i].column_mut(d).fill(0.0);
-                        self.diag[i][(d, d)] = 1.0;
-                        if i + 1 < n {
-                            self.upper[i].row_mut(d).fill(0.0);
-                            self.lower[i].column_mut(d).fill(0.0);
-                        }
-                        if i > 0 {
-                            self.lower[i - 1].row_mut(d).fill(0.0);
-                            self.upper[i - 1].column_mut(d).fill(0.0);
-                        }
-                        rhs[i][d] = if pending { pres[i][d] } else { 0.0 };
-                    }
-                }
-            }
-            if let Err(block) = solve_block_tridiagonal(
-                &self.diag,
-                &self.upper,
-                &self.lower,
-                &mut rhs,
-                &mut self.work,
-            ) {
-                return Err(fail(
-                    it,
-                    r0 / f_ref,
-                    format!("singular tangent at node {block} (a mechanism: add constraints)"),
-                ));
-            }
-            let small = rhs.iter().all(|d| {
-                d.fixed_rows::<3>(0).amax() <= SMALL_CORRECTION * self.length_scale
-                    && d.fixed_rows::<3>(3).amax() <= SMALL_CORRECTION
-            });
-            let (x0, q0) = (self.x.clone(), self.rot.clone());
-            let s0 = self.directional(&rhs);
-            let mut alpha = 1.0;
-            self.move_from(&x0, &q0, &rhs, alpha);
-            if pending {
-                // Land exactly on the prescribed values.
-                for i in 0..n {
-                    if let Some(p) = self.current.position[i] {
-                        for k in 0..3 {
-                            if self.fixed[i][k] {
-                                self.x[i][k] = p[k];
-                            }
-                        }
-                    }
-                    if let Some(r) = self.current.rotation[i] {
-                        self.rot[i] = r;
-                    }
-                }
-            }
-            let mut status = self.assemble(dt, true);
-            if !pending && it >= PLAIN_NEWTON_ITERATIONS {
-                for _ in 0..10 {
-                    let r1 = self.free_residual_norm();
-                    let s1 = self.directional(&rhs);
-                    if status.is_ok() && crate::linesearch::accept(s0, s1, r0, r1) {
-                        break;
-                    }
-                    alpha = crate::linesearch::next_alpha(alpha, s0, s1, status.is_ok());
-                    self.move_from(&x0, &q0, &rhs, alpha);
-                    status = self.assemble(dt, true);
-                }
-            }
-            if let Err(t) = status {
-                return Err(fail(it + 1, f64::NAN, too_big(t)));
-            }
-            pending = false;
-            let r1 = self.free_residual_norm();
-            if !r1.is_finite() {
-                return Err(fail(
-                    it + 1,
-                    f64::INFINITY,
-                    "residual became non-finite along the Newton direction".into(),
-                ));
-            }
-            if small {
-                return Ok(it + 1);
-            }
-        }
-        let r = self.free_residual_norm();
-        let f_ref = self.reference_force();
-        if r <= self.options.tolerance * f_ref {
-            return Ok(self.options.max_iterations);
-        }
-        Err(fail(
-            self.options.max_iterations,
-            r / f_ref,
-            format!(
-                "no convergence in {} Newton iterations",
-                self.options.max_iterations
-            ),
-        ))
+        let options = self.options;
+        crate::newton::solve(self, &options, dt, step)
     }
 
     /// Accept the converged state: trial law states become committed.
     fn commit(&mut self) {
         self.state.copy_from_slice(&self.trial);
     }
+}
+
+impl NewtonSystem for SpatialRod<'_> {
+    /// Prescribed increments of positions and spins (the rotation vector from the current frame
+    /// to the prescribed one).
+    fn prescribe(&mut self) -> bool {
+        let n = self.nodes();
+        self.newton.pres.clear();
+        self.newton.pres.resize(n, Vector6::zeros());
+        for i in 0..n {
+            if let Some(p) = self.current.position[i] {
+                for k in 0..3 {
+                    if self.fixed[i][k] {
+                        self.newton.pres[i][k] = p[k] - self.x[i][k];
+                    }
+                }
+            }
+            if let Some(r) = self.current.rotation[i] {
+                let w = rotation_vector(&(r * self.rot[i].inverse()));
+                self.newton.pres[i].fixed_rows_mut::<3>(3).copy_from(&w);
+            }
+        }
+        self.newton.pres.iter().any(|p| p.iter().any(|&v| v != 0.0))
+    }
+
+    fn assemble(&mut self, dt: f64) -> Result<(), String> {
+        SpatialRod::assemble(self, dt, true).map_err(|(e, a)| {
+            format!(
+                "element {e} turned by {a:.3} rad (> {MAX_ELEMENT_ROTATION_RAD} rad) relative to its neighbour: refine the mesh"
+            )
+        })
+    }
+
+    fn free_residual_norm(&self) -> f64 {
+        SpatialRod::free_residual_norm(self)
+    }
+
+    fn reference_force(&self) -> f64 {
+        SpatialRod::reference_force(self)
+    }
+
+    #[allow(clippy::needless_range_loop)] // several per-node arrays indexed together
+    fn correction(&mut self, pending: bool) -> Result<(), usize> {
+        let n = self.nodes();
+        let NewtonBuffers { pres, dq, .. } = &mut self.newton;
+        dq.clear();
+        dq.extend(self.res.iter().map(|r| -r));
+        if pending {
+            // Move the prescribed increments to the right-hand side through the tangent.
+            for i in 0..n {
+                for d in 0..6 {
+                    let delta = pres[i][d];
+                    if !self.fixed[i][d] || delta == 0.0 {
+                        continue;
+                    }
+                    subtract_column(&self.diag, &self.upper, &self.lower, dq, (i, d), delta);
+                }
+            }
+        }
+        for i in 0..n {
+            for d in 0..6 {
+                if self.fixed[i][d] {
+                    constrain(&mut self.diag, &mut self.upper, &mut self.lower, (i, d));
+                    dq[i][d] = if pending { pres[i][d] } else { 0.0 };
+                }
+            }
+        }
+        self.newton.landing = pending;
+        solve_block_tridiagonal(
+            &self.diag,
+            &self.upper,
+            &self.lower,
+            &mut self.newton.dq,
+            &mut self.work,
+        )
+    }
+
+    fn correction_is_small(&self) -> bool {
+        self.newton.dq.iter().all(|d| {
+            d.fixed_rows::<3>(0).amax() <= SMALL_CORRECTION * self.length_scale
+                && d.fixed_rows::<3>(3).amax() <= SMALL_CORRECTION
+        })
+    }
+
+    fn save(&mut self) {
+        self.newton.x0.clone_from(&self.x);
+        self.newton.q0.clone_from(&self.rot);
+    }
+
+    fn restore(&mut self) {
+        self.x.clone_from(&self.newton.x0);
+        self.rot.clone_from(&self.newton.q0);
+    }
+
+    /// (x₀, q₀) moved by α Δ (spins applied multiplicatively, spatially); in the step that
+    /// applies prescribed increments, landing exactly on the prescribed values.
+    fn move_along(&mut self, alpha: f64) {
+        let NewtonBuffers { dq, x0, q0, .. } = &self.newton;
+        for i in 0..x0.len() {
+            let d = dq[i] * alpha;
+            self.x[i] = x0[i] + Vector3::new(d[0], d[1], d[2]);
+            let mut q = UnitQuaternion::from_scaled_axis(Vector3::new(d[3], d[4], d[5])) * q0[i];
+            q.renormalize_fast();
+            self.rot[i] = q;
+        }
+        if self.newton.landing {
+            for i in 0..self.x.len() {
+                if let Some(p) = self.current.position[i] {
+                    for k in 0..3 {
+                        if self.fixed[i][k] {
+                            self.x[i][k] = p[k];
+                        }
+                    }
+                }
+                if let Some(r) = self.current.rotation[i] {
+                    self.rot[i] = r;
+                }
+            }
+        }
+    }
+
+    /// Σ over free dofs of Δ·R, the line-search function.
+    fn directional(&self) -> f64 {
+        let mut s = 0.0;
+        for (i, (r, d)) in self.res.iter().zip(&self.newton.dq).enumerate() {
+            for k in 0..6 {
+                if !self.fixed[i][k] {
+                    s += r[k] * d[k];
+                }
+            }
+        }
+        s
+    }
+}
+
+/// Newton's work vectors, kept between steps (no allocation per iteration).
+#[derive(Debug, Clone, Default)]
+struct NewtonBuffers {
+    /// Prescribed increments of this step, per node.
+    pres: Vec<Vector6<f64>>,
+    /// The correction Δ.
+    dq: Vec<Vector6<f64>>,
+    /// The configuration Δ starts from.
+    x0: Vec<Vector3<f64>>,
+    q0: Vec<UnitQuaternion<f64>>,
+    /// Whether the current correction applies prescribed increments.
+    landing: bool,
 }
 
 #[cfg(test)]
@@ -1161,16 +1119,17 @@ mod tests {
                 _ => Matrix6::zeros(),
             }
         };
-        let (x0, q0) = (rod.x.clone(), rod.rot.clone());
+        NewtonSystem::save(&mut rod);
         let h = 1e-6;
         for j in 0..rod.nodes() {
             for d in 0..6 {
                 let mut dq = vec![Vector6::zeros(); rod.nodes()];
                 dq[j][d] = h;
-                rod.move_from(&x0, &q0, &dq, 1.0);
+                rod.newton.dq = dq;
+                rod.move_along(1.0);
                 rod.assemble(0.0, false).unwrap();
                 let rp = rod.res.clone();
-                rod.move_from(&x0, &q0, &dq, -1.0);
+                rod.move_along(-1.0);
                 rod.assemble(0.0, false).unwrap();
                 let rm = rod.res.clone();
                 for i in 0..rod.nodes() {

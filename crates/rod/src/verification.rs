@@ -792,3 +792,73 @@ fn machine_compliance_in_pure_bending_is_a_spring_in_series() {
         );
     }
 }
+
+/// Tension, torsion and pure bending through a machine compliance C in series, by both entry
+/// points (`simulate_path` runs the rod for pure bending, `simulate_history` the uniform state):
+/// the response of a linear specimen of stiffness k = (EA, GJ or EI)/L under the machine's
+/// reading u is R = u / (1/k + C), springs in series. Before the series solver was shared,
+/// `simulate_history` ignored C for every kind but three-point.
+#[test]
+fn machine_compliance_in_every_uniform_kind_is_a_spring_in_series() {
+    let l = 0.08;
+    for (kind, name, stiffness, u_max) in [
+        (TestKind::Tension, "EA", 2.4e5, 4e-4),
+        (TestKind::Torsion, "GJ", 2.1e-3, 0.8),
+        (TestKind::PureBending, "EI", 1.37e-3, 0.8),
+    ] {
+        let lin = law(kind, "linear", &[(name, stiffness)]);
+        let k = stiffness / l;
+        for ratio in [0.0, 0.25, 3.0] {
+            let mut setup = TestSetup::new(kind, l);
+            setup.elements = 20;
+            setup.machine_compliance = ratio / k;
+            let expected = |u: f64| u / (1.0 / k + setup.machine_compliance);
+            let u: Vec<f64> = (0..=12).map(|i| u_max * (0.7 * i as f64).sin()).collect();
+            let t: Vec<f64> = (0..u.len()).map(|i| 0.5 * i as f64).collect();
+            let h = simulate_history(&setup, lin.as_ref(), &u, &t).unwrap();
+            let p = simulate_path(&setup, lin.as_ref(), &u[1..], None).unwrap();
+            let r_scale = k * u_max;
+            for (curve, route, tol) in [(&h, "history", 1e-12), (&p, "path", 1e-6)] {
+                assert!(curve.control.len() >= u.len() - 1);
+                for (&ui, &r) in curve.control.iter().zip(&curve.response) {
+                    assert!(
+                        (r - expected(ui)).abs() <= tol * r_scale,
+                        "{kind} C k = {ratio} ({route}): u {ui}: R {r} vs {}",
+                        expected(ui)
+                    );
+                }
+            }
+            // The uniform replay the diagnosis calls gives the history's numbers exactly.
+            let mut out = vec![0.0; u.len()];
+            crate::replay_uniform(&setup, lin.as_ref(), &u, &t, &mut out).unwrap();
+            assert_eq!(out, h.response, "{kind}");
+        }
+    }
+}
+
+/// The uniform states with an elastoplastic specimen behind a soft machine: replaying the
+/// machine's reading u = w + C·R(w) gives back, sample by sample, the specimen driven by its own
+/// w through a rigid machine — through yield, unloading and reversed yield.
+#[test]
+fn machine_compliance_replay_inverts_the_series_spring_in_tension() {
+    let l = 0.1;
+    let plastic = [("EA", 2.4e5), ("F_y", 300.0), ("H", 2e4)];
+    let ep = law(TestKind::Tension, "elastoplastic", &plastic);
+    let w: Vec<f64> = (0..200).map(|i| 1.2e-3 * (i as f64 * 0.05).sin()).collect();
+    let t: Vec<f64> = (0..w.len()).map(|i| 0.1 * i as f64).collect();
+    let mut setup = TestSetup::new(TestKind::Tension, l);
+    let direct = simulate_history(&setup, ep.as_ref(), &w, &t).unwrap();
+    let rmax = direct.response.iter().fold(0.0f64, |m, r| m.max(r.abs()));
+    assert!(rmax > 300.0, "yields: {rmax}");
+    let c = 1.5 * l / 2.4e5;
+    let u: Vec<f64> = w
+        .iter()
+        .zip(&direct.response)
+        .map(|(w, r)| w + c * r)
+        .collect();
+    setup.machine_compliance = c;
+    let through = simulate_history(&setup, ep.as_ref(), &u, &t).unwrap();
+    for (i, (a, b)) in direct.response.iter().zip(&through.response).enumerate() {
+        assert!((a - b).abs() <= 1e-9 * rmax, "sample {i}: {a} vs {b}");
+    }
+}
