@@ -478,8 +478,10 @@ pub fn series_table(caption: &str, rows: &[SeriesStat]) -> Grid {
                     Cell::Int(r.n as i64),
                     Cell::Num(r.mean),
                     Cell::opt(r.sd),
+                    // A CoV only where the values share a sign: around zero (a loop area that is
+                    // noise, say) SD/|mean| is any number at all.
                     match r.sd {
-                        Some(sd) if r.mean != 0.0 => Cell::Percent(sd / r.mean.abs()),
+                        Some(sd) if r.min * r.max > 0.0 => Cell::Percent(sd / r.mean.abs()),
                         _ => Cell::Empty,
                     },
                     Cell::Num(r.min),
@@ -724,5 +726,22 @@ mod tests {
         assert_eq!(t.rows[0][2], "1.40");
         assert_eq!(t.rows[1][2], "0.180");
         assert_eq!(t.rows[1][3], "1/m");
+    }
+
+    #[test]
+    fn series_cov_only_where_the_values_share_a_sign() {
+        let stat = |min: f64, max: f64, mean: f64, sd: f64| SeriesStat {
+            series: "s".into(),
+            quantity: "q".into(),
+            n: 3,
+            mean,
+            sd: Some(sd),
+            min,
+            max,
+        };
+        // 8.0 ± 0.4 → 5.0 %; a loop area scattered around zero gets no CoV.
+        let t = series_table("c", &[stat(7.6, 8.4, 8.0, 0.4), stat(-0.3, 0.3, 0.01, 0.3)]);
+        assert_eq!(t.rows[0][5], Cell::Percent(0.05));
+        assert_eq!(t.rows[1][5], Cell::Empty);
     }
 }
