@@ -103,15 +103,32 @@ pub(crate) fn load_campaign(
 }
 
 /// Print a finished run's failures, its counts and what to do next; exit 1 when a test failed.
+/// A test whose model part (calibration, simulation, diagnosis) failed is counted and named with
+/// its reason, but its measurement stands: it does not change the exit code.
 pub(crate) fn print_run(r: &runner::RunReport, next: &str) -> ExitCode {
     for o in &r.outcomes {
         if let Some(e) = &o.error {
             eprintln!("cablab: FAILED {}: {e}", o.id);
         }
     }
+    let model_failed: Vec<_> = r
+        .outcomes
+        .iter()
+        .filter(|o| o.error.is_none())
+        .filter_map(|o| Some((&o.id, o.model_error.as_ref()?)))
+        .collect();
+    for (id, e) in &model_failed {
+        eprintln!("cablab: MODEL FAILED {id}: {e} (the measurement is kept)");
+    }
     let failed = r.failed();
+    let model_note = match model_failed.len() {
+        0 => String::new(),
+        n => format!(
+            " ({n} of them without the model: it failed, see above; their measurement is kept, so the exit code stays 0)"
+        ),
+    };
     eprintln!(
-        "cablab: {} tests, {} ok, {} failed, {} from cache, {:.1} s → {}",
+        "cablab: {} tests, {} ok{model_note}, {} failed, {} from cache, {:.1} s → {}",
         r.outcomes.len(),
         r.outcomes.len() - failed,
         failed,

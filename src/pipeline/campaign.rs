@@ -36,6 +36,10 @@ pub struct Manifest {
     pub inputs: Vec<Hashed>,
     /// Every output except this manifest.
     pub outputs: Vec<Hashed>,
+    /// The run had the diagnosis switched off (`--no-diagnosis`) although the pipeline enables
+    /// it: `cablab verify` reruns it the same way. Absent (false) otherwise.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub no_diagnosis: bool,
 }
 
 /// `summary.json` per-test entry.
@@ -326,6 +330,11 @@ pub fn write_campaign_outputs(
         root_from_report: rel(&abs(&c.output_dir()), &abs(&c.root)),
         inputs,
         outputs,
+        // Read from the outcomes, so that runs and shard merges record it alike.
+        no_diagnosis: c.file.diagnosis.enabled
+            && outcomes
+                .iter()
+                .any(|o| o.why.iter().any(|w| w == super::evaluate::DIAGNOSIS_OFF)),
     };
     write_atomic(&out_dir.join("manifest.json"), &to_json_bytes(&manifest)?)
         .context("cannot write manifest.json")?;

@@ -13,6 +13,10 @@ use cablab_diagnose::ModelSpec;
 use cablab_measure::{Analysis, Branch};
 use serde::{Deserialize, Serialize};
 
+/// The `why` line of a test whose run had the diagnosis switched off (`--no-diagnosis`); the
+/// manifest records such a run so that `cablab verify` reruns it alike.
+pub const DIAGNOSIS_OFF: &str = "diagnose: disabled for this run";
+
 /// Stages, in order; the runner shows one progress bar per stage.
 pub const STAGES: [&str; 5] = ["ingest", "characterise", "calibrate", "diagnose", "report"];
 
@@ -532,7 +536,7 @@ fn model_part(
         out.diagnosis_words = Some(words(&d));
         *diagnosis = Some(d);
     } else if !diagnosis_enabled {
-        out.why.push("diagnose: disabled for this run".into());
+        out.why.push(DIAGNOSIS_OFF.into());
     } else {
         out.why.push(format!(
             "diagnose: {} is not among [diagnosis].kinds",
