@@ -144,16 +144,15 @@ pub(crate) fn print_run(r: &runner::RunReport, next: &str) -> ExitCode {
     }
 }
 
-/// Folder mode: infer every file, stop with one message listing the gaps (unless
-/// `--skip-incomplete`), then validate the generated pipeline exactly as a pipeline file is
+/// Folder mode: infer every file; leave out (with why) the files whose kind nothing states,
+/// evaluate those without a length or diameter at the machine level with one note listing what
+/// would unlock their sectional results (`--skip-incomplete` leaves out every file with a gap),
+/// then validate the generated pipeline exactly as a pipeline file is
 /// validated. The pipeline is kept as `reports/<name>/pipeline.toml` (written after the run).
 fn folder_campaign(a: &RunArgs) -> Result<config::Campaign, CliError> {
     let mut s = init::survey(&a.paths, &a.infer)?;
     eprint!("cablab: inferred:\n{}", init::describe(&s));
-    if let Some(m) = init::gaps_message(&s, &a.paths) {
-        if !a.skip_incomplete {
-            return Err(CliError::input(anyhow::anyhow!("{m}")));
-        }
+    if a.skip_incomplete {
         let (keep, drop): (Vec<_>, Vec<_>) = s.found.into_iter().partition(|f| f.gaps().is_empty());
         for f in drop {
             let why = format!("--skip-incomplete: no {}", f.gaps().join(", no "));
@@ -161,6 +160,19 @@ fn folder_campaign(a: &RunArgs) -> Result<config::Campaign, CliError> {
             s.skipped.push((f.path, why));
         }
         s.found = keep;
+    } else {
+        // A file of no stated kind cannot be evaluated; one without a length or diameter still
+        // is, at the machine level, with a note naming what would unlock the rest.
+        let (keep, drop): (Vec<_>, Vec<_>) = s.found.into_iter().partition(|f| f.kind.is_some());
+        for f in drop {
+            let why = init::no_kind_why(&f);
+            eprintln!("cablab: skipped {}: {why}", f.path.display());
+            s.skipped.push((f.path, why));
+        }
+        s.found = keep;
+        if let Some(m) = init::unlock_note(&s, &a.paths) {
+            eprintln!("cablab: note: {m}");
+        }
     }
     if s.found.is_empty() {
         return Err(CliError::input(anyhow::anyhow!(
@@ -171,7 +183,13 @@ fn folder_campaign(a: &RunArgs) -> Result<config::Campaign, CliError> {
     let name = init::campaign_name(&a.paths, &a.infer);
     let pipeline = PathBuf::from("reports").join(&name).join("pipeline.toml");
     let cmd = format!("cablab run {}", init::joined(&a.paths));
-    let text = init::render(&s, &name, init::root_from(&pipeline).as_deref(), &cmd);
+    let text = init::render(
+        &s,
+        &name,
+        init::root_from(&pipeline).as_deref(),
+        &cmd,
+        init::Gaps::LeaveOut,
+    );
     config::load_str(&text, &pipeline).map_err(CliError::input)
 }
 

@@ -64,6 +64,12 @@ struct SummaryTest<'a> {
     report: String,
     /// Why calibration, simulation or diagnosis failed (the measurement above is kept).
     model_error: Option<&'a str>,
+    /// Values that would unlock the sectional results (absent when the geometry is known).
+    #[serde(skip_serializing_if = "<[String]>::is_empty")]
+    needs: &'a [String],
+    /// The slope in the machine's quantities when the length is unknown (absent otherwise).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    machine_stiffness: Option<&'a super::evaluate::MachineStiffness>,
     /// Protocol series (level) the test belongs to; null when pooled or not stated.
     series: Option<&'a str>,
     /// Specimen id, operator, date and machine from the file's header.
@@ -167,7 +173,7 @@ pub fn write_campaign_outputs(
         .filter_map(|(o, s)| {
             Some(cablab_measure::TableRow {
                 specimen: o.specimen.clone(),
-                diameter_m: Some(o.diameter_m),
+                diameter_m: o.diameter_m,
                 kind: o.kind,
                 stiffness: o.stiffness?,
                 modulus_pa: o.modulus_pa,
@@ -233,6 +239,8 @@ pub fn write_campaign_outputs(
             why: &o.why,
             report: format!("tests/{}/result.json", o.slug),
             model_error: o.model_error.as_deref(),
+            needs: &o.needs,
+            machine_stiffness: o.machine_stiffness.as_ref(),
             series: s.as_deref(),
             header: &o.header,
             yield_method: o.yield_method.as_deref(),

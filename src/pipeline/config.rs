@@ -69,8 +69,10 @@ fn default_nu() -> f64 {
 pub struct SpecimenType {
     /// Label used in tables ("cable 2.8 mm").
     pub label: String,
-    /// Section diameter in millimetres.
-    pub diameter_mm: f64,
+    /// Section diameter in millimetres. Absent when not known (folder mode on files that do not
+    /// state it): the moduli are then null, with why.
+    #[serde(default)]
+    pub diameter_mm: Option<f64>,
     /// Free text.
     #[serde(default)]
     pub note: String,
@@ -292,8 +294,8 @@ pub struct PlannedTest {
     pub path: PathBuf,
     /// Specimen type label.
     pub specimen: String,
-    /// Section diameter, m.
-    pub diameter_m: f64,
+    /// Section diameter, m; `None` when neither the pipeline nor (later) the file states it.
+    pub diameter_m: Option<f64>,
     /// Test kind.
     pub kind: TestKind,
     /// Free length or span, m (None: from the file's metadata).
@@ -688,13 +690,18 @@ fn validate(file: PipelineFile, path: &Path, bytes: Vec<u8>, root: PathBuf) -> R
     }
     let mut diam = BTreeMap::new();
     for (si, s) in file.specimens.iter().enumerate() {
-        in_range(
-            s.diameter_mm,
-            DIAMETER_MM,
-            "mm",
-            &lines.at(&ctx, "specimen", si, "diameter_mm"),
-        )?;
-        if diam.insert(s.label.clone(), s.diameter_mm * 1e-3).is_some() {
+        if let Some(d) = s.diameter_mm {
+            in_range(
+                d,
+                DIAMETER_MM,
+                "mm",
+                &lines.at(&ctx, "specimen", si, "diameter_mm"),
+            )?;
+        }
+        if diam
+            .insert(s.label.clone(), s.diameter_mm.map(|d| d * 1e-3))
+            .is_some()
+        {
             bail!(
                 "{}: specimen '{}' is declared twice",
                 lines.at(&ctx, "specimen", si, "label"),
