@@ -384,24 +384,42 @@ fn stages(
     // with l₀ = 1 m the sectional control is numerically the machine control (eqs. (1), (2),
     // (5)), so the fitted slope is the machine stiffness once the three-point factor l₀³/48 is
     // taken off. The sectional quantities are null, with what would unlock them.
-    let machine_level = t.free_length_m.is_none() && rec.specimen.free_length_m.is_none();
-    let geom = if machine_level {
+    // A pure-bending file whose control is the curvature K_B itself needs no length for (EI)_B:
+    // with a length its control becomes the angle θ_B = K_B l₀ (eq. (4)); without one it is
+    // characterised on l₀ = 1 m, where the sectional control is K_B.
+    let curvature_control = t.kind == TestKind::PureBending
+        && rec
+            .channel_index(cablab_core::Role::Control)
+            .and_then(|i| rec.channels[i].dimension)
+            == Some(cablab_ingest::units::Dimension::Curvature);
+    let length_known = t.free_length_m.is_some() || rec.specimen.free_length_m.is_some();
+    let machine_level = !length_known && !curvature_control;
+    let geom = if length_known {
+        crate::bridge::geometry(&rec, t.kind, t.free_length_m, t.diameter_m)?
+    } else {
         cablab_measure::Geometry {
             free_length_m: 1.0,
-            diameter_m: None,
+            diameter_m: if curvature_control {
+                t.diameter_m.or(rec.specimen.diameter_m)
+            } else {
+                None
+            },
         }
-    } else {
-        crate::bridge::geometry(&rec, t.kind, t.free_length_m, t.diameter_m)?
     };
     out.diameter_m = t.diameter_m.or(rec.specimen.diameter_m);
-    out.free_length_m = (!machine_level).then_some(geom.free_length_m);
+    out.free_length_m = length_known.then_some(geom.free_length_m);
     if machine_level {
         out.needs.push(format!("length_mm ({})", length_word(t.kind)));
     }
     if out.diameter_m.is_none() {
         out.needs.push("diameter_mm".into());
     }
-    let curve = crate::bridge::curve(&rec)?;
+    let mut curve = crate::bridge::curve(&rec)?;
+    if curvature_control && length_known {
+        for c in &mut curve.control {
+            *c *= geom.free_length_m;
+        }
+    }
     out.rows = Some(curve.control.len());
     drop(rec);
     done(0);
@@ -447,7 +465,7 @@ fn stages(
     let mut simulated: Option<Vec<f64>> = None;
     let mut diagnosis = None;
     let mut model_stage = 2;
-    let model = if machine_level {
+    let model = if !length_known {
         // The rod model needs the length; not a failure of the model.
         out.why.push(format!(
             "calibrate: needs length_mm ({}): the rod model is built on it",

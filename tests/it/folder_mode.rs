@@ -468,3 +468,70 @@ fn flags_are_checked_and_raw_files_never_overwritten() {
     assert_eq!(r.code, 2);
     assert!(r.stderr.contains("not both"), "{}", r.stderr);
 }
+
+/// A loading to `peak` and back (201 rows, with time): `x` column header, `y` header, y = k x.
+fn ramp_csv(x: &str, y: &str, peak: f64, k: f64) -> String {
+    let mut s = format!("Time (s),{x},{y}\n");
+    for i in 0..=200 {
+        let u = peak * if i <= 100 { i as f64 } else { (200 - i) as f64 } / 100.0;
+        s.push_str(&format!("{:.2},{u:.6},{:.8}\n", i as f64 * 0.1, k * u));
+    }
+    s
+}
+
+/// Files that state neither span nor diameter are still evaluated in one command: a three-point
+/// test gives its machine stiffness F/w (the l₀³/48 factor taken off again), a moment-curvature
+/// test gives (EI)_B itself (its control is the sectional curvature: no length needed), each
+/// with the values that would unlock the rest.
+#[test]
+fn without_geometry_the_machine_stiffness_and_moment_curvature_ei_are_exact() {
+    let d = tempfile::tempdir().unwrap();
+    std::fs::create_dir_all(d.path().join("lab3")).unwrap();
+    // F = k w with k = 150 N/m: deflection to 2 mm.
+    std::fs::write(
+        d.path().join("lab3/beam_3pb_1.csv"),
+        ramp_csv("Deflection (mm)", "Force (N)", 2.0, 0.15),
+    )
+    .unwrap();
+    // M = EI κ with EI = 0.02 N m²: curvature to 2 1/m.
+    std::fs::write(
+        d.path().join("lab3/arc_1.csv"),
+        ramp_csv("curvature [1/m]", "bending_moment [N.m]", 2.0, 0.02),
+    )
+    .unwrap();
+    let r = run_in(d.path(), &["run", "lab3", "--no-diagnosis"]);
+    assert_eq!(r.code, 0, "{}", r.stderr);
+    let s: Value = serde_json::from_slice(
+        &std::fs::read(d.path().join("reports/lab3/summary.json")).unwrap(),
+    )
+    .unwrap();
+    let by: BTreeMap<String, &Value> = s["tests"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|t| (t["id"].as_str().unwrap().to_string(), t))
+        .collect();
+    let b = by["lab3/beam_3pb_1.csv"];
+    assert_eq!(b["kind"], "three_point", "{b}");
+    let k = b["machine_stiffness"]["value"].as_f64().unwrap();
+    assert!((k - 150.0).abs() < 0.5, "{b}");
+    assert_eq!(b["machine_stiffness"]["unit"], "N/m");
+    assert!(b["stiffness"].is_null(), "{b}");
+    assert_eq!(
+        b["needs"],
+        serde_json::json!(["length_mm (support span)", "diameter_mm"])
+    );
+    let a = by["lab3/arc_1.csv"];
+    assert_eq!(a["kind"], "pure_bending", "{a}");
+    let ei = a["stiffness"].as_f64().unwrap_or_else(|| panic!("{a}"));
+    assert!((ei - 0.02).abs() < 1e-4, "{a}");
+    assert_eq!(a["stiffness_unit"], "N m^2");
+    assert!(a.get("machine_stiffness").is_none(), "{a}");
+    assert_eq!(a["needs"], serde_json::json!(["diameter_mm"]));
+    assert!(
+        r.stderr
+            .contains("need length_mm (support span), diameter_mm:\n    lab3/beam_3pb_1.csv"),
+        "{}",
+        r.stderr
+    );
+}
