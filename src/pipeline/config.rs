@@ -1026,6 +1026,19 @@ length_mm = 30
         assert_eq!(c.output_dir(), d.path().join("reports/t"));
     }
 
+    /// A specimen type without a diameter loads (its tests get null moduli); a given one is SI.
+    #[test]
+    fn the_diameter_is_optional() {
+        let d = tempfile::tempdir().unwrap();
+        write(d.path(), "raw_data/b.csv", "x");
+        write(d.path(), "raw_data/a.csv", "x");
+        let c = load(&write(d.path(), "pipelines/t.toml", GOOD)).unwrap();
+        assert!((c.tests[0].diameter_m.unwrap() - 2.8e-3).abs() < 1e-15);
+        let text = GOOD.replace("diameter_mm = 2.8\n", "");
+        let c = load(&write(d.path(), "pipelines/t.toml", &text)).unwrap();
+        assert!(c.tests.iter().all(|t| t.diameter_m.is_none()));
+    }
+
     #[test]
     fn unknown_key_is_named_with_its_line() {
         let d = tempfile::tempdir().unwrap();
