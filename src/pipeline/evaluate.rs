@@ -409,7 +409,8 @@ fn stages(
     out.diameter_m = t.diameter_m.or(rec.specimen.diameter_m);
     out.free_length_m = length_known.then_some(geom.free_length_m);
     if machine_level {
-        out.needs.push(format!("length_mm ({})", length_word(t.kind)));
+        out.needs
+            .push(format!("length_mm ({})", length_word(t.kind)));
     }
     if out.diameter_m.is_none() {
         out.needs.push("diameter_mm".into());
@@ -476,20 +477,20 @@ fn stages(
         Ok(())
     } else {
         model_part(
-        c,
-        t,
-        &geom,
-        &curve,
-        &an,
-        diagnosis_enabled,
-        out,
-        &mut simulated,
-        &mut diagnosis,
-        &mut |s| {
-            done(s);
-            model_stage = s + 1;
-        },
-    )
+            c,
+            t,
+            &geom,
+            &curve,
+            &an,
+            diagnosis_enabled,
+            out,
+            &mut simulated,
+            &mut diagnosis,
+            &mut |s| {
+                done(s);
+                model_stage = s + 1;
+            },
+        )
     };
     if let Err(e) = model {
         out.model_error = Some(format!("{}: {e:#}", STAGES[model_stage.min(3)]));

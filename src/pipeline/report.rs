@@ -497,9 +497,10 @@ fn section(out_dir: &Path, o: &TestOutcome) -> TestSection {
     }
     facts.push((
         "diameter".into(),
-        o.diameter_m.map_or("not stated (the moduli need it)".into(), |d| {
-            format!("{} mm", fmt_num(d * 1e3, 3))
-        }),
+        o.diameter_m
+            .map_or("not stated (the moduli need it)".into(), |d| {
+                format!("{} mm", fmt_num(d * 1e3, 3))
+            }),
     ));
     if let Some(k) = &o.machine_stiffness {
         facts.push((

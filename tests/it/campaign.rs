@@ -450,6 +450,10 @@ fn verify_reruns_a_no_diagnosis_report_alike() {
         .output()
         .unwrap();
     let out = String::from_utf8_lossy(&v.stdout);
-    assert!(v.status.success(), "{out}{}", String::from_utf8_lossy(&v.stderr));
+    assert!(
+        v.status.success(),
+        "{out}{}",
+        String::from_utf8_lossy(&v.stderr)
+    );
     assert!(out.starts_with("verified: "), "{out}");
 }

@@ -194,10 +194,9 @@ fn gaps_are_listed_once_and_init_marks_them() {
         r.stderr
     );
     assert_eq!(r.stderr.matches("note:").count(), 1, "{}", r.stderr);
-    let s: Value = serde_json::from_slice(
-        &std::fs::read(d.path().join("reports/lab2/summary.json")).unwrap(),
-    )
-    .unwrap();
+    let s: Value =
+        serde_json::from_slice(&std::fs::read(d.path().join("reports/lab2/summary.json")).unwrap())
+            .unwrap();
     let tests = s["tests"].as_array().unwrap();
     assert_eq!(tests.len(), 1, "{s}");
     let t = &tests[0];
@@ -219,7 +218,10 @@ fn gaps_are_listed_once_and_init_marks_them() {
         "{why}"
     );
     // The model part needs the length: said, not a failure.
-    assert!(t["model_error"].is_null() && why.contains("calibrate: needs length_mm"), "{t}");
+    assert!(
+        t["model_error"].is_null() && why.contains("calibrate: needs length_mm"),
+        "{t}"
+    );
     // Table 1 holds sectional values only: this test is not in it.
     assert_eq!(s["groups"].as_array().map_or(0, Vec::len), 0, "{s}");
     std::fs::remove_dir_all(d.path().join("reports")).unwrap();
@@ -337,7 +339,8 @@ fn real_logs_get_the_kind_their_metadata_or_name_states() {
         .unwrap()
         .parse()
         .unwrap();
-    let s = cablab::commands::init::survey(&[dir.clone()], &InferArgs::default()).unwrap();
+    let s =
+        cablab::commands::init::survey(std::slice::from_ref(&dir), &InferArgs::default()).unwrap();
     let found: BTreeMap<String, Option<TestKind>> = s
         .found
         .iter()
@@ -501,10 +504,9 @@ fn without_geometry_the_machine_stiffness_and_moment_curvature_ei_are_exact() {
     .unwrap();
     let r = run_in(d.path(), &["run", "lab3", "--no-diagnosis"]);
     assert_eq!(r.code, 0, "{}", r.stderr);
-    let s: Value = serde_json::from_slice(
-        &std::fs::read(d.path().join("reports/lab3/summary.json")).unwrap(),
-    )
-    .unwrap();
+    let s: Value =
+        serde_json::from_slice(&std::fs::read(d.path().join("reports/lab3/summary.json")).unwrap())
+            .unwrap();
     let by: BTreeMap<String, &Value> = s["tests"]
         .as_array()
         .unwrap()
@@ -548,7 +550,13 @@ fn real_logs_run_in_one_command() {
     let d = tempfile::tempdir().unwrap();
     let r = run_in(
         d.path(),
-        &["run", dir.to_str().unwrap(), "--no-diagnosis", "--jobs", "1"],
+        &[
+            "run",
+            dir.to_str().unwrap(),
+            "--no-diagnosis",
+            "--jobs",
+            "1",
+        ],
     );
     // Exit 1 only if a test failed; the run itself is not refused for missing geometry.
     assert!(r.code == 0 || r.code == 1, "{}", r.stderr);
@@ -564,7 +572,11 @@ fn real_logs_run_in_one_command() {
     )
     .unwrap();
     let tests = s["tests"].as_array().unwrap();
-    assert_eq!(tests.len(), 12, "17 files less 3 compression and 2 of no stated kind");
+    assert_eq!(
+        tests.len(),
+        12,
+        "17 files less 3 compression and 2 of no stated kind"
+    );
     let ok: Vec<&Value> = tests.iter().filter(|t| t["ok"] == true).collect();
     assert!(ok.len() >= 10, "{}", r.stderr);
     let mut machine = 0;
