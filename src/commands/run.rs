@@ -104,7 +104,8 @@ pub(crate) fn load_campaign(
 
 /// Print a finished run's failures, its counts and what to do next; exit 1 when a test failed.
 /// A test whose model part (calibration, simulation, diagnosis) failed is counted and named with
-/// its reason, but its measurement stands: it does not change the exit code.
+/// its reason, but its measurement stands: it does not change the exit code. Tests evaluated at
+/// the machine level (no length) are counted too.
 pub(crate) fn print_run(r: &runner::RunReport, next: &str) -> ExitCode {
     for o in &r.outcomes {
         if let Some(e) = &o.error {
@@ -127,8 +128,17 @@ pub(crate) fn print_run(r: &runner::RunReport, next: &str) -> ExitCode {
             " ({n} of them without the model: it failed, see above; their measurement is kept, so the exit code stays 0)"
         ),
     };
+    let machine = r
+        .outcomes
+        .iter()
+        .filter(|o| o.error.is_none() && o.machine_stiffness.is_some())
+        .count();
+    let machine_note = match machine {
+        0 => String::new(),
+        n => format!(" ({n} at the machine level: no length, stiffness in N/m or N m/rad)"),
+    };
     eprintln!(
-        "cablab: {} tests, {} ok{model_note}, {} failed, {} from cache, {:.1} s → {}",
+        "cablab: {} tests, {} ok{model_note}{machine_note}, {} failed, {} from cache, {:.1} s → {}",
         r.outcomes.len(),
         r.outcomes.len() - failed,
         failed,

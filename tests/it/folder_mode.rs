@@ -194,6 +194,12 @@ fn gaps_are_listed_once_and_init_marks_them() {
         r.stderr
     );
     assert_eq!(r.stderr.matches("note:").count(), 1, "{}", r.stderr);
+    assert!(
+        r.stderr
+            .contains("1 tests, 1 ok (1 at the machine level: no length"),
+        "{}",
+        r.stderr
+    );
     let s: Value =
         serde_json::from_slice(&std::fs::read(d.path().join("reports/lab2/summary.json")).unwrap())
             .unwrap();
