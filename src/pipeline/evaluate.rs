@@ -701,7 +701,8 @@ fn length_word(kind: TestKind) -> &'static str {
 
 /// A test characterised on the stand-in length l₀ = 1 m (see [`stages`]): the sectional
 /// stiffness becomes the machine stiffness k = slope = value / f(l₀) (f from
-/// `cablab_measure::sectional::stiffness_factor`), the sectional stiffness and modulus are nulled with why.
+/// `cablab_measure::sectional::stiffness_factor`); the sectional stiffness, the modulus and the
+/// piecewise fit are nulled with why (`stiffness_unit` stays the unit of the null `stiffness`).
 /// `yield` stays as fitted: with l₀ = 1 m its control is the machine control (m or rad).
 ///
 /// Does not touch the maximum, the break or the loop area: they are machine quantities anyway.
@@ -730,7 +731,6 @@ fn to_machine_level(
     }
     out.stiffness = None;
     out.stiffness_ci95 = None;
-    out.stiffness_unit = machine_stiffness_unit(kind).to_string();
     out.modulus_pa = None;
     out.why.retain(|w| !w.starts_with("modulus_pa:"));
     out.why.push(format!("modulus_pa: needs {need}"));
