@@ -480,6 +480,22 @@ pub fn describe(s: &Survey) -> String {
 
 /// One message listing which files need which value, and how to give them.
 pub fn gaps_message(s: &Survey, paths: &[PathBuf]) -> Option<String> {
+    let (n, list) = gap_list(s)?;
+    let mut m = format!(
+        "{n} of {} files lack a value cablab cannot infer:\n{list}",
+        s.found.len()
+    );
+    let _ = write!(
+        m,
+        "give the value for all of them (--kind K, --length-mm L, --diameter-mm D), or write a pipeline \
+         and fill in each file: `cablab init {}`, or leave them out: --skip-incomplete",
+        joined(paths)
+    );
+    Some(m)
+}
+
+/// The files with a gap, grouped by what they need ("  need a, b:\n    file\n"), and how many.
+fn gap_list(s: &Survey) -> Option<(usize, String)> {
     let mut by: BTreeMap<Vec<&str>, Vec<String>> = BTreeMap::new();
     for f in &s.found {
         let g = f.gaps();
@@ -490,24 +506,50 @@ pub fn gaps_message(s: &Survey, paths: &[PathBuf]) -> Option<String> {
     if by.is_empty() {
         return None;
     }
-    let n: usize = by.values().map(Vec::len).sum();
-    let mut m = format!(
-        "{n} of {} files lack a value cablab cannot infer:\n",
-        s.found.len()
-    );
+    let mut m = String::new();
     for (g, files) in &by {
         let _ = writeln!(m, "  need {}:", g.join(", "));
         for f in files {
             let _ = writeln!(m, "    {f}");
         }
     }
-    let _ = write!(
-        m,
-        "give the value for all of them (--kind K, --length-mm L, --diameter-mm D), or write a pipeline \
-         and fill in each file: `cablab init {}`, or leave them out: --skip-incomplete",
+    Some((by.values().map(Vec::len).sum(), m))
+}
+
+/// Why a file whose kind nothing states is left out of a folder-mode run: a compression test
+/// (its name says so) is not one of cablab's kinds; otherwise the kind is simply not stated.
+pub fn no_kind_why(f: &Found) -> String {
+    let name = f
+        .path
+        .file_name()
+        .unwrap_or_default()
+        .to_string_lossy()
+        .to_lowercase();
+    match ["compression", "druck", "compress"]
+        .iter()
+        .find(|w| name.contains(*w))
+    {
+        Some(w) => format!(
+            "a compression test (file name '{w}'): cablab evaluates tension, torsion, three_point and pure_bending"
+        ),
+        None => "its kind is not stated by its metadata, channels or file name: give --kind K, or \
+                 `cablab init` and fill it in"
+            .into(),
+    }
+}
+
+/// The note of a folder-mode run whose files (kinds known) lack a length or diameter: which
+/// values would unlock the sectional results, for which files, and how to give them.
+pub fn unlock_note(s: &Survey, paths: &[PathBuf]) -> Option<String> {
+    let (n, list) = gap_list(s)?;
+    Some(format!(
+        "{n} of {} tests lack a length or diameter no file states: they are evaluated at the \
+         machine level (stiffness in N/m or N m/rad, yield in m or rad); these values would unlock \
+         the sectional results (EA, GJ, EI, modulus):\n{list}give them with --length-mm L / \
+         --diameter-mm D, or write a pipeline and fill in each file: `cablab init {}`",
+        s.found.len(),
         joined(paths)
-    );
-    Some(m)
+    ))
 }
 
 /// The campaign name: `--name`, else the first path's folder name, as a folder-safe word.
@@ -544,6 +586,15 @@ fn q(s: &str) -> String {
     toml::Value::String(s.to_string()).to_string()
 }
 
+/// How [`render`] writes a value no file states.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Gaps {
+    /// As a [`FILL_IN`] marker that keeps the pipeline from loading (`cablab init`).
+    FillIn,
+    /// Left out with a comment: the test is evaluated at the machine level (`cablab run PATH`).
+    LeaveOut,
+}
+
 /// Marker written where a value is missing: loading the pipeline fails on it, naming the line.
 pub const FILL_IN: &str = "FILL IN";
 
@@ -551,7 +602,10 @@ pub const FILL_IN: &str = "FILL IN";
 /// (one glob per folder, kind, specimen type and length when a glob matches exactly that group,
 /// else one per file), each value commented with where it came from, gaps marked [`FILL_IN`].
 /// `root` is written when the pipeline will not sit in `<project>/pipelines/`.
-pub fn render(s: &Survey, name: &str, root: Option<&str>, command: &str) -> String {
+///
+/// With `gaps` = [`Gaps::LeaveOut`] (folder mode's own pipeline) an unknown length or diameter
+/// is left out with a comment instead: the test is then evaluated at the machine level.
+pub fn render(s: &Survey, name: &str, root: Option<&str>, command: &str, gaps: Gaps) -> String {
     let mut t = String::new();
     let _ = writeln!(
         t,
@@ -561,7 +615,15 @@ pub fn render(s: &Survey, name: &str, root: Option<&str>, command: &str) -> Stri
         t,
         "# Every key is explained in docs/pipeline.md (`cablab help pipeline`). Values marked"
     );
-    let _ = writeln!(t, "# \"{FILL_IN}\" could not be inferred: replace them; until then the pipeline does not load.");
+    match gaps {
+        Gaps::FillIn => {
+            let _ = writeln!(t, "# \"{FILL_IN}\" could not be inferred: replace them; until then the pipeline does not load.");
+        }
+        Gaps::LeaveOut => {
+            let _ = writeln!(t, "# A length or diameter no file states is left out: those tests are evaluated at the");
+            let _ = writeln!(t, "# machine level (stiffness in N/m or N m/rad); give it to get EA, GJ, EI and the modulus.");
+        }
+    }
     for (p, why) in &s.skipped {
         let _ = writeln!(t, "# skipped {}: {why}", rel(p));
     }
@@ -597,11 +659,18 @@ pub fn render(s: &Survey, name: &str, root: Option<&str>, command: &str) -> Stri
     }
     // A file whose diameter is not in its metadata is its own specimen type, to be filled in.
     for f in s.found.iter().filter(|f| f.diameter_mm.is_none()) {
-        let _ = writeln!(
-            t,
-            "\n[[specimen]]\nlabel = {}\ndiameter_mm = \"{FILL_IN}: section diameter in mm\"  # not in the metadata",
-            q(&gap_type(f))
-        );
+        let _ = match gaps {
+            Gaps::FillIn => writeln!(
+                t,
+                "\n[[specimen]]\nlabel = {}\ndiameter_mm = \"{FILL_IN}: section diameter in mm\"  # not in the metadata",
+                q(&gap_type(f))
+            ),
+            Gaps::LeaveOut => writeln!(
+                t,
+                "\n[[specimen]]\nlabel = {}\n# diameter_mm: not in the metadata; the moduli need it",
+                q(&gap_type(f))
+            ),
+        };
     }
     // Groups.
     type Key = (String, String, String, String);
@@ -627,7 +696,7 @@ pub fn render(s: &Survey, name: &str, root: Option<&str>, command: &str) -> Stri
         groups.entry(key).or_default().push(f);
     }
     for files in groups.values() {
-        for block in input_blocks(files) {
+        for block in input_blocks(files, gaps) {
             t.push_str(&block);
         }
     }
@@ -635,7 +704,7 @@ pub fn render(s: &Survey, name: &str, root: Option<&str>, command: &str) -> Stri
 }
 
 /// The `[[input]]` table(s) for files sharing folder, type, kind and length.
-fn input_blocks(files: &[&Found]) -> Vec<String> {
+fn input_blocks(files: &[&Found], gaps: Gaps) -> Vec<String> {
     let f0 = files[0];
     let dir = f0.path.parent().unwrap_or(Path::new(""));
     let names: Vec<String> = files
@@ -666,11 +735,11 @@ fn input_blocks(files: &[&Found]) -> Vec<String> {
         m.iter().map(|p| PathBuf::from(rel(p))).collect::<Vec<_>>() == want
     };
     if exact {
-        vec![block(files, &glob)]
+        vec![block(files, &glob, gaps)]
     } else {
         files
             .iter()
-            .map(|f| block(&[*f], &glob::Pattern::escape(&rel(&f.path))))
+            .map(|f| block(&[*f], &glob::Pattern::escape(&rel(&f.path)), gaps))
             .collect()
     }
 }
@@ -693,7 +762,7 @@ fn common_prefix(names: &[String]) -> String {
     p.into_iter().collect()
 }
 
-fn block(files: &[&Found], glob: &str) -> String {
+fn block(files: &[&Found], glob: &str, gaps: Gaps) -> String {
     let f0 = files[0];
     let mut t = String::new();
     let labels: Vec<&str> = files.iter().map(|f| f.label.as_str()).collect();
@@ -733,10 +802,16 @@ fn block(files: &[&Found], glob: &str) -> String {
             } else {
                 "free length"
             };
-            let _ = writeln!(
-                t,
-                "length_mm = \"{FILL_IN}: {what} in mm\"  # not in the metadata"
-            );
+            let _ = match gaps {
+                Gaps::FillIn => writeln!(
+                    t,
+                    "length_mm = \"{FILL_IN}: {what} in mm\"  # not in the metadata"
+                ),
+                Gaps::LeaveOut => writeln!(
+                    t,
+                    "# length_mm: the {what} is not in the metadata; evaluated at the machine level"
+                ),
+            };
         }
     }
     let mut layouts: Vec<&str> = files.iter().map(|f| f.format.as_str()).collect();
@@ -780,7 +855,7 @@ pub fn run(a: InitArgs) -> CmdResult {
     super::refuse_overwrite(&out, &inputs)?;
     let root = root_from(&out);
     let cmd = format!("cablab init {}", joined(&a.paths));
-    let text = render(&s, &name, root.as_deref(), &cmd);
+    let text = render(&s, &name, root.as_deref(), &cmd, Gaps::FillIn);
     eprint!("cablab: inferred:\n{}", describe(&s));
     write_atomic(&out, text.as_bytes())
         .map_err(|e| CliError::failed(anyhow::anyhow!("{}: cannot write: {e}", out.display())))?;

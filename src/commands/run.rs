@@ -103,15 +103,42 @@ pub(crate) fn load_campaign(
 }
 
 /// Print a finished run's failures, its counts and what to do next; exit 1 when a test failed.
+/// A test whose model part (calibration, simulation, diagnosis) failed is counted and named with
+/// its reason, but its measurement stands: it does not change the exit code. Tests evaluated at
+/// the machine level (no length) are counted too.
 pub(crate) fn print_run(r: &runner::RunReport, next: &str) -> ExitCode {
     for o in &r.outcomes {
         if let Some(e) = &o.error {
             eprintln!("cablab: FAILED {}: {e}", o.id);
         }
     }
+    let model_failed: Vec<_> = r
+        .outcomes
+        .iter()
+        .filter(|o| o.error.is_none())
+        .filter_map(|o| Some((&o.id, o.model_error.as_ref()?)))
+        .collect();
+    for (id, e) in &model_failed {
+        eprintln!("cablab: MODEL FAILED {id}: {e} (the measurement is kept)");
+    }
     let failed = r.failed();
+    let model_note = match model_failed.len() {
+        0 => String::new(),
+        n => format!(
+            " ({n} of them without the model: it failed, see above; their measurement is kept, so the exit code stays 0)"
+        ),
+    };
+    let machine = r
+        .outcomes
+        .iter()
+        .filter(|o| o.error.is_none() && o.machine_stiffness.is_some())
+        .count();
+    let machine_note = match machine {
+        0 => String::new(),
+        n => format!(" ({n} at the machine level: no length, stiffness in N/m or N m/rad)"),
+    };
     eprintln!(
-        "cablab: {} tests, {} ok, {} failed, {} from cache, {:.1} s → {}",
+        "cablab: {} tests, {} ok{model_note}{machine_note}, {} failed, {} from cache, {:.1} s → {}",
         r.outcomes.len(),
         r.outcomes.len() - failed,
         failed,
@@ -127,16 +154,15 @@ pub(crate) fn print_run(r: &runner::RunReport, next: &str) -> ExitCode {
     }
 }
 
-/// Folder mode: infer every file, stop with one message listing the gaps (unless
-/// `--skip-incomplete`), then validate the generated pipeline exactly as a pipeline file is
+/// Folder mode: infer every file; leave out (with why) the files whose kind nothing states,
+/// evaluate those without a length or diameter at the machine level with one note listing what
+/// would unlock their sectional results (`--skip-incomplete` leaves out every file with a gap),
+/// then validate the generated pipeline exactly as a pipeline file is
 /// validated. The pipeline is kept as `reports/<name>/pipeline.toml` (written after the run).
 fn folder_campaign(a: &RunArgs) -> Result<config::Campaign, CliError> {
     let mut s = init::survey(&a.paths, &a.infer)?;
     eprint!("cablab: inferred:\n{}", init::describe(&s));
-    if let Some(m) = init::gaps_message(&s, &a.paths) {
-        if !a.skip_incomplete {
-            return Err(CliError::input(anyhow::anyhow!("{m}")));
-        }
+    if a.skip_incomplete {
         let (keep, drop): (Vec<_>, Vec<_>) = s.found.into_iter().partition(|f| f.gaps().is_empty());
         for f in drop {
             let why = format!("--skip-incomplete: no {}", f.gaps().join(", no "));
@@ -144,6 +170,19 @@ fn folder_campaign(a: &RunArgs) -> Result<config::Campaign, CliError> {
             s.skipped.push((f.path, why));
         }
         s.found = keep;
+    } else {
+        // A file of no stated kind cannot be evaluated; one without a length or diameter still
+        // is, at the machine level, with a note naming what would unlock the rest.
+        let (keep, drop): (Vec<_>, Vec<_>) = s.found.into_iter().partition(|f| f.kind.is_some());
+        for f in drop {
+            let why = init::no_kind_why(&f);
+            eprintln!("cablab: skipped {}: {why}", f.path.display());
+            s.skipped.push((f.path, why));
+        }
+        s.found = keep;
+        if let Some(m) = init::unlock_note(&s, &a.paths) {
+            eprintln!("cablab: note: {m}");
+        }
     }
     if s.found.is_empty() {
         return Err(CliError::input(anyhow::anyhow!(
@@ -154,7 +193,13 @@ fn folder_campaign(a: &RunArgs) -> Result<config::Campaign, CliError> {
     let name = init::campaign_name(&a.paths, &a.infer);
     let pipeline = PathBuf::from("reports").join(&name).join("pipeline.toml");
     let cmd = format!("cablab run {}", init::joined(&a.paths));
-    let text = init::render(&s, &name, init::root_from(&pipeline).as_deref(), &cmd);
+    let text = init::render(
+        &s,
+        &name,
+        init::root_from(&pipeline).as_deref(),
+        &cmd,
+        init::Gaps::LeaveOut,
+    );
     config::load_str(&text, &pipeline).map_err(CliError::input)
 }
 

@@ -5,8 +5,8 @@
 
 use super::config::Campaign;
 use super::evaluate::TestOutcome;
-use crate::VERSION;
 use crate::output::{sha256_hex, to_json_bytes, write_atomic};
+use crate::VERSION;
 use anyhow::{Context, Result};
 use cablab_core::TestKind;
 use serde::{Deserialize, Serialize};
@@ -36,6 +36,10 @@ pub struct Manifest {
     pub inputs: Vec<Hashed>,
     /// Every output except this manifest.
     pub outputs: Vec<Hashed>,
+    /// The run had the diagnosis switched off (`--no-diagnosis`) although the pipeline enables
+    /// it: `cablab verify` reruns it the same way. Absent (false) otherwise.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub no_diagnosis: bool,
 }
 
 /// `summary.json` per-test entry.
@@ -60,6 +64,12 @@ struct SummaryTest<'a> {
     report: String,
     /// Why calibration, simulation or diagnosis failed (the measurement above is kept).
     model_error: Option<&'a str>,
+    /// Values that would unlock the sectional results (absent when the geometry is known).
+    #[serde(skip_serializing_if = "<[String]>::is_empty")]
+    needs: &'a [String],
+    /// The slope in the machine's quantities when the length is unknown (absent otherwise).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    machine_stiffness: Option<&'a super::evaluate::MachineStiffness>,
     /// Protocol series (level) the test belongs to; null when pooled or not stated.
     series: Option<&'a str>,
     /// Specimen id, operator, date and machine from the file's header.
@@ -163,7 +173,7 @@ pub fn write_campaign_outputs(
         .filter_map(|(o, s)| {
             Some(cablab_measure::TableRow {
                 specimen: o.specimen.clone(),
-                diameter_m: Some(o.diameter_m),
+                diameter_m: o.diameter_m,
                 kind: o.kind,
                 stiffness: o.stiffness?,
                 modulus_pa: o.modulus_pa,
@@ -229,6 +239,8 @@ pub fn write_campaign_outputs(
             why: &o.why,
             report: format!("tests/{}/result.json", o.slug),
             model_error: o.model_error.as_deref(),
+            needs: &o.needs,
+            machine_stiffness: o.machine_stiffness.as_ref(),
             series: s.as_deref(),
             header: &o.header,
             yield_method: o.yield_method.as_deref(),
@@ -326,6 +338,11 @@ pub fn write_campaign_outputs(
         root_from_report: rel(&abs(&c.output_dir()), &abs(&c.root)),
         inputs,
         outputs,
+        // Read from the outcomes, so that runs and shard merges record it alike.
+        no_diagnosis: c.file.diagnosis.enabled
+            && outcomes
+                .iter()
+                .any(|o| o.why.iter().any(|w| w == super::evaluate::DIAGNOSIS_OFF)),
     };
     write_atomic(&out_dir.join("manifest.json"), &to_json_bytes(&manifest)?)
         .context("cannot write manifest.json")?;

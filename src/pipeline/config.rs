@@ -69,8 +69,10 @@ fn default_nu() -> f64 {
 pub struct SpecimenType {
     /// Label used in tables ("cable 2.8 mm").
     pub label: String,
-    /// Section diameter in millimetres.
-    pub diameter_mm: f64,
+    /// Section diameter in millimetres. Absent when not known (folder mode on files that do not
+    /// state it): the moduli are then null, with why.
+    #[serde(default)]
+    pub diameter_mm: Option<f64>,
     /// Free text.
     #[serde(default)]
     pub note: String,
@@ -292,8 +294,8 @@ pub struct PlannedTest {
     pub path: PathBuf,
     /// Specimen type label.
     pub specimen: String,
-    /// Section diameter, m.
-    pub diameter_m: f64,
+    /// Section diameter, m; `None` when neither the pipeline nor (later) the file states it.
+    pub diameter_m: Option<f64>,
     /// Test kind.
     pub kind: TestKind,
     /// Free length or span, m (None: from the file's metadata).
@@ -688,13 +690,18 @@ fn validate(file: PipelineFile, path: &Path, bytes: Vec<u8>, root: PathBuf) -> R
     }
     let mut diam = BTreeMap::new();
     for (si, s) in file.specimens.iter().enumerate() {
-        in_range(
-            s.diameter_mm,
-            DIAMETER_MM,
-            "mm",
-            &lines.at(&ctx, "specimen", si, "diameter_mm"),
-        )?;
-        if diam.insert(s.label.clone(), s.diameter_mm * 1e-3).is_some() {
+        if let Some(d) = s.diameter_mm {
+            in_range(
+                d,
+                DIAMETER_MM,
+                "mm",
+                &lines.at(&ctx, "specimen", si, "diameter_mm"),
+            )?;
+        }
+        if diam
+            .insert(s.label.clone(), s.diameter_mm.map(|d| d * 1e-3))
+            .is_some()
+        {
             bail!(
                 "{}: specimen '{}' is declared twice",
                 lines.at(&ctx, "specimen", si, "label"),
@@ -1017,6 +1024,19 @@ length_mm = 30
         assert_eq!(c.tests[0].free_length_m, Some(0.032));
         assert!((c.tests[1].free_length_m.unwrap() - 0.030).abs() < 1e-15);
         assert_eq!(c.output_dir(), d.path().join("reports/t"));
+    }
+
+    /// A specimen type without a diameter loads (its tests get null moduli); a given one is SI.
+    #[test]
+    fn the_diameter_is_optional() {
+        let d = tempfile::tempdir().unwrap();
+        write(d.path(), "raw_data/b.csv", "x");
+        write(d.path(), "raw_data/a.csv", "x");
+        let c = load(&write(d.path(), "pipelines/t.toml", GOOD)).unwrap();
+        assert!((c.tests[0].diameter_m.unwrap() - 2.8e-3).abs() < 1e-15);
+        let text = GOOD.replace("diameter_mm = 2.8\n", "");
+        let c = load(&write(d.path(), "pipelines/t.toml", &text)).unwrap();
+        assert!(c.tests.iter().all(|t| t.diameter_m.is_none()));
     }
 
     #[test]

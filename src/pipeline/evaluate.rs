@@ -13,6 +13,10 @@ use cablab_diagnose::ModelSpec;
 use cablab_measure::{Analysis, Branch};
 use serde::{Deserialize, Serialize};
 
+/// The `why` line of a test whose run had the diagnosis switched off (`--no-diagnosis`); the
+/// manifest records such a run so that `cablab verify` reruns it alike.
+pub const DIAGNOSIS_OFF: &str = "diagnose: disabled for this run";
+
 /// Stages, in order; the runner shows one progress bar per stage.
 pub const STAGES: [&str; 5] = ["ingest", "characterise", "calibrate", "diagnose", "report"];
 
@@ -25,8 +29,8 @@ pub struct TestOutcome {
     pub slug: String,
     /// Specimen type label.
     pub specimen: String,
-    /// Diameter, m.
-    pub diameter_m: f64,
+    /// Diameter, m; null when neither the pipeline nor the file states it.
+    pub diameter_m: Option<f64>,
     /// Kind.
     pub kind: TestKind,
     /// Content hash of everything this result depends on.
@@ -98,6 +102,37 @@ pub struct TestOutcome {
     /// `views::OVERLAY_POINTS` samples: the series overlay draws it.
     #[serde(default)]
     pub overlay: Vec<[f64; 2]>,
+    /// Values that would unlock the sectional results ("length_mm (free length)",
+    /// "diameter_mm"); empty when the geometry is known. Without the length the test is
+    /// evaluated at the machine level: `stiffness` is null and `machine_stiffness` holds the
+    /// slope in the file's own quantities; `yield`, `max_response` and `break_at` are in the
+    /// machine control (m or rad).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub needs: Vec<String>,
+    /// The elastic slope in the machine's quantities (force per elongation N/m, torque per
+    /// angle N m/rad, force per deflection N/m, moment per angle N m/rad), when the length is
+    /// unknown; null otherwise.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub machine_stiffness: Option<MachineStiffness>,
+}
+
+/// The elastic slope of a test whose length is unknown, in the machine's quantities.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+pub struct MachineStiffness {
+    /// Slope of the response over the machine control.
+    pub value: f64,
+    /// Its 95% interval.
+    pub ci95: [f64; 2],
+    /// "N/m" or "N m/rad".
+    pub unit: String,
+}
+
+/// Unit of the machine stiffness: the response (N or N m) per the machine control (m or rad).
+pub fn machine_stiffness_unit(kind: TestKind) -> &'static str {
+    match kind {
+        TestKind::Tension | TestKind::ThreePoint | TestKind::Unknown => "N/m",
+        TestKind::Torsion | TestKind::PureBending => "N m/rad",
+    }
 }
 
 /// Header data a file carries, as written (empty when the file does not say).
@@ -230,6 +265,8 @@ impl TestOutcome {
             break_at: None,
             last_loop_area_j: None,
             overlay: vec![],
+            needs: vec![],
+            machine_stiffness: None,
         }
     }
 }
@@ -343,9 +380,47 @@ fn stages(
         t.settings.compliance.is_some(),
     )?;
     out.warnings.extend(notes);
-    let geom = crate::bridge::geometry(&rec, t.kind, t.free_length_m, Some(t.diameter_m))?;
-    out.free_length_m = Some(geom.free_length_m);
-    let curve = crate::bridge::curve(&rec)?;
+    // Without a length (pipeline or file) the test is still characterised, at the machine level:
+    // with l₀ = 1 m the sectional control is numerically the machine control (eqs. (1), (2),
+    // (5)), so the fitted slope is the machine stiffness once the three-point factor l₀³/48 is
+    // taken off. The sectional quantities are null, with what would unlock them.
+    // A pure-bending file whose control is the curvature K_B itself needs no length for (EI)_B:
+    // with a length its control becomes the angle θ_B = K_B l₀ (eq. (4)); without one it is
+    // characterised on l₀ = 1 m, where the sectional control is K_B.
+    let curvature_control = t.kind == TestKind::PureBending
+        && rec
+            .channel_index(cablab_core::Role::Control)
+            .and_then(|i| rec.channels[i].dimension)
+            == Some(cablab_ingest::units::Dimension::Curvature);
+    let length_known = t.free_length_m.is_some() || rec.specimen.free_length_m.is_some();
+    let machine_level = !length_known && !curvature_control;
+    let geom = if length_known {
+        crate::bridge::geometry(&rec, t.kind, t.free_length_m, t.diameter_m)?
+    } else {
+        cablab_measure::Geometry {
+            free_length_m: 1.0,
+            diameter_m: if curvature_control {
+                t.diameter_m.or(rec.specimen.diameter_m)
+            } else {
+                None
+            },
+        }
+    };
+    out.diameter_m = t.diameter_m.or(rec.specimen.diameter_m);
+    out.free_length_m = length_known.then_some(geom.free_length_m);
+    if machine_level {
+        out.needs
+            .push(format!("length_mm ({})", length_word(t.kind)));
+    }
+    if out.diameter_m.is_none() {
+        out.needs.push("diameter_mm".into());
+    }
+    let mut curve = crate::bridge::curve(&rec)?;
+    if curvature_control && length_known {
+        for c in &mut curve.control {
+            *c *= geom.free_length_m;
+        }
+    }
     out.rows = Some(curve.control.len());
     drop(rec);
     done(0);
@@ -379,6 +454,9 @@ fn stages(
         &ao,
     )?;
     fill_analysis(out, &an);
+    if machine_level {
+        to_machine_level(out, t.kind, &geom, &an);
+    }
     (out.max_response, out.break_at) = max_and_break(&curve.control, &curve.response);
     out.overlay = super::views::overlay_points(t.kind, &geom, &curve);
     done(1);
@@ -388,21 +466,32 @@ fn stages(
     let mut simulated: Option<Vec<f64>> = None;
     let mut diagnosis = None;
     let mut model_stage = 2;
-    let model = model_part(
-        c,
-        t,
-        &geom,
-        &curve,
-        &an,
-        diagnosis_enabled,
-        out,
-        &mut simulated,
-        &mut diagnosis,
-        &mut |s| {
-            done(s);
-            model_stage = s + 1;
-        },
-    );
+    let model = if !length_known {
+        // The rod model needs the length; not a failure of the model.
+        out.why.push(format!(
+            "calibrate: needs length_mm ({}): the rod model is built on it",
+            length_word(t.kind)
+        ));
+        done(2);
+        done(3);
+        Ok(())
+    } else {
+        model_part(
+            c,
+            t,
+            &geom,
+            &curve,
+            &an,
+            diagnosis_enabled,
+            out,
+            &mut simulated,
+            &mut diagnosis,
+            &mut |s| {
+                done(s);
+                model_stage = s + 1;
+            },
+        )
+    };
     if let Err(e) = model {
         out.model_error = Some(format!("{}: {e:#}", STAGES[model_stage.min(3)]));
         for s in model_stage..4 {
@@ -411,19 +500,23 @@ fn stages(
     }
 
     // 5. per-test files
-    let result = serde_json::json!({
+    let mut result = serde_json::json!({
         "id": t.id,
         "specimen": t.specimen,
         "kind": t.kind,
         "input": {"path": t.id, "sha256": out.input_sha256, "format": out.format},
         "header": out.header,
-        "geometry": {"free_length_m": geom.free_length_m, "diameter_m": geom.diameter_m},
+        "geometry": {"free_length_m": out.free_length_m, "diameter_m": out.diameter_m},
         "analysis": an,
         "calibration": out.calibration,
         "baseline_gap_rel": out.baseline_gap_rel,
         "diagnosis": diagnosis,
         "model_error": out.model_error,
     });
+    if !out.needs.is_empty() {
+        result["needs"] = serde_json::json!(out.needs);
+        result["machine_stiffness"] = serde_json::json!(out.machine_stiffness);
+    }
     files.push(("result.json".into(), crate::output::to_json_bytes(&result)?));
     if c.file.reports.parquet {
         files.push((
@@ -532,7 +625,7 @@ fn model_part(
         out.diagnosis_words = Some(words(&d));
         *diagnosis = Some(d);
     } else if !diagnosis_enabled {
-        out.why.push("diagnose: disabled for this run".into());
+        out.why.push(DIAGNOSIS_OFF.into());
     } else {
         out.why.push(format!(
             "diagnose: {} is not among [diagnosis].kinds",
@@ -595,6 +688,67 @@ fn fill_analysis(out: &mut TestOutcome, an: &Analysis) {
     for (k, v) in &an.why_by_key {
         out.why.push(format!("{k}: {v}"));
     }
+}
+
+/// "support span" for three-point bending, else "free length".
+fn length_word(kind: TestKind) -> &'static str {
+    if kind == TestKind::ThreePoint {
+        "support span"
+    } else {
+        "free length"
+    }
+}
+
+/// A test characterised on the stand-in length l₀ = 1 m (see [`stages`]): the sectional
+/// stiffness becomes the machine stiffness k = slope = value / f(l₀) (f from
+/// `cablab_measure::sectional::stiffness_factor`); the sectional stiffness, the modulus and the
+/// piecewise fit are nulled with why (`stiffness_unit` stays the unit of the null `stiffness`).
+/// `yield` stays as fitted: with l₀ = 1 m its control is the machine control (m or rad).
+///
+/// Does not touch the maximum, the break or the loop area: they are machine quantities anyway.
+fn to_machine_level(
+    out: &mut TestOutcome,
+    kind: TestKind,
+    geom: &cablab_measure::Geometry,
+    an: &Analysis,
+) {
+    let need = out.needs.join(" and ");
+    if let Some(s) = &an.stiffness {
+        let f = cablab_measure::sectional::stiffness_factor(kind, geom);
+        let unit = machine_stiffness_unit(kind);
+        out.machine_stiffness = Some(MachineStiffness {
+            value: s.value / f,
+            ci95: [s.ci95[0] / f, s.ci95[1] / f],
+            unit: unit.to_string(),
+        });
+        out.why.push(format!(
+            "stiffness: {} needs {need}; the machine stiffness is {} {unit} (95% CI {} to {})",
+            kind_stiffness_name(kind),
+            fmt4(s.value / f),
+            fmt4(s.ci95[0] / f),
+            fmt4(s.ci95[1] / f),
+        ));
+    }
+    out.stiffness = None;
+    out.stiffness_ci95 = None;
+    out.modulus_pa = None;
+    out.why.retain(|w| !w.starts_with("modulus_pa:"));
+    out.why.push(format!("modulus_pa: needs {need}"));
+    out.piecewise = None;
+}
+
+/// The sectional stiffness of a kind, as the chapter names it.
+fn kind_stiffness_name(kind: TestKind) -> &'static str {
+    match kind {
+        TestKind::Tension => "(EA)_T",
+        TestKind::Torsion => "(GJ)_T",
+        _ => "(EI)_B",
+    }
+}
+
+/// Four significant digits.
+fn fmt4(v: f64) -> String {
+    format!("{v:.4e}")
 }
 
 /// The diagnosis in plain words (the report crate's wording).

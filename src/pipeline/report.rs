@@ -499,8 +499,24 @@ fn section(out_dir: &Path, o: &TestOutcome) -> TestSection {
     }
     facts.push((
         "diameter".into(),
-        format!("{} mm", fmt_num(o.diameter_m * 1e3, 3)),
+        o.diameter_m
+            .map_or("not stated (the moduli need it)".into(), |d| {
+                format!("{} mm", fmt_num(d * 1e3, 3))
+            }),
     ));
+    if let Some(k) = &o.machine_stiffness {
+        facts.push((
+            "machine stiffness".into(),
+            format!(
+                "{} {} (95% CI {} to {}; sectional values need {})",
+                fmt_num(k.value, 4),
+                k.unit,
+                fmt_num(k.ci95[0], 4),
+                fmt_num(k.ci95[1], 4),
+                o.needs.join(" and ")
+            ),
+        ));
+    }
     if let Some(r) = o.rows {
         facts.push(("samples".into(), r.to_string()));
     }

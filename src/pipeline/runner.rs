@@ -206,7 +206,7 @@ pub fn run_campaign(c: &Campaign, o: &RunOptions) -> Result<RunReport> {
         ))
     };
     let (outcomes, cached_n) =
-        evaluate_tests(c, &tests, stage.path(), &[target.clone()], o).map_err(kept)?;
+        evaluate_tests(c, &tests, stage.path(), std::slice::from_ref(&target), o).map_err(kept)?;
     super::campaign::write_campaign_outputs(c, stage.path(), &outcomes).map_err(kept)?;
     stage.commit()?;
     Ok(RunReport::new(target, outcomes, cached_n, start))

@@ -370,7 +370,7 @@ mod tests {
                 id: id.to_string(),
                 path: PathBuf::from(id),
                 specimen: "s".into(),
-                diameter_m: 1e-3,
+                diameter_m: Some(1e-3),
                 kind: cablab_core::TestKind::Tension,
                 free_length_m: Some(0.01),
                 format: None,

@@ -64,7 +64,7 @@ pub fn verify(manifest_path: &Path, jobs: Option<usize>) -> Result<VerifyReport>
             jobs,
             no_cache: true,
             quiet: true,
-            no_diagnosis: false,
+            no_diagnosis: m.no_diagnosis,
             output_override: Some(scratch.path().to_path_buf()),
         },
     )?;

@@ -385,6 +385,17 @@ tables = ["csv"]
     .unwrap();
     let r = run_in(d.path(), &["--jobs", "1"]);
     let err = String::from_utf8_lossy(&r.stderr);
+    // The run says the model failed, for which test and why, and that the exit code stays 0.
+    assert_eq!(r.status.code(), Some(0), "{err}");
+    assert!(
+        err.contains("MODEL FAILED raw_data/cable/three_point_6mm_1.csv: calibrate: "),
+        "{err}"
+    );
+    assert!(
+        err.contains("1 tests, 1 ok (1 of them without the model")
+            && err.contains("exit code stays 0"),
+        "{err}"
+    );
     let s = summary(d.path());
     let t = &s["tests"][0];
     assert_eq!(t["ok"], true, "{t}\n{err}");
@@ -406,4 +417,43 @@ tables = ["csv"]
     let csv = std::fs::read_to_string(dir.join("specimens_three_point.csv")).unwrap();
     let row = csv.lines().nth(1).unwrap();
     assert!(row.contains("failed: calibrate"), "{csv}");
+}
+
+/// A report made with `--no-diagnosis` (the pipeline enables the diagnosis) records that in
+/// its manifest, and `verify` reruns it the same way: no differences.
+#[test]
+fn verify_reruns_a_no_diagnosis_report_alike() {
+    let d = tempfile::tempdir().unwrap();
+    let f = "raw_data/cable/tension_40N_1.TXT";
+    std::fs::create_dir_all(d.path().join("raw_data/cable")).unwrap();
+    std::fs::copy(root().join(f), d.path().join(f)).unwrap();
+    std::fs::create_dir_all(d.path().join("pipelines")).unwrap();
+    std::fs::write(
+        d.path().join("pipelines/demo.toml"),
+        format!(
+            "[campaign]\nname = \"demo\"\n\n[[specimen]]\nlabel = \"cable\"\ndiameter_mm = 2.8\n\n\
+             [[input]]\nglob = \"{f}\"\nspecimen = \"cable\"\nkind = \"tension\"\n\n\
+             [diagnosis]\nenabled = true\n\n[reports]\nparquet = false\ntables = [\"csv\"]\n"
+        ),
+    )
+    .unwrap();
+    let r = run_in(d.path(), &["--jobs", "1", "--no-diagnosis"]);
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    let m: serde_json::Value = serde_json::from_slice(
+        &std::fs::read(d.path().join("reports/demo/manifest.json")).unwrap(),
+    )
+    .unwrap();
+    assert_eq!(m["no_diagnosis"], true, "{m}");
+    let v = cablab()
+        .current_dir(d.path())
+        .args(["verify", "reports/demo/manifest.json", "--jobs", "1"])
+        .output()
+        .unwrap();
+    let out = String::from_utf8_lossy(&v.stdout);
+    assert!(
+        v.status.success(),
+        "{out}{}",
+        String::from_utf8_lossy(&v.stderr)
+    );
+    assert!(out.starts_with("verified: "), "{out}");
 }
