@@ -847,7 +847,12 @@ fn validate(file: PipelineFile, path: &Path, bytes: Vec<u8>, root: PathBuf) -> R
                 .strip_prefix(&root)
                 .unwrap_or(&p)
                 .components()
-                .map(|c| c.as_os_str().to_string_lossy().to_string())
+                // The root of an absolute path outside the project becomes the leading "/"
+                // of the joined id ("/work/x.csv", not "//work/x.csv").
+                .map(|c| match c {
+                    std::path::Component::RootDir => String::new(),
+                    c => c.as_os_str().to_string_lossy().to_string(),
+                })
                 .collect::<Vec<_>>()
                 .join("/");
             if crate::commands::canonical_or_absolute(&p).starts_with(&out_abs) {
