@@ -199,7 +199,66 @@ pub fn calibrate(
         free_offset: opts.free_offset,
     };
     let starts = make_starts(fwd.specs(), opts.warm.as_ref(), opts.starts, opts.seed);
-    let mut f = calibrate::fit(fwd, &data, &starts, &opts.fit);
+    // The starts descend on a branch-preserving decimation of the histories (module doc).
+    let kept: Vec<Vec<usize>> = tests
+        .iter()
+        .zip(&data.fit_idx)
+        .map(|(t, idx)| {
+            let budget = if cablab_rod::uniform::is_uniform(t.kind) {
+                usize::MAX
+            } else {
+                ROD_COARSE_POINTS
+            };
+            decimation(t, idx, opts.fit.per_branch, budget)
+        })
+        .collect();
+    let n_kept: usize = kept.iter().map(Vec::len).sum();
+    let n_replayed: usize = data
+        .fit_idx
+        .iter()
+        .map(|idx| idx.iter().max().map_or(0, |&m| m + 1))
+        .sum();
+    let coarse_tests: Vec<DiagTest> = tests.iter().zip(&kept).map(|(t, k)| pick(t, k)).collect();
+    let coarse_full = full.replaying(&coarse_tests);
+    let coarse_pinned = match &opts.pinned {
+        Some(p) => Some(
+            calibrate::Pinned::new(&coarse_full, &p.0).map_err(|why| DiagError::Model {
+                model: model.label(),
+                why,
+            })?,
+        ),
+        None => None,
+    };
+    let coarse_fwd: &dyn Forward = match &coarse_pinned {
+        Some(p) => p,
+        None => &coarse_full,
+    };
+    let coarse_data = FitData {
+        measured: coarse_tests.iter().map(|t| t.response.as_slice()).collect(),
+        weight: data.weight.clone(),
+        fit_idx: kept
+            .iter()
+            .zip(&data.fit_idx)
+            .map(|(k, idx)| {
+                k.iter()
+                    .enumerate()
+                    .filter(|(_, i)| idx.binary_search(i).is_ok())
+                    .map(|(j, _)| j)
+                    .collect()
+            })
+            .collect(),
+        free_offset: data.free_offset,
+    };
+    // Worth it only when it replays markedly fewer samples and still fits more of them than
+    // there are parameters.
+    let use_coarse = opts.fit.per_branch > 0
+        && 2 * n_kept < n_replayed
+        && coarse_data.n() > 2 * fwd.specs().len();
+    let coarse = use_coarse.then_some((coarse_fwd, &coarse_data));
+    let mut f = calibrate::fit_coarse(fwd, &data, coarse, &starts, &opts.fit);
+    if std::env::var_os("R2C_DEBUG").is_some() {
+        eprintln!("R2C {} kept {n_kept} of {n_replayed} coarse {use_coarse} evals {} starts {}", model.label(), f.evaluations, starts.len());
+    }
     if let Some(p) = &pinned {
         // Back to the whole model: pinned parameters carry no standard error; one pinned at a
         // bound is reported there.
@@ -266,6 +325,82 @@ pub fn calibrate(
         k_eff: f.k_eff,
         response_offset,
     })
+}
+
+/// Most samples a coarse fit replays per rod-driven (three-point) history: each is a rod
+/// equilibrium solve (the full problem replays `registry::DEFAULT_ROD_POINTS` = 250).
+pub const ROD_COARSE_POINTS: usize = 80;
+
+/// Factor on the rod's largest sub-step (default 0.5 % of the span) in a coarse fit's replays.
+pub const ROD_COARSE_SUBSTEP: f64 = 3.0;
+
+/// The samples of `test` a coarse fit replays (increasing): a branch-preserving decimation of
+/// its history up to its last fitted sample (`fit_idx`, increasing). The history is cut into its
+/// branches (runs of one cycle and branch of [`DiagTest::labels_or_derived`]: first loading,
+/// unloading, reloading, reversed loading, holds); every branch keeps its first and last sample
+/// (the turning points and the holds' ends) and at most `per_branch` samples evenly spread in
+/// between, so that a rate-independent law sees the same reversals and a rate-dependent one the
+/// same holds. When that keeps more than `budget` samples in all, fewer per branch (at least 4).
+/// Every sample when `per_branch` is 0; none when the fit has no samples.
+pub(crate) fn decimation(
+    test: &DiagTest,
+    fit_idx: &[usize],
+    per_branch: usize,
+    budget: usize,
+) -> Vec<usize> {
+    let Some(&last) = fit_idx.iter().max() else {
+        return vec![];
+    };
+    let end = (last + 1).min(test.control.len());
+    if per_branch == 0 {
+        return (0..end).collect();
+    }
+    let labels = test.labels_or_derived();
+    let branches = 1 + (1..end).filter(|&i| labels.get(i) != labels.get(i - 1)).count();
+    let per_branch = per_branch.min((budget / branches).max(4));
+    let mut keep = Vec::new();
+    let mut a = 0;
+    while a < end {
+        let mut b = a;
+        while b + 1 < end && labels.get(b + 1) == labels.get(a) {
+            b += 1;
+        }
+        // Branch a..=b: its ends and at most per_branch samples between them.
+        let len = b - a + 1;
+        let step = len.div_ceil(per_branch.max(1)).max(1);
+        keep.extend((a..=b).step_by(step));
+        if keep.last() != Some(&b) {
+            keep.push(b);
+        }
+        a = b + 1;
+    }
+    keep
+}
+
+/// `test` restricted to the samples `idx` (increasing).
+fn pick(test: &DiagTest, idx: &[usize]) -> DiagTest {
+    let at = |v: &[f64]| idx.iter().map(|&i| v[i]).collect::<Vec<f64>>();
+    DiagTest {
+        time_s: at(&test.time_s),
+        control: at(&test.control),
+        response: at(&test.response),
+        labels: if test.labels.len() == test.control.len() {
+            idx.iter().map(|&i| test.labels[i]).collect()
+        } else {
+            vec![]
+        },
+        rod_setup: (!cablab_rod::uniform::is_uniform(test.kind)).then(|| {
+            let mut setup = test
+                .rod_setup
+                .clone()
+                .unwrap_or_else(|| cablab_rod::TestSetup::new(test.kind, test.free_length_m));
+            setup.max_substep = Some(
+                setup.max_substep.unwrap_or(0.005 * test.free_length_m) * ROD_COARSE_SUBSTEP,
+            );
+            setup
+        }),
+        ..test.clone()
+    }
 }
 
 /// Starting points: the warm point (if any: the warm values, the data-informed initial values
