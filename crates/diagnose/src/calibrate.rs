@@ -301,8 +301,9 @@ pub fn fit(fwd: &dyn Forward, data: &FitData, starts: &[Vec<f64>], opts: &FitOpt
 const POLISH_ITERATIONS: usize = 2;
 
 /// [`fit`], with the starts descending on `coarse` (the same parameters over fewer samples: a
-/// decimation of the same histories) when given: each start's end is then scored on `data`
-/// (ties as in [`fit`]), the best is polished on `data` ([`POLISH_ITERATIONS`]) and its
+/// decimation of the same histories) when given: each start's end, then each start itself, is
+/// scored on `data` (ties as in [`fit`]; a start ends no worse than where it began, as without a
+/// coarse problem), the best is polished on `data` ([`POLISH_ITERATIONS`]) and its
 /// uncertainties are computed on `data`. Cost, `n_fit` and residual statistics are always those
 /// of `data`, so fits with and without a coarse problem compare.
 pub fn fit_coarse(
@@ -320,6 +321,10 @@ pub fn fit_coarse(
         .map(|p0| descend(cf, cd, p0, iterations, opts))
         .collect();
     if coarse.is_some() {
+        // Every end, then every start, on all the fitted samples: a descent on the decimation
+        // may end a little off the full problem's optimum, and a nested start (the special
+        // case's optimum) must stay a floor the fit cannot end above.
+        runs.extend(starts.iter().map(|p| (p.clone(), 0.0, 0)));
         runs = runs
             .into_par_iter()
             .map(|(p, _, ev)| {

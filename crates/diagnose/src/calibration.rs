@@ -256,9 +256,6 @@ pub fn calibrate(
         && coarse_data.n() > 2 * fwd.specs().len();
     let coarse = use_coarse.then_some((coarse_fwd, &coarse_data));
     let mut f = calibrate::fit_coarse(fwd, &data, coarse, &starts, &opts.fit);
-    if std::env::var_os("R2C_DEBUG").is_some() {
-        eprintln!("R2C {} kept {n_kept} of {n_replayed} coarse {use_coarse} evals {} starts {}", model.label(), f.evaluations, starts.len());
-    }
     if let Some(p) = &pinned {
         // Back to the whole model: pinned parameters carry no standard error; one pinned at a
         // bound is reported there.
@@ -334,6 +331,9 @@ pub const ROD_COARSE_POINTS: usize = 80;
 /// Factor on the rod's largest sub-step (default 0.5 % of the span) in a coarse fit's replays.
 pub const ROD_COARSE_SUBSTEP: f64 = 3.0;
 
+/// A coarse fit's rod has half the elements of the full one, and at least this many.
+pub const ROD_COARSE_MIN_ELEMENTS: usize = 16;
+
 /// The samples of `test` a coarse fit replays (increasing): a branch-preserving decimation of
 /// its history up to its last fitted sample (`fit_idx`, increasing). The history is cut into its
 /// branches (runs of one cycle and branch of [`DiagTest::labels_or_derived`]: first loading,
@@ -394,6 +394,7 @@ fn pick(test: &DiagTest, idx: &[usize]) -> DiagTest {
                 .rod_setup
                 .clone()
                 .unwrap_or_else(|| cablab_rod::TestSetup::new(test.kind, test.free_length_m));
+            setup.elements = (setup.elements / 2).max(ROD_COARSE_MIN_ELEMENTS);
             setup.max_substep = Some(
                 setup.max_substep.unwrap_or(0.005 * test.free_length_m) * ROD_COARSE_SUBSTEP,
             );
