@@ -495,3 +495,107 @@ pub(crate) fn switched_off(s: &ParamSpec, warm: &ParamMap) -> f64 {
         s.initial
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::{Branch, SegLabel};
+    use cablab_core::TestKind;
+
+    /// A tension history with explicit branches: loading 0 → 1 mm (100 samples), a hold
+    /// (50), reversed to −1 mm (200), back to 0 (100); 10 Hz.
+    fn triangle() -> DiagTest {
+        let mut control = Vec::new();
+        let mut labels = Vec::new();
+        let mut push = |c: f64, cycle: usize, branch: Branch| {
+            control.push(c * 1e-3);
+            labels.push(SegLabel { cycle, branch });
+        };
+        for i in 0..100 {
+            push(i as f64 / 99.0, 1, Branch::FirstLoading);
+        }
+        for _ in 0..50 {
+            push(1.0, 1, Branch::Hold);
+        }
+        for i in 1..=200 {
+            push(1.0 - 2.0 * i as f64 / 200.0, 1, Branch::Unloading);
+        }
+        for i in 1..=100 {
+            push(-1.0 + i as f64 / 100.0, 2, Branch::ReversedLoading);
+        }
+        let n = control.len();
+        DiagTest {
+            kind: TestKind::Tension,
+            free_length_m: 0.032,
+            diameter_m: Some(2.8e-3),
+            time_s: (0..n).map(|i| i as f64 * 0.1).collect(),
+            response: vec![1.0; n],
+            control,
+            labels,
+            specimen: None,
+            rod_setup: None,
+        }
+    }
+
+    #[test]
+    fn decimation_keeps_every_branch_end_and_at_most_per_branch_between() {
+        let t = triangle();
+        let all: Vec<usize> = (0..t.control.len()).collect();
+        let k = decimation(&t, &all, 10, usize::MAX);
+        // Branch ends: first loading 0..=99, hold 100..=149, unloading 150..=349 (the reversal
+        // to −1 mm at 349), reversed loading 350..=449.
+        for i in [0, 99, 100, 149, 150, 349, 350, 449] {
+            assert!(k.contains(&i), "{i} missing from {k:?}");
+        }
+        assert!(k.windows(2).all(|w| w[0] < w[1]));
+        // Each branch: at most 10 evenly spread samples plus its last.
+        assert!(k.len() <= 4 * 11, "{} kept", k.len());
+        assert!(k.len() >= 4 * 10, "{} kept", k.len());
+        // Only up to the last fitted sample; a budget thins every branch (to 4 at least).
+        let prefix: Vec<usize> = (0..300).collect();
+        let kp = decimation(&t, &prefix, 10, usize::MAX);
+        assert_eq!(kp.last(), Some(&299));
+        let kb = decimation(&t, &all, 10, 20);
+        assert!(kb.len() <= 4 * 6 && kb.contains(&349), "{kb:?}");
+        // 0 per branch: every sample up to the last fitted one.
+        assert_eq!(decimation(&t, &prefix, 0, usize::MAX), prefix);
+        assert!(decimation(&t, &[], 10, usize::MAX).is_empty());
+    }
+
+    #[test]
+    fn a_fit_on_the_decimation_ends_where_the_full_fit_does() {
+        // Elastoplastic tension, cycles past yield: the response of the truth, replayed.
+        let mut t = triangle();
+        t.labels.clear();
+        let truth = [("EA", 7.96e4), ("F_y", 54.0), ("H", 2400.0)];
+        let ctx = Context::project();
+        let model = ModelSpec::law("elastoplastic");
+        let tests = [t.clone()];
+        let fwd = ModelForward::new(&tests, &model, ctx.catalog, ctx.rod).unwrap();
+        let p: Vec<f64> = fwd
+            .specs()
+            .iter()
+            .map(|s| truth.iter().find(|(n, _)| *n == s.name).unwrap().1)
+            .collect();
+        t.response = fwd.simulate_all(&p).unwrap().remove(0);
+        let tests = [t];
+        let opts = |per_branch| CalibrateOptions {
+            noise: Some(vec![0.05]),
+            fit: FitOptions {
+                per_branch,
+                ..FitOptions::default()
+            },
+            ..CalibrateOptions::default()
+        };
+        let coarse = calibrate(ctx, &tests, &model, &opts(8)).unwrap();
+        let full = calibrate(ctx, &tests, &model, &opts(0)).unwrap();
+        // Scored on every sample either way; the same optimum (the truth) to a part in 10⁴.
+        assert_eq!(coarse.n_fit, full.n_fit);
+        for (name, v) in truth {
+            let (c, f) = (coarse.get(name).unwrap(), full.get(name).unwrap());
+            assert!((c / v - 1.0).abs() < 1e-4, "{name}: coarse {c} vs {v}");
+            assert!((f / v - 1.0).abs() < 1e-4, "{name}: full {f} vs {v}");
+        }
+        assert!(coarse.chi2 < 1e-3 && full.chi2 < 1e-3, "{coarse:?} {full:?}");
+    }
+}
