@@ -1,6 +1,17 @@
 //! Calibration of a model to measured tests: the wrapper around the one fitting routine
 //! ([`crate::calibrate`]) that builds the forward model, its starts, pinned parameters and the
 //! response offsets, and reports the fitted values with their uncertainties.
+//!
+//! Coarse descent. Every residual evaluation replays whole histories, so the starts descend on a
+//! branch-preserving decimation of them ([`decimation`]: every branch's ends — the turning points
+//! and the holds' ends — and at most [`FitOptions::per_branch`](crate::calibrate::FitOptions)
+//! samples in between, up to the last fitted sample; three-point histories at most
+//! [`ROD_COARSE_POINTS`] samples on a rod of half the elements with 3× the sub-step). The ends
+//! and the starts are then scored on every fitted sample, the best is polished there, and its
+//! cost, χ², uncertainties and gaps are those of every fitted sample: what the comparison of
+//! models reads is unchanged, only the path to the optimum is cheaper (about 3× fewer CPU-seconds
+//! per diagnosis). It does not change the model: a rate-independent law replays the same
+//! reversals exactly, a rate-dependent one sees the same holds at a coarser time step.
 
 use crate::calibrate::{self, FitData, FitOptions, Forward};
 use crate::error::DiagError;
@@ -162,15 +173,7 @@ pub fn calibrate(
         t.validate(i)?;
     }
     let full = ModelForward::new(tests, model, ctx.catalog, ctx.rod)?;
-    let pinned = match &opts.pinned {
-        Some(p) => Some(
-            calibrate::Pinned::new(&full, &p.0).map_err(|why| DiagError::Model {
-                model: model.label(),
-                why,
-            })?,
-        ),
-        None => None,
-    };
+    let pinned = pinned_on(&full, opts.pinned.as_ref(), model)?;
     let fwd: &dyn Forward = match &pinned {
         Some(p) => p,
         None => &full,
@@ -220,15 +223,7 @@ pub fn calibrate(
         .sum();
     let coarse_tests: Vec<DiagTest> = tests.iter().zip(&kept).map(|(t, k)| pick(t, k)).collect();
     let coarse_full = full.replaying(&coarse_tests);
-    let coarse_pinned = match &opts.pinned {
-        Some(p) => Some(
-            calibrate::Pinned::new(&coarse_full, &p.0).map_err(|why| DiagError::Model {
-                model: model.label(),
-                why,
-            })?,
-        ),
-        None => None,
-    };
+    let coarse_pinned = pinned_on(&coarse_full, opts.pinned.as_ref(), model)?;
     let coarse_fwd: &dyn Forward = match &coarse_pinned {
         Some(p) => p,
         None => &coarse_full,
@@ -240,11 +235,13 @@ pub fn calibrate(
             .iter()
             .zip(&data.fit_idx)
             .map(|(k, idx)| {
-                k.iter()
-                    .enumerate()
-                    .filter(|(_, i)| idx.binary_search(i).is_ok())
-                    .map(|(j, _)| j)
-                    .collect()
+                let mut fitted = vec![false; k.last().map_or(0, |&m| m + 1)];
+                for &i in idx {
+                    if let Some(f) = fitted.get_mut(i) {
+                        *f = true;
+                    }
+                }
+                (0..k.len()).filter(|&j| fitted[k[j]]).collect()
             })
             .collect(),
         free_offset: data.free_offset,
@@ -334,6 +331,22 @@ pub const ROD_COARSE_SUBSTEP: f64 = 3.0;
 /// A coarse fit's rod has half the elements of the full one, and at least this many.
 pub const ROD_COARSE_MIN_ELEMENTS: usize = 16;
 
+/// `inner` with `pinned` parameters held (`None`: nothing pinned).
+fn pinned_on<'a>(
+    inner: &'a dyn Forward,
+    pinned: Option<&ParamMap>,
+    model: &ModelSpec,
+) -> Result<Option<calibrate::Pinned<'a>>, DiagError> {
+    pinned
+        .map(|p| {
+            calibrate::Pinned::new(inner, &p.0).map_err(|why| DiagError::Model {
+                model: model.label(),
+                why,
+            })
+        })
+        .transpose()
+}
+
 /// The samples of `test` a coarse fit replays (increasing): a branch-preserving decimation of
 /// its history up to its last fitted sample (`fit_idx`, increasing). The history is cut into its
 /// branches (runs of one cycle and branch of [`DiagTest::labels_or_derived`]: first loading,
@@ -356,7 +369,10 @@ pub(crate) fn decimation(
         return (0..end).collect();
     }
     let labels = test.labels_or_derived();
-    let branches = 1 + (1..end).filter(|&i| labels.get(i) != labels.get(i - 1)).count();
+    let branches = 1
+        + (1..end)
+            .filter(|&i| labels.get(i) != labels.get(i - 1))
+            .count();
     let per_branch = per_branch.min((budget / branches).max(4));
     let mut keep = Vec::new();
     let mut a = 0;
@@ -395,9 +411,8 @@ fn pick(test: &DiagTest, idx: &[usize]) -> DiagTest {
                 .clone()
                 .unwrap_or_else(|| cablab_rod::TestSetup::new(test.kind, test.free_length_m));
             setup.elements = (setup.elements / 2).max(ROD_COARSE_MIN_ELEMENTS);
-            setup.max_substep = Some(
-                setup.max_substep.unwrap_or(0.005 * test.free_length_m) * ROD_COARSE_SUBSTEP,
-            );
+            setup.max_substep =
+                Some(setup.max_substep.unwrap_or(0.005 * test.free_length_m) * ROD_COARSE_SUBSTEP);
             setup
         }),
         ..test.clone()
@@ -596,6 +611,9 @@ mod tests {
             assert!((c / v - 1.0).abs() < 1e-4, "{name}: coarse {c} vs {v}");
             assert!((f / v - 1.0).abs() < 1e-4, "{name}: full {f} vs {v}");
         }
-        assert!(coarse.chi2 < 1e-3 && full.chi2 < 1e-3, "{coarse:?} {full:?}");
+        assert!(
+            coarse.chi2 < 1e-3 && full.chi2 < 1e-3,
+            "{coarse:?} {full:?}"
+        );
     }
 }
