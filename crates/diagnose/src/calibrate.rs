@@ -62,6 +62,10 @@ pub struct FitOptions {
     pub tol: f64,
     /// Forward-difference step in the unbounded coordinates.
     pub fd_step: f64,
+    /// Most samples per branch of the history the starts descend on (a branch-preserving
+    /// decimation, see [`crate::calibration`]); 0: every sample. The end is scored, polished and
+    /// given its uncertainties on every fitted sample.
+    pub per_branch: usize,
 }
 
 impl Default for FitOptions {
@@ -70,6 +74,7 @@ impl Default for FitOptions {
             patience: 60,
             tol: 1e-9,
             fd_step: 1e-6,
+            per_branch: 64,
         }
     }
 }
@@ -287,45 +292,99 @@ pub const COST_TIE: f64 = 1.0;
 /// the caller orders its starts by preference (the data-informed or warm point first; a nested
 /// start, which only guarantees the special case, last).
 pub fn fit(fwd: &dyn Forward, data: &FitData, starts: &[Vec<f64>], opts: &FitOptions) -> Fit {
+    fit_coarse(fwd, data, None, starts, opts)
+}
+
+/// Levenberg–Marquardt iterations of the polish on every fitted sample after a descent on a
+/// coarse problem: the decimated optimum is already within a fraction of a noise unit of the full
+/// one, and one or two Gauss–Newton steps close that.
+const POLISH_ITERATIONS: usize = 2;
+
+/// [`fit`], with the starts descending on `coarse` (the same parameters over fewer samples: a
+/// decimation of the same histories) when given: each start's end, then each start itself, is
+/// scored on `data` (ties as in [`fit`]; a start ends no worse than where it began, as without a
+/// coarse problem), the best is polished on `data` ([`POLISH_ITERATIONS`]) and its
+/// uncertainties are computed on `data`. Cost, `n_fit` and residual statistics are always those
+/// of `data`, so fits with and without a coarse problem compare.
+pub fn fit_coarse(
+    fwd: &dyn Forward,
+    data: &FitData,
+    coarse: Option<(&dyn Forward, &FitData)>,
+    starts: &[Vec<f64>],
+    opts: &FitOptions,
+) -> Fit {
     let specs = fwd.specs();
-    let runs: Vec<(Vec<f64>, f64, usize)> = starts
+    let (cf, cd) = coarse.unwrap_or((fwd, data));
+    let iterations = opts.patience.max(1) / (specs.len() + 1).max(1) + 1;
+    let mut runs: Vec<(Vec<f64>, f64, usize)> = starts
         .par_iter()
-        .map(|p0| {
-            let z0 = DVector::from_iterator(
-                specs.len(),
-                specs.iter().zip(p0).map(|(s, &p)| s.to_unbounded(p)),
-            );
-            let mut prob = Problem {
-                fwd,
-                data,
-                z: z0.clone(),
-                r: DVector::zeros(0),
-                fd_step: opts.fd_step,
-            };
-            prob.set_params(&z0);
-            let lm = LevenbergMarquardt::new()
-                .with_tol(opts.tol)
-                .with_patience(opts.patience.max(1) / (specs.len() + 1).max(1) + 1);
-            let (prob, report) = if specs.is_empty() {
-                (prob, None)
-            } else {
-                let (p, r) = lm.minimize(prob);
-                (p, Some(r))
-            };
-            let p = prob.phys(&prob.z);
-            let cost = prob.r.norm_squared();
-            (p, cost, report.map_or(1, |r| r.number_of_evaluations))
-        })
+        .map(|p0| descend(cf, cd, p0, iterations, opts))
         .collect();
-    let evaluations = runs.iter().map(|r| r.2).sum();
+    if coarse.is_some() {
+        // Every end, then every start, on all the fitted samples: a descent on the decimation
+        // may end a little off the full problem's optimum, and a nested start (the special
+        // case's optimum) must stay a floor the fit cannot end above.
+        runs.extend(starts.iter().map(|p| (p.clone(), 0.0, 0)));
+        runs = runs
+            .into_par_iter()
+            .map(|(p, _, ev)| {
+                let cost = residuals(fwd, data, &p).map_or(f64::INFINITY, |r| r.norm_squared());
+                (p, cost, ev + 1)
+            })
+            .collect();
+    }
+    let mut evaluations = runs.iter().map(|r| r.2).sum();
     let lowest = runs.iter().map(|r| r.1).fold(f64::INFINITY, f64::min);
     let best = runs
         .iter()
         .find(|r| r.1 <= lowest + COST_TIE.min(1e-3 * lowest))
         .cloned()
         .unwrap_or_else(|| (specs.iter().map(|s| s.initial).collect(), f64::INFINITY, 0));
-    let (params, cost) = (best.0, best.1);
+    let (mut params, mut cost) = (best.0, best.1);
+    if coarse.is_some() && cost.is_finite() {
+        let (p, c, ev) = descend(fwd, data, &params, POLISH_ITERATIONS, opts);
+        evaluations += ev;
+        if c < cost {
+            (params, cost) = (p, c);
+        }
+    }
     finish(fwd, data, params, cost, starts.len(), evaluations)
+}
+
+/// One Levenberg–Marquardt descent from physical parameters `p0` with at most `iterations`
+/// Jacobians: the end (physical), its cost and the residual evaluations spent.
+fn descend(
+    fwd: &dyn Forward,
+    data: &FitData,
+    p0: &[f64],
+    iterations: usize,
+    opts: &FitOptions,
+) -> (Vec<f64>, f64, usize) {
+    let specs = fwd.specs();
+    let z0 = DVector::from_iterator(
+        specs.len(),
+        specs.iter().zip(p0).map(|(s, &p)| s.to_unbounded(p)),
+    );
+    let mut prob = Problem {
+        fwd,
+        data,
+        z: z0.clone(),
+        r: DVector::zeros(0),
+        fd_step: opts.fd_step,
+    };
+    prob.set_params(&z0);
+    let lm = LevenbergMarquardt::new()
+        .with_tol(opts.tol)
+        .with_patience(iterations);
+    let (prob, report) = if specs.is_empty() {
+        (prob, None)
+    } else {
+        let (p, r) = lm.minimize(prob);
+        (p, Some(r))
+    };
+    let p = prob.phys(&prob.z);
+    let cost = prob.r.norm_squared();
+    (p, cost, report.map_or(1, |r| r.number_of_evaluations))
 }
 
 /// Uncertainties, bounds and residual statistics at the optimum.

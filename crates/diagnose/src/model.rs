@@ -581,6 +581,28 @@ impl<'a> ModelForward<'a> {
         })
     }
 
+    /// The same model (same parameters, bounds and starting values, set up from the tests it
+    /// was built on) replaying other histories: `tests` must match the original ones one for one
+    /// in kind, length and specimen (the fit's decimated copies, [`crate::calibration`]).
+    pub fn replaying<'b>(&self, tests: &'b [DiagTest]) -> ModelForward<'b>
+    where
+        'a: 'b,
+    {
+        ModelForward {
+            tests,
+            catalog: self.catalog,
+            rod: self.rod,
+            model: self.model.clone(),
+            specs: self.specs.clone(),
+            names: self.names.clone(),
+            n_law: self.n_law,
+            i_compliance: self.i_compliance,
+            i_drift: self.i_drift,
+            i_friction: self.i_friction,
+            i_factor: self.i_factor.clone(),
+        }
+    }
+
     /// The model.
     pub fn model(&self) -> &ModelSpec {
         &self.model
