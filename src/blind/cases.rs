@@ -412,17 +412,8 @@ pub fn pair_matrix(
     noise_levels: &[f64],
     seeds: &[u64],
 ) -> (Vec<BlindCase>, Vec<String>) {
-    let mut jobs = Vec::new();
-    for &kind in kinds {
-        for pair in pairs_for(kind) {
-            for &noise in noise_levels {
-                for &seed in seeds {
-                    jobs.push((kind, pair.to_vec(), noise, seed));
-                }
-            }
-        }
-    }
-    build(jobs)
+    let sets = |kind| pairs_for(kind).iter().map(|p| p.to_vec()).collect();
+    build(jobs(kinds, sets, noise_levels, seeds))
 }
 
 /// The standard matrix: every applicable truth (and `none`) × `noise_levels` × `seeds`, layouts
@@ -433,19 +424,32 @@ pub fn standard_matrix(
     noise_levels: &[f64],
     seeds: &[u64],
 ) -> (Vec<BlindCase>, Vec<String>) {
-    let mut jobs = Vec::new();
-    for &kind in kinds {
+    let sets = |kind| {
         let mut truths = vec![vec![]];
         truths.extend(truths_for(kind).into_iter().map(|t| vec![t]));
-        for truth in &truths {
+        truths
+    };
+    build(jobs(kinds, sets, noise_levels, seeds))
+}
+
+/// Every (kind, withheld set, noise, seed) of a matrix, the sets of a kind from `sets`.
+fn jobs(
+    kinds: &[TestKind],
+    sets: impl Fn(TestKind) -> Vec<Vec<Effect>>,
+    noise_levels: &[f64],
+    seeds: &[u64],
+) -> Vec<(TestKind, Vec<Effect>, f64, u64)> {
+    let mut jobs = Vec::new();
+    for &kind in kinds {
+        for set in sets(kind) {
             for &noise in noise_levels {
                 for &seed in seeds {
-                    jobs.push((kind, truth.clone(), noise, seed));
+                    jobs.push((kind, set.clone(), noise, seed));
                 }
             }
         }
     }
-    build(jobs)
+    jobs
 }
 
 /// Generate the cases of a matrix (kind, withheld effects, noise, seed), layouts in turn.
