@@ -5,8 +5,8 @@
 
 use super::config::Campaign;
 use super::evaluate::TestOutcome;
-use crate::output::{sha256_hex, to_json_bytes, write_atomic};
 use crate::VERSION;
+use crate::output::{sha256_hex, to_json_bytes, write_atomic};
 use anyhow::{Context, Result};
 use cablab_core::TestKind;
 use serde::{Deserialize, Serialize};
