@@ -438,6 +438,9 @@ pub enum BenchWhat {
             default_value = "tension,torsion,pure_bending,three_point"
         )]
         kinds: Vec<KindArg>,
+        /// Also withhold every applicable pair of effects per kind (issue 13.6).
+        #[arg(long)]
+        pairs: bool,
         /// Write the report (Markdown) here as well as to stdout.
         #[arg(long, short = 'o')]
         output: Option<PathBuf>,

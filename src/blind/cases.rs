@@ -15,8 +15,10 @@ use std::collections::BTreeMap;
 pub struct BlindCase {
     /// Case name (kind, truth, noise, seed, layout).
     pub name: String,
-    /// The withheld truth (`none` for null cases).
+    /// The withheld truth (`none` for null cases; the first member for a pair).
     pub truth: Effect,
+    /// Every withheld effect, in the order given (empty for null cases, two for a pair).
+    pub truths: Vec<Effect>,
     /// Response noise of the generator, fraction of the load-cell full scale.
     pub noise_rel: f64,
     /// Layout the virtual lab wrote.
@@ -108,12 +110,16 @@ pub fn generate_case(
     seed: u64,
     layout: Layout,
 ) -> Result<BlindCase, String> {
-    let rate = if kind == TestKind::ThreePoint {
+    generate_case_at(kind, truth, noise_rel, seed, layout, sample_rate(kind))
+}
+
+/// The logger's sample rate of the blind cases, Hz (three-point cases replay the rod: 10 Hz).
+fn sample_rate(kind: TestKind) -> f64 {
+    if kind == TestKind::ThreePoint {
         10.0
     } else {
         60.0
-    };
-    generate_case_at(kind, truth, noise_rel, seed, layout, rate)
+    }
 }
 
 /// [`generate_case`] with the logger's sample rate given (Hz): the protocol lasts 49.6 s, so
@@ -126,9 +132,36 @@ pub fn generate_case_at(
     layout: Layout,
     sample_rate_hz: f64,
 ) -> Result<BlindCase, String> {
+    let truths: Vec<Effect> = if truth == Effect::None {
+        vec![]
+    } else {
+        vec![truth]
+    };
+    generate_set_at(kind, &truths, noise_rel, seed, layout, sample_rate_hz)
+}
+
+/// [`generate_case_at`] with several effects withheld at once (each drawn as it is alone; a
+/// single effect draws exactly what [`generate_case_at`] draws). The material extensions are
+/// layered on one law the registry's way (`kinematic_hardening+viscoelasticity`); the rig and
+/// logger effects (`machine_compliance`, `sensor_drift`, `support_friction`) act beside it.
+///
+/// Does not check that the effects can coexist (see [`pairs_for`]): the law registry refuses
+/// the compositions it does not know.
+pub fn generate_set_at(
+    kind: TestKind,
+    truths: &[Effect],
+    noise_rel: f64,
+    seed: u64,
+    layout: Layout,
+    sample_rate_hz: f64,
+) -> Result<BlindCase, String> {
     let nom = nominal(kind).ok_or("unknown kind")?;
+    let truth = truths.first().copied().unwrap_or(Effect::None);
+    let has = |e: Effect| truths.contains(&e);
+    // The pair's second member shifts the stream (a single effect keeps its historic draws).
+    let second = truths.get(1).map_or(0, |&e| (e as u64 + 1) << 48);
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(
-        seed ^ 0x9e37_79b9_7f4a_7c15 ^ ((truth as u64) << 32) ^ ((kind as u64) << 40),
+        seed ^ 0x9e37_79b9_7f4a_7c15 ^ ((truth as u64) << 32) ^ ((kind as u64) << 40) ^ second,
     );
     let mut draw = |lo: f64, hi: f64| rng.random_range(lo..hi);
     let s = nom.stiff.1 * draw(0.8, 1.25);
@@ -155,69 +188,70 @@ pub fn generate_case_at(
             params: kv.into_iter().collect(),
         })
     };
-    match truth {
-        Effect::PiecewiseElasticity => {
-            law = "piecewise_linear".into();
-            params.insert(format!("{}1", nom.stiff.0), s);
-            params.insert(format!("{}2", nom.stiff.0), s * draw(0.2, 0.4));
-            params.insert(format!("{}_t", nom.strain), y / s);
-        }
-        _ => {
-            params.insert(nom.stiff.0.to_string(), s);
-            params.insert(nom.strength.0.to_string(), y);
-            params.insert(nom.hard.to_string(), h);
-        }
+    if has(Effect::PiecewiseElasticity) {
+        law = "piecewise_linear".into();
+        params.insert(format!("{}1", nom.stiff.0), s);
+        params.insert(format!("{}2", nom.stiff.0), s * draw(0.2, 0.4));
+        params.insert(format!("{}_t", nom.strain), y / s);
+    } else {
+        params.insert(nom.stiff.0.to_string(), s);
+        params.insert(nom.strength.0.to_string(), y);
+        params.insert(nom.hard.to_string(), h);
     }
-    match truth {
-        Effect::KinematicHardening => {
-            extension = ext(
+    let mut exts: Vec<(&str, Vec<(String, f64)>)> = Vec::new();
+    for &t in truths {
+        match t {
+            Effect::KinematicHardening => exts.push((
                 "kinematic_hardening",
                 vec![(format!("{}_kin", nom.hard), s * draw(0.06, 0.12))],
-            )
-        }
-        Effect::StiffnessDegradation => {
-            extension = ext(
+            )),
+            Effect::StiffnessDegradation => exts.push((
                 "stiffness_degradation",
                 vec![
                     ("D_inf".into(), draw(0.25, 0.4)),
                     ("alpha_D".into(), (y / s) * draw(1.0, 2.0)),
                 ],
-            )
-        }
-        Effect::Viscoelasticity => {
-            extension = ext(
+            )),
+            Effect::Viscoelasticity => exts.push((
                 "viscoelasticity",
                 vec![
                     (format!("{}_v1", nom.stiff.0), s * draw(0.25, 0.4)),
                     ("tau_v1".into(), draw(1.0, 3.0)),
                 ],
-            )
+            )),
+            Effect::FrictionHysteresis => {
+                let f_name = if kind == TestKind::Tension {
+                    "F_f"
+                } else {
+                    "M_f"
+                };
+                exts.push((
+                    "friction_hysteresis",
+                    vec![
+                        (format!("{}_f", nom.stiff.0), s * draw(0.25, 0.4)),
+                        (f_name.into(), y * draw(0.15, 0.25)),
+                    ],
+                ))
+            }
+            Effect::MachineCompliance => {
+                // Compliance that softens the shorter specimen by 25–40 %.
+                let k_spec = match kind {
+                    TestKind::ThreePoint => 48.0 * s / l0.powi(3),
+                    _ => s / l0,
+                };
+                artefacts.machine_compliance = draw(0.33, 0.66) / k_spec;
+            }
+            // Steel rollers on a polymer sheath: μ 0.15–0.3 (at 0.1 a 1 % load cell barely sees it).
+            Effect::SupportFriction => rig.support_friction = draw(0.15, 0.3),
+            _ => {}
         }
-        Effect::FrictionHysteresis => {
-            let f_name = if kind == TestKind::Tension {
-                "F_f"
-            } else {
-                "M_f"
-            };
-            extension = ext(
-                "friction_hysteresis",
-                vec![
-                    (format!("{}_f", nom.stiff.0), s * draw(0.25, 0.4)),
-                    (f_name.into(), y * draw(0.15, 0.25)),
-                ],
-            )
-        }
-        Effect::MachineCompliance => {
-            // Compliance that softens the shorter specimen by 25–40 %.
-            let k_spec = match kind {
-                TestKind::ThreePoint => 48.0 * s / l0.powi(3),
-                _ => s / l0,
-            };
-            artefacts.machine_compliance = draw(0.33, 0.66) / k_spec;
-        }
-        // Steel rollers on a polymer sheath: μ 0.15–0.3 (at 0.1 a 1 % load cell barely sees it).
-        Effect::SupportFriction => rig.support_friction = draw(0.15, 0.3),
-        _ => {}
+    }
+    if !exts.is_empty() {
+        let names: Vec<&str> = exts.iter().map(|e| e.0).collect();
+        extension = ext(
+            &names.join("+"),
+            exts.into_iter().flat_map(|e| e.1).collect(),
+        );
     }
     // Protocol: four cycles to 0.6, 1.6, 2.6, 3.6 × first-yield control, dwell 2 s at the turns.
     let rate = u_y / 2.0;
@@ -232,7 +266,7 @@ pub fn generate_case_at(
         })
         .collect();
     let duration = 2.0 * (0.6 + 1.6 + 2.6 + 3.6) * 2.0 + 8.0 * 2.0;
-    if truth == Effect::SensorDrift {
+    if has(Effect::SensorDrift) {
         // Drift worth 6–10 % of the yield response over the test.
         let r_y = match kind {
             TestKind::ThreePoint => 4.0 * y / l0,
@@ -240,7 +274,7 @@ pub fn generate_case_at(
         };
         artefacts.drift_per_s = r_y * draw(0.06, 0.1) / duration;
     }
-    let lengths: Vec<f64> = if truth == Effect::MachineCompliance {
+    let lengths: Vec<f64> = if has(Effect::MachineCompliance) {
         // Three-point: a 1.5× span (twice would let the punch push the rod off its supports).
         vec![
             l0,
@@ -317,21 +351,69 @@ pub fn generate_case_at(
             rod_setup,
         });
     }
+    let label = if truths.is_empty() {
+        Effect::None.to_string()
+    } else {
+        set_label(truths)
+    };
     Ok(BlindCase {
         name: format!(
             "{}/{}/noise{:.1}%/seed{}/{:?}",
             kind,
-            truth,
+            label,
             100.0 * noise_rel,
             seed,
             layout
         ),
         truth,
+        truths: truths.to_vec(),
         noise_rel,
         layout: format!("{layout:?}"),
         tests,
         files,
     })
+}
+
+/// Name of a set of effects: the members joined by `+` (`kinematic_hardening+sensor_drift`).
+pub fn set_label(effects: &[Effect]) -> String {
+    let names: Vec<&str> = effects.iter().map(|e| e.as_str()).collect();
+    names.join("+")
+}
+
+/// The pairs of effects the blind matrix withholds together for a kind: every pair of
+/// [`truths_for`] that can coexist in one cable. In a stranded cable the wires' plasticity
+/// (back stress: `kinematic_hardening`), their damage (`stiffness_degradation`), the sheath's
+/// creep (`viscoelasticity`) and the slip between wires (`friction_hysteresis`) act together,
+/// and the rig's compliance, the logger's drift and (three-point) the rollers' friction come on
+/// top of any of them; so every pair is kept except `piecewise_elasticity` (a rope that does
+/// not yield: strands settling, then bearing) with an effect of plasticity
+/// (`kinematic_hardening`, `stiffness_degradation`), which has no yield to act on.
+pub fn pairs_for(kind: TestKind) -> Vec<[Effect; 2]> {
+    let t = truths_for(kind);
+    let plastic =
+        |e: Effect| matches!(e, Effect::KinematicHardening | Effect::StiffnessDegradation);
+    let mut out = Vec::new();
+    for (i, &a) in t.iter().enumerate() {
+        for &b in &t[i + 1..] {
+            let piecewise = a == Effect::PiecewiseElasticity || b == Effect::PiecewiseElasticity;
+            if piecewise && (plastic(a) || plastic(b)) {
+                continue;
+            }
+            out.push([a, b]);
+        }
+    }
+    out
+}
+
+/// The pair matrix: every pair of [`pairs_for`] × `noise_levels` × `seeds`, layouts cycling over
+/// the three the virtual lab writes, as [`standard_matrix`].
+pub fn pair_matrix(
+    kinds: &[TestKind],
+    noise_levels: &[f64],
+    seeds: &[u64],
+) -> (Vec<BlindCase>, Vec<String>) {
+    let sets = |kind| pairs_for(kind).iter().map(|p| p.to_vec()).collect();
+    build(jobs(kinds, sets, noise_levels, seeds))
 }
 
 /// The standard matrix: every applicable truth (and `none`) × `noise_levels` × `seeds`, layouts
@@ -342,25 +424,44 @@ pub fn standard_matrix(
     noise_levels: &[f64],
     seeds: &[u64],
 ) -> (Vec<BlindCase>, Vec<String>) {
-    let layouts = [Layout::TestXpert, Layout::BluehillCsv, Layout::Mts793Dat];
+    let sets = |kind| {
+        let mut truths = vec![vec![]];
+        truths.extend(truths_for(kind).into_iter().map(|t| vec![t]));
+        truths
+    };
+    build(jobs(kinds, sets, noise_levels, seeds))
+}
+
+/// Every (kind, withheld set, noise, seed) of a matrix, the sets of a kind from `sets`.
+fn jobs(
+    kinds: &[TestKind],
+    sets: impl Fn(TestKind) -> Vec<Vec<Effect>>,
+    noise_levels: &[f64],
+    seeds: &[u64],
+) -> Vec<(TestKind, Vec<Effect>, f64, u64)> {
     let mut jobs = Vec::new();
     for &kind in kinds {
-        let mut truths = vec![Effect::None];
-        truths.extend(truths_for(kind));
-        for &truth in &truths {
+        for set in sets(kind) {
             for &noise in noise_levels {
                 for &seed in seeds {
-                    jobs.push((kind, truth, noise, seed));
+                    jobs.push((kind, set.clone(), noise, seed));
                 }
             }
         }
     }
+    jobs
+}
+
+/// Generate the cases of a matrix (kind, withheld effects, noise, seed), layouts in turn.
+fn build(jobs: Vec<(TestKind, Vec<Effect>, f64, u64)>) -> (Vec<BlindCase>, Vec<String>) {
+    let layouts = [Layout::TestXpert, Layout::BluehillCsv, Layout::Mts793Dat];
     let made: Vec<Result<BlindCase, String>> = jobs
         .par_iter()
         .enumerate()
-        .map(|(i, &(kind, truth, noise, seed))| {
-            generate_case(kind, truth, noise, seed, layouts[i % layouts.len()])
-                .map_err(|e| format!("{kind}/{truth}/seed {seed}: {e}"))
+        .map(|(i, (kind, truths, noise, seed))| {
+            let layout = layouts[i % layouts.len()];
+            generate_set_at(*kind, truths, *noise, *seed, layout, sample_rate(*kind))
+                .map_err(|e| format!("{kind}/{}/seed {seed}: {e}", set_label(truths)))
         })
         .collect();
     let mut cases = Vec::new();
@@ -372,4 +473,84 @@ pub fn standard_matrix(
         }
     }
     (cases, errors)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Uniform kinds: C(7,2) = 21 pairs less piecewise elasticity with kinematic hardening and
+    /// with stiffness degradation; three-point (no kinematic hardening, support friction added):
+    /// C(7,2) = 21 less piecewise elasticity with stiffness degradation.
+    #[test]
+    fn pairs_are_every_coexisting_pair_once() {
+        for kind in [TestKind::Tension, TestKind::Torsion, TestKind::PureBending] {
+            let p = pairs_for(kind);
+            assert_eq!(p.len(), 19, "{kind}");
+            assert!(!p.contains(&[Effect::KinematicHardening, Effect::PiecewiseElasticity]));
+            assert!(p.contains(&[Effect::KinematicHardening, Effect::SensorDrift]));
+            assert!(p.contains(&[Effect::Viscoelasticity, Effect::PiecewiseElasticity]));
+        }
+        let p = pairs_for(TestKind::ThreePoint);
+        assert_eq!(p.len(), 20);
+        assert!(p
+            .iter()
+            .all(|[a, b]| a != b && *a != Effect::KinematicHardening));
+        assert!(p.contains(&[Effect::MachineCompliance, Effect::SupportFriction]));
+    }
+
+    /// A set of one draws exactly the single case (the historic matrix is unchanged), and every
+    /// uniform-kind pair builds a case the registry accepts, with two lengths when compliance is
+    /// one of the pair.
+    #[test]
+    fn pair_cases_build_and_single_sets_match_single_cases() {
+        let one = generate_case_at(
+            TestKind::Torsion,
+            Effect::Viscoelasticity,
+            0.003,
+            2,
+            Layout::BluehillCsv,
+            5.0,
+        )
+        .unwrap();
+        let set = generate_set_at(
+            TestKind::Torsion,
+            &[Effect::Viscoelasticity],
+            0.003,
+            2,
+            Layout::BluehillCsv,
+            5.0,
+        )
+        .unwrap();
+        assert_eq!(one.tests[0].response, set.tests[0].response);
+        assert_eq!(one.name, set.name);
+        for kind in [TestKind::Tension, TestKind::PureBending] {
+            for pair in pairs_for(kind) {
+                let c = generate_set_at(kind, &pair, 0.01, 1, Layout::Mts793Dat, 5.0)
+                    .unwrap_or_else(|e| panic!("{}: {e}", set_label(&pair)));
+                assert_eq!(c.truths, pair.to_vec());
+                let n = if pair.contains(&Effect::MachineCompliance) {
+                    2
+                } else {
+                    1
+                };
+                assert_eq!(c.tests.len(), n, "{}", c.name);
+                assert!(c.name.contains(&set_label(&pair)));
+            }
+        }
+        // The pair differs from each of its members alone: both are in the response.
+        let pair = [Effect::KinematicHardening, Effect::Viscoelasticity];
+        let both = generate_set_at(TestKind::Tension, &pair, 0.0, 3, Layout::TestXpert, 5.0);
+        let both = both.unwrap().tests[0].response.clone();
+        for e in pair {
+            let alone = generate_set_at(TestKind::Tension, &[e], 0.0, 3, Layout::TestXpert, 5.0);
+            let alone = alone.unwrap().tests[0].response.clone();
+            let peak = both.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            let diff = both
+                .iter()
+                .zip(&alone)
+                .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+            assert!(diff > 0.01 * peak, "{e}: {diff} of {peak}");
+        }
+    }
 }

@@ -54,6 +54,7 @@ fn through_readers(case: &mut BlindCase) -> Result<(), String> {
 pub fn bench(
     seeds: u64,
     kind_names: &[String],
+    pairs: bool,
     out: Option<&std::path::Path>,
     json: Option<&std::path::Path>,
 ) -> CmdResult {
@@ -71,6 +72,11 @@ pub fn bench(
     let seed_list: Vec<u64> = (1..=seeds).collect();
     let (mut cases, gen_errors) = cases::standard_matrix(&kinds, &[0.003, 0.01], &seed_list);
     let mut errors = gen_errors;
+    if pairs {
+        let (more, more_errors) = cases::pair_matrix(&kinds, &[0.003, 0.01], &seed_list);
+        cases.extend(more);
+        errors.extend(more_errors);
+    }
     cases.retain_mut(|c| match through_readers(c) {
         Ok(()) => true,
         Err(e) => {
@@ -103,12 +109,18 @@ pub fn bench(
     let kinds_text: Vec<&str> = kinds.iter().map(|k| k.as_str()).collect();
     let mut text = format!(
         "# Blind check of the gap diagnosis, through the real readers\n\n\
-         `cablab bench blind --seeds {seeds} --kinds {}`: every effect that applies to the kind, \
-         withheld, plus null cases; noise 0.3 % and 1 % of full scale; {seeds} parameter draws \
+         `cablab bench blind --seeds {seeds} --kinds {}{}`: every effect that applies to the kind, \
+         withheld, plus null cases{}; noise 0.3 % and 1 % of full scale; {seeds} parameter draws \
          each; layouts testXpert II, Bluehill CSV and MTS 793 in turn, written by the virtual lab \
          and read back by cablab-ingest; the diagnosis is not told the truth. Three-point cases \
          replay the rod at up to {} points per history.\n\n```\n",
         kinds_text.join(","),
+        if pairs { " --pairs" } else { "" },
+        if pairs {
+            " and every pair of effects that can coexist in a cable (`cases::pairs_for`)"
+        } else {
+            ""
+        },
         rod.max_points
     );
     text.push_str(&score::render(&report));

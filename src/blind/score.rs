@@ -19,17 +19,21 @@ pub struct CaseOutcome {
     pub name: String,
     /// Kind.
     pub kind: TestKind,
-    /// Truth.
+    /// Truth (the first member for a pair).
     pub truth: Effect,
+    /// Every withheld effect (empty for a null case, two for a pair).
+    pub truths: Vec<Effect>,
     /// Verdict (`None` when the diagnosis failed; see `error`).
     pub verdict: Option<Effect>,
     /// Equivalent explanations reported.
     pub equivalent: Vec<Effect>,
     /// The set of effects the verdict names (`verdict.effects`).
     pub effects: Vec<Effect>,
-    /// Verdict equals the truth, and the set it names is the truth alone (empty for `none`).
+    /// The set the verdict names equals the withheld set (empty for `none`) and the verdict is
+    /// a member of it (`none` for a null case).
     pub right: bool,
-    /// The truth is the verdict or among the reported equivalents.
+    /// Right, or the truth is among the reported equivalents (a single effect among
+    /// `verdict.equivalent`, a set among `verdict.equivalent_sets`).
     pub right_or_equivalent: bool,
     /// Generator noise (fraction of full scale).
     pub noise_rel: f64,
@@ -41,6 +45,21 @@ pub struct CaseOutcome {
     pub seconds: f64,
     /// Why the diagnosis failed, if it did.
     pub error: Option<String>,
+}
+
+/// How one pair of withheld effects fared over its noise levels and draws.
+#[derive(Debug, Clone, Serialize)]
+pub struct PairRow {
+    /// The pair, `a+b`.
+    pub pair: String,
+    /// Cases.
+    pub cases: usize,
+    /// Cases whose verdict named the pair.
+    pub right: usize,
+    /// Cases whose verdict named the pair or reported it as equivalent.
+    pub right_or_equivalent: usize,
+    /// The sets named instead, with their counts (`none`, `unexplained`, `error` by name).
+    pub named_instead: BTreeMap<String, usize>,
 }
 
 /// Quantiles of the gap shrink over the cases whose verdict was right.
@@ -63,7 +82,14 @@ pub struct Shrink {
 pub struct BlindReport {
     /// Every case.
     pub outcomes: Vec<CaseOutcome>,
-    /// Confusion counts: truth → verdict → count (`error` for failed diagnoses).
+    /// Pairs of withheld effects, one row per pair (empty when the matrix has none).
+    pub pairs: Vec<PairRow>,
+    /// Share of pair cases scored right (the set named, or reported equivalent).
+    pub pairs_right_share: f64,
+    /// Share of single-effect cases scored right.
+    pub singles_right_share: f64,
+    /// Confusion counts of the null and single-effect cases: truth → verdict → count (`error`
+    /// for failed diagnoses).
     pub confusion: BTreeMap<String, BTreeMap<String, usize>>,
     /// Share of cases whose verdict equals the truth.
     pub right_share: f64,
@@ -77,6 +103,11 @@ pub struct BlindReport {
     pub shrink: Shrink,
     /// Total wall time, s.
     pub seconds: f64,
+}
+
+/// Two sets of effects hold the same members (order aside).
+fn same_set(a: &[Effect], b: &[Effect]) -> bool {
+    a.len() == b.len() && a.iter().all(|e| b.contains(e))
 }
 
 fn median(v: &mut [f64]) -> f64 {
@@ -110,6 +141,7 @@ pub fn run_matrix_observed(
                 name: c.name.clone(),
                 kind,
                 truth: c.truth,
+                truths: c.truths.clone(),
                 verdict: None,
                 equivalent: vec![],
                 effects: vec![],
@@ -125,14 +157,11 @@ pub fn run_matrix_observed(
                 Ok(d) => {
                     let v = d.verdict.effect;
                     o.verdict = Some(v);
-                    let want: Vec<Effect> = if c.truth == Effect::None {
-                        vec![]
-                    } else {
-                        vec![c.truth]
-                    };
-                    o.right = v == c.truth && d.verdict.effects == want;
+                    o.right = same_set(&d.verdict.effects, &c.truths)
+                        && (c.truths.contains(&v) || (c.truths.is_empty() && v == Effect::None));
                     o.effects = d.verdict.effects.clone();
-                    o.right_or_equivalent = o.right || d.verdict.equivalent.contains(&c.truth);
+                    o.right_or_equivalent =
+                        o.right || (c.truths.len() == 1 && d.verdict.equivalent.contains(&c.truth));
                     o.equivalent = d.verdict.equivalent.clone();
                     let noise = d.verdict.noise.max(f64::MIN_POSITIVE);
                     o.gap_before_over_noise = d.baseline.gap_heldout_rel * d.verdict.noise
@@ -140,6 +169,11 @@ pub fn run_matrix_observed(
                         / noise;
                     o.gap_after_over_noise = if c.truth == Effect::None {
                         Some(o.gap_before_over_noise)
+                    } else if c.truths.len() > 1 {
+                        // A set: the gap its fitted model leaves, when the verdict named it.
+                        o.right.then(|| {
+                            d.verdict.gap_after_rel / d.verdict.noise_rel.max(f64::MIN_POSITIVE)
+                        })
                     } else {
                         d.effects
                             .iter()
@@ -155,7 +189,39 @@ pub fn run_matrix_observed(
         })
         .collect();
     let mut confusion: BTreeMap<String, BTreeMap<String, usize>> = BTreeMap::new();
-    for o in &outcomes {
+    let mut pair_rows: BTreeMap<String, PairRow> = BTreeMap::new();
+    for o in outcomes.iter().filter(|o| o.truths.len() > 1) {
+        let label = super::cases::set_label(&o.truths);
+        let row = pair_rows.entry(label.clone()).or_insert(PairRow {
+            pair: label,
+            cases: 0,
+            right: 0,
+            right_or_equivalent: 0,
+            named_instead: BTreeMap::new(),
+        });
+        row.cases += 1;
+        row.right += usize::from(o.right);
+        row.right_or_equivalent += usize::from(o.right_or_equivalent);
+        if !o.right_or_equivalent {
+            let named = match o.verdict {
+                None => "error".to_string(),
+                Some(v) if o.effects.is_empty() => v.as_str().to_string(),
+                Some(_) => super::cases::set_label(&o.effects),
+            };
+            *row.named_instead.entry(named).or_default() += 1;
+        }
+    }
+    let share = |of: &mut dyn Iterator<Item = &CaseOutcome>| {
+        let (mut n, mut r) = (0usize, 0usize);
+        for o in of {
+            n += 1;
+            r += usize::from(o.right_or_equivalent);
+        }
+        r as f64 / n.max(1) as f64
+    };
+    let pairs_right_share = share(&mut outcomes.iter().filter(|o| o.truths.len() > 1));
+    let singles_right_share = share(&mut outcomes.iter().filter(|o| o.truths.len() == 1));
+    for o in outcomes.iter().filter(|o| o.truths.len() <= 1) {
         let v = o
             .verdict
             .map_or("error".to_string(), |v| v.as_str().to_string());
@@ -188,6 +254,9 @@ pub fn run_matrix_observed(
     let within = after.iter().filter(|&&a| a <= 1.5).count() as f64 / after.len().max(1) as f64;
     let max_after = after.iter().copied().fold(f64::NAN, f64::max);
     BlindReport {
+        pairs: pair_rows.into_values().collect(),
+        pairs_right_share,
+        singles_right_share,
         confusion,
         right_share: right / n,
         right_or_equivalent_share: right_eq / n,
@@ -239,24 +308,58 @@ pub fn render(r: &BlindReport) -> String {
         r.outcomes.len(),
         r.seconds
     );
-    let _ = writeln!(s, "confusion matrix (rows: truth, columns: verdict)");
-    let _ = write!(s, "{:<22}", "truth \\ verdict");
-    for c in &cols {
-        let _ = write!(s, "{:>11}", short(c));
-    }
-    let _ = writeln!(s, "{:>8}", "right");
-    for t in rows {
-        let row = &r.confusion[t];
-        let _ = write!(s, "{:<22}", t);
-        let total: usize = row.values().sum();
+    if !r.confusion.is_empty() {
+        let _ = writeln!(s, "confusion matrix (rows: truth, columns: verdict)");
+        let _ = write!(s, "{:<22}", "truth \\ verdict");
         for c in &cols {
-            let _ = write!(
+            let _ = write!(s, "{:>11}", short(c));
+        }
+        let _ = writeln!(s, "{:>8}", "right");
+        for t in rows {
+            let row = &r.confusion[t];
+            let _ = write!(s, "{:<22}", t);
+            let total: usize = row.values().sum();
+            for c in &cols {
+                let _ = write!(
+                    s,
+                    "{:>11}",
+                    row.get(c).map_or("·".to_string(), |v| v.to_string())
+                );
+            }
+            let _ = writeln!(s, "{:>5}/{:<2}", row.get(t).copied().unwrap_or(0), total);
+        }
+    }
+    if !r.pairs.is_empty() {
+        let _ = writeln!(
+            s,
+            "pairs (rows: the two withheld effects; right: the verdict names the pair or reports it as equivalent)"
+        );
+        for p in &r.pairs {
+            let instead: Vec<String> = p
+                .named_instead
+                .iter()
+                .map(|(k, v)| format!("{k} x{v}"))
+                .collect();
+            let _ = writeln!(
                 s,
-                "{:>11}",
-                row.get(c).map_or("·".to_string(), |v| v.to_string())
+                "  {:<46} {:>3}/{:<3} (named {}){}",
+                p.pair,
+                p.right_or_equivalent,
+                p.cases,
+                p.right,
+                if instead.is_empty() {
+                    String::new()
+                } else {
+                    format!("  instead: {}", instead.join(", "))
+                }
             );
         }
-        let _ = writeln!(s, "{:>5}/{:<2}", row.get(t).copied().unwrap_or(0), total);
+        let _ = writeln!(
+            s,
+            "pairs right: {:.1} %, single effects right: {:.1} %",
+            100.0 * r.pairs_right_share,
+            100.0 * r.singles_right_share
+        );
     }
     let _ = writeln!(
         s,
@@ -312,7 +415,11 @@ pub fn render(r: &BlindReport) -> String {
     if !wrong.is_empty() {
         let _ = writeln!(s, "cases not right:");
         for o in wrong {
-            let v = o.verdict.map_or("error".to_string(), |v| v.to_string());
+            let v = match o.verdict {
+                None => "error".to_string(),
+                Some(_) if o.effects.len() > 1 => super::cases::set_label(&o.effects),
+                Some(v) => v.to_string(),
+            };
             let eq: Vec<&str> = o.equivalent.iter().map(|e| e.as_str()).collect();
             let _ = writeln!(
                 s,

@@ -24,6 +24,7 @@ pub fn run(a: BenchArgs) -> CmdResult {
         BenchWhat::Blind {
             seeds,
             kinds,
+            pairs,
             output,
             json,
         } => {
@@ -31,7 +32,7 @@ pub fn run(a: BenchArgs) -> CmdResult {
                 .into_iter()
                 .map(|k| cablab_core::TestKind::from(k).as_str().to_string())
                 .collect();
-            crate::blind::bench(seeds, &kinds, output.as_deref(), json.as_deref())
+            crate::blind::bench(seeds, &kinds, pairs, output.as_deref(), json.as_deref())
         }
     }
 }

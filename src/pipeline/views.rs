@@ -295,6 +295,24 @@ pub fn gap_svgs(
                 (format!("{sign}{}", r.effect.as_str()), r.gap_after_rel)
             }));
         }
+        // A set of effects: the waterfall over the set search's steps.
+        _ if d.verdict.steps.len() > 1 => {
+            let set: Vec<cablab_report::gap::SetStep> = d
+                .verdict
+                .steps
+                .iter()
+                .map(|r| cablab_report::gap::SetStep {
+                    step: r.step.to_string(),
+                    effect: r.effect.as_str().to_string(),
+                    gap_after_rel: r.gap_after_rel,
+                })
+                .collect();
+            steps = cablab_report::gap::set_waterfall_steps(
+                &format!("baseline ({})", d.baseline.law),
+                d.baseline.gap_heldout_rel,
+                &set,
+            );
+        }
         _ => {
             steps.push((
                 format!("baseline ({})", d.baseline.law),

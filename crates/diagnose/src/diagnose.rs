@@ -140,6 +140,20 @@ pub struct Separation {
     pub experiment: &'static str,
 }
 
+/// A set of effects whose held-out score the rule cannot tell from the verdict's set, and the
+/// experiment that would.
+#[derive(Debug, Clone, Serialize)]
+pub struct EquivalentSet {
+    /// The set (the verdict's set with one member swapped).
+    pub effects: Vec<Effect>,
+    /// The verdict's member it swaps out and the effect it swaps in.
+    pub swapped: [Effect; 2],
+    /// Held-out gap its fitted model leaves, same units as `Verdict::gap_after_rel`.
+    pub gap_after_rel: f64,
+    /// What to run to tell the two sets apart (the experiment that separates the swapped pair).
+    pub experiment: &'static str,
+}
+
 /// The verdict.
 #[derive(Debug, Clone, Serialize)]
 pub struct Verdict {
@@ -157,6 +171,11 @@ pub struct Verdict {
     pub steps: Vec<Rung>,
     /// Effects that explain the held-out data as well.
     pub equivalent: Vec<Effect>,
+    /// When the verdict names a set of two or more: the sets that explain the held-out data as
+    /// well (scored at the set search's last forward step: the same set with its last-added
+    /// member swapped for an effect the rule cannot tell from it), each with the experiment that
+    /// would separate it from the verdict's set. Does not list sets the search never scored.
+    pub equivalent_sets: Vec<EquivalentSet>,
     /// The test's gap, defined once: RMS of the baseline's held-out residual / largest |measured
     /// response| (the same figure as `baseline.gap_heldout_rel` and every `gap_before_rel`).
     pub gap_rel: f64,
@@ -380,6 +399,7 @@ pub fn diagnose(
     let mut set = vec![];
     let mut steps = vec![];
     let mut verdict_effect = verdict_effect;
+    let mut equivalent_sets = vec![];
     if let Some(first) = scored.iter().find(|s| s.effect == verdict_effect) {
         set.push(verdict_effect);
         steps.push(Rung {
@@ -395,7 +415,7 @@ pub fn diagnose(
                 effect: Effect::None,
                 ..first.clone()
             };
-            let (all, last) = climb(
+            let (all, last, alternatives) = climb(
                 ctx,
                 tests,
                 start,
@@ -418,6 +438,23 @@ pub fn diagnose(
             }
             gap_after = abs_rms(&last.held_resid);
             steps = all;
+            if set.len() > 1 {
+                equivalent_sets = alternatives
+                    .iter()
+                    .filter(|(out, _)| set.contains(out))
+                    .map(|(out, alt)| {
+                        let mut effects: Vec<Effect> = set.clone();
+                        effects.retain(|e| e != out);
+                        effects.push(alt.effect);
+                        EquivalentSet {
+                            effects,
+                            swapped: [*out, alt.effect],
+                            gap_after_rel: abs_rms(&alt.held_resid) / scale,
+                            experiment: separating_experiment(*out, alt.effect),
+                        }
+                    })
+                    .collect();
+            }
             // The member that explains most on its own first.
             set.sort_by(|a, b| {
                 let g = |e: &Effect| {
@@ -454,6 +491,7 @@ pub fn diagnose(
             effects: set,
             steps,
             equivalent: choice.equivalent,
+            equivalent_sets,
             gap_rel: gap_before / scale,
             gap_after_rel: gap_after / scale,
             unexplained,

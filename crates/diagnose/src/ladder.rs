@@ -47,7 +47,7 @@ pub(crate) fn ladder(
         None,
         opts,
     )?;
-    let (rungs, _) = climb(
+    let (rungs, _, _) = climb(
         ctx,
         tests,
         start,
@@ -68,7 +68,10 @@ pub(crate) fn ladder(
 /// candidates excluded; only `allowed` ones if given) until the held-out gap reaches the noise
 /// floor or nothing helps; then
 /// backward elimination of the added effects the rule finds redundant (those of the `prior`
-/// rungs that led to `start` included). Returns the rungs (`prior` first) and the final model.
+/// rungs that led to `start` included). Returns the rungs (`prior` first), the final model and
+/// its equivalent sets: the models of the last forward step whose held-out score the rule cannot
+/// tell from the one it added (each scored, so the same model with the added effect swapped for
+/// another), kept when no later step dropped an effect.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn climb(
     ctx: Context,
@@ -82,11 +85,12 @@ pub(crate) fn climb(
     noise: &[f64],
     opts: &DiagnoseOptions,
     scale: f64,
-) -> (Vec<Rung>, Scored) {
+) -> (Vec<Rung>, Scored, Vec<(Effect, Scored)>) {
     let kind = tests[0].kind;
     let resolution = resolution_floor(tests);
     let mut cur = start;
     let mut rungs = prior;
+    let mut alternatives: Vec<(Effect, Scored)> = Vec::new();
     let rms_abs = |s: &Scored| {
         (s.held_resid.iter().flatten().map(|v| v * v).sum::<f64>() / s.n_held.max(1) as f64).sqrt()
     };
@@ -113,6 +117,11 @@ pub(crate) fn climb(
         if choice.effect == Effect::None {
             break;
         }
+        alternatives = scored
+            .iter()
+            .filter(|s| choice.equivalent.contains(&s.effect))
+            .map(|s| (choice.effect, s.clone()))
+            .collect();
         let Some(next) = scored.into_iter().find(|s| s.effect == choice.effect) else {
             break;
         };
@@ -179,6 +188,7 @@ pub(crate) fn climb(
             gap_after_rel: rms_abs(&smaller) / scale,
         });
         cur = smaller;
+        alternatives.clear();
     }
-    (rungs, cur)
+    (rungs, cur, alternatives)
 }

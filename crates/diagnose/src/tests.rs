@@ -9,6 +9,7 @@ use crate::diagnose::{
     calibrate, diagnose, CalibrateOptions, Context, DiagnoseOptions, UNEXPLAINED_GAP,
 };
 use crate::model::{DiagTest, ModelSpec};
+use crate::select::separating_experiment;
 use cablab_core::{Effect, Specimen, TestKind};
 use cablab_synth::{Artefacts, Extension, Layout, Protocol, Step, SynthSpec};
 use std::collections::BTreeMap;
@@ -609,4 +610,14 @@ fn two_withheld_effects_are_named_as_a_set_with_its_waterfall() {
         "{steps:?} noise {}",
         d.verdict.noise_rel
     );
+    // Equivalent sets, if any: the verdict's set with one member swapped, scored, within the
+    // floor's reach like the set itself, and an experiment to separate them.
+    for q in &d.verdict.equivalent_sets {
+        let [out, inn] = q.swapped;
+        assert!(set.contains(&out) && !set.contains(&inn), "{q:?}");
+        assert_eq!(q.effects.len(), set.len());
+        assert!(q.effects.contains(&inn) && !q.effects.contains(&out));
+        assert!(q.gap_after_rel.is_finite() && q.gap_after_rel > 0.0);
+        assert_eq!(q.experiment, separating_experiment(out, inn));
+    }
 }

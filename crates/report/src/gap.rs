@@ -25,6 +25,48 @@ pub struct CandidateBar {
     pub after: f64,
 }
 
+/// One step of the set search (the contract's `verdict.steps`): an effect added to the model or
+/// dropped from it, and the held-out gap its model leaves (fraction, as `gap_after_rel`).
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct SetStep {
+    /// `add` or `drop`.
+    pub step: String,
+    /// Vocabulary name of the effect.
+    pub effect: String,
+    /// Held-out gap after the step, relative.
+    pub gap_after_rel: f64,
+}
+
+/// The rows of the "how far" waterfall over a set of effects: the baseline's held-out gap, then
+/// one row per step (`+ effect` added, `− effect` dropped) at the gap it leaves. The parts the
+/// rows remove add up to the baseline's gap less the last step's (a drop that costs a little
+/// counts negative).
+pub fn set_waterfall_steps(
+    baseline_label: &str,
+    baseline_gap_rel: f64,
+    steps: &[SetStep],
+) -> Vec<(String, f64)> {
+    std::iter::once((baseline_label.to_string(), baseline_gap_rel))
+        .chain(steps.iter().map(|s| {
+            let sign = if s.step == "drop" { "\u{2212}" } else { "+" };
+            (format!("{sign} {}", s.effect), s.gap_after_rel)
+        }))
+        .collect()
+}
+
+/// "How far" over a set of effects: [`gap_waterfall_svg`] of [`set_waterfall_steps`].
+pub fn set_waterfall_svg(
+    baseline_label: &str,
+    baseline_gap_rel: f64,
+    steps: &[SetStep],
+    noise_floor: f64,
+) -> Result<String, ReportError> {
+    gap_waterfall_svg(
+        &set_waterfall_steps(baseline_label, baseline_gap_rel, steps),
+        noise_floor,
+    )
+}
+
 /// The residual along the span of a three-point test.
 #[derive(Debug, Clone, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct SpanResidual {
@@ -527,6 +569,45 @@ mod tests {
     /// `fill="#RRGGBB"` of a colour, as plotters writes it.
     fn fill(c: RGBColor) -> String {
         format!("fill=\"#{:02X}{:02X}{:02X}\"", c.0, c.1, c.2)
+    }
+
+    /// The removed parts the waterfall prints ("(−x pts)", "(+x pts)") add up to the baseline's
+    /// gap less the set's final gap, over an add, add, drop path.
+    #[test]
+    fn set_waterfall_bars_sum_to_the_gap_the_set_closes() {
+        let step = |k: &str, e: &str, g| SetStep {
+            step: k.into(),
+            effect: e.into(),
+            gap_after_rel: g,
+        };
+        let steps = [
+            step("add", "friction_hysteresis", 0.031),
+            step("add", "kinematic_hardening", 0.012),
+            step("add", "sensor_drift", 0.004),
+            step("drop", "friction_hysteresis", 0.0043),
+        ];
+        let rows = set_waterfall_steps("baseline (elastoplastic)", 0.085, &steps);
+        assert_eq!(rows.len(), 5);
+        assert_eq!(rows[4].0, "\u{2212} friction_hysteresis");
+        let removed: f64 = rows.windows(2).map(|w| w[0].1 - w[1].1).sum();
+        assert!((removed - (0.085 - 0.0043)).abs() < 1e-12);
+        let svg = set_waterfall_svg("baseline (elastoplastic)", 0.085, &steps, 0.003).unwrap();
+        let mut pts = 0.0;
+        for part in svg.split('(').skip(1) {
+            let Some(num) = part
+                .split(" pts)")
+                .next()
+                .filter(|_| part.contains(" pts)"))
+            else {
+                continue;
+            };
+            let (sign, v) = num.split_at(num.chars().next().unwrap().len_utf8());
+            let v: f64 = v.parse().unwrap();
+            pts += if sign == "+" { -v } else { v };
+        }
+        // Printed to 0.1 point each: within 4 × 0.05 of 8.07 points.
+        assert!((pts - 8.07).abs() <= 0.2 + 1e-9, "{pts}");
+        assert!(svg.contains("+ sensor_drift") && svg.contains("noise floor"));
     }
 
     #[test]
