@@ -170,7 +170,12 @@ pub struct Verdict {
     /// step adds `effect`; `drop` steps remove an effect the set does not need).
     pub steps: Vec<Rung>,
     /// Effects that explain the held-out data as well.
+    #[serde(skip)]
     pub equivalent: Vec<Effect>,
+    /// What the JSON calls `equivalent` (CONTRACT.md): the names in [`Verdict::equivalent`],
+    /// then each of [`Verdict::equivalent_sets`] with its members joined by `+`.
+    #[serde(rename = "equivalent")]
+    pub equivalent_names: Vec<String>,
     /// When the verdict names a set of two or more: the sets that explain the held-out data as
     /// well (scored at the set search's last forward step: the same set with its last-added
     /// member swapped for an effect the rule cannot tell from it), each with the experiment that
@@ -490,6 +495,18 @@ pub fn diagnose(
             effect: verdict_effect,
             effects: set,
             steps,
+            equivalent_names: choice
+                .equivalent
+                .iter()
+                .map(|e| e.as_str().to_string())
+                .chain(equivalent_sets.iter().map(|q| {
+                    q.effects
+                        .iter()
+                        .map(|e| e.as_str())
+                        .collect::<Vec<_>>()
+                        .join("+")
+                }))
+                .collect(),
             equivalent: choice.equivalent,
             equivalent_sets,
             gap_rel: gap_before / scale,

@@ -619,5 +619,12 @@ fn two_withheld_effects_are_named_as_a_set_with_its_waterfall() {
         assert!(q.effects.contains(&inn) && !q.effects.contains(&out));
         assert!(q.gap_after_rel.is_finite() && q.gap_after_rel > 0.0);
         assert_eq!(q.experiment, separating_experiment(out, inn));
+        // The JSON's `equivalent` (CONTRACT.md) lists the set joined by "+".
+        let joined: Vec<&str> = q.effects.iter().map(|e| e.as_str()).collect();
+        assert!(d.verdict.equivalent_names.contains(&joined.join("+")));
     }
+    assert_eq!(
+        d.verdict.equivalent_names.len(),
+        d.verdict.equivalent.len() + d.verdict.equivalent_sets.len()
+    );
 }
