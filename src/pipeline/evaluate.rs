@@ -769,17 +769,19 @@ pub fn words(d: &cablab_diagnose::Diagnosis) -> String {
         } else {
             after
         },
-        equivalent: d
-            .verdict
-            .equivalent
-            .iter()
-            .map(|e| e.as_str().to_string())
-            .collect(),
+        // Single effects and equivalent sets ("a+b"), as the JSON lists them.
+        equivalent: d.verdict.equivalent_names.clone(),
         separating: d
             .verdict
             .separating
             .iter()
             .map(|s| s.experiment.to_string())
+            .chain(
+                d.verdict
+                    .equivalent_sets
+                    .iter()
+                    .map(|q| q.experiment.to_string()),
+            )
             .collect(),
         noise_rel: d.verdict.noise_rel,
         top_location: top,

@@ -146,13 +146,20 @@ pub fn diagnosis_words(s: &DiagnosisSummary) -> String {
         .filter(|e| *e != s.verdict_effect && *e != "none")
         .collect();
     if !equivalent.is_empty() {
-        let names: Vec<String> = equivalent.iter().map(|e| e.replace('_', " ")).collect();
+        let names: Vec<String> = equivalent
+            .iter()
+            .map(|e| e.replace('_', " ").replace('+', " + "))
+            .collect();
         let mut p = format!(
             "Equally good on the held-out data: {}. These tests cannot tell them apart.",
             names.join(", ")
         );
+        let mut said: Vec<&str> = Vec::new();
         for exp in &s.separating {
-            p.push_str(&format!(" To separate them: {exp}."));
+            if !said.contains(&exp.as_str()) {
+                p.push_str(&format!(" To separate them: {exp}."));
+                said.push(exp);
+            }
         }
         paras.push(p);
     }
@@ -162,6 +169,23 @@ pub fn diagnosis_words(s: &DiagnosisSummary) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn equivalent_sets_are_named_with_their_members_and_one_experiment_each() {
+        let s = DiagnosisSummary {
+            baseline_law: "elastoplastic".into(),
+            gap_before_rel: 0.05,
+            verdict_effect: "kinematic_hardening".into(),
+            gap_after_rel: Some(0.003),
+            equivalent: vec!["kinematic_hardening+sensor_drift".into()],
+            separating: vec!["a dwell".into(), "a dwell".into()],
+            noise_rel: 0.003,
+            ..Default::default()
+        };
+        let w = diagnosis_words(&s);
+        assert!(w.contains("kinematic hardening + sensor drift"), "{w}");
+        assert_eq!(w.matches("To separate them: a dwell.").count(), 1, "{w}");
+    }
 
     #[test]
     fn unexplained_gap_is_not_called_noise() {
