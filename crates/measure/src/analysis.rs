@@ -708,6 +708,14 @@ pub fn analyze(
         TestKind::ThreePoint => 1.0,
         _ => 1.0 / geom.free_length_m,
     };
+    // The toe (slack) of the first loading, sectional: where it ends and where the elastic line
+    // meets zero response.
+    let toe_ref = elastic.as_ref().and_then(|e| {
+        e.toe.map(|t| {
+            let end = from_fit_x(t.knee_x);
+            (end, from_fit_x(e.fit.x_intercept().unwrap_or(t.knee_x)))
+        })
+    });
     let cyc = cycles(&CycleInputs {
         control: &cm,
         sectional: &xs,
@@ -717,6 +725,8 @@ pub fn analyze(
         three_point: three,
         sectional_per_control: per_control,
         control_resolution: crate::condition::resolution(&c),
+        zero_sectional: toe_ref.map_or(0.0, |t| t.1),
+        toe_end_control: toe_ref.map_or(f64::NEG_INFINITY, |t| t.0 / per_control),
     });
 
     // Behaviour. Knee positions back from the fitting control to the sectional one.
