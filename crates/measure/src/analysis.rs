@@ -26,7 +26,9 @@
 //!   `linear_elastic` without a bend in the first loading, `piecewise_linear_elastic` with one;
 //! * a bend, loops that do not close and a significant residual deformation → `elastoplastic`;
 //! * anything else (loops without a bend: friction, viscosity, drift; or no unloading to judge
-//!   reversibility by, while the first loading bends) → `other`.
+//!   reversibility by, while the first loading bends) → `other`;
+//! * a break (the response falls below [`BREAK_DROP`] of its maximum and stays there) → `broken`,
+//!   whatever came before it (the yield point and stiffness are still reported).
 //!
 //! The yield point is the bend of an `elastoplastic` (or unjudgeable) test; a reversible bend is
 //! reported as the piecewise threshold K_t instead. Pure: numbers in, numbers out.
@@ -161,6 +163,9 @@ pub enum Behaviour {
     Elastoplastic,
     /// None of the above (rate dependence, friction loops, drift, or not enough data).
     Other,
+    /// The specimen broke ([`Analysis::break_point`] says where); the class before the break
+    /// (elastic, elastoplastic) is not judged, since a break leaves no unloading to judge by.
+    Broken,
 }
 
 impl Behaviour {
@@ -171,6 +176,7 @@ impl Behaviour {
             Behaviour::PiecewiseLinearElastic => "piecewise_linear_elastic",
             Behaviour::Elastoplastic => "elastoplastic",
             Behaviour::Other => "other",
+            Behaviour::Broken => "broken",
         }
     }
 }
@@ -893,6 +899,13 @@ pub fn analyze(
             offset_control: sign * from_fit_x(e.fit.x_intercept().unwrap_or(t.knee_x)),
         })
     });
+
+    // A break overrides the class (the yield and the threshold above were judged without it).
+    let behaviour = if break_point.is_some() {
+        Behaviour::Broken
+    } else {
+        behaviour
+    };
 
     let large_deflection = match (&elastica, &elastic, &stiffness) {
         (Some(tab), Some(e), Some(st)) => {
