@@ -84,6 +84,9 @@ fn family_figures() {
     let n = 500u64;
     let (mut with_s, mut covered, mut within1, mut low_noise, mut low_within1) = (0, 0, 0, 0, 0);
     let mut meets = 0;
+    // (cases with a stiffness, CI holds, |error| <= 1 %) for white / AR(1) noise and for
+    // decimated exports.
+    let mut by_noise: std::collections::BTreeMap<&str, (usize, usize, usize)> = Default::default();
     let mut errors = Vec::new();
     let mut yield_err = Vec::new();
     let mut confusion: std::collections::BTreeMap<(String, String), usize> = Default::default();
@@ -105,6 +108,16 @@ fn family_figures() {
                     with_s += 1;
                     covered += cov as usize;
                     meets += meet as usize;
+                    let mut tally = |key| {
+                        let e = by_noise.entry(key).or_default();
+                        e.0 += 1;
+                        e.1 += cov as usize;
+                        e.2 += (err.abs() <= 0.01) as usize;
+                    };
+                    tally(if t.noise_ar1 > 0.0 { "ar1" } else { "white" });
+                    if t.decimate > 1 {
+                        tally("decimated");
+                    }
                     within1 += (err.abs() <= 0.01) as usize;
                     k.1 += (err.abs() <= 0.01) as usize;
                     k.2 += cov as usize;
@@ -149,6 +162,7 @@ fn family_figures() {
     );
     println!("  class confusion (truth -> measured): {confusion:?}");
     println!("  per kind (cases, |error| <= 1 %, CI holds the truth, CI meets its band): {by_kind:?}");
+    println!("  by noise (cases, CI holds the truth, |error| <= 1 %): {by_noise:?}");
     for e in errors.iter().take(10) {
         println!("  {e}");
     }

@@ -16,11 +16,12 @@
 //!   bending);
 //! * dwells of 0–30 s at the turning points (or none), the rate changed by 0.1–10× from step to
 //!   step, sampling 1 Hz – 2 kHz with 30–600 samples on the first ramp;
-//! * white response noise 0.05–1 % of the load cell's full scale, ADC quantisation (none, 12 or
-//!   16 bit), a toe (slack) region in 30 % of the cases.
+//! * response noise 0.05–1 % of the load cell's full scale, white or (30 %) AR(1) with
+//!   φ = 0.3–0.95 at the logger's rate, ADC quantisation (none, 12 or 16 bit), a toe (slack)
+//!   region in 30 % of the cases, a decimated export (every 2nd–8th row, ≥ 20 rows left on
+//!   the first ramp) in 20 %.
 //!
-//! Does not make AR(1) noise or decimated exports (the virtual lab's artefacts have neither),
-//! rate-dependent, drifting or broken specimens.
+//! Does not make rate-dependent, drifting or broken specimens.
 
 use crate::spec::{Artefacts, Layout, Protocol, Step, SynthSpec};
 use cablab_core::{Specimen, TestKind};
@@ -60,6 +61,10 @@ pub struct FamilyTruth {
     pub two_sided: bool,
     /// Response noise, fraction of full scale.
     pub noise_rel: f64,
+    /// AR(1) coefficient of the noise at the logger's rate (0: white).
+    pub noise_ar1: f64,
+    /// Export decimation (every k-th row; 0 or 1: none).
+    pub decimate: usize,
 }
 
 /// One case of the family: the virtual lab's spec and the truth.
@@ -194,6 +199,21 @@ pub fn family_case(seed: u64) -> FamilyCase {
     };
     let layout =
         [Layout::TestXpert, Layout::BluehillCsv, Layout::Mts793Dat][rng.random_range(0..3)];
+    // Drawn last, so the cases' other parameters do not depend on them.
+    let artefacts = Artefacts {
+        noise_ar1: if rng.random_bool(0.3) {
+            rng.random_range(0.3..0.95)
+        } else {
+            0.0
+        },
+        // A decimated export in a fifth of the cases, keeping ≥ 20 rows on the first ramp.
+        decimate: if rng.random_bool(0.2) {
+            rng.random_range(2..=8).min((n1 / 20.0) as usize)
+        } else {
+            0
+        },
+        ..artefacts
+    };
     let mut params = BTreeMap::new();
     if kind == TestKind::ThreePoint {
         // The rod's section must be one section: without EA the registry's shear stiffness
@@ -232,6 +252,7 @@ pub fn family_case(seed: u64) -> FamilyCase {
         file_stem: Some(format!("family_{seed}")),
         specimen_number: None,
     };
+    let (noise_ar1, decimate) = (spec.artefacts.noise_ar1, spec.artefacts.decimate);
     FamilyCase {
         spec,
         truth: FamilyTruth {
@@ -246,6 +267,8 @@ pub fn family_case(seed: u64) -> FamilyCase {
             schedule,
             two_sided,
             noise_rel,
+            noise_ar1,
+            decimate,
         },
     }
 }
