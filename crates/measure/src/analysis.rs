@@ -27,8 +27,9 @@
 //! * a bend, loops that do not close and a significant residual deformation → `elastoplastic`;
 //! * anything else (loops without a bend: friction, viscosity, drift; or no unloading to judge
 //!   reversibility by, while the first loading bends) → `other`;
-//! * a break (the response falls below [`BREAK_DROP`] of its maximum and stays there) → `broken`,
-//!   whatever came before it (the yield point and stiffness are still reported).
+//! * an abrupt break (the response falls from 90 % of its maximum below [`BREAK_DROP`] of it
+//!   within 5 samples or 2 % of the record, and stays there) → `broken`, whatever came before
+//!   it (the yield point and stiffness are still reported).
 //!
 //! The yield point is the bend of an `elastoplastic` (or unjudgeable) test; a reversible bend is
 //! reported as the piecewise threshold K_t instead. Pure: numbers in, numbers out.
@@ -163,8 +164,8 @@ pub enum Behaviour {
     Elastoplastic,
     /// None of the above (rate dependence, friction loops, drift, or not enough data).
     Other,
-    /// The specimen broke ([`Analysis::break_point`] says where); the class before the break
-    /// (elastic, elastoplastic) is not judged, since a break leaves no unloading to judge by.
+    /// The specimen broke abruptly ([`Analysis::break_point`] says where; a gradual fall keeps
+    /// its class and the warning); the class before the break is not judged.
     Broken,
 }
 
@@ -900,8 +901,10 @@ pub fn analyze(
         })
     });
 
-    // A break overrides the class (the yield and the threshold above were judged without it).
-    let behaviour = if break_point.is_some() {
+    // An abrupt break overrides the class (the yield and the threshold above were judged
+    // without it). A gradual fall (a wire sliding through three-point supports, necking) keeps
+    // its class and the break warning.
+    let behaviour = if break_point.is_some_and(|b| break_is_abrupt(&rm, b.sample)) {
         Behaviour::Broken
     } else {
         behaviour
@@ -1162,6 +1165,14 @@ fn find_break(cm: &[f64], rm: &[f64]) -> Option<(usize, f64)> {
         .map(|i| 0.5 * (rm[i] + rm[i + 1]) * (cm[i + 1] - cm[i]))
         .sum();
     Some((j, work))
+}
+
+/// Whether the response fell from 90 % of its maximum before sample `j` to the break level at
+/// `j` within max(5, 2 % of the record) samples: a fracture, not a gradual loss of load.
+fn break_is_abrupt(rm: &[f64], j: usize) -> bool {
+    let top = rm[..j].iter().fold(f64::NEG_INFINITY, |m, &v| m.max(v));
+    let last_high = (0..j).rev().find(|&i| rm[i] >= 0.9 * top).unwrap_or(0);
+    j - last_high <= (rm.len() / 50).max(5)
 }
 
 /// Variance inflation of a slope from the lag-1 autocorrelation ρ of the fit's residuals (in

@@ -41,7 +41,15 @@ pub fn noise_level(signal: &[f64]) -> f64 {
         .windows(3)
         .map(|w| w[2] - 2.0 * w[1] + w[0])
         .collect();
-    let med = median(&d2);
+    mad_sigma_of_second_differences(&d2)
+}
+
+/// σ of white noise from its second differences (at any lag): MAD / (0.6745·√6).
+pub(crate) fn mad_sigma_of_second_differences(d2: &[f64]) -> f64 {
+    if d2.is_empty() {
+        return 0.0;
+    }
+    let med = median(d2);
     let abs_dev: Vec<f64> = d2.iter().map(|d| (d - med).abs()).collect();
     median(&abs_dev) / (0.674_489_750_196_081_7 * 6f64.sqrt())
 }
