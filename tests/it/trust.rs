@@ -404,6 +404,7 @@ fn a_monotonic_test_to_break() {
     assert!((b.machine_control - 1.002e-3).abs() < 1e-9, "{b:?}");
     assert!((b.work_to_break / 0.01 - 1.0).abs() < 0.01, "{b:?}");
     assert!((a.max_response.response / 20.0 - 1.0).abs() < 0.01);
+    assert_eq!(a.behaviour, cablab_measure::Behaviour::Broken);
     assert!(
         a.cycles.iter().all(|c| c.loop_area.is_none()),
         "{:?}",
@@ -411,7 +412,9 @@ fn a_monotonic_test_to_break() {
     );
     // A cyclic test that unloads is no break.
     let (c, r) = step_up_test(&[0.002, 0.004], 100e9, 1e12, 0.0, 0.01);
-    assert!(tension(&c, &r, None).break_point.is_none());
+    let a = tension(&c, &r, None);
+    assert!(a.break_point.is_none());
+    assert_ne!(a.behaviour, cablab_measure::Behaviour::Broken);
 }
 
 /// Fit windows in response units and in percent of the maximum response (issue 14 item 2):

@@ -26,7 +26,10 @@
 //!   `linear_elastic` without a bend in the first loading, `piecewise_linear_elastic` with one;
 //! * a bend, loops that do not close and a significant residual deformation → `elastoplastic`;
 //! * anything else (loops without a bend: friction, viscosity, drift; or no unloading to judge
-//!   reversibility by, while the first loading bends) → `other`.
+//!   reversibility by, while the first loading bends) → `other`;
+//! * an abrupt break (the response falls from 90 % of its maximum below [`BREAK_DROP`] of it
+//!   within 5 samples or 2 % of the record, and stays there) → `broken`, whatever came before
+//!   it (the yield point and stiffness are still reported).
 //!
 //! The yield point is the bend of an `elastoplastic` (or unjudgeable) test; a reversible bend is
 //! reported as the piecewise threshold K_t instead. Pure: numbers in, numbers out.
@@ -161,6 +164,9 @@ pub enum Behaviour {
     Elastoplastic,
     /// None of the above (rate dependence, friction loops, drift, or not enough data).
     Other,
+    /// The specimen broke abruptly ([`Analysis::break_point`] says where; a gradual fall keeps
+    /// its class and the warning); the class before the break is not judged.
+    Broken,
 }
 
 impl Behaviour {
@@ -171,6 +177,7 @@ impl Behaviour {
             Behaviour::PiecewiseLinearElastic => "piecewise_linear_elastic",
             Behaviour::Elastoplastic => "elastoplastic",
             Behaviour::Other => "other",
+            Behaviour::Broken => "broken",
         }
     }
 }
@@ -708,6 +715,14 @@ pub fn analyze(
         TestKind::ThreePoint => 1.0,
         _ => 1.0 / geom.free_length_m,
     };
+    // The toe (slack) of the first loading, sectional: where it ends and where the elastic line
+    // meets zero response.
+    let toe_ref = elastic.as_ref().and_then(|e| {
+        e.toe.map(|t| {
+            let end = from_fit_x(t.knee_x);
+            (end, from_fit_x(e.fit.x_intercept().unwrap_or(t.knee_x)))
+        })
+    });
     let cyc = cycles(&CycleInputs {
         control: &cm,
         sectional: &xs,
@@ -717,6 +732,8 @@ pub fn analyze(
         three_point: three,
         sectional_per_control: per_control,
         control_resolution: crate::condition::resolution(&c),
+        zero_sectional: toe_ref.map_or(0.0, |t| t.1),
+        toe_end_control: toe_ref.map_or(f64::NEG_INFINITY, |t| t.0 / per_control),
     });
 
     // Behaviour. Knee positions back from the fitting control to the sectional one.
@@ -883,6 +900,15 @@ pub fn analyze(
             offset_control: sign * from_fit_x(e.fit.x_intercept().unwrap_or(t.knee_x)),
         })
     });
+
+    // An abrupt break overrides the class (the yield and the threshold above were judged
+    // without it). A gradual fall (a wire sliding through three-point supports, necking) keeps
+    // its class and the break warning.
+    let behaviour = if break_point.is_some_and(|b| break_is_abrupt(&rm, b.sample)) {
+        Behaviour::Broken
+    } else {
+        behaviour
+    };
 
     let large_deflection = match (&elastica, &elastic, &stiffness) {
         (Some(tab), Some(e), Some(st)) => {
@@ -1139,6 +1165,14 @@ fn find_break(cm: &[f64], rm: &[f64]) -> Option<(usize, f64)> {
         .map(|i| 0.5 * (rm[i] + rm[i + 1]) * (cm[i + 1] - cm[i]))
         .sum();
     Some((j, work))
+}
+
+/// Whether the response fell from 90 % of its maximum before sample `j` to the break level at
+/// `j` within max(5, 2 % of the record) samples: a fracture, not a gradual loss of load.
+fn break_is_abrupt(rm: &[f64], j: usize) -> bool {
+    let top = rm[..j].iter().fold(f64::NEG_INFINITY, |m, &v| m.max(v));
+    let last_high = (0..j).rev().find(|&i| rm[i] >= 0.9 * top).unwrap_or(0);
+    j - last_high <= (rm.len() / 50).max(5)
 }
 
 /// Variance inflation of a slope from the lag-1 autocorrelation ρ of the fit's residuals (in

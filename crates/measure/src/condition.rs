@@ -41,7 +41,15 @@ pub fn noise_level(signal: &[f64]) -> f64 {
         .windows(3)
         .map(|w| w[2] - 2.0 * w[1] + w[0])
         .collect();
-    let med = median(&d2);
+    mad_sigma_of_second_differences(&d2)
+}
+
+/// σ of white noise from its second differences (at any lag): MAD / (0.6745·√6).
+pub(crate) fn mad_sigma_of_second_differences(d2: &[f64]) -> f64 {
+    if d2.is_empty() {
+        return 0.0;
+    }
+    let med = median(d2);
     let abs_dev: Vec<f64> = d2.iter().map(|d| (d - med).abs()).collect();
     median(&abs_dev) / (0.674_489_750_196_081_7 * 6f64.sqrt())
 }
@@ -709,9 +717,10 @@ pub struct Offsets {
 /// Removes the zero offsets. With an initial rest (a hold that starts at the first sample, see
 /// [`holds`]) the offsets are the control and response means over it. Without one, they are
 /// the values at the first sample of straight lines fitted against sample index over the first
-/// 1% of the record, up to where the control has moved a tenth of its range (at least 5
-/// samples), so that neither a single noisy sample nor the first
-/// rise of the curve sets the zero.
+/// 1% of the record, up to where the control has moved a tenth of its range or has come within
+/// a tenth of its farthest excursion in that stretch (at least 5 samples), so that neither a
+/// single noisy sample, nor the first rise of the curve, nor a dwell after a short first ramp
+/// sets the zero.
 pub fn zero_offsets(control: &mut [f64], response: &mut [f64]) -> Offsets {
     let n = control.len().min(response.len());
     if n == 0 {
@@ -739,7 +748,17 @@ pub fn zero_offsets(control: &mut [f64], response: &mut [f64]) -> Offsets {
         let reach = (0..n)
             .find(|&i| (control[i] - control[0]).abs() > 0.1 * (hi - lo))
             .unwrap_or(n);
-        let m = (n / 100).min(reach).max(5).min(n);
+        let m0 = (n / 100).min(reach).max(5).min(n);
+        // Nor past the corner of a first ramp that ends inside that stretch (a step-up
+        // schedule's first amplitude can be below a tenth of the range; a line through the
+        // ramp and the dwell after it puts the zero at the dwell's level).
+        let far = (0..m0)
+            .map(|i| (control[i] - control[0]).abs())
+            .fold(0.0, f64::max);
+        let corner = (0..m0)
+            .find(|&i| (control[i] - control[0]).abs() >= 0.9 * far)
+            .unwrap_or(m0);
+        let m = m0.min(corner.max(5));
         let idx: Vec<f64> = (0..m).map(|i| i as f64).collect();
         let at0 = |v: &[f64]| crate::stats::line_fit(&idx, &v[..m]).map_or(v[0], |f| f.intercept);
         (at0(control), at0(response))
@@ -1157,5 +1176,26 @@ mod tests {
         );
         let cc = correct_compliance(&[1.0, 2.0], &[10.0, 20.0], 0.01);
         assert_eq!(cc, vec![0.9, 1.8]);
+    }
+
+    /// A step-up schedule without a rest (family seeds 297, 458, 486): a 40-sample first ramp to
+    /// 1, a 5000-sample dwell, then a cycle to 20. The first ramp is below a tenth of the range,
+    /// so only its corner stops the zero line; before, the line ran through the dwell, put the
+    /// zero at the dwell's level and the analysis failed with "the control never moves".
+    #[test]
+    fn offsets_stop_at_the_corner_of_a_short_first_ramp() {
+        let mut ctrl: Vec<f64> = (0..=40).map(|i| i as f64 / 40.0).collect();
+        ctrl.extend(std::iter::repeat_n(1.0, 5000));
+        ctrl.extend((1..=400).map(|i| 1.0 + 19.0 * i as f64 / 400.0));
+        ctrl.extend((1..=400).map(|i| 20.0 - 20.0 * i as f64 / 400.0));
+        let mut c: Vec<f64> = ctrl.iter().map(|x| 0.3 + x).collect();
+        let mut r: Vec<f64> = ctrl.iter().map(|x| -0.5 + 7.0 * x).collect();
+        let o = zero_offsets(&mut c, &mut r);
+        assert_eq!(o.samples_at_rest, 0);
+        assert!(
+            (o.control - 0.3).abs() < 1e-9 && (o.response + 0.5).abs() < 1e-9,
+            "{o:?}"
+        );
+        assert!((c[40] - 1.0).abs() < 1e-9, "ramp top {}", c[40]);
     }
 }

@@ -87,6 +87,14 @@ pub struct CycleInputs<'a> {
     /// Resolution of the machine control (its quantisation step, [`crate::resolution`]; 0 when
     /// unquantised).
     pub control_resolution: f64,
+    /// Sectional control where the first loading's elastic line meets zero response when it
+    /// starts with a toe (slack), else 0: the residual is significant against this reference,
+    /// since slack taken up shifts every later zero crossing by the same amount without any
+    /// permanent deformation of the specimen.
+    pub zero_sectional: f64,
+    /// Machine control where the toe ends (−∞ without a toe): the first cycle's loading is
+    /// compared with its unloading only beyond it (the slack travel has no unloading twin).
+    pub toe_end_control: f64,
 }
 
 fn collect(segs: &[Segment], cycle: usize, branch: Branch) -> Vec<usize> {
@@ -231,7 +239,7 @@ pub fn cycles(inp: &CycleInputs) -> Vec<CycleResult> {
                     if slope > 0.0 {
                         let sx = noise_level(ux);
                         let tol = z * std::f64::consts::SQRT_2 * (sigma / slope + sx) + q_sect;
-                        r.residual_significant = Some(xr.abs() > tol);
+                        r.residual_significant = Some((xr - inp.zero_sectional).abs() > tol);
                     }
                     if inp.three_point {
                         let travel = xr - ux[ux.len() - 1];
@@ -251,7 +259,7 @@ pub fn cycles(inp: &CycleInputs) -> Vec<CycleResult> {
                             let tol = z * std::f64::consts::SQRT_2 * (sigma / slope + sx)
                                 + z * se
                                 + q_sect;
-                            r.residual_significant = Some(xr.abs() > tol);
+                            r.residual_significant = Some((xr - inp.zero_sectional).abs() > tol);
                         }
                     }
                     Err(reason) => {
@@ -261,9 +269,15 @@ pub fn cycles(inp: &CycleInputs) -> Vec<CycleResult> {
             }
             // Coincidence of loading and unloading.
             if load.len() >= 5 && ub - ua >= 5 {
+                let from = if c == 1 {
+                    inp.toe_end_control
+                } else {
+                    f64::NEG_INFINITY
+                };
                 let mut lp: Vec<(f64, f64)> = load
                     .iter()
                     .map(|&i| (inp.control[i], inp.response[i]))
+                    .filter(|p| p.0 >= from)
                     .collect();
                 let mut up: Vec<(f64, f64)> = (ua..ub)
                     .map(|i| (inp.control[i], inp.response[i]))

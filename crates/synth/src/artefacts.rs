@@ -126,10 +126,15 @@ pub fn apply(
         .fold(0.0f64, |m, c| m.max(c.abs()));
     let sd_r = a.noise_rel * fs;
     let sd_c = a.control_noise_rel * c_max;
+    let phi = a.noise_ar1.clamp(0.0, 0.999);
+    let mut nr_prev: Option<f64> = None;
     for i in 0..rec.time_s.len() {
         let t = rec.time_s[i];
-        let nr: f64 = rng.sample(StandardNormal);
+        let e: f64 = rng.sample(StandardNormal);
         let nc: f64 = rng.sample(StandardNormal);
+        // AR(1) with unit marginal variance (white for φ = 0; the first sample is stationary).
+        let nr = nr_prev.map_or(e, |p| phi * p + (1.0 - phi * phi).sqrt() * e);
+        nr_prev = Some(nr);
         let r = rec.response[i] + a.drift_per_s * t + a.response_offset + sd_r * nr;
         let c = rec.control_machine[i] + a.control_offset + sd_c * nc;
         rec.response_measured.push(quantise(r, q_r));
@@ -138,6 +143,20 @@ pub fn apply(
     rec.response_full_scale = fs;
     rec.response_quantum = q_r;
     rec.control_quantum = q_c;
+    if a.decimate > 1 {
+        let k = a.decimate;
+        for v in [
+            &mut rec.time_s,
+            &mut rec.control_specimen,
+            &mut rec.control_machine,
+            &mut rec.response,
+            &mut rec.control_measured,
+            &mut rec.response_measured,
+            &mut rec.cycle,
+        ] {
+            *v = v.iter().step_by(k).copied().collect();
+        }
+    }
     rec
 }
 
@@ -200,6 +219,41 @@ mod tests {
         assert_eq!(rec, again);
         let other = apply(TestKind::Tension, &a, &t, &c, &r, &[], 1e-3, 0.01, 8);
         assert_ne!(rec.response_measured, other.response_measured);
+    }
+
+    /// AR(1) noise keeps the marginal σ and has lag-1 correlation φ; a decimated export keeps
+    /// every k-th row, so the file shows φᵏ.
+    #[test]
+    fn ar1_noise_and_decimated_export() {
+        let n = 40_000;
+        let t: Vec<f64> = (0..n).map(|i| i as f64 * 0.01).collect();
+        let c = vec![0.0; n];
+        let mut r = vec![0.0; n];
+        r[0] = 80.0; // full scale → 100 N
+        let lag1 = |v: &[f64]| {
+            let m = v.iter().sum::<f64>() / v.len() as f64;
+            let num: f64 = v.windows(2).map(|w| (w[0] - m) * (w[1] - m)).sum();
+            let den: f64 = v.iter().map(|x| (x - m) * (x - m)).sum();
+            (num / den, (den / v.len() as f64).sqrt())
+        };
+        let mut a = Artefacts {
+            noise_rel: 1e-3,
+            adc_bits: 0,
+            noise_ar1: 0.8,
+            ..Artefacts::default()
+        };
+        let rec = apply(TestKind::Tension, &a, &t, &c, &r, &[], 1e-3, 0.01, 7);
+        let (rho, sd) = lag1(&rec.response_measured[1..]);
+        assert!((rho - 0.8).abs() < 0.02, "rho {rho}");
+        assert!((sd / 0.1 - 1.0).abs() < 0.06, "sd {sd}");
+        a.decimate = 4;
+        let dec = apply(TestKind::Tension, &a, &t, &c, &r, &[], 1e-3, 0.01, 7);
+        assert_eq!(dec.time_s.len(), n / 4);
+        assert_eq!(dec.response_measured.len(), n / 4);
+        assert_eq!(dec.response_measured[1], rec.response_measured[4]);
+        assert!((dec.time_s[1] - 0.04).abs() < 1e-12);
+        let (rho4, _) = lag1(&dec.response_measured[1..]);
+        assert!((rho4 - 0.8f64.powi(4)).abs() < 0.03, "rho4 {rho4}");
     }
 
     #[test]

@@ -175,6 +175,13 @@ pub struct Artefacts {
     /// Slack taken up before the specimen carries load, control units: the log starts with the
     /// machine travelling this far at the first step's rate while the response reads zero.
     pub slack: f64,
+    /// Lag-1 coefficient φ ∈ [0, 1) of AR(1) response noise, n_i = φ n_{i−1} + √(1 − φ²) e_i,
+    /// at the logger's rate (the marginal σ stays `noise_rel` of full scale); 0 = white.
+    pub noise_ar1: f64,
+    /// Export every k-th logged row only (a decimated export; 0 or 1 = every row). The noise is
+    /// made at the logger's rate, so φ shows in the file as φᵏ, and turning points between kept
+    /// rows are lost.
+    pub decimate: usize,
 }
 
 impl Default for Artefacts {
@@ -193,6 +200,8 @@ impl Default for Artefacts {
             drift_per_s: 0.0,
             machine_compliance: 0.0,
             slack: 0.0,
+            noise_ar1: 0.0,
+            decimate: 0,
         }
     }
 }
