@@ -656,6 +656,7 @@ fn analyze_json_contract_and_truth() {
             "linear_elastic",
             "piecewise_linear_elastic",
             "elastoplastic",
+            "broken",
             "other"
         ]
         .contains(&b),
