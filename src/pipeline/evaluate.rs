@@ -622,6 +622,10 @@ fn model_part(
         };
         let d = cablab_diagnose::diagnose(ctx, tests, &dopts).context("diagnosing the gap")?;
         out.verdict = Some(d.verdict.effect.as_str().to_string());
+        // One gap figure per test (issue 13): once the diagnosis ran, the baseline's gap is the
+        // verdict's held-out gap, the number its charts and words use; the calibration's
+        // all-sample misfit stays inside `calibration`.
+        out.baseline_gap_rel = Some(d.verdict.gap_rel);
         out.diagnosis_words = Some(words(&d));
         *diagnosis = Some(d);
     } else if !diagnosis_enabled {

@@ -610,7 +610,12 @@ fn section(out_dir: &Path, o: &TestOutcome) -> TestSection {
             ));
         }
         if let Some(g) = o.baseline_gap_rel {
-            facts.push(("baseline gap (RMS, rel.)".into(), fmt_percent(g, 2)));
+            let what = if o.verdict.is_some() {
+                "baseline gap (held-out RMS / max |response|)"
+            } else {
+                "baseline misfit (RMS / max |response|)"
+            };
+            facts.push((what.into(), fmt_percent(g, 2)));
         }
         if let Some(v) = &o.verdict {
             facts.push(("diagnosis verdict".into(), v.clone()));

@@ -1062,6 +1062,11 @@ fn bench_scale_with_the_diagnosis_diagnoses_every_test() {
                 .unwrap();
         assert_eq!(v["diagnosis"]["kind"], "tension", "{v}");
         assert!(v["diagnosis"]["verdict"]["effect"].is_string(), "{v}");
+        // One gap figure per test: the result's baseline gap is the verdict's held-out gap.
+        assert_eq!(
+            v["baseline_gap_rel"], v["diagnosis"]["verdict"]["gap_rel"],
+            "{v}"
+        );
         n += 1;
     }
     assert_eq!(n, 3);
