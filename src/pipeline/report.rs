@@ -283,7 +283,9 @@ pub fn series_tables(outcomes: &[TestOutcome], series: &[Option<String>]) -> Vec
                     }),
                     // The magnitude: a two-sided test's largest response may be negative in one specimen
                     // and positive in the next; a signed statistic over them means nothing.
-                    (format!("|{rs}|_max [{ru}]"), |o| o.max_response.map(|p| p[1].abs())),
+                    (format!("|{rs}|_max [{ru}]"), |o| {
+                        o.max_response.map(|p| p[1].abs())
+                    }),
                     ("loop area of last cycle [mJ]".into(), |o| {
                         o.last_loop_area_j.map(|a| a * 1e3)
                     }),

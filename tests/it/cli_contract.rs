@@ -556,7 +556,10 @@ fn convert_writes_si_csv_and_parquet_and_nothing_on_error() {
         "-o",
         same.to_str().unwrap(),
     ]);
-    assert!(msg.contains("refusing to write over the input file"), "{msg}");
+    assert!(
+        msg.contains("refusing to write over the input file"),
+        "{msg}"
+    );
     assert!(std::fs::read_to_string(&raw)
         .unwrap()
         .starts_with("Time (s),Force"));

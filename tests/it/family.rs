@@ -161,7 +161,9 @@ fn family_figures() {
             / yield_err.len().max(1) as f64
     );
     println!("  class confusion (truth -> measured): {confusion:?}");
-    println!("  per kind (cases, |error| <= 1 %, CI holds the truth, CI meets its band): {by_kind:?}");
+    println!(
+        "  per kind (cases, |error| <= 1 %, CI holds the truth, CI meets its band): {by_kind:?}"
+    );
     println!("  by noise (cases, CI holds the truth, |error| <= 1 %): {by_noise:?}");
     for e in errors.iter().take(10) {
         println!("  {e}");

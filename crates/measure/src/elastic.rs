@@ -173,9 +173,7 @@ pub fn residual_noise(x: &[f64], y: &[f64]) -> f64 {
         sigma = sigma.max(crate::condition::mad_sigma_of_second_differences(&sub));
         k *= 2;
     }
-    sigma
-        .max(1e-5 * (hi - lo).abs())
-        .max(f64::MIN_POSITIVE)
+    sigma.max(1e-5 * (hi - lo).abs()).max(f64::MIN_POSITIVE)
 }
 
 /// A continuous two-slope fit y = a + b x + c (x − x_k)₊ with its knee.
@@ -541,7 +539,11 @@ mod tests {
         let (mut ar, mut white, mut p) = (Vec::new(), Vec::new(), 0.0f64);
         for i in 0..n {
             let e = d.sample(&mut rng);
-            p = if i == 0 { e } else { 0.9 * p + (1.0f64 - 0.81).sqrt() * e };
+            p = if i == 0 {
+                e
+            } else {
+                0.9 * p + (1.0f64 - 0.81).sqrt() * e
+            };
             ar.push(0.5 * x[i] + p);
             white.push(0.5 * x[i] + d.sample(&mut rng));
         }

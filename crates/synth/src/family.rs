@@ -257,7 +257,11 @@ pub fn family_case(seed: u64) -> FamilyCase {
         spec,
         truth: FamilyTruth {
             stiffness,
-            stiffness_tol: if kind == TestKind::ThreePoint { 1e-3 } else { 0.0 },
+            stiffness_tol: if kind == TestKind::ThreePoint {
+                1e-3
+            } else {
+                0.0
+            },
             yield_response: elastoplastic.then_some(y),
             class: if elastoplastic {
                 "elastoplastic"
