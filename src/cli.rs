@@ -365,6 +365,10 @@ pub struct DiagnoseArgs {
     /// until the held-out gap reaches the noise floor, then drop any the final model does not need.
     #[arg(long)]
     pub ladder: bool,
+    /// Diagnose as --kind even where a file's own evidence (kind words, channel units) says
+    /// otherwise; the contradiction is then printed as a warning.
+    #[arg(long)]
+    pub force_kind: bool,
     /// Print JSON (the keys of the scripted contract).
     #[arg(long)]
     pub json: bool,

@@ -16,6 +16,10 @@ pub fn diag_test(
 ) -> Result<DiagTest, CliError> {
     let opts = crate::bridge::read_options(&a.reader, Some(kind)).map_err(CliError::input)?;
     let rec = cablab_ingest::read_path(path, &opts).map_err(CliError::input)?;
+    // The declared kind against the file's own evidence, as `analyze` and `run` check it.
+    if let Some(w) = crate::bridge::check_kind(&rec, kind, a.force_kind).map_err(CliError::input)? {
+        eprintln!("cablab: warning: {w}");
+    }
     let geom = crate::bridge::geometry(
         &rec,
         kind,

@@ -62,6 +62,17 @@ fn a_declared_kind_that_the_file_contradicts_is_an_error_naming_the_evidence() {
     assert!(err.contains("contradicts"), "{err}");
     assert!(err.contains("'Force' (N) is a force"), "{err}");
     assert!(err.contains("--force-kind"), "{err}");
+    // `diagnose` checks the same evidence before any fitting.
+    let out = cablab()
+        .args(["diagnose", DEMO_TENSION, "--kind", "torsion"])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("contradicts") && err.contains("--force-kind"),
+        "{err}"
+    );
     // Forced: analysed, and the contradiction stays as a warning in the JSON.
     let out = cablab()
         .args([
