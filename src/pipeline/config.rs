@@ -76,6 +76,10 @@ pub struct SpecimenType {
     /// Free text.
     #[serde(default)]
     pub note: String,
+    /// Characterisation settings for this specimen type, per kind (`[specimen.kinds.<kind>]`):
+    /// each key given here replaces the campaign-wide `[kinds.<kind>]` key for this type's tests.
+    #[serde(default)]
+    pub kinds: BTreeMap<String, KindSettings>,
 }
 
 /// `[[input]]`: files matched by a glob, all of one specimen type and kind.
@@ -124,6 +128,27 @@ pub struct FileOverride {
     /// Leave this file out of the campaign (with the reason in the summary).
     #[serde(default)]
     pub skip: Option<String>,
+    /// Elastic fit window for this file (replaces the specimen type's and the kind's).
+    #[serde(default)]
+    pub fit_window: Option<FitWindowKey>,
+    /// Yield detection method for this file.
+    #[serde(default)]
+    pub yield_method: Option<String>,
+    /// Machine compliance for this file (m/N or rad/(N m)).
+    #[serde(default)]
+    pub compliance: Option<f64>,
+}
+
+impl FileOverride {
+    /// The characterisation settings this override carries, as a [`KindSettings`] layer.
+    fn settings(&self) -> KindSettings {
+        KindSettings {
+            fit_window: self.fit_window.clone(),
+            compliance: self.compliance,
+            yield_method: self.yield_method.clone(),
+            force_kind: None,
+        }
+    }
 }
 
 /// `[kinds.<kind>]`: characterisation settings per kind.
@@ -146,6 +171,38 @@ pub struct KindSettings {
     /// file name, channel units) contradicts it; the contradiction stays as a warning.
     #[serde(default)]
     pub force_kind: Option<bool>,
+}
+
+impl KindSettings {
+    /// These settings with every key `over` gives replacing this one's (campaign kind → specimen
+    /// type → file: the most specific wins, key by key).
+    pub fn overlaid(&self, over: &KindSettings) -> KindSettings {
+        KindSettings {
+            fit_window: over.fit_window.clone().or_else(|| self.fit_window.clone()),
+            compliance: over.compliance.or(self.compliance),
+            yield_method: over
+                .yield_method
+                .clone()
+                .or_else(|| self.yield_method.clone()),
+            force_kind: over.force_kind.or(self.force_kind),
+        }
+    }
+
+    /// Check every key's value; `at(key)` names the file, line and table for the message.
+    fn check(&self, at: &dyn Fn(&str) -> String) -> Result<()> {
+        if let Some(w) = &self.fit_window {
+            w.resolve()
+                .map_err(|e| anyhow!("{}: {e}", at("fit_window")))?;
+        }
+        if let Some(c) = self.compliance {
+            in_range(c, COMPLIANCE, "m/N or rad/(N m)", &at("compliance"))?;
+        }
+        if let Some(m) = &self.yield_method {
+            m.parse::<cablab_measure::YieldMethod>()
+                .map_err(|e| anyhow!("{}: {e}", at("yield_method")))?;
+        }
+        Ok(())
+    }
 }
 
 /// The `fit_window` key: two numbers (sectional control, the original form) or a string with
@@ -518,6 +575,7 @@ pub fn known_keys() -> Vec<String> {
         ("input.", fields::<InputGroup>()),
         ("input.overrides.<file>.", fields::<FileOverride>()),
         ("kinds.<kind>.", fields::<KindSettings>()),
+        ("specimen.kinds.<kind>.", fields::<KindSettings>()),
         ("model.", fields::<ModelSettings>()),
         ("diagnosis.", fields::<DiagnosisSettings>()),
         ("reports.", fields::<ReportSettings>()),
@@ -712,21 +770,21 @@ fn validate(file: PipelineFile, path: &Path, bytes: Vec<u8>, root: PathBuf) -> R
     for (k, ks) in &file.kinds {
         k.parse::<TestKind>()
             .map_err(|e| anyhow!("{ctx}: [kinds.{k}]: {e}"))?;
-        if let Some(w) = &ks.fit_window {
-            w.resolve()
-                .map_err(|e| anyhow!("{ctx}: [kinds.{k}] fit_window: {e}"))?;
-        }
-        if let Some(c) = ks.compliance {
-            in_range(
-                c,
-                COMPLIANCE,
-                "m/N or rad/(N m)",
-                &lines.at(&ctx, &format!("kinds.{k}"), 0, "compliance"),
-            )?;
-        }
-        if let Some(m) = &ks.yield_method {
-            m.parse::<cablab_measure::YieldMethod>()
-                .map_err(|e| anyhow!("{ctx}: [kinds.{k}] yield_method: {e}"))?;
+        let table = format!("kinds.{k}");
+        ks.check(&|key| lines.at(&ctx, &table, 0, key))?;
+    }
+    for (si, s) in file.specimens.iter().enumerate() {
+        for (k, ks) in &s.kinds {
+            let table = format!("specimen.kinds.{k}");
+            k.parse::<TestKind>()
+                .map_err(|e| anyhow!("{ctx}: [{table}] of specimen '{}': {e}", s.label))?;
+            // The n-th `[specimen.kinds.<k>]` table in the file belongs to the n-th specimen
+            // that has one.
+            let nth = file.specimens[..si]
+                .iter()
+                .filter(|p| p.kinds.contains_key(k))
+                .count();
+            ks.check(&|key| lines.at(&ctx, &table, nth, key))?;
         }
     }
     for t in &file.reports.tables {
@@ -882,6 +940,7 @@ fn validate(file: PipelineFile, path: &Path, bytes: Vec<u8>, root: PathBuf) -> R
                 f.parse::<cablab_ingest::Format>()
                     .map_err(|e| anyhow!("{}: {e}", lines.at(&ctx, &octx, 0, "format")))?;
             }
+            ov.settings().check(&|key| lines.at(&ctx, &octx, 0, key))?;
             if let Some(b) = ov.block {
                 if !(1..=10_000).contains(&b) {
                     bail!(
@@ -902,7 +961,7 @@ fn validate(file: PipelineFile, path: &Path, bytes: Vec<u8>, root: PathBuf) -> R
                 time: ov.time.clone(),
                 control: ov.control.clone(),
                 response: ov.response.clone(),
-                settings: file.kinds.get(kind.as_str()).cloned().unwrap_or_default(),
+                settings: settings_for(&file, &g.specimen, kind).overlaid(&ov.settings()),
             });
         }
     }
@@ -920,6 +979,22 @@ fn validate(file: PipelineFile, path: &Path, bytes: Vec<u8>, root: PathBuf) -> R
         candidates,
         diagnose_kinds,
     })
+}
+
+/// The characterisation settings of `specimen`'s tests of `kind`: the campaign's `[kinds.<kind>]`
+/// with the specimen type's `[specimen.kinds.<kind>]` keys laid over it (the per-file override is
+/// laid over this by the caller).
+fn settings_for(file: &PipelineFile, specimen: &str, kind: TestKind) -> KindSettings {
+    let campaign = file.kinds.get(kind.as_str()).cloned().unwrap_or_default();
+    match file
+        .specimens
+        .iter()
+        .find(|s| s.label == specimen)
+        .and_then(|s| s.kinds.get(kind.as_str()))
+    {
+        Some(own) => campaign.overlaid(own),
+        None => campaign,
+    }
 }
 
 /// Names of the files a campaign writes at the top of its report folder.
@@ -1015,6 +1090,88 @@ length_mm = 32
 [input.overrides."b.csv"]
 length_mm = 30
 "#;
+
+    /// Characterisation settings resolve key by key: the file's override, then the specimen
+    /// type's `[specimen.kinds.<kind>]`, then the campaign's `[kinds.<kind>]`.
+    #[test]
+    fn settings_resolve_per_file_then_specimen_type_then_kind() {
+        let d = tempfile::tempdir().unwrap();
+        for f in ["raw_data/a.csv", "raw_data/b.csv", "wire/c.csv"] {
+            write(d.path(), f, "x");
+        }
+        let text = r#"
+[campaign]
+name = "t"
+[[specimen]]
+label = "cable"
+diameter_mm = 2.8
+[[specimen]]
+label = "wire"
+diameter_mm = 0.5
+[specimen.kinds.tension]
+fit_window = "10%,40%"
+compliance = 1e-7
+[[input]]
+glob = "raw_data/*.csv"
+specimen = "cable"
+kind = "tension"
+length_mm = 32
+[input.overrides."b.csv"]
+fit_window = "100N,500N"
+yield_method = "offset:0.002"
+[[input]]
+glob = "wire/*.csv"
+specimen = "wire"
+kind = "tension"
+length_mm = 32
+[kinds.tension]
+fit_window = [0.0, 0.0005]
+compliance = 2e-7
+"#;
+        let c = load(&write(d.path(), "pipelines/t.toml", text)).unwrap();
+        let by_id = |id: &str| &c.tests.iter().find(|t| t.id == id).unwrap().settings;
+        let a = by_id("raw_data/a.csv");
+        assert_eq!(a.fit_window, Some(FitWindowKey::Control([0.0, 0.0005])));
+        assert_eq!(
+            (a.compliance, a.yield_method.as_deref()),
+            (Some(2e-7), None)
+        );
+        let b = by_id("raw_data/b.csv");
+        assert_eq!(b.fit_window, Some(FitWindowKey::Text("100N,500N".into())));
+        assert_eq!(b.yield_method.as_deref(), Some("offset:0.002"));
+        assert_eq!(
+            b.compliance,
+            Some(2e-7),
+            "keys the file does not give stay the kind's"
+        );
+        let w = by_id("wire/c.csv");
+        assert_eq!(w.fit_window, Some(FitWindowKey::Text("10%,40%".into())));
+        assert_eq!(w.compliance, Some(1e-7));
+
+        // Bad values in the new tables name the file, the line and the key.
+        let bad = text.replace("compliance = 1e-7", "compliance = 5");
+        let e = load(&write(d.path(), "pipelines/t.toml", &bad)).unwrap_err();
+        assert!(
+            e.to_string().contains(
+                "t.toml:12: [specimen.kinds.tension] compliance = 5: outside the plausible range"
+            ),
+            "{e}"
+        );
+        let bad = text.replace("yield_method = \"offset:0.002\"", "yield_method = \"bend\"");
+        let e = load(&write(d.path(), "pipelines/t.toml", &bad)).unwrap_err();
+        assert!(
+            e.to_string()
+                .contains("t.toml:20: [input.overrides.b.csv] yield_method"),
+            "{e}"
+        );
+        let bad = text.replace("[specimen.kinds.tension]", "[specimen.kinds.twisting]");
+        let e = load(&write(d.path(), "pipelines/t.toml", &bad)).unwrap_err();
+        assert!(
+            e.to_string()
+                .contains("[specimen.kinds.twisting] of specimen 'wire'"),
+            "{e}"
+        );
+    }
 
     #[test]
     fn resolves_globs_overrides_and_sorts() {
