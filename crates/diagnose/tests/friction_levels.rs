@@ -1,9 +1,10 @@
 //! Friction hysteresis with several slip levels (issue 13, item 5).
 
-use cablab_core::{Effect, Specimen, TestKind};
+use cablab_core::{Effect, TestKind};
 use cablab_diagnose::diagnose::{diagnose, Context, DiagnoseOptions};
 use cablab_diagnose::model::DiagTest;
-use cablab_synth::{Artefacts, Extension, Layout, Protocol, Step, SynthSpec};
+use cablab_synth::SynthSpec;
+use serde_json::json;
 use std::collections::BTreeMap;
 
 struct Nominal {
@@ -48,7 +49,9 @@ fn nominal(kind: TestKind) -> Nominal {
     }
 }
 
-/// The blind check's protocol and layout for `kind`, with friction parameters given.
+/// The blind check's specimen and protocol for `kind` (four cycles to 0.6 … 3.6 × the yield
+/// control, 2 s dwells, 60 Hz, testXpert layout) with a friction truth: total stiffness `k_f` ×
+/// and strength `m_f` × the baseline's, and `fric` (the element count, the density exponent).
 fn case(
     kind: TestKind,
     fric: &[(&str, f64)],
@@ -56,54 +59,31 @@ fn case(
     m_f: f64,
     noise: f64,
     seed: u64,
-    layout: Layout,
-    hz: f64,
 ) -> DiagTest {
     let n = nominal(kind);
-    let mut params = BTreeMap::new();
-    params.insert(n.stiff.to_string(), n.s);
-    params.insert(n.strength.to_string(), n.y);
-    params.insert(n.hard.to_string(), 0.03 * n.s);
     let mut ext: BTreeMap<String, f64> = fric.iter().map(|(k, v)| (k.to_string(), *v)).collect();
     ext.insert(format!("{}_f", n.stiff), k_f * n.s);
     ext.insert(n.f_name.to_string(), m_f * n.y);
     let u_y = n.y / n.s * n.l0;
-    let spec = SynthSpec {
-        kind,
-        specimen: Specimen {
-            label: Some("f".into()),
-            diameter_m: Some(2.8e-3),
-            free_length_m: Some(n.l0),
-        },
-        law: "elastoplastic".into(),
-        params,
-        extension: Some(Extension {
-            name: "friction_hysteresis".into(),
-            params: ext,
-        }),
-        rig: Default::default(),
-        protocol: Protocol {
-            steps: [0.6, 1.6, 2.6, 3.6]
-                .iter()
-                .map(|&a| Step::Cycles {
-                    lower: 0.0,
-                    upper: a * u_y,
-                    rate: u_y / 2.0,
-                    count: 1,
-                    dwell_s: 2.0,
-                })
-                .collect(),
-        },
-        artefacts: Artefacts {
-            noise_rel: noise,
-            ..Artefacts::default()
-        },
-        layout,
-        seed,
-        sample_rate_hz: hz,
-        file_stem: None,
-        specimen_number: Some(1),
-    };
+    let steps: Vec<_> = [0.6, 1.6, 2.6, 3.6]
+        .iter()
+        .map(|&a| json!({"step": "cycles", "lower": 0.0, "upper": a * u_y, "rate": u_y / 2.0, "count": 1, "dwell_s": 2.0}))
+        .collect();
+    // As a spec file would say it (`cablab synth --spec`).
+    let spec: SynthSpec = serde_json::from_value(json!({
+        "kind": kind.to_string(),
+        "specimen": {"label": "f", "diameter_m": 2.8e-3, "free_length_m": n.l0},
+        "law": "elastoplastic",
+        "params": {n.stiff: n.s, n.strength: n.y, n.hard: 0.03 * n.s},
+        "extension": {"name": "friction_hysteresis", "params": ext},
+        "protocol": {"steps": steps},
+        "artefacts": {"noise_rel": noise},
+        "layout": "test_xpert",
+        "seed": seed,
+        "sample_rate_hz": 60.0,
+        "specimen_number": 1
+    }))
+    .expect("spec");
     let out = cablab_synth::generate(&spec).expect("virtual lab");
     DiagTest {
         kind,
@@ -127,16 +107,7 @@ fn case(
 #[test]
 fn a_four_level_iwan_truth_is_named_and_closed_to_the_floor() {
     for (kind, chi) in [(TestKind::PureBending, 2.0), (TestKind::Torsion, 0.0)] {
-        let t = case(
-            kind,
-            &[("n_f", 4.0), ("chi_f", chi)],
-            0.33,
-            0.2,
-            0.003,
-            1,
-            Layout::TestXpert,
-            60.0,
-        );
+        let t = case(kind, &[("n_f", 4.0), ("chi_f", chi)], 0.33, 0.2, 0.003, 1);
         let d = diagnose(Context::project(), &[t], &DiagnoseOptions::default()).unwrap();
         let f = d
             .effects
@@ -210,7 +181,7 @@ fn survey() {
                 let mut row = format!("{kind:>12} chi {chi:>5} levels {nl}:");
                 for (noise, seed) in [(0.001, 2u64), (0.003, 1), (0.005, 3)] {
                     let fric = [("n_f", nl), ("chi_f", chi)];
-                    let t = case(kind, &fric, 0.33, 0.2, noise, seed, Layout::TestXpert, 60.0);
+                    let t = case(kind, &fric, 0.33, 0.2, noise, seed);
                     let opts = DiagnoseOptions {
                         starts,
                         ..DiagnoseOptions::default()
