@@ -150,6 +150,9 @@ fn scaled(s: &cablab_laws::ParamSpec, sc: &DataScales) -> Result<ParamSpec, Stri
         ParamSpec::log(n, k * 1e-4, k * 10.0, 0.3 * k)
     } else if matches!(n, "F_f" | "M_f") {
         ParamSpec::linear(n, 0.0, m, 0.1 * m)
+    } else if n == "chi_f" {
+        // From early slip (χ → −1) to slip near saturation; 0, the uniform density, starts.
+        ParamSpec::linear(n, -0.8, 10.0, 0.0)
     } else if matches!(n, "K_t" | "Gamma_t") {
         ParamSpec::log(n, e * 1e-3, e * 2.0, 0.3 * e)
     } else {

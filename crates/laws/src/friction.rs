@@ -33,15 +33,48 @@ impl IwanElements {
     /// `n` equal springs of total stiffness `total_stiffness` whose slip strains are spread
     /// uniformly, ε_i = ε_f i/n, so that the friction stress saturates at `max_friction` = Σ s_i
     /// once every element slips (ε_f = 2 n σ_f / ((n + 1) K)). The backbone is then a piecewise
-    /// linear approximation of a parabola from slope K to slope 0 at ε_f.
+    /// linear approximation of a parabola from slope K to slope 0 at ε_f. The same as
+    /// [`IwanElements::power_law`] with χ = 0.
     pub fn uniform(channel: Channel, total_stiffness: f64, max_friction: f64, n: usize) -> Self {
+        Self::power_law(channel, total_stiffness, max_friction, n, 0.0)
+    }
+
+    /// `n` equal springs of total stiffness K = `total_stiffness` whose slip strains sample a
+    /// power-law Iwan density ρ(ε*) ∝ ε*^χ on [0, ε_f] (χ = `chi` > −1) at its quantiles i/n:
+    ///
+    /// ε_i = ε_f (i/n)^{1/(χ+1)},  k_i = K/n,  s_i = k_i ε_i,
+    ///
+    /// with ε_f such that Σ s_i = σ_f (`max_friction`): ε_f = n σ_f / (K Σ_i (i/n)^{1/(χ+1)}).
+    /// χ = 0 is the uniform density (parabolic backbone); χ < 0 puts more slip at small strains
+    /// (a stiff, early-slipping layer: Segalman's −1 < χ < 0), χ > 0 concentrates the slip
+    /// near ε_f (χ → ∞: one Jenkins element). As n → ∞ the backbone tends to
+    ///
+    /// σ_b(ε) = K [ε − ε^{χ+2} / ((χ+2) ε_f^{χ+1})] for ε ≤ ε_f, σ_f = K ε_f (χ+1)/(χ+2) beyond,
+    ///
+    /// (tangent K (1 − (ε/ε_f)^{χ+1})). Does not check its arguments: χ ≤ −1 or K ≤ 0 give
+    /// non-finite thresholds.
+    pub fn power_law(
+        channel: Channel,
+        total_stiffness: f64,
+        max_friction: f64,
+        n: usize,
+        chi: f64,
+    ) -> Self {
         let n = n.max(1);
         let k = total_stiffness / n as f64;
-        let eps_f = 2.0 * n as f64 * max_friction / ((n as f64 + 1.0) * total_stiffness);
-        let elements = (1..=n)
-            .map(|i| JenkinsElement {
+        let q = 1.0 / (chi + 1.0);
+        let u: Vec<f64> = (1..=n).map(|i| (i as f64 / n as f64).powf(q)).collect();
+        let eps_f = if chi == 0.0 {
+            // Σ i/n = (n + 1)/2 in closed form: the uniform elements as they always were.
+            2.0 * n as f64 * max_friction / ((n as f64 + 1.0) * total_stiffness)
+        } else {
+            n as f64 * max_friction / (total_stiffness * u.iter().sum::<f64>())
+        };
+        let elements = u
+            .iter()
+            .map(|&ui| JenkinsElement {
                 stiffness: k,
-                threshold: k * eps_f * i as f64 / n as f64,
+                threshold: k * eps_f * ui,
             })
             .collect();
         IwanElements { channel, elements }
@@ -178,14 +211,21 @@ mod tests {
     /// (−ε_m, −σ_m) follows −σ_m + 2 σ_b((ε + ε_m)/2).
     #[test]
     fn masing_loops() {
-        for (ch, comp) in [
+        let chans = [
             (Channel::Axial, 2),
             (Channel::Bending, 3),
             (Channel::Twist, 5),
-        ] {
-            let law = IwanElements::uniform(ch, 4.0, 1.0, 7);
+        ];
+        for ((ch, comp), chi) in chans
+            .into_iter()
+            .flat_map(|c| [0.0, -0.5, 2.0].map(|x| (c, x)))
+        {
+            let law = IwanElements::power_law(ch, 4.0, 1.0, 7, chi);
             assert!((law.elements.iter().map(|e| e.threshold).sum::<f64>() - 1.0).abs() < 1e-12);
-            let em = 0.4; // ε_f = 2·7·1/(8·4) = 0.4375: not all elements slip
+            // Below the last element's slip strain (uniform: ε_f = 2·7·1/(8·4) = 0.4375, em
+            // 0.39): not all elements slip.
+            let last = law.elements.last().unwrap();
+            let em = 0.9 * last.threshold / last.stiffness;
             let mut path = vec![0.0];
             path.extend(lin(0.0, em, 40));
             path.extend(lin(em, -em, 80));
@@ -203,11 +243,57 @@ mod tests {
                 };
                 assert!(
                     (si - exact).abs() < 1e-12,
-                    "{ch:?} step {i}: {si} vs {exact}"
+                    "{ch:?} χ {chi} step {i}: {si} vs {exact}"
                 );
             }
             // The loop closes and has positive area (energy dissipated already without yield).
             assert!((s[200] - sm).abs() < 1e-12);
+        }
+    }
+
+    /// The continuum backbone of the power-law density ρ(ε*) ∝ ε*^χ on [0, ε_f] with total
+    /// stiffness K and saturation σ_f: ε_f = σ_f (χ+2)/(K (χ+1)) and
+    /// σ_b(ε) = K [ε − ε^{χ+2}/((χ+2) ε_f^{χ+1})] below ε_f (χ = 0: the parabola
+    /// K (ε − ε²/(2 ε_f))), σ_f beyond.
+    fn continuum_backbone(k: f64, sf: f64, chi: f64, eps: f64) -> f64 {
+        let ef = sf * (chi + 2.0) / (k * (chi + 1.0));
+        if eps >= ef {
+            return sf;
+        }
+        k * (eps - eps.powf(chi + 2.0) / ((chi + 2.0) * ef.powf(chi + 1.0)))
+    }
+
+    /// The discrete elements sample the density: their backbone starts with slope K, saturates
+    /// exactly at σ_f, and tends to the analytic continuum backbone as O(1/n).
+    #[test]
+    fn power_law_backbone_tends_to_the_analytic_density() {
+        let (k, sf) = (4.0, 1.0);
+        for chi in [-0.5, 0.0, 2.0] {
+            let err = |n: usize| {
+                let law = IwanElements::power_law(Channel::Axial, k, sf, n, chi);
+                let first = law.elements[0].threshold / law.elements[0].stiffness;
+                assert!((law.backbone(0.5 * first) - k * 0.5 * first).abs() < 1e-12);
+                assert!((law.backbone(10.0) - sf).abs() < 1e-12, "χ {chi}");
+                (0..=600)
+                    .map(|i| {
+                        let e = 1.2 * sf / k * (chi + 2.0) / (chi + 1.0) * i as f64 / 600.0;
+                        (law.backbone(e) - continuum_backbone(k, sf, chi, e)).abs()
+                    })
+                    .fold(0.0, f64::max)
+            };
+            let (e100, e400) = (err(100), err(400));
+            assert!(e400 < 0.01 * sf, "χ {chi}: {e400}");
+            // Four times the elements, a quarter of the error (within 30 %).
+            let ratio = e100 / e400;
+            assert!((3.0..5.2).contains(&ratio), "χ {chi}: {e100} / {e400}");
+        }
+        // Uniform: the closed form of the old elements, continuous in χ at 0.
+        let u = IwanElements::uniform(Channel::Axial, k, sf, 7);
+        let near = IwanElements::power_law(Channel::Axial, k, sf, 7, 1e-9);
+        for (i, (a, b)) in u.elements.iter().zip(&near.elements).enumerate() {
+            let exact = (k / 7.0) * (2.0 * 7.0 * sf / (8.0 * k)) * (i + 1) as f64 / 7.0;
+            assert!((a.threshold - exact).abs() < 1e-15);
+            assert!((a.threshold - b.threshold).abs() < 1e-8);
         }
     }
 

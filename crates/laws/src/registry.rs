@@ -17,7 +17,8 @@
 //! - `viscoelasticity`: elastoplastic + Maxwell branch `S_v1` (e.g. `EI_v1`), `tau_v1` (s); optional
 //!   branches 2 and 3 (`S_v2`, `tau_v2`, `S_v3`, `tau_v3`; stiffness default 0 = absent).
 //! - `friction_hysteresis`: elastoplastic + Iwan elements of total stiffness `S_f` (e.g. `EI_f`)
-//!   saturating at the friction strength `M_f` (`F_f` in tension), `n_f` elements (default 10).
+//!   saturating at the friction strength `M_f` (`F_f` in tension), `n_f` elements (default 10)
+//!   sampling a power-law density of slip strains with exponent `chi_f` (default 0: uniform).
 //! - `BASE+EXT+…`: extensions stacked, each at most once: `viscoelasticity` and
 //!   `friction_hysteresis` (parallel branches) on `linear`, `piecewise_linear` or `elastoplastic`;
 //!   `kinematic_hardening` and `stiffness_degradation` (hardening rules of the one return
@@ -430,6 +431,15 @@ fn specs_for(kind: TestKind, base: Base, exts: &[Ext]) -> Result<Vec<ParamSpec>,
                     "number of Jenkins elements (integer)".into(),
                     false,
                 ));
+                v.push(spec(
+                    "chi_f".into(),
+                    "1",
+                    Some(0.0),
+                    -0.95,
+                    50.0,
+                    "exponent of the Iwan density of slip strains, ρ ∝ ε*^χ (0: uniform, parabolic backbone; < 0: more early slip; > 0: slip concentrated near saturation)".into(),
+                    true,
+                ));
             }
         }
     }
@@ -675,11 +685,12 @@ pub fn build(
                     branches,
                 })
             }
-            Ext::Friction => Box::new(IwanElements::uniform(
+            Ext::Friction => Box::new(IwanElements::power_law(
                 ch,
                 get(&format!("{}_f", n.stiff)),
                 get(&format!("{}_f", n.strength)),
                 get("n_f") as usize,
+                get("chi_f"),
             )),
             Ext::Kinematic | Ext::Degradation => continue,
         };
@@ -741,11 +752,11 @@ mod tests {
         );
         assert_eq!(
             names(TestKind::Tension, "friction_hysteresis"),
-            ["EA", "F_y", "H", "EA_f", "F_f"]
+            ["EA", "F_y", "H", "EA_f", "F_f", "chi_f"]
         );
         assert_eq!(
             names(TestKind::Torsion, "linear+friction_hysteresis"),
-            ["GJ", "GJ_f", "M_f"]
+            ["GJ", "GJ_f", "M_f", "chi_f"]
         );
         for k in TestKind::ALL {
             for l in LAW_NAMES {
@@ -797,7 +808,7 @@ mod tests {
         );
         assert_eq!(
             names("linear+friction_hysteresis+viscoelasticity"),
-            ["EI", "EI_v1", "tau_v1", "EI_f", "M_f"]
+            ["EI", "EI_v1", "tau_v1", "EI_f", "M_f", "chi_f"]
         );
         let (canonical, ..) =
             parse("elastoplastic+friction_hysteresis+stiffness_degradation").unwrap();
