@@ -12,6 +12,9 @@ pub(crate) struct ChannelFacts {
     pub name: String,
     pub dimension: Option<Dimension>,
     pub unit_written: bool,
+    /// Whether at least half of the column's cells are numbers: a geometry value written on
+    /// the first row only (and empty cells after) is not a channel.
+    pub filled: bool,
 }
 
 fn has(name: &str, words: &[&str]) -> bool {
@@ -181,7 +184,7 @@ fn control_score(c: &ChannelFacts, dim: Dimension) -> Option<i32> {
     };
     let dim_ok = c.dimension == Some(dim);
     let word = has(&n, words);
-    if !(dim_ok || (word && c.dimension.is_none())) {
+    if !(dim_ok || (word && c.dimension.is_none())) || !c.filled {
         return None;
     }
     let mut s = if dim_ok { 10 } else { 4 };
@@ -200,18 +203,102 @@ fn control_score(c: &ChannelFacts, dim: Dimension) -> Option<i32> {
     if n.contains("machine") || n.contains("traverse") || n.contains("maschine") {
         s -= 1;
     }
-    if n.contains("standardweg") {
+    // Zwick's "standard travel" (testXpert: the extensometer's travel when one is fitted); not
+    // catman's "Standardwegaufnehmer", which is the crosshead transducer.
+    if has(&n, STANDARD_TRAVEL) && !n.contains("aufnehmer") {
         s += 2;
+    }
+    if has(&n, CROSSHEAD_WORDS) {
+        s -= 1;
+    }
+    if dim == Dimension::Length && is_specimen_mounted(&n) {
+        s += 8;
     }
     Some(s)
 }
 
+/// Names of channels that sit on the specimen: extensometers (clip-on, video, laser, DIC), the
+/// German "Feindehnung"/"Dehnung", MayTec high-temperature extensometers.
+pub const SPECIMEN_MOUNTED: &[&str] = &[
+    "extenso",
+    "feindehnung",
+    "dehnung",
+    "maytec",
+    "strain",
+    "clip",
+    "video",
+    "laser",
+    "gauge",
+    "gage",
+];
+
+/// Names of machine travel channels (crosshead, actuator, piston): the load train's compliance
+/// is in them.
+pub const CROSSHEAD_WORDS: &[&str] = &[
+    "crosshead",
+    "traverse",
+    "stroke",
+    "machine",
+    "maschine",
+    "actuator",
+    "kolben",
+    "standardwegaufnehmer",
+];
+
+/// Zwick testXpert's "standard travel" in German, English and French.
+pub const STANDARD_TRAVEL: &[&str] = &["standardweg", "standard travel", "course standard"];
+
+/// Whether a lower-case channel name says the channel sits on the specimen, not on the machine.
+/// A strain "(Extension)" is Bluehill's strain computed from the crosshead: not mounted.
+pub fn is_specimen_mounted(lower_name: &str) -> bool {
+    has(lower_name, SPECIMEN_MOUNTED)
+        && !has(lower_name, CROSSHEAD_WORDS)
+        && !lower_name.contains("extension")
+}
+
+/// Strain words: a ratio channel is a control candidate only when its name says strain.
+const STRAIN_WORDS: &[&str] = &[
+    "strain",
+    "dehnung",
+    "déformation",
+    "deformation",
+    "deformación",
+    "deformazione",
+    "allongement",
+    "extenso",
+];
+
+/// A dimensionless strain as a tension control: an extensometer's (or DIC's) strain is the
+/// sectional strain itself (ISO 6892-1: the stiffness comes from the specimen-mounted measure).
+/// Scores above a crosshead travel (at most 15) and below a named extensometer travel (18 and
+/// more). A true (logarithmic) strain, a strain computed from the crosshead, a strain rate, a
+/// shear strain or a column that does not move is no candidate.
+fn strain_control_score(c: &ChannelFacts) -> Option<i32> {
+    let n = c.name.to_lowercase();
+    if c.dimension != Some(Dimension::Ratio) || !c.filled || !has(&n, STRAIN_WORDS) {
+        return None;
+    }
+    let excluded = has(&n, CROSSHEAD_WORDS)
+        || has(&n, SETPOINT)
+        || ["extension", "rate", "shear", "true", "log"]
+            .iter()
+            .any(|w| n.contains(w))
+        || n.starts_with("tstrain");
+    (!excluded).then_some(16)
+}
+
 /// Picks (time, control, response) column indices. `fixed` holds overrides already chosen.
+///
+/// The control against a force is the specimen-mounted measure when the file has one (a named
+/// extensometer travel, else a strain channel) ahead of the crosshead (ISO 6892-1 / ISO 527):
+/// one decision, shared by `inspect` and `analyze`. A strain is a candidate only when the kind
+/// is tension or not known (`kind`).
 pub(crate) fn assign_roles(
     ch: &[ChannelFacts],
     fixed_time: Option<usize>,
     fixed_control: Option<usize>,
     fixed_response: Option<usize>,
+    kind: Option<TestKind>,
 ) -> (Option<usize>, Option<usize>, Option<usize>) {
     let mut taken: Vec<usize> = [fixed_time, fixed_control, fixed_response]
         .into_iter()
@@ -269,6 +356,14 @@ pub(crate) fn assign_roles(
             rdim == Some(Dimension::Torque) || (rdim.is_none() && has(&rname, TORQUE_WORDS));
         if torque_like {
             ctl(Dimension::Angle, &taken).or_else(|| ctl(Dimension::Curvature, &taken))
+        } else if matches!(kind, None | Some(TestKind::Tension | TestKind::Unknown)) {
+            best(
+                ch.iter().enumerate().map(|(i, c)| {
+                    let s = control_score(c, Dimension::Length);
+                    (i, s.max(strain_control_score(c)))
+                }),
+                &taken,
+            )
         } else {
             ctl(Dimension::Length, &taken)
         }
@@ -590,7 +685,43 @@ fn length_m(key: &str, value: &str) -> Option<(f64, bool)> {
     }
 }
 
+/// An area from a metadata value (`6.3812 mm²`), in m²; `None` without a readable area unit.
+fn area_m2(key: &str, value: &str) -> Option<f64> {
+    let mut parts = value.split_whitespace();
+    let v: f64 = parts.next()?.replace(',', ".").parse().ok()?;
+    let unit = parts
+        .next()
+        .map(|s| s.to_string())
+        .or_else(|| key_unit(key))?;
+    let info = lookup(&unit)?;
+    (info.dimension == Dimension::Area && v > 0.0).then_some(v * info.factor)
+}
+
+/// The specimen's cross-section area stated in the metadata (testXpert `Cross-section`,
+/// `Section`, `Querschnitt`, `Area`), m²; `None` when no such line has an area unit.
+pub(crate) fn area_from_metadata(meta: &[(String, String)]) -> Option<f64> {
+    const KEYS: &[&str] = &[
+        "cross-section",
+        "cross section",
+        "cross-sectional area",
+        "section",
+        "querschnitt",
+        "anfangsquerschnitt",
+        "area",
+        "original area",
+        "s0",
+    ];
+    meta.iter().find_map(|(k, v)| {
+        let nk = norm_key(k);
+        KEYS.contains(&nk.as_str()).then(|| area_m2(k, v)).flatten()
+    })
+}
+
 /// Specimen label, diameter and free length (or span) from metadata; warnings for assumed units.
+///
+/// A gauge length (`Gauge length`, testXpert's `Gage length, standard travel`, `L0 - course
+/// standard`, UIUC's `Original Length`) is the free length where no clamp length is given:
+/// with an extensometer it is the length the measured elongation belongs to.
 pub(crate) fn specimen_from_metadata(
     meta: &[(String, String)],
 ) -> (cablab_core::Specimen, Vec<String>) {
@@ -614,6 +745,8 @@ pub(crate) fn specimen_from_metadata(
     let diam_keys = [
         "gauge diameter",
         "specimen diameter",
+        "original diameter",
+        "initial diameter",
         "diameter",
         "durchmesser",
         "diámetro",
@@ -637,9 +770,14 @@ pub(crate) fn specimen_from_metadata(
         ],
         &[
             "gauge length",
+            "gage length",
+            "l0 - course standard",
             "messlänge",
             "parallel length",
             "longitud calibrada",
+            "original length",
+            "initial length",
+            "original gauge length",
         ],
         &["length", "länge", "longitud", "lunghezza"],
     ];
@@ -647,7 +785,7 @@ pub(crate) fn specimen_from_metadata(
         for k in keys {
             let matches = |key: &str| {
                 let nk = norm_key(key);
-                nk == *k || nk.starts_with(&format!("{k} "))
+                nk == *k || nk.starts_with(&format!("{k} ")) || nk.starts_with(&format!("{k},"))
             };
             if let Some((key, v)) = meta
                 .iter()
@@ -658,7 +796,37 @@ pub(crate) fn specimen_from_metadata(
         }
         None
     };
-    if let Some((_, v)) = find(&label_keys) {
+    // "Specimen thickness: 1.06 mm" is a dimension, not the specimen's name.
+    let dimension_key = |k: &str| {
+        let nk = norm_key(k);
+        [
+            "thickness",
+            "width",
+            "diameter",
+            "length",
+            "section",
+            "area",
+            "dicke",
+            "breite",
+            "durchmesser",
+            "länge",
+            "épaisseur",
+            "largeur",
+            "gauge",
+            "gage",
+        ]
+        .iter()
+        .any(|w| nk.contains(w))
+    };
+    let label = label_keys.iter().find_map(|k| {
+        meta.iter().find(|(key, v)| {
+            let nk = norm_key(key);
+            !v.trim().is_empty()
+                && !dimension_key(key)
+                && (nk == *k || nk.starts_with(&format!("{k} ")))
+        })
+    });
+    if let Some((_, v)) = label {
         sp.label = Some(v.trim().to_string());
     }
     if let Some((k, v)) = find(&diam_keys) {
@@ -697,6 +865,7 @@ mod tests {
                 name: n.to_string(),
                 dimension: lookup(u).map(|i| i.dimension),
                 unit_written: !u.is_empty(),
+                filled: true,
             })
             .collect()
     }
@@ -712,7 +881,7 @@ mod tests {
             ("1944 B", "mm"),
         ]);
         assert_eq!(
-            assign_roles(&f, None, None, None),
+            assign_roles(&f, None, None, None, None),
             (Some(1), Some(4), Some(3))
         );
         let f = facts(&[
@@ -724,7 +893,7 @@ mod tests {
             ("Dehnung", "mm"),
         ]);
         assert_eq!(
-            assign_roles(&f, None, None, None),
+            assign_roles(&f, None, None, None, None),
             (Some(0), Some(3), Some(1))
         );
     }
@@ -738,12 +907,12 @@ mod tests {
             ("Channel 1 Recuento", "cycles"),
         ]);
         assert_eq!(
-            assign_roles(&f, None, None, None),
+            assign_roles(&f, None, None, None, None),
             (Some(0), Some(1), Some(2))
         );
         let f = facts(&[("Tempo", ""), ("Spostamento", ""), ("Carico", "")]);
         assert_eq!(
-            assign_roles(&f, None, None, None),
+            assign_roles(&f, None, None, None, None),
             (Some(0), Some(1), Some(2))
         );
     }
@@ -759,7 +928,7 @@ mod tests {
             ("Digital Rotation", "deg"),
         ]);
         assert_eq!(
-            assign_roles(&f, None, None, None),
+            assign_roles(&f, None, None, None, None),
             (Some(0), Some(3), Some(4))
         );
         let dims: Vec<_> = f.iter().map(|c| c.dimension).collect();
@@ -768,7 +937,7 @@ mod tests {
             "axial-torsional is not plain torsion"
         );
         let f = facts(&[("curvature", "1/m"), ("bending_moment", "N.m")]);
-        let (t, c, r) = assign_roles(&f, None, None, None);
+        let (t, c, r) = assign_roles(&f, None, None, None, None);
         assert_eq!((t, c, r), (None, Some(0), Some(1)));
         let dims: Vec<_> = f.iter().map(|c| c.dimension).collect();
         assert_eq!(
