@@ -194,24 +194,27 @@ fn control_score(c: &ChannelFacts, dim: Dimension) -> Option<i32> {
     if has(&n, SETPOINT) {
         s -= 8;
     }
-    if has(&n, CONTROL_PENALTY) {
+    // A specimen-mounted travel (an extensometer; Zwick's "standard travel", the extensometer's
+    // travel when one is fitted, but not catman's "Standardwegaufnehmer", the crosshead
+    // transducer) ranks first; its strain word ("Feindehnung", "Dehnung" in mm) is no penalty.
+    // A length called "strain" (MTS TestSuite's `_Strain1` in mm) is not ranked first: the
+    // shared real-logs manifest names the crosshead as the technician's control there.
+    let standard_travel = has(&n, STANDARD_TRAVEL) && !n.contains("aufnehmer");
+    let mounted = dim == Dimension::Length
+        && ((is_specimen_mounted(&n) && !n.contains("strain")) || standard_travel);
+    if has(&n, CONTROL_PENALTY) && !mounted {
         s -= 6;
     }
     if n.contains("digital") {
         s -= 3;
     }
-    if n.contains("machine") || n.contains("traverse") || n.contains("maschine") {
-        s -= 1;
-    }
-    // Zwick's "standard travel" (testXpert: the extensometer's travel when one is fitted); not
-    // catman's "Standardwegaufnehmer", which is the crosshead transducer.
-    if has(&n, STANDARD_TRAVEL) && !n.contains("aufnehmer") {
-        s += 2;
-    }
     if has(&n, CROSSHEAD_WORDS) {
         s -= 1;
     }
-    if dim == Dimension::Length && is_specimen_mounted(&n) {
+    if standard_travel {
+        s += 2;
+    }
+    if mounted {
         s += 8;
     }
     Some(s)
@@ -896,6 +899,69 @@ mod tests {
             assign_roles(&f, None, None, None, None),
             (Some(0), Some(3), Some(1))
         );
+    }
+
+    #[test]
+    fn the_specimen_mounted_measure_is_the_control() {
+        let ctl =
+            |cols: &[(&str, &str)], kind| assign_roles(&facts(cols), None, None, None, kind).1;
+        // catman hot tensile: MayTec extensometer over the crosshead transducer.
+        let catman = [
+            ("Zeit  1 - Standardmessrate", "s"),
+            ("Maytec", "mm"),
+            ("Kraft", "N"),
+            ("Standardwegaufnehmer", "mm"),
+        ];
+        assert_eq!(ctl(&catman, None), Some(1));
+        // testXpert English: the standard travel (extensometer) over the absolute crosshead.
+        let zwick = [
+            ("Time", "s"),
+            ("Crosshead absolute", "mm"),
+            ("Standard force", "N"),
+            ("Standard travel", "mm"),
+        ];
+        assert_eq!(ctl(&zwick, Some(TestKind::Tension)), Some(3));
+        // German testXpert with a crosshead, a standard travel and a "Dehnung" in mm.
+        let de = [
+            ("Prüfzeit", "s"),
+            ("Standardkraft", "N"),
+            ("Traversenweg absolut", "mm"),
+            ("Standardweg", "mm"),
+            ("Dehnung", "mm"),
+        ];
+        assert_eq!(ctl(&de, None), Some(3));
+        let fein = [
+            ("Zeit", "s"),
+            ("Traversenweg", "mm"),
+            ("Feindehnung", "mm"),
+            ("Kraft", "kN"),
+        ];
+        assert_eq!(ctl(&fein, None), Some(2));
+        // UIUC: the extensometer strain (mm/mm) over the crosshead extension, for tension or an
+        // unknown kind; never for three-point bending.
+        let uiuc = [
+            ("Time", "s"),
+            ("Extension", "mm"),
+            ("Load", "kN"),
+            ("Strain", "mm/mm"),
+        ];
+        assert_eq!(ctl(&uiuc, None), Some(3));
+        assert_eq!(ctl(&uiuc, Some(TestKind::Tension)), Some(3));
+        assert_eq!(ctl(&uiuc, Some(TestKind::ThreePoint)), Some(1));
+        // Bluehill's strain computed from the crosshead, a true strain, a strain rate: no.
+        let bluehill = [
+            ("Time", "s"),
+            ("Extension", "mm"),
+            ("Load", "N"),
+            ("Tensile strain (Extension)", "%"),
+            ("True strain", "mm/mm"),
+            ("Strain rate", "1"),
+        ];
+        assert_eq!(ctl(&bluehill, None), Some(1));
+        // A column filled on one row only is no channel.
+        let mut f = facts(&[("Time", "s"), ("Original Length", "mm"), ("Load", "kN")]);
+        f[1].filled = false;
+        assert_eq!(assign_roles(&f, None, None, None, None).1, None);
     }
 
     #[test]
