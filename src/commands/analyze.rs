@@ -37,14 +37,20 @@ pub fn analyze_file(
     )
     .map_err(CliError::input)?;
     warnings.extend(notes);
-    let geom = crate::bridge::geometry(
+    let (geom, notes) = crate::bridge::geometry_noted(
         &rec,
         kind,
         crate::bridge::mm(a.length_mm),
         crate::bridge::mm(a.diameter_mm),
     )
     .map_err(CliError::input)?;
-    let curve = crate::bridge::curve(&rec).map_err(CliError::input)?;
+    warnings.extend(notes);
+    let mut curve = crate::bridge::curve(&rec).map_err(CliError::input)?;
+    if let Some(n) =
+        crate::bridge::sectional_control(&rec, kind, &geom, &mut curve).map_err(CliError::input)?
+    {
+        warnings.push(n);
+    }
     let yield_method: cablab_measure::YieldMethod = a
         .yield_method
         .parse()

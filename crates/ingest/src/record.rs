@@ -8,8 +8,8 @@
 use crate::error::{Diagnostic, IngestError};
 use crate::format::Format;
 use crate::roles::{
-    assign_roles, kind_evidence, kind_from_channels, kind_from_text, roles_of,
-    specimen_from_metadata, ChannelFacts, KindEvidence,
+    assign_roles, kind_evidence, kind_from_channels, kind_from_text, mount_of, roles_of,
+    specimen_from_metadata, ChannelFacts, KindEvidence, Mount,
 };
 use crate::table::{RawBlock, RawTable};
 use crate::units::{lookup, split_name_unit, strip_brackets, unreadable_unit, Dimension};
@@ -899,6 +899,18 @@ impl TestRecord {
             .map(|e| e.what.as_str())
             .collect();
         (!against.is_empty()).then(|| against.join("; "))
+    }
+
+    /// Where channel `i` measures: on the specimen, on the machine, or not said
+    /// ([`crate::roles::Mount`]; from the channel names, not from the file name).
+    pub fn mount(&self, i: usize) -> Mount {
+        let crosshead_elsewhere = self.channels.iter().enumerate().any(|(k, c)| {
+            k != i
+                && c.dimension == Some(Dimension::Length)
+                && mount_of(&c.name, c.dimension, false) == Mount::Machine
+        });
+        let c = &self.channels[i];
+        mount_of(&c.name, c.dimension, crosshead_elsewhere)
     }
 
     /// Index of the channel with `role` (first one).

@@ -235,8 +235,8 @@ pub const SPECIMEN_MOUNTED: &[&str] = &[
     "gage",
 ];
 
-/// Names of machine travel channels (crosshead, actuator, piston): the load train's compliance
-/// is in them.
+/// Names of machine travel channels (crosshead, actuator, piston; Instron's and Lloyd's
+/// "Extension" is the crosshead's): the load train's compliance is in them.
 pub const CROSSHEAD_WORDS: &[&str] = &[
     "crosshead",
     "traverse",
@@ -246,17 +246,73 @@ pub const CROSSHEAD_WORDS: &[&str] = &[
     "actuator",
     "kolben",
     "standardwegaufnehmer",
+    "extension",
 ];
 
 /// Zwick testXpert's "standard travel" in German, English and French.
 pub const STANDARD_TRAVEL: &[&str] = &["standardweg", "standard travel", "course standard"];
 
 /// Whether a lower-case channel name says the channel sits on the specimen, not on the machine.
-/// A strain "(Extension)" is Bluehill's strain computed from the crosshead: not mounted.
+/// A strain "(Extension)" is Bluehill's strain computed from the crosshead: not mounted; an
+/// "extensometer" always is.
 pub fn is_specimen_mounted(lower_name: &str) -> bool {
-    has(lower_name, SPECIMEN_MOUNTED)
-        && !has(lower_name, CROSSHEAD_WORDS)
-        && !lower_name.contains("extension")
+    lower_name.contains("extenso")
+        || (has(lower_name, SPECIMEN_MOUNTED) && !has(lower_name, CROSSHEAD_WORDS))
+}
+
+/// Where a displacement or strain channel measures: on the specimen (an extensometer, a strain
+/// channel, testXpert's standard travel next to a crosshead channel), on the machine (crosshead,
+/// actuator: the load train's compliance is in it), or not said by its name.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Mount {
+    /// Extensometer, clip gauge, video/laser/DIC strain.
+    Specimen,
+    /// Crosshead, actuator, piston, machine travel.
+    Machine,
+    /// The name does not say (`Displacement`, `Position`).
+    Unknown,
+}
+
+/// Where a channel called `name` with `dimension` measures (see [`Mount`]); `crosshead_elsewhere`
+/// says whether another channel of the file is named as the crosshead (then Zwick's "standard
+/// travel" is the extensometer's, else it may be the crosshead's).
+pub(crate) fn mount_of(
+    name: &str,
+    dimension: Option<Dimension>,
+    crosshead_elsewhere: bool,
+) -> Mount {
+    let n = name.to_lowercase();
+    match dimension {
+        Some(Dimension::Ratio) if strain_named(&n) => {
+            if has(&n, CROSSHEAD_WORDS) || n.contains("extension") {
+                Mount::Machine
+            } else {
+                Mount::Specimen
+            }
+        }
+        Some(Dimension::Length) => {
+            if has(&n, STANDARD_TRAVEL) && !n.contains("aufnehmer") {
+                if crosshead_elsewhere {
+                    Mount::Specimen
+                } else {
+                    Mount::Unknown
+                }
+            } else if is_specimen_mounted(&n) {
+                Mount::Specimen
+            } else if has(&n, CROSSHEAD_WORDS) {
+                Mount::Machine
+            } else {
+                Mount::Unknown
+            }
+        }
+        _ => Mount::Unknown,
+    }
+}
+
+/// Whether a lower-case name says strain.
+fn strain_named(lower_name: &str) -> bool {
+    has(lower_name, STRAIN_WORDS)
 }
 
 /// Strain words: a ratio channel is a control candidate only when its name says strain.
@@ -278,7 +334,7 @@ const STRAIN_WORDS: &[&str] = &[
 /// shear strain or a column that does not move is no candidate.
 fn strain_control_score(c: &ChannelFacts) -> Option<i32> {
     let n = c.name.to_lowercase();
-    if c.dimension != Some(Dimension::Ratio) || !c.filled || !has(&n, STRAIN_WORDS) {
+    if c.dimension != Some(Dimension::Ratio) || !c.filled || !strain_named(&n) {
         return None;
     }
     let excluded = has(&n, CROSSHEAD_WORDS)
