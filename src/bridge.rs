@@ -325,7 +325,7 @@ const MACHINE_FILE_WORDS: &[&str] = &["machine", "crosshead", "traverse", "actua
 
 /// Where the control of a tension test measures, with the evidence: the channel's name
 /// ([`TestRecord::mount`]), else the file name for a control whose name does not say.
-fn control_mount(rec: &TestRecord, i: usize) -> (cablab_ingest::Mount, Option<String>) {
+pub fn control_mount(rec: &TestRecord, i: usize) -> (cablab_ingest::Mount, Option<String>) {
     use cablab_ingest::Mount;
     let m = rec.mount(i);
     if m != Mount::Unknown {
