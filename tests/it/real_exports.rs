@@ -232,6 +232,7 @@ fn testxpert_english_standard_travel_gauge_length_and_cross_section() {
     let name = "hilhorst__testxpert_tension_mdb1pct_en.TRA";
     let i = inspect(name);
     assert_eq!(i["rows"], 3415);
+    assert_eq!(i["format"], "testxpert_ascii");
     assert_eq!(
         channels(&i),
         owned(&[
@@ -271,6 +272,7 @@ fn testxpert_french_course_standard() {
     let name = "hilhorst__testxpert_tension_allong1_fr.TRA";
     let i = inspect(name);
     assert_eq!(i["rows"], 2184);
+    assert_eq!(i["format"], "testxpert_ascii");
     assert_eq!(
         channels(&i),
         owned(&[
