@@ -79,8 +79,9 @@ fn strain_control(rec: &TestRecord) -> bool {
 /// - a free length (or gauge length) from the file's metadata;
 /// - for tension with a strain control and no length anywhere: l₀ = 1 m, which only carries the
 ///   strain (elongation = ε l₀, and (EA) = dF/dε does not depend on l₀);
-/// - for tension with no diameter: the cross-section area stated in the file (testXpert
-///   `Cross-section 6.3812 mm²`) as the equivalent round diameter d = √(4A/π), so that
+/// - for tension with no diameter: the cross-section area of the file's metadata (testXpert
+///   `Cross-section 6.3812 mm²`, else thickness × width) as the equivalent round diameter
+///   d = √(4A/π), so that
 ///   E = (EA)/A uses the stated area. Tension only: a flat section's (GJ) or (EI) is not a round
 ///   one's, so torsion and bending get no diameter from an area.
 pub fn geometry_noted(
@@ -124,7 +125,7 @@ pub fn geometry_noted(
         (None, None, Some(a)) if kind == TestKind::Tension => {
             let d = (4.0 * a / std::f64::consts::PI).sqrt();
             notes.push(format!(
-                "the modulus uses the cross-section {:.4} mm² stated in the file (as the equivalent round diameter {:.4} mm; tension only)",
+                "the modulus uses the cross-section {:.4} mm² from the file's metadata (as the equivalent round diameter {:.4} mm; tension only)",
                 a * 1e6,
                 d * 1e3
             ));
@@ -163,15 +164,7 @@ pub fn sectional_control(
         return Ok(None);
     };
     let c = &rec.channels[i];
-    let show = format!(
-        "'{}' ({})",
-        c.name,
-        if c.unit.is_empty() {
-            "no unit"
-        } else {
-            &c.unit
-        }
-    );
+    let show = show(c);
     let lname = c.name.to_lowercase();
     let shear = [
         "shear",
@@ -319,6 +312,19 @@ pub fn check_kind(rec: &TestRecord, kind: TestKind, force: bool) -> Result<Optio
     )
 }
 
+/// A channel as messages name it: `'Strain' (mm/mm)`, `'displacement' (no unit)`.
+fn show(c: &cablab_ingest::Channel) -> String {
+    format!(
+        "'{}' ({})",
+        c.name,
+        if c.unit.is_empty() {
+            "no unit"
+        } else {
+            &c.unit
+        }
+    )
+}
+
 /// Words of a file name that say its displacement is the machine's (the `mechanical_testing`
 /// pair `…_machine.csv` / `…_extensometer.csv`, `…_crosshead…`).
 const MACHINE_FILE_WORDS: &[&str] = &["machine", "crosshead", "traverse", "actuator", "stroke"];
@@ -370,17 +376,6 @@ pub fn check_roles(
     use cablab_ingest::units::Dimension as D;
     let file = rec.provenance.path.clone();
     let mut notes = Vec::new();
-    let show = |c: &cablab_ingest::Channel| {
-        format!(
-            "'{}' ({})",
-            c.name,
-            if c.unit.is_empty() {
-                "no unit"
-            } else {
-                &c.unit
-            }
-        )
-    };
     let ci = rec.channel_index(Role::Control);
     let ri = rec.channel_index(Role::Response);
     if let Some(i) = ci {
@@ -462,7 +457,7 @@ pub fn check_roles(
                     }
                 )),
                 Mount::Machine if !compliance_given => notes.push(format!(
-                    "the stiffness comes from the machine travel {}{}: it includes the compliance of the load train (grips, frame), so (EA) and the modulus are lower bounds, possibly far too low; use a specimen-mounted extensometer or give --compliance",
+                    "the stiffness comes from the machine travel {}{}: it includes the compliance of the load train (grips, frame), so (EA) is a lower bound; use a specimen-mounted extensometer or give --compliance",
                     show(&rec.channels[i]),
                     match (evidence, control_given) {
                         (Some(e), true) => format!(" ({e}; chosen with --control)"),

@@ -102,8 +102,8 @@ pub struct TestRecord {
     pub kind_evidence: Vec<KindEvidence>,
     /// Specimen geometry found in the metadata (SI).
     pub specimen: Specimen,
-    /// The specimen's cross-section area stated in the metadata (testXpert `Cross-section`,
-    /// m²), when there is one: a flat specimen's area, which no diameter describes.
+    /// The specimen's cross-section area from the metadata, m² (testXpert `Cross-section`,
+    /// else thickness × width): a flat specimen's area, which no diameter describes.
     pub cross_section_m2: Option<f64>,
     /// Channels of the main block, in file order.
     pub channels: Vec<Channel>,

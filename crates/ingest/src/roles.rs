@@ -756,9 +756,48 @@ fn area_m2(key: &str, value: &str) -> Option<f64> {
     (info.dimension == Dimension::Area && v > 0.0).then_some(v * info.factor)
 }
 
-/// The specimen's cross-section area stated in the metadata (testXpert `Cross-section`,
-/// `Section`, `Querschnitt`, `Area`), m²; `None` when no such line has an area unit.
+/// The specimen's cross-section area from the metadata, m²: stated (testXpert `Cross-section`,
+/// `Section`, `Querschnitt`, `Area`, with an area unit), else a flat specimen's thickness ×
+/// width (`Specimen thickness` and `Specimen width`, `Dicke`/`Breite`, `Épaisseur`/`Largeur`,
+/// with length units). `None` when neither is there.
 pub(crate) fn area_from_metadata(meta: &[(String, String)]) -> Option<f64> {
+    stated_area(meta).or_else(|| {
+        let find = |keys: &[&str]| {
+            meta.iter().find_map(|(k, v)| {
+                let nk = norm_key(k);
+                let unit_given = v.split_whitespace().nth(1).is_some() || key_unit(k).is_some();
+                (keys.contains(&nk.as_str()) && unit_given)
+                    .then(|| length_m(k, v).map(|(x, _)| x))
+                    .flatten()
+                    .filter(|x| *x > 0.0)
+            })
+        };
+        let t = find(&[
+            "specimen thickness",
+            "thickness",
+            "dicke",
+            "probendicke",
+            "épaisseur éprouvette",
+            "épaisseur",
+            "espesor",
+            "spessore",
+        ])?;
+        let w = find(&[
+            "specimen width",
+            "width",
+            "breite",
+            "probenbreite",
+            "largeur éprouvette",
+            "largeur",
+            "ancho",
+            "larghezza",
+        ])?;
+        Some(t * w)
+    })
+}
+
+/// A cross-section area stated with an area unit (see [`area_from_metadata`]).
+fn stated_area(meta: &[(String, String)]) -> Option<f64> {
     const KEYS: &[&str] = &[
         "cross-section",
         "cross section",
@@ -1137,6 +1176,29 @@ mod tests {
         assert_eq!(ev[0].kinds, vec![TestKind::Tension]);
         assert_eq!(ev[1].kinds, vec![TestKind::ThreePoint]);
         assert!(ev[1].what.starts_with("the file name"), "{ev:?}");
+    }
+
+    #[test]
+    fn cross_section_stated_or_thickness_times_width() {
+        let kv = |v: &[(&str, &str)]| -> Vec<(String, String)> {
+            v.iter()
+                .map(|(a, b)| (a.to_string(), b.to_string()))
+                .collect()
+        };
+        let zwick = kv(&[
+            ("Specimen thickness", "1.06 mm"),
+            ("Specimen width", "6.02 mm"),
+            ("Cross-section", "6.3812 mm²"),
+        ]);
+        assert!((area_from_metadata(&zwick).unwrap() - 6.3812e-6).abs() < 1e-15);
+        let flat = kv(&[("Dicke [mm]", "2"), ("Breite [mm]", "9,9")]);
+        assert!((area_from_metadata(&flat).unwrap() - 19.8e-6).abs() < 1e-15);
+        // No unit: no guess; one of the two: no area.
+        assert_eq!(
+            area_from_metadata(&kv(&[("Dicke", "2"), ("Breite", "9.9")])),
+            None
+        );
+        assert_eq!(area_from_metadata(&kv(&[("Breite [mm]", "150")])), None);
     }
 
     #[test]
