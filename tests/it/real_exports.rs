@@ -385,3 +385,41 @@ fn a_torsional_shear_strain_becomes_the_twist() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("needs the diameter"), "{err}");
 }
+
+/// A campaign over real exports (folder mode) gets the same stiffness as `analyze`: the strain
+/// control and the file's own gauge length and cross-section go through the pipeline too.
+#[test]
+fn a_campaign_over_real_exports_uses_the_specimen_mounted_channel() {
+    let d = tempfile::tempdir().unwrap();
+    let ex = d.path().join("ex");
+    std::fs::create_dir_all(&ex).unwrap();
+    for n in [
+        "tensileanalyzer__uiuc_tension_steel1045_1.csv",
+        "hilhorst__testxpert_tension_mdb1pct_en.TRA",
+    ] {
+        std::fs::copy(crate::common::root().join(data(n)), ex.join(n)).unwrap();
+    }
+    let o = assert_cmd::Command::cargo_bin("cablab")
+        .unwrap()
+        .current_dir(d.path())
+        .env("CI", "1")
+        .args(["run", "ex", "--kind", "tension", "--name", "r"])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let s: Value =
+        serde_json::from_slice(&std::fs::read(d.path().join("reports/r/summary.json")).unwrap())
+            .unwrap();
+    let by = |part: &str| {
+        s["tests"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|t| t["id"].as_str().unwrap().contains(part))
+            .unwrap()["stiffness"]
+            .as_f64()
+            .unwrap()
+    };
+    assert!(within(by("uiuc"), 7.5e6, 0.05), "{:e}", by("uiuc"));
+    assert!(within(by("mdb1pct"), 1.37e6, 0.04), "{:e}", by("mdb1pct"));
+}
