@@ -57,35 +57,164 @@ pub fn curve(rec: &TestRecord) -> Result<Curve> {
 }
 
 /// Geometry from the caller (SI: m, settled where flags and pipelines are parsed), else from the
-/// record's metadata. The length is required; the diameter is optional (moduli need it).
+/// record's metadata. The length is required; the diameter is optional (moduli need it). See
+/// [`geometry_noted`] for what else the file can settle and the notes that say so.
 pub fn geometry(
     rec: &TestRecord,
     kind: TestKind,
     length_m: Option<f64>,
     diameter_m: Option<f64>,
 ) -> Result<cablab_measure::Geometry> {
+    geometry_noted(rec, kind, length_m, diameter_m).map(|(g, _)| g)
+}
+
+/// Whether the record's control is a dimensionless strain (mm/mm, %, µm/m, ...).
+fn strain_control(rec: &TestRecord) -> bool {
+    rec.channel_index(Role::Control)
+        .and_then(|i| rec.channels[i].dimension)
+        == Some(cablab_ingest::units::Dimension::Ratio)
+}
+
+/// [`geometry`] with the notes to print next to the results when the file settled something:
+/// - a free length (or gauge length) from the file's metadata;
+/// - for tension with a strain control and no length anywhere: l₀ = 1 m, which only carries the
+///   strain (elongation = ε l₀, and (EA) = dF/dε does not depend on l₀);
+/// - for tension with no diameter: the cross-section area of the file's metadata (testXpert
+///   `Cross-section 6.3812 mm²`, else thickness × width) as the equivalent round diameter
+///   d = √(4A/π), so that
+///   E = (EA)/A uses the stated area. Tension only: a flat section's (GJ) or (EI) is not a round
+///   one's, so torsion and bending get no diameter from an area.
+pub fn geometry_noted(
+    rec: &TestRecord,
+    kind: TestKind,
+    length_m: Option<f64>,
+    diameter_m: Option<f64>,
+) -> Result<(cablab_measure::Geometry, Vec<String>)> {
     let file = &rec.provenance.path;
+    let mut notes = Vec::new();
     let what = if kind == TestKind::ThreePoint {
         "support span"
     } else {
         "free length"
     };
-    let free_length_m = match length_m {
-        Some(l) if l.is_finite() && l > 0.0 => l,
-        Some(l) => bail!("{file}: the {what} must be positive, got {l} m"),
-        None => rec.specimen.free_length_m.ok_or_else(|| {
-            anyhow!("{file}: the {what} is missing: the file's metadata does not give it; pass --length-mm")
-        })?,
+    let free_length_m = match (length_m, rec.specimen.free_length_m) {
+        (Some(l), _) if l.is_finite() && l > 0.0 => l,
+        (Some(l), _) => bail!("{file}: the {what} must be positive, got {l} m"),
+        (None, Some(l)) => {
+            notes.push(format!(
+                "the {what} {:.4} mm is the file's own (its metadata; with an extensometer, the gauge length)",
+                l * 1e3
+            ));
+            l
+        }
+        (None, None) if kind == TestKind::Tension && strain_control(rec) => {
+            notes.push(
+                "no free length given: a strain control needs none, (EA) = dF/dε (l₀ = 1 m only carries the strain)"
+                    .into(),
+            );
+            1.0
+        }
+        (None, None) => bail!(
+            "{file}: the {what} is missing: the file's metadata does not give it; pass --length-mm"
+        ),
     };
-    let diameter_m = match diameter_m {
-        Some(d) if d.is_finite() && d > 0.0 => Some(d),
-        Some(d) => bail!("{file}: the diameter must be positive, got {d} m"),
-        None => rec.specimen.diameter_m,
+    let diameter_m = match (diameter_m, rec.specimen.diameter_m, rec.cross_section_m2) {
+        (Some(d), _, _) if d.is_finite() && d > 0.0 => Some(d),
+        (Some(d), _, _) => bail!("{file}: the diameter must be positive, got {d} m"),
+        (None, Some(d), _) => Some(d),
+        (None, None, Some(a)) if kind == TestKind::Tension => {
+            let d = (4.0 * a / std::f64::consts::PI).sqrt();
+            notes.push(format!(
+                "the modulus uses the cross-section {:.4} mm² from the file's metadata (as the equivalent round diameter {:.4} mm; tension only)",
+                a * 1e6,
+                d * 1e3
+            ));
+            Some(d)
+        }
+        (None, None, _) => None,
     };
-    Ok(cablab_measure::Geometry {
-        free_length_m,
-        diameter_m,
-    })
+    Ok((
+        cablab_measure::Geometry {
+            free_length_m,
+            diameter_m,
+        },
+        notes,
+    ))
+}
+
+/// The control in the kind's machine variable, where the file gives a strain:
+/// - tension, a strain ε (extensometer, DIC; mm/mm, %, µm/m): the elongation ε l₀, so that the
+///   analysis' sectional strain u/l₀ is ε itself and (EA) = dF/dε;
+/// - torsion, a surface shear strain γ (a torsional extensometer's "Shear Strain", in degrees or
+///   dimensionless): γ = r θ / l₀, so the twist θ = 2 γ l₀ / d (needs the diameter);
+/// - any other strain as the control (a strain in bending, an axial strain against a torque): an
+///   error naming the column: it is not the kind's control and no factor makes it one.
+///
+/// Returns the note that says what was done. Does not touch a control in the kind's own
+/// variable.
+pub fn sectional_control(
+    rec: &TestRecord,
+    kind: TestKind,
+    geom: &cablab_measure::Geometry,
+    curve: &mut Curve,
+) -> Result<Option<String>> {
+    use cablab_ingest::units::Dimension as D;
+    let file = &rec.provenance.path;
+    let Some(i) = rec.channel_index(Role::Control) else {
+        return Ok(None);
+    };
+    let c = &rec.channels[i];
+    let show = show(c);
+    let lname = c.name.to_lowercase();
+    let shear = [
+        "shear",
+        "schub",
+        "gleitung",
+        "cisaillement",
+        "cizalla",
+        "taglio",
+    ]
+    .iter()
+    .any(|w| lname.contains(w));
+    match (c.dimension, kind) {
+        (Some(D::Ratio), TestKind::Tension) if !shear => {
+            let l = geom.free_length_m;
+            for x in &mut curve.control {
+                *x *= l;
+            }
+            Ok(Some(format!(
+                "the control {show} is a strain ε, the sectional strain itself: (EA) = dF/dε, with no division by a length"
+            )))
+        }
+        (Some(D::Ratio | D::Angle), TestKind::Torsion) if shear => {
+            let Some(d) = geom.diameter_m else {
+                bail!(
+                    "{file}: the control {show} is a surface shear strain γ = r θ / l₀, not a twist angle; the twist θ = 2 γ l₀ / d needs the diameter: pass --diameter-mm (or name the twist angle with --control)"
+                );
+            };
+            let k = 2.0 * geom.free_length_m / d;
+            for x in &mut curve.control {
+                *x *= k;
+            }
+            Ok(Some(format!(
+                "the control {show} is a surface shear strain γ = r θ / l₀: taken as the twist θ = 2 γ l₀ / d (l₀ = {:.4} mm, d = {:.4} mm), so (GJ) = T r / γ",
+                geom.free_length_m * 1e3,
+                d * 1e3
+            )))
+        }
+        (Some(D::Ratio), _) => bail!(
+            "{file}: the control {show} is a {}strain, not the control of a {} test ({}); name the control with --control",
+            if shear { "shear " } else { "" },
+            kind.as_str(),
+            match kind {
+                TestKind::Tension => "an elongation or an axial strain",
+                TestKind::Torsion => "a twist angle or a surface shear strain",
+                TestKind::ThreePoint => "the punch deflection",
+                _ => "the end rotation or the curvature",
+            }
+        ),
+        _ => Ok(None),
+    }
 }
 
 /// Millimetres (as flags and pipelines give lengths) to metres.
@@ -183,44 +312,61 @@ pub fn check_kind(rec: &TestRecord, kind: TestKind, force: bool) -> Result<Optio
     )
 }
 
-/// Names of channels that sit on the specimen (extensometers, clip gauges, video or laser
-/// extensometers; German "Feindehnung", "Dehnung", MayTec sensors).
-const SPECIMEN_MOUNTED: &[&str] = &[
-    "extenso",
-    "feindehnung",
-    "dehnung",
-    "maytec",
-    "strain",
-    "clip",
-    "video",
-    "laser",
-    "gauge",
-];
-/// Names of machine travel channels (the crosshead or actuator: the load train's compliance is
-/// in them).
-const CROSSHEAD: &[&str] = &[
-    "crosshead",
-    "traverse",
-    "stroke",
-    "machine",
-    "maschine",
-    "actuator",
-    "kolben",
-    "position",
-    "standardweg",
-];
+/// A channel as messages name it: `'Strain' (mm/mm)`, `'displacement' (no unit)`.
+fn show(c: &cablab_ingest::Channel) -> String {
+    format!(
+        "'{}' ({})",
+        c.name,
+        if c.unit.is_empty() {
+            "no unit"
+        } else {
+            &c.unit
+        }
+    )
+}
 
-fn named(c: &cablab_ingest::Channel, words: &[&str]) -> bool {
-    let n = c.name.to_lowercase();
-    words.iter().any(|w| n.contains(w))
+/// Words of a file name that say its displacement is the machine's (the `mechanical_testing`
+/// pair `…_machine.csv` / `…_extensometer.csv`, `…_crosshead…`).
+const MACHINE_FILE_WORDS: &[&str] = &["machine", "crosshead", "traverse", "actuator", "stroke"];
+
+/// Where the control of a tension test measures, with the evidence: the channel's name
+/// ([`TestRecord::mount`]), else the file name for a control whose name does not say.
+pub fn control_mount(rec: &TestRecord, i: usize) -> (cablab_ingest::Mount, Option<String>) {
+    use cablab_ingest::Mount;
+    let m = rec.mount(i);
+    if m != Mount::Unknown {
+        return (m, None);
+    }
+    let stem = rec
+        .provenance
+        .path
+        .rsplit(['/', '\\'])
+        .next()
+        .unwrap_or_default()
+        .to_lowercase();
+    let other_mounted = (0..rec.channels.len()).any(|k| k != i && rec.mount(k) == Mount::Specimen);
+    match MACHINE_FILE_WORDS.iter().find(|w| stem.contains(*w)) {
+        Some(w) => (Mount::Machine, Some(format!("the file name says '{w}'"))),
+        None if other_mounted => (
+            Mount::Machine,
+            Some("the file has a specimen-mounted channel beside it".into()),
+        ),
+        None => (Mount::Unknown, None),
+    }
 }
 
 /// The channel roles checked before any physics: a control or response in the wrong units (a
 /// time, a force or torque as the control; a time, length or angle as the response) or a
 /// control that is the time column itself is an error naming the columns and their units.
-/// For tension, a specimen-mounted displacement (extensometer) is made the control in place of
-/// the crosshead unless `control_given` (ISO 6892-1 / ISO 527 practice); a tension stiffness
-/// from the crosshead is flagged unless a machine compliance is removed. Returns the notes to print next to the results.
+/// For tension, the output says where the stiffness comes from: a specimen-mounted control
+/// (extensometer travel or strain, which the reader ranks first: ISO 6892-1 / ISO 527) is named
+/// as such; a machine travel (by its name, or by the file name, or because the file has a
+/// specimen-mounted channel beside it) is flagged unless a machine compliance is removed.
+/// `control_given` (the control was chosen with `--control`) is said in the flag.
+/// Returns the notes to print next to the results.
+///
+/// Does not choose the control: the reader does (`cablab_ingest`), for `inspect` and `analyze`
+/// alike.
 pub fn check_roles(
     rec: &mut TestRecord,
     kind: TestKind,
@@ -230,17 +376,6 @@ pub fn check_roles(
     use cablab_ingest::units::Dimension as D;
     let file = rec.provenance.path.clone();
     let mut notes = Vec::new();
-    let show = |c: &cablab_ingest::Channel| {
-        format!(
-            "'{}' ({})",
-            c.name,
-            if c.unit.is_empty() {
-                "no unit"
-            } else {
-                &c.unit
-            }
-        )
-    };
     let ci = rec.channel_index(Role::Control);
     let ri = rec.channel_index(Role::Response);
     if let Some(i) = ci {
@@ -302,39 +437,36 @@ pub fn check_roles(
     }
     if kind == TestKind::Tension {
         if let Some(i) = ci {
-            let mounted = rec.channels.iter().position(|c| {
-                c.dimension == Some(D::Length)
-                    && named(c, SPECIMEN_MOUNTED)
-                    && c.role != Role::Control
-            });
-            let is_mounted = named(&rec.channels[i], SPECIMEN_MOUNTED);
-            match mounted {
-                Some(m) if !control_given && !is_mounted => {
-                    let moved = rec.values(m).is_some_and(|v| {
-                        let f: Vec<f64> = v.into_iter().filter(|x| x.is_finite()).collect();
-                        f.len() >= 3 && f.iter().any(|x| (x - f[0]).abs() > 0.0)
-                    });
-                    if moved {
-                        notes.push(format!(
-                            "the control is the specimen-mounted displacement {} rather than {} (ISO 6892-1 / ISO 527: the machine travel includes the load train's compliance)",
-                            show(&rec.channels[m]),
-                            show(&rec.channels[i])
-                        ));
-                        rec.channels[i].role = Role::Other;
-                        rec.channels[m].role = Role::Control;
+            use cablab_ingest::Mount;
+            let (mount, evidence) = control_mount(rec, i);
+            let machine: Vec<String> = (0..rec.channels.len())
+                .filter(|&k| k != i && rec.mount(k) == Mount::Machine)
+                .map(|k| show(&rec.channels[k]))
+                .collect();
+            match mount {
+                Mount::Specimen => notes.push(format!(
+                    "the stiffness comes from the specimen-mounted {} (ISO 6892-1 / ISO 527){}",
+                    show(&rec.channels[i]),
+                    if machine.is_empty() {
+                        String::new()
+                    } else {
+                        format!(
+                            ", not from the machine travel {} (it includes the load train's compliance)",
+                            machine.join(", ")
+                        )
                     }
-                }
+                )),
+                Mount::Machine if !compliance_given => notes.push(format!(
+                    "the stiffness comes from the machine travel {}{}: it includes the compliance of the load train (grips, frame), so (EA) is a lower bound; use a specimen-mounted extensometer or give --compliance",
+                    show(&rec.channels[i]),
+                    match (evidence, control_given) {
+                        (Some(e), true) => format!(" ({e}; chosen with --control)"),
+                        (Some(e), false) => format!(" ({e})"),
+                        (None, true) => " (chosen with --control)".into(),
+                        (None, false) => String::new(),
+                    }
+                )),
                 _ => {}
-            }
-            let now = rec.channel_index(Role::Control).unwrap_or(i);
-            if !compliance_given
-                && named(&rec.channels[now], CROSSHEAD)
-                && !named(&rec.channels[now], SPECIMEN_MOUNTED)
-            {
-                notes.push(format!(
-                    "the stiffness comes from the machine travel {}: it includes the compliance of the load train (grips, frame), so (EA) is a lower bound; use a specimen-mounted extensometer or give --compliance",
-                    show(&rec.channels[now])
-                ));
             }
         }
     }

@@ -37,14 +37,20 @@ pub fn analyze_file(
     )
     .map_err(CliError::input)?;
     warnings.extend(notes);
-    let geom = crate::bridge::geometry(
+    let (geom, notes) = crate::bridge::geometry_noted(
         &rec,
         kind,
         crate::bridge::mm(a.length_mm),
         crate::bridge::mm(a.diameter_mm),
     )
     .map_err(CliError::input)?;
-    let curve = crate::bridge::curve(&rec).map_err(CliError::input)?;
+    warnings.extend(notes);
+    let mut curve = crate::bridge::curve(&rec).map_err(CliError::input)?;
+    if let Some(n) =
+        crate::bridge::sectional_control(&rec, kind, &geom, &mut curve).map_err(CliError::input)?
+    {
+        warnings.push(n);
+    }
     let yield_method: cablab_measure::YieldMethod = a
         .yield_method
         .parse()
@@ -103,16 +109,33 @@ pub fn run(a: AnalyzeArgs) -> CmdResult {
         }
     };
     if a.json {
+        /// The channel the stiffness comes from and where it measures (`specimen`: extensometer
+        /// or strain; `machine`: crosshead or actuator; `unknown`).
+        #[derive(serde::Serialize)]
+        struct ControlChannel<'a> {
+            name: &'a str,
+            unit: &'a str,
+            mount: cablab_ingest::Mount,
+        }
         #[derive(serde::Serialize)]
         struct Out<'a> {
             file: &'a str,
             sha256: &'a str,
+            control_channel: Option<ControlChannel<'a>>,
             #[serde(flatten)]
             analysis: &'a cablab_measure::Analysis,
         }
+        let control_channel =
+            rec.channel_index(cablab_core::Role::Control)
+                .map(|i| ControlChannel {
+                    name: &rec.channels[i].name,
+                    unit: &rec.channels[i].unit,
+                    mount: crate::bridge::control_mount(&rec, i).0,
+                });
         return print_json(&Out {
             file: &rec.provenance.path,
             sha256: &rec.provenance.sha256,
+            control_channel,
             analysis: &an,
         })
         .map(|_| ExitCode::SUCCESS);

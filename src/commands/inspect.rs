@@ -29,12 +29,16 @@ pub fn run(a: InspectArgs) -> CmdResult {
     println!("kind      {}  ({})", rec.kind, rec.kind_reason);
     let sp = &rec.specimen;
     println!(
-        "specimen  {}   diameter {}   length/span {}",
+        "specimen  {}   diameter {}   length/span {}{}",
         sp.label.as_deref().unwrap_or("-"),
         sp.diameter_m
             .map_or("-".into(), |d| format!("{:.4} mm", d * 1e3)),
         sp.free_length_m
             .map_or("-".into(), |l| format!("{:.4} mm", l * 1e3)),
+        rec.cross_section_m2.map_or(String::new(), |a| format!(
+            "   cross-section {:.4} mm²",
+            a * 1e6
+        )),
     );
     if rec.blocks.len() > 1 {
         if rec.joined_blocks.len() > 1 {

@@ -416,6 +416,10 @@ fn stages(
         out.needs.push("diameter_mm".into());
     }
     let mut curve = crate::bridge::curve(&rec)?;
+    // A strain control (extensometer strain, torsional shear strain) in the kind's variable.
+    out.warnings.extend(crate::bridge::sectional_control(
+        &rec, t.kind, &geom, &mut curve,
+    )?);
     if curvature_control && length_known {
         for c in &mut curve.control {
             *c *= geom.free_length_m;

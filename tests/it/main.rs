@@ -8,5 +8,6 @@ mod common;
 mod diagnosis;
 mod family;
 mod folder_mode;
+mod real_exports;
 mod shards;
 mod trust;

@@ -123,10 +123,15 @@ pub fn detect(text: &str, encoding: Encoding, source: &str) -> (Format, String) 
         ));
     }
     if is_mts_locale_line(first) {
+        let what = if first.contains("|BTW|") {
+            "MTS 793 Basic TestWare (BTW) locale line"
+        } else {
+            "MTS 793 locale line"
+        };
         cands.push((
             90,
             Format::Mts793Dat,
-            format!("MTS 793 locale line '{}'", shorten(first, 40)),
+            format!("{what} '{}'", shorten(first, 40)),
         ));
     }
     let catman_time = head.iter().take(60).any(|l| {
@@ -177,7 +182,7 @@ pub fn detect(text: &str, encoding: Encoding, source: &str) -> (Format, String) 
             ),
         ));
     }
-    let has_paren_units_row = head.iter().take(40).any(|l| {
+    let paren_units_row = head.iter().take(40).find(|l| {
         let cells: Vec<&str> = l.split(',').map(|c| c.trim().trim_matches('"')).collect();
         let filled: Vec<&&str> = cells.iter().filter(|c| !c.is_empty()).collect();
         filled.len() >= 2
@@ -186,11 +191,20 @@ pub fn detect(text: &str, encoding: Encoding, source: &str) -> (Format, String) 
                 .all(|c| c.starts_with('(') && c.ends_with(')'))
     });
     let bluehill_name = file_name.to_lowercase().starts_with("specimen_rawdata");
-    if has_paren_units_row || bluehill_name {
-        let why = if bluehill_name {
-            format!("Bluehill file name '{file_name}'")
-        } else {
-            "Bluehill units row in parentheses ('(s),(mm),(kN)')".into()
+    if paren_units_row.is_some() || bluehill_name {
+        let why = match paren_units_row {
+            Some(row) if !bluehill_name => {
+                let units: Vec<&str> = row
+                    .split(',')
+                    .map(|c| c.trim().trim_matches('"'))
+                    .filter(|c| !c.is_empty())
+                    .collect();
+                format!(
+                    "Bluehill units row in parentheses ('{}')",
+                    shorten(&units.join(","), 60)
+                )
+            }
+            _ => format!("Bluehill file name '{file_name}'"),
         };
         cands.push((75, Format::BluehillCsv, why));
     }
@@ -207,10 +221,13 @@ pub fn detect(text: &str, encoding: Encoding, source: &str) -> (Format, String) 
             "WaveMatrix header ('Total Time (s)', 'Total Cycles', 'Elapsed Cycles')".into(),
         ));
     }
+    // `"Key"<sep>value<sep>"unit"` with a tab, comma or semicolon.
     let quoted_kv = head
         .iter()
         .take(40)
-        .filter(|l| l.starts_with('"') && l.contains("\"\t"))
+        .filter(|l| {
+            l.starts_with('"') && (l.contains("\"\t") || l.contains("\",") || l.contains("\";"))
+        })
         .count();
     let zwick_words = [
         "prüfzeit",
@@ -219,6 +236,12 @@ pub fn detect(text: &str, encoding: Encoding, source: &str) -> (Format, String) 
         "traversenweg",
         "testxpert",
         "zwick",
+        "standard force",
+        "standard travel",
+        "crosshead absolute",
+        "force standard",
+        "course standard",
+        "traverse absolue",
     ];
     if quoted_kv >= 5
         && lower_head
@@ -258,10 +281,11 @@ pub fn detect(text: &str, encoding: Encoding, source: &str) -> (Format, String) 
     (f, why)
 }
 
-/// `MTS793|MPT|DEU|1|2|,|.|:|…` (also anonymised `MTS***|MPT|**|…`).
+/// `MTS793|MPT|DEU|1|2|,|.|:|…` (also anonymised `MTS***|MPT|**|…`), and the "BTW" (Basic
+/// TestWare) export's `MTS793|BTW|ENG|1|0|.|/|:|…`.
 pub(crate) fn is_mts_locale_line(line: &str) -> bool {
     let l = line.trim_start_matches('\u{feff}').trim();
-    l.starts_with("MTS") && l.contains("|MPT|")
+    l.starts_with("MTS") && (l.contains("|MPT|") || l.contains("|BTW|"))
 }
 
 /// Decimal mark declared in the MTS 793 locale line (field 6), if any.
@@ -328,5 +352,30 @@ mod tests {
         assert_eq!(f, Format::BluehillCsv);
         let (f, _) = detect("a,b\n1,2\n", Encoding::Utf8, "a.csv");
         assert_eq!(f, Format::Delimited);
+    }
+
+    #[test]
+    fn comma_testxpert_btw_and_the_units_row_as_written() {
+        let head = "\"Specimen thickness\",1.06,\"mm\"\n\"Specimen width\",6.02,\"mm\"\n\"Cross-section\",6.3812,\"mm²\"\n\"Gage length, standard travel\",20,\"mm\"\n\"Extensometer\"\n\"Operator\"\n\"Time\",\"Crosshead absolute\",\"Standard force\",\"Standard travel\"\n\"s\",\"mm\",\"N\",\"mm\"\n1,2,3,4\n";
+        let (f, why) = detect(head, Encoding::Latin1, "mDB1pct.TRA");
+        assert_eq!(f, Format::TestxpertAscii, "{why}");
+        let (f, why) = detect(
+            "MTS793|BTW|ENG|1|0|.|/|:|44|1|1|A\n\nData Acquisition: Timed\n",
+            Encoding::Utf8,
+            "1_3D850_s1.dat",
+        );
+        assert_eq!(f, Format::Mts793Dat);
+        assert!(why.contains("BTW"), "{why}");
+        assert_eq!(
+            mts_locale_decimal("MTS793|BTW|ENG|1|0|.|/|:|44|1|1|A"),
+            Some(b'.')
+        );
+        let (f, why) = detect(
+            "Test : Rate 1,\"10.00000\",mm/min\n\nTime,Extension,Load\n(s),(mm),(N)\n",
+            Encoding::Utf8,
+            "bauer_flyx.csv",
+        );
+        assert_eq!(f, Format::BluehillCsv);
+        assert!(why.contains("'(s),(mm),(N)'"), "{why}");
     }
 }

@@ -25,7 +25,7 @@ pub use format::{Format, UnknownFormat};
 pub use record::{
     BlockInfo, Channel, InspectChannel, InspectReport, MetadataObject, Provenance, TestRecord,
 };
-pub use roles::KindEvidence;
+pub use roles::{KindEvidence, Mount};
 
 use cablab_core::TestKind;
 use sha2::{Digest, Sha256};

@@ -8,8 +8,8 @@
 use crate::error::{Diagnostic, IngestError};
 use crate::format::Format;
 use crate::roles::{
-    assign_roles, kind_evidence, kind_from_channels, kind_from_text, roles_of,
-    specimen_from_metadata, ChannelFacts, KindEvidence,
+    assign_roles, kind_evidence, kind_from_channels, kind_from_text, mount_of, roles_of,
+    specimen_from_metadata, ChannelFacts, KindEvidence, Mount,
 };
 use crate::table::{RawBlock, RawTable};
 use crate::units::{lookup, split_name_unit, strip_brackets, unreadable_unit, Dimension};
@@ -102,6 +102,9 @@ pub struct TestRecord {
     pub kind_evidence: Vec<KindEvidence>,
     /// Specimen geometry found in the metadata (SI).
     pub specimen: Specimen,
+    /// The specimen's cross-section area from the metadata, m² (testXpert `Cross-section`,
+    /// else thickness × width): a flat specimen's area, which no diameter describes.
+    pub cross_section_m2: Option<f64>,
     /// Channels of the main block, in file order.
     pub channels: Vec<Channel>,
     /// One Float64 column per channel, SI; null for empty cells, `nan` and sentinels.
@@ -341,6 +344,77 @@ fn append_block(a: &mut RawBlock, b: RawBlock) {
     a.last_data_line = b.last_data_line;
 }
 
+/// Columns that hold a number on the first data row only (every later cell empty) are specimen
+/// values written as columns (UIUC's `Original Length (mm)`, `Original Diameter (mm)`): they
+/// become metadata (`Original Length` = `25.4 mm`) and leave the channels. Needs at least three
+/// rows and one column that is filled further down.
+fn one_row_columns_to_metadata(
+    block: &mut RawBlock,
+    metadata: &mut Vec<(String, String)>,
+    warnings: &mut Vec<Diagnostic>,
+    source: &str,
+) {
+    let is_label = |b: &RawBlock, i: usize| b.label_slot.get(i).is_some_and(|s| s.is_some());
+    let one_row = |b: &RawBlock, i: usize| {
+        !is_label(b, i)
+            && b.columns[i].first().is_some_and(|v| !v.is_nan())
+            && b.columns[i][1..].iter().all(|v| v.is_nan())
+    };
+    if block.rows < 3 {
+        return;
+    }
+    let moved: Vec<usize> = (0..block.columns.len())
+        .filter(|&i| one_row(block, i))
+        .collect();
+    if moved.is_empty() || moved.len() == block.columns.len() {
+        return;
+    }
+    let mut names = Vec::new();
+    for &i in &moved {
+        let header = block.header_cells.get(i).map_or("", |s| s.trim());
+        let unit_cell = block
+            .unit_cells
+            .get(i)
+            .map(|s| strip_brackets(s).to_string())
+            .unwrap_or_default();
+        let (name, unit) = if unit_cell.is_empty() {
+            split_name_unit(header)
+        } else {
+            (header.to_string(), unit_cell)
+        };
+        let value = format!("{} {unit}", block.columns[i][0]);
+        names.push(format!("'{name}' = {}", value.trim()));
+        metadata.push((name, value.trim().to_string()));
+    }
+    warnings.push(Diagnostic {
+        file: source.into(),
+        line: Some(block.first_data_line),
+        column: None,
+        message: format!(
+            "{} column(s) hold a number on the first data row only: read as specimen metadata, not channels ({})",
+            moved.len(),
+            names.join(", ")
+        ),
+    });
+    for &i in moved.iter().rev() {
+        block.columns.remove(i);
+        if i < block.header_cells.len() {
+            block.header_cells.remove(i);
+        }
+        if i < block.unit_cells.len() {
+            block.unit_cells.remove(i);
+        }
+        if i < block.label_slot.len() {
+            block.label_slot.remove(i);
+        }
+        for (c, _) in block.labels.iter_mut() {
+            if *c > i {
+                *c -= 1;
+            }
+        }
+    }
+}
+
 /// Builds the record from what a reader found.
 pub(crate) fn build(
     mut raw: RawTable,
@@ -437,6 +511,7 @@ pub(crate) fn build(
         append_block(&mut block, next);
     }
     drop(raw.blocks);
+    one_row_columns_to_metadata(&mut block, &mut raw.metadata, &mut warnings, &source);
 
     // Names and units.
     let n = block.columns.len();
@@ -484,6 +559,25 @@ pub(crate) fn build(
     let is_label: Vec<bool> = (0..n)
         .map(|i| block.label_slot.get(i).is_some_and(|s| s.is_some()))
         .collect();
+    // A column with no unit in its header takes the unit a metadata line gives for its name
+    // (sdata's `#;Displacement;;mm;...`: name, empty value, unit).
+    for i in 0..n {
+        if !units[i].is_empty() || is_label[i] {
+            continue;
+        }
+        let declared = raw.metadata.iter().find_map(|(k, v)| {
+            let v = v.trim();
+            (k.trim().eq_ignore_ascii_case(names[i].trim())
+                && !v.contains(' ')
+                && v != "-"
+                && v.parse::<f64>().is_err()
+                && lookup(v).is_some())
+            .then(|| v.to_string())
+        });
+        if let Some(u) = declared {
+            units[i] = u;
+        }
+    }
     // Units stated by the user (`--unit COLUMN=UNIT`) replace what the file says.
     for (col, unit) in &opts.units {
         let i = find_column(&names, &block.header_cells, col).ok_or_else(|| {
@@ -519,6 +613,7 @@ pub(crate) fn build(
             // An unreadable unit scores like a missing one, so that the column still gets its
             // role by name and then refuses below for want of a unit.
             unit_written: !units[i].is_empty() && infos[i].is_some(),
+            filled: 2 * block.columns[i].iter().filter(|v| !v.is_nan()).count() >= block.rows,
         })
         .collect();
 
@@ -570,7 +665,7 @@ pub(crate) fn build(
     let ft = pick(&opts.time, "--time")?;
     let fc = pick(&opts.control, "--control")?;
     let fr = pick(&opts.response, "--response")?;
-    let (t, c, r) = assign_roles(&facts, ft, fc, fr);
+    let (t, c, r) = assign_roles(&facts, ft, fc, fr, opts.kind);
     let mut roles = roles_of(n, t, c, r);
     for (role, &l) in roles.iter_mut().zip(&is_label) {
         if l {
@@ -722,11 +817,13 @@ pub(crate) fn build(
 
     let labels = std::mem::take(&mut block.labels);
     let data = to_frame(&names, columns, labels, &source)?;
+    let cross_section_m2 = crate::roles::area_from_metadata(&raw.metadata);
     Ok(TestRecord {
         kind,
         kind_reason,
         kind_evidence,
         specimen,
+        cross_section_m2,
         channels,
         data,
         metadata: raw.metadata,
@@ -802,6 +899,18 @@ impl TestRecord {
             .map(|e| e.what.as_str())
             .collect();
         (!against.is_empty()).then(|| against.join("; "))
+    }
+
+    /// Where channel `i` measures: on the specimen, on the machine, or not said
+    /// ([`crate::roles::Mount`]; from the channel names, not from the file name).
+    pub fn mount(&self, i: usize) -> Mount {
+        let crosshead_elsewhere = self.channels.iter().enumerate().any(|(k, c)| {
+            k != i
+                && c.dimension == Some(Dimension::Length)
+                && mount_of(&c.name, c.dimension, false) == Mount::Machine
+        });
+        let c = &self.channels[i];
+        mount_of(&c.name, c.dimension, crosshead_elsewhere)
     }
 
     /// Index of the channel with `role` (first one).

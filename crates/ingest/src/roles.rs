@@ -12,6 +12,9 @@ pub(crate) struct ChannelFacts {
     pub name: String,
     pub dimension: Option<Dimension>,
     pub unit_written: bool,
+    /// Whether at least half of the column's cells are numbers: a geometry value written on
+    /// the first row only (and empty cells after) is not a channel.
+    pub filled: bool,
 }
 
 fn has(name: &str, words: &[&str]) -> bool {
@@ -181,7 +184,7 @@ fn control_score(c: &ChannelFacts, dim: Dimension) -> Option<i32> {
     };
     let dim_ok = c.dimension == Some(dim);
     let word = has(&n, words);
-    if !(dim_ok || (word && c.dimension.is_none())) {
+    if !(dim_ok || (word && c.dimension.is_none())) || !c.filled {
         return None;
     }
     let mut s = if dim_ok { 10 } else { 4 };
@@ -191,27 +194,170 @@ fn control_score(c: &ChannelFacts, dim: Dimension) -> Option<i32> {
     if has(&n, SETPOINT) {
         s -= 8;
     }
-    if has(&n, CONTROL_PENALTY) {
+    // A specimen-mounted travel (an extensometer; Zwick's "standard travel", the extensometer's
+    // travel when one is fitted, but not catman's "Standardwegaufnehmer", the crosshead
+    // transducer) ranks first; its strain word ("Feindehnung", "Dehnung" in mm) is no penalty.
+    // A length called "strain" (MTS TestSuite's `_Strain1` in mm) is not ranked first: the
+    // shared real-logs manifest names the crosshead as the technician's control there.
+    let standard_travel = has(&n, STANDARD_TRAVEL) && !n.contains("aufnehmer");
+    let mounted = dim == Dimension::Length
+        && ((is_specimen_mounted(&n) && !n.contains("strain")) || standard_travel);
+    if has(&n, CONTROL_PENALTY) && !mounted {
         s -= 6;
     }
     if n.contains("digital") {
         s -= 3;
     }
-    if n.contains("machine") || n.contains("traverse") || n.contains("maschine") {
+    if has(&n, CROSSHEAD_WORDS) {
         s -= 1;
     }
-    if n.contains("standardweg") {
+    if standard_travel {
         s += 2;
+    }
+    if mounted {
+        s += 8;
     }
     Some(s)
 }
 
+/// Names of channels that sit on the specimen: extensometers (clip-on, video, laser, DIC), the
+/// German "Feindehnung"/"Dehnung", MayTec high-temperature extensometers.
+pub const SPECIMEN_MOUNTED: &[&str] = &[
+    "extenso",
+    "feindehnung",
+    "dehnung",
+    "maytec",
+    "strain",
+    "clip",
+    "video",
+    "laser",
+    "gauge",
+    "gage",
+];
+
+/// Names of machine travel channels (crosshead, actuator, piston; Instron's and Lloyd's
+/// "Extension" is the crosshead's): the load train's compliance is in them.
+pub const CROSSHEAD_WORDS: &[&str] = &[
+    "crosshead",
+    "traverse",
+    "stroke",
+    "machine",
+    "maschine",
+    "actuator",
+    "kolben",
+    "standardwegaufnehmer",
+    "extension",
+];
+
+/// Zwick testXpert's "standard travel" in German, English and French.
+pub const STANDARD_TRAVEL: &[&str] = &["standardweg", "standard travel", "course standard"];
+
+/// Whether a lower-case channel name says the channel sits on the specimen, not on the machine.
+/// A strain "(Extension)" is Bluehill's strain computed from the crosshead: not mounted; an
+/// "extensometer" always is.
+pub fn is_specimen_mounted(lower_name: &str) -> bool {
+    lower_name.contains("extenso")
+        || (has(lower_name, SPECIMEN_MOUNTED) && !has(lower_name, CROSSHEAD_WORDS))
+}
+
+/// Where a displacement or strain channel measures: on the specimen (an extensometer, a strain
+/// channel, testXpert's standard travel next to a crosshead channel), on the machine (crosshead,
+/// actuator: the load train's compliance is in it), or not said by its name.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Mount {
+    /// Extensometer, clip gauge, video/laser/DIC strain.
+    Specimen,
+    /// Crosshead, actuator, piston, machine travel.
+    Machine,
+    /// The name does not say (`Displacement`, `Position`).
+    Unknown,
+}
+
+/// Where a channel called `name` with `dimension` measures (see [`Mount`]); `crosshead_elsewhere`
+/// says whether another channel of the file is named as the crosshead (then Zwick's "standard
+/// travel" is the extensometer's, else it may be the crosshead's).
+pub(crate) fn mount_of(
+    name: &str,
+    dimension: Option<Dimension>,
+    crosshead_elsewhere: bool,
+) -> Mount {
+    let n = name.to_lowercase();
+    match dimension {
+        Some(Dimension::Ratio) if strain_named(&n) => {
+            if has(&n, CROSSHEAD_WORDS) || n.contains("extension") {
+                Mount::Machine
+            } else {
+                Mount::Specimen
+            }
+        }
+        Some(Dimension::Length) => {
+            if has(&n, STANDARD_TRAVEL) && !n.contains("aufnehmer") {
+                if crosshead_elsewhere {
+                    Mount::Specimen
+                } else {
+                    Mount::Unknown
+                }
+            } else if is_specimen_mounted(&n) {
+                Mount::Specimen
+            } else if has(&n, CROSSHEAD_WORDS) {
+                Mount::Machine
+            } else {
+                Mount::Unknown
+            }
+        }
+        _ => Mount::Unknown,
+    }
+}
+
+/// Whether a lower-case name says strain.
+fn strain_named(lower_name: &str) -> bool {
+    has(lower_name, STRAIN_WORDS)
+}
+
+/// Strain words: a ratio channel is a control candidate only when its name says strain.
+const STRAIN_WORDS: &[&str] = &[
+    "strain",
+    "dehnung",
+    "déformation",
+    "deformation",
+    "deformación",
+    "deformazione",
+    "allongement",
+    "extenso",
+];
+
+/// A dimensionless strain as a tension control: an extensometer's (or DIC's) strain is the
+/// sectional strain itself (ISO 6892-1: the stiffness comes from the specimen-mounted measure).
+/// Scores above a crosshead travel (at most 15) and below a named extensometer travel (18 and
+/// more). A true (logarithmic) strain, a strain computed from the crosshead, a strain rate, a
+/// shear strain or a column that does not move is no candidate.
+fn strain_control_score(c: &ChannelFacts) -> Option<i32> {
+    let n = c.name.to_lowercase();
+    if c.dimension != Some(Dimension::Ratio) || !c.filled || !strain_named(&n) {
+        return None;
+    }
+    let excluded = has(&n, CROSSHEAD_WORDS)
+        || has(&n, SETPOINT)
+        || ["extension", "rate", "shear", "true", "log"]
+            .iter()
+            .any(|w| n.contains(w))
+        || n.starts_with("tstrain");
+    (!excluded).then_some(16)
+}
+
 /// Picks (time, control, response) column indices. `fixed` holds overrides already chosen.
+///
+/// The control against a force is the specimen-mounted measure when the file has one (a named
+/// extensometer travel, else a strain channel) ahead of the crosshead (ISO 6892-1 / ISO 527):
+/// one decision, shared by `inspect` and `analyze`. A strain is a candidate only when the kind
+/// is tension or not known (`kind`).
 pub(crate) fn assign_roles(
     ch: &[ChannelFacts],
     fixed_time: Option<usize>,
     fixed_control: Option<usize>,
     fixed_response: Option<usize>,
+    kind: Option<TestKind>,
 ) -> (Option<usize>, Option<usize>, Option<usize>) {
     let mut taken: Vec<usize> = [fixed_time, fixed_control, fixed_response]
         .into_iter()
@@ -269,6 +415,14 @@ pub(crate) fn assign_roles(
             rdim == Some(Dimension::Torque) || (rdim.is_none() && has(&rname, TORQUE_WORDS));
         if torque_like {
             ctl(Dimension::Angle, &taken).or_else(|| ctl(Dimension::Curvature, &taken))
+        } else if matches!(kind, None | Some(TestKind::Tension | TestKind::Unknown)) {
+            best(
+                ch.iter().enumerate().map(|(i, c)| {
+                    let s = control_score(c, Dimension::Length);
+                    (i, s.max(strain_control_score(c)))
+                }),
+                &taken,
+            )
         } else {
             ctl(Dimension::Length, &taken)
         }
@@ -590,7 +744,82 @@ fn length_m(key: &str, value: &str) -> Option<(f64, bool)> {
     }
 }
 
+/// An area from a metadata value (`6.3812 mm²`), in m²; `None` without a readable area unit.
+fn area_m2(key: &str, value: &str) -> Option<f64> {
+    let mut parts = value.split_whitespace();
+    let v: f64 = parts.next()?.replace(',', ".").parse().ok()?;
+    let unit = parts
+        .next()
+        .map(|s| s.to_string())
+        .or_else(|| key_unit(key))?;
+    let info = lookup(&unit)?;
+    (info.dimension == Dimension::Area && v > 0.0).then_some(v * info.factor)
+}
+
+/// The specimen's cross-section area from the metadata, m²: stated (testXpert `Cross-section`,
+/// `Section`, `Querschnitt`, `Area`, with an area unit), else a flat specimen's thickness ×
+/// width (`Specimen thickness` and `Specimen width`, `Dicke`/`Breite`, `Épaisseur`/`Largeur`,
+/// with length units). `None` when neither is there.
+pub(crate) fn area_from_metadata(meta: &[(String, String)]) -> Option<f64> {
+    stated_area(meta).or_else(|| {
+        let find = |keys: &[&str]| {
+            meta.iter().find_map(|(k, v)| {
+                let nk = norm_key(k);
+                let unit_given = v.split_whitespace().nth(1).is_some() || key_unit(k).is_some();
+                (keys.contains(&nk.as_str()) && unit_given)
+                    .then(|| length_m(k, v).map(|(x, _)| x))
+                    .flatten()
+                    .filter(|x| *x > 0.0)
+            })
+        };
+        let t = find(&[
+            "specimen thickness",
+            "thickness",
+            "dicke",
+            "probendicke",
+            "épaisseur éprouvette",
+            "épaisseur",
+            "espesor",
+            "spessore",
+        ])?;
+        let w = find(&[
+            "specimen width",
+            "width",
+            "breite",
+            "probenbreite",
+            "largeur éprouvette",
+            "largeur",
+            "ancho",
+            "larghezza",
+        ])?;
+        Some(t * w)
+    })
+}
+
+/// A cross-section area stated with an area unit (see [`area_from_metadata`]).
+fn stated_area(meta: &[(String, String)]) -> Option<f64> {
+    const KEYS: &[&str] = &[
+        "cross-section",
+        "cross section",
+        "cross-sectional area",
+        "section",
+        "querschnitt",
+        "anfangsquerschnitt",
+        "area",
+        "original area",
+        "s0",
+    ];
+    meta.iter().find_map(|(k, v)| {
+        let nk = norm_key(k);
+        KEYS.contains(&nk.as_str()).then(|| area_m2(k, v)).flatten()
+    })
+}
+
 /// Specimen label, diameter and free length (or span) from metadata; warnings for assumed units.
+///
+/// A gauge length (`Gauge length`, testXpert's `Gage length, standard travel`, `L0 - course
+/// standard`, UIUC's `Original Length`) is the free length where no clamp length is given:
+/// with an extensometer it is the length the measured elongation belongs to.
 pub(crate) fn specimen_from_metadata(
     meta: &[(String, String)],
 ) -> (cablab_core::Specimen, Vec<String>) {
@@ -614,6 +843,8 @@ pub(crate) fn specimen_from_metadata(
     let diam_keys = [
         "gauge diameter",
         "specimen diameter",
+        "original diameter",
+        "initial diameter",
         "diameter",
         "durchmesser",
         "diámetro",
@@ -637,9 +868,14 @@ pub(crate) fn specimen_from_metadata(
         ],
         &[
             "gauge length",
+            "gage length",
+            "l0 - course standard",
             "messlänge",
             "parallel length",
             "longitud calibrada",
+            "original length",
+            "initial length",
+            "original gauge length",
         ],
         &["length", "länge", "longitud", "lunghezza"],
     ];
@@ -647,7 +883,7 @@ pub(crate) fn specimen_from_metadata(
         for k in keys {
             let matches = |key: &str| {
                 let nk = norm_key(key);
-                nk == *k || nk.starts_with(&format!("{k} "))
+                nk == *k || nk.starts_with(&format!("{k} ")) || nk.starts_with(&format!("{k},"))
             };
             if let Some((key, v)) = meta
                 .iter()
@@ -658,7 +894,37 @@ pub(crate) fn specimen_from_metadata(
         }
         None
     };
-    if let Some((_, v)) = find(&label_keys) {
+    // "Specimen thickness: 1.06 mm" is a dimension, not the specimen's name.
+    let dimension_key = |k: &str| {
+        let nk = norm_key(k);
+        [
+            "thickness",
+            "width",
+            "diameter",
+            "length",
+            "section",
+            "area",
+            "dicke",
+            "breite",
+            "durchmesser",
+            "länge",
+            "épaisseur",
+            "largeur",
+            "gauge",
+            "gage",
+        ]
+        .iter()
+        .any(|w| nk.contains(w))
+    };
+    let label = label_keys.iter().find_map(|k| {
+        meta.iter().find(|(key, v)| {
+            let nk = norm_key(key);
+            !v.trim().is_empty()
+                && !dimension_key(key)
+                && (nk == *k || nk.starts_with(&format!("{k} ")))
+        })
+    });
+    if let Some((_, v)) = label {
         sp.label = Some(v.trim().to_string());
     }
     if let Some((k, v)) = find(&diam_keys) {
@@ -697,6 +963,7 @@ mod tests {
                 name: n.to_string(),
                 dimension: lookup(u).map(|i| i.dimension),
                 unit_written: !u.is_empty(),
+                filled: true,
             })
             .collect()
     }
@@ -712,7 +979,7 @@ mod tests {
             ("1944 B", "mm"),
         ]);
         assert_eq!(
-            assign_roles(&f, None, None, None),
+            assign_roles(&f, None, None, None, None),
             (Some(1), Some(4), Some(3))
         );
         let f = facts(&[
@@ -724,9 +991,72 @@ mod tests {
             ("Dehnung", "mm"),
         ]);
         assert_eq!(
-            assign_roles(&f, None, None, None),
+            assign_roles(&f, None, None, None, None),
             (Some(0), Some(3), Some(1))
         );
+    }
+
+    #[test]
+    fn the_specimen_mounted_measure_is_the_control() {
+        let ctl =
+            |cols: &[(&str, &str)], kind| assign_roles(&facts(cols), None, None, None, kind).1;
+        // catman hot tensile: MayTec extensometer over the crosshead transducer.
+        let catman = [
+            ("Zeit  1 - Standardmessrate", "s"),
+            ("Maytec", "mm"),
+            ("Kraft", "N"),
+            ("Standardwegaufnehmer", "mm"),
+        ];
+        assert_eq!(ctl(&catman, None), Some(1));
+        // testXpert English: the standard travel (extensometer) over the absolute crosshead.
+        let zwick = [
+            ("Time", "s"),
+            ("Crosshead absolute", "mm"),
+            ("Standard force", "N"),
+            ("Standard travel", "mm"),
+        ];
+        assert_eq!(ctl(&zwick, Some(TestKind::Tension)), Some(3));
+        // German testXpert with a crosshead, a standard travel and a "Dehnung" in mm.
+        let de = [
+            ("Prüfzeit", "s"),
+            ("Standardkraft", "N"),
+            ("Traversenweg absolut", "mm"),
+            ("Standardweg", "mm"),
+            ("Dehnung", "mm"),
+        ];
+        assert_eq!(ctl(&de, None), Some(3));
+        let fein = [
+            ("Zeit", "s"),
+            ("Traversenweg", "mm"),
+            ("Feindehnung", "mm"),
+            ("Kraft", "kN"),
+        ];
+        assert_eq!(ctl(&fein, None), Some(2));
+        // UIUC: the extensometer strain (mm/mm) over the crosshead extension, for tension or an
+        // unknown kind; never for three-point bending.
+        let uiuc = [
+            ("Time", "s"),
+            ("Extension", "mm"),
+            ("Load", "kN"),
+            ("Strain", "mm/mm"),
+        ];
+        assert_eq!(ctl(&uiuc, None), Some(3));
+        assert_eq!(ctl(&uiuc, Some(TestKind::Tension)), Some(3));
+        assert_eq!(ctl(&uiuc, Some(TestKind::ThreePoint)), Some(1));
+        // Bluehill's strain computed from the crosshead, a true strain, a strain rate: no.
+        let bluehill = [
+            ("Time", "s"),
+            ("Extension", "mm"),
+            ("Load", "N"),
+            ("Tensile strain (Extension)", "%"),
+            ("True strain", "mm/mm"),
+            ("Strain rate", "1"),
+        ];
+        assert_eq!(ctl(&bluehill, None), Some(1));
+        // A column filled on one row only is no channel.
+        let mut f = facts(&[("Time", "s"), ("Original Length", "mm"), ("Load", "kN")]);
+        f[1].filled = false;
+        assert_eq!(assign_roles(&f, None, None, None, None).1, None);
     }
 
     #[test]
@@ -738,12 +1068,12 @@ mod tests {
             ("Channel 1 Recuento", "cycles"),
         ]);
         assert_eq!(
-            assign_roles(&f, None, None, None),
+            assign_roles(&f, None, None, None, None),
             (Some(0), Some(1), Some(2))
         );
         let f = facts(&[("Tempo", ""), ("Spostamento", ""), ("Carico", "")]);
         assert_eq!(
-            assign_roles(&f, None, None, None),
+            assign_roles(&f, None, None, None, None),
             (Some(0), Some(1), Some(2))
         );
     }
@@ -759,7 +1089,7 @@ mod tests {
             ("Digital Rotation", "deg"),
         ]);
         assert_eq!(
-            assign_roles(&f, None, None, None),
+            assign_roles(&f, None, None, None, None),
             (Some(0), Some(3), Some(4))
         );
         let dims: Vec<_> = f.iter().map(|c| c.dimension).collect();
@@ -768,7 +1098,7 @@ mod tests {
             "axial-torsional is not plain torsion"
         );
         let f = facts(&[("curvature", "1/m"), ("bending_moment", "N.m")]);
-        let (t, c, r) = assign_roles(&f, None, None, None);
+        let (t, c, r) = assign_roles(&f, None, None, None, None);
         assert_eq!((t, c, r), (None, Some(0), Some(1)));
         let dims: Vec<_> = f.iter().map(|c| c.dimension).collect();
         assert_eq!(
@@ -846,6 +1176,29 @@ mod tests {
         assert_eq!(ev[0].kinds, vec![TestKind::Tension]);
         assert_eq!(ev[1].kinds, vec![TestKind::ThreePoint]);
         assert!(ev[1].what.starts_with("the file name"), "{ev:?}");
+    }
+
+    #[test]
+    fn cross_section_stated_or_thickness_times_width() {
+        let kv = |v: &[(&str, &str)]| -> Vec<(String, String)> {
+            v.iter()
+                .map(|(a, b)| (a.to_string(), b.to_string()))
+                .collect()
+        };
+        let zwick = kv(&[
+            ("Specimen thickness", "1.06 mm"),
+            ("Specimen width", "6.02 mm"),
+            ("Cross-section", "6.3812 mm²"),
+        ]);
+        assert!((area_from_metadata(&zwick).unwrap() - 6.3812e-6).abs() < 1e-15);
+        let flat = kv(&[("Dicke [mm]", "2"), ("Breite [mm]", "9,9")]);
+        assert!((area_from_metadata(&flat).unwrap() - 19.8e-6).abs() < 1e-15);
+        // No unit: no guess; one of the two: no area.
+        assert_eq!(
+            area_from_metadata(&kv(&[("Dicke", "2"), ("Breite", "9.9")])),
+            None
+        );
+        assert_eq!(area_from_metadata(&kv(&[("Breite [mm]", "150")])), None);
     }
 
     #[test]

@@ -1198,6 +1198,29 @@ fn key_value(cells: &[String], raw: &[u8]) -> Option<(String, String)> {
             raw_s.trim().trim_start_matches('\u{feff}').to_string(),
         ));
     }
+    // sdata's `#;<name>;<value>;<unit>;<type>;<description>;`: the name is the key and the value
+    // is `<value> <unit>` (a column's unit alone when the value is empty; "-" and "nan" are no
+    // unit). A column without a unit in the header takes the unit of its `#;` line
+    // (`record::build`).
+    if cells
+        .first()
+        .is_some_and(|c| c.trim().trim_start_matches('\u{feff}') == "#")
+        && cells.len() >= 4
+    {
+        let key = cells[1].trim();
+        if !key.is_empty() {
+            let value = cells[2].trim();
+            let unit = cells[3].trim();
+            let unit = if matches!(unit, "-" | "nan" | "") {
+                ""
+            } else {
+                unit
+            };
+            let value = if matches!(value, "nan") { "" } else { value };
+            let v = format!("{value} {unit}").trim().to_string();
+            return Some((key.to_string(), v));
+        }
+    }
     match filled.as_slice() {
         [] => None,
         [one] => {

@@ -448,3 +448,108 @@ fn german_torsion_units_in_brackets_sets_kind() {
         .iter()
         .any(|w| w.message.contains("unknown unit 'N/mm'")));
 }
+
+/// The real exports added with `EXPECTED.md`: units from where each file writes them, the
+/// specimen-mounted channel as the control, geometry from the file.
+#[test]
+fn real_exports_units_roles_and_geometry() {
+    let read = |n: &str| read_path(&data(n), &ReadOptions::default()).unwrap();
+
+    // UIUC: units in the names, geometry columns filled on row 1 only.
+    let r = read("tensileanalyzer__uiuc_tension_steel1045_1.csv");
+    assert_eq!(r.data.height(), 381);
+    assert_eq!(r.channels.len(), 4);
+    assert_eq!(role_name(&r, Role::Control), Some("Strain"));
+    assert!(
+        rel(val(&r, "Load", 381), 22.20e3),
+        "{}",
+        val(&r, "Load", 381)
+    );
+    assert!(rel(r.specimen.free_length_m.unwrap(), 25.4e-3));
+    assert!(rel(r.specimen.diameter_m.unwrap(), 7.13e-3));
+
+    // sdata: units from the `#;` lines (the names row has none).
+    let r = read("sdata__nist_numisheet2020_tct_dp980.csv");
+    assert_eq!(r.data.height(), 1623);
+    let unit = |n: &str| {
+        r.channels
+            .iter()
+            .find(|c| c.name == n)
+            .unwrap()
+            .unit
+            .clone()
+    };
+    assert_eq!(unit("Displacement"), "mm");
+    assert_eq!(unit("Force"), "N");
+    assert_eq!(unit("StrainA"), "mm/mm");
+    assert!(
+        r.warnings.iter().all(|w| !w.message.contains("no unit")),
+        "{:?}",
+        r.warnings
+    );
+    assert_eq!(role_name(&r, Role::Response), Some("Force"));
+    let strain = role_name(&r, Role::Control).unwrap();
+    assert!(["Estrain", "StrainA"].contains(&strain), "{strain}");
+    // Row 485: the first peak, +25.142 kN at StrainA 0.0557.
+    assert!((val(&r, "Force", 485) - 25_142.0).abs() < 1.0);
+    assert!((val(&r, "StrainA", 485) - 0.0557).abs() < 1e-4);
+    assert_eq!(r.kind, TestKind::Tension);
+
+    // testXpert, English and French: the standard travel, the gauge length and the area.
+    for (n, rows, ctl, l0, area) in [
+        (
+            "hilhorst__testxpert_tension_mdb1pct_en.TRA",
+            3415,
+            "Standard travel",
+            20e-3,
+            6.3812e-6,
+        ),
+        (
+            "hilhorst__testxpert_tension_allong1_fr.TRA",
+            2184,
+            "Course standard",
+            25e-3,
+            5.96e-6,
+        ),
+    ] {
+        let r = read(n);
+        assert_eq!(r.data.height(), rows, "{n}");
+        assert_eq!(role_name(&r, Role::Control), Some(ctl), "{n}");
+        assert!(rel(r.specimen.free_length_m.unwrap(), l0), "{n}");
+        assert!(rel(r.cross_section_m2.unwrap(), area), "{n}");
+        assert_eq!(r.specimen.label, None, "{n}: a thickness is no label");
+        assert_eq!(r.specimen.diameter_m, None, "{n}");
+    }
+    let r = read("hilhorst__testxpert_tension_mdb1pct_en.TRA");
+    assert!(rel(val(&r, "Standard force", 1839), 3708.59));
+}
+
+/// The HBM catman hot-tensile layout (names with units in brackets, tab, trailing tab): the
+/// MayTec extensometer is the control, not the crosshead transducer — the one role decision
+/// `inspect` and `analyze` share.
+#[test]
+fn catman_hot_tensile_maytec_is_the_control() {
+    let mut s = String::from(
+        "Zeit  1 - Standardmessrate [s]\tMaytec [mm]\tKraft [N]\tStandardwegaufnehmer [mm]\tPyrometer [°C]\t\n",
+    );
+    for k in 0..60 {
+        let x = 1e-3 * k as f64;
+        s += &format!(
+            "{}\t{x}\t{}\t{}\t900\t\n",
+            0.02 * k as f64,
+            3e6 / 0.02 * x,
+            8.0 * x
+        );
+    }
+    let r = read_bytes(s.as_bytes(), "DD11_7_1.ASC", &ReadOptions::default()).unwrap();
+    assert_eq!(role_name(&r, Role::Control), Some("Maytec"));
+    assert_eq!(role_name(&r, Role::Response), Some("Kraft"));
+    let i = r.channels.iter().position(|c| c.name == "Maytec").unwrap();
+    assert_eq!(r.mount(i), cablab_ingest::Mount::Specimen);
+    let k = r
+        .channels
+        .iter()
+        .position(|c| c.name == "Standardwegaufnehmer")
+        .unwrap();
+    assert_eq!(r.mount(k), cablab_ingest::Mount::Machine);
+}

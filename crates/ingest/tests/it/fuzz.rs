@@ -16,6 +16,12 @@ fn fixtures() -> Vec<Vec<u8>> {
         "cthbiax__testsuite_axial_torsion_daq.xml",
         "materialdigital__instron8852_tension_46NT71.csv",
         "catman_ascii_sample.txt",
+        "tensileanalyzer__uiuc_tension_steel1045_1.csv",
+        "sdata__nist_numisheet2020_tct_dp980.csv",
+        "mechtesting__tension_steel1045_extensometer.csv",
+        "mechtesting__tension_steel1045_machine.csv",
+        "hilhorst__testxpert_tension_mdb1pct_en.TRA",
+        "hilhorst__testxpert_tension_allong1_fr.TRA",
     ] {
         let b = std::fs::read(dir.join(name)).expect("fixture");
         // Keep inputs small so that each case is fast: the head holds every layout feature.
@@ -126,7 +132,7 @@ proptest! {
     }
 
     #[test]
-    fn mutated_fixtures_never_panic(which in 0usize..7, edits in prop::collection::vec(edit(), 1..6)) {
+    fn mutated_fixtures_never_panic(which in 0usize..13, edits in prop::collection::vec(edit(), 1..6)) {
         let fx = fixtures();
         let bytes = apply(fx[which % fx.len()].clone(), &edits);
         for o in all_options() {

@@ -1,0 +1,425 @@
+//! The six real exports of `tests/data/` (see `tests/data/EXPECTED.md`, reference values by plain
+//! least squares): what `inspect` reads (channels, units, rows, roles, geometry) and what
+//! `analyze` gives (stiffness from the specimen-mounted channel within the stated tolerance, the
+//! machine-travel flag where it applies, the offset yield). Plus small generated files for the
+//! strain controls: a strain in % against a crosshead, a torsional shear strain, a strain in a
+//! bending test.
+
+use crate::common::cablab;
+use serde_json::Value;
+
+fn json(args: &[&str]) -> Value {
+    let out = cablab().args(args).arg("--json").output().unwrap();
+    assert!(
+        out.status.success(),
+        "{args:?}: {}{}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_slice(&out.stdout).unwrap()
+}
+
+fn data(name: &str) -> String {
+    format!("tests/data/{name}")
+}
+
+fn inspect(name: &str) -> Value {
+    json(&["inspect", &data(name)])
+}
+
+fn analyze(name: &str, extra: &[&str]) -> Value {
+    let f = data(name);
+    let mut args = vec!["analyze", f.as_str(), "--kind", "tension"];
+    args.extend_from_slice(extra);
+    json(&args)
+}
+
+/// (name, unit, role) of every channel.
+fn channels(v: &Value) -> Vec<(String, String, String)> {
+    v["channels"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|c| {
+            (
+                c["name"].as_str().unwrap().to_string(),
+                c["unit"].as_str().unwrap().to_string(),
+                c["role"].as_str().unwrap().to_string(),
+            )
+        })
+        .collect()
+}
+
+fn owned(v: &[(&str, &str, &str)]) -> Vec<(String, String, String)> {
+    v.iter()
+        .map(|(a, b, c)| (a.to_string(), b.to_string(), c.to_string()))
+        .collect()
+}
+
+fn stiffness(v: &Value) -> f64 {
+    v["stiffness"]["value"].as_f64().unwrap()
+}
+
+fn warnings(v: &Value) -> Vec<String> {
+    v["warnings"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|w| w.as_str().unwrap().to_string())
+        .collect()
+}
+
+fn within(x: f64, target: f64, rel: f64) -> bool {
+    (x / target - 1.0).abs() <= rel
+}
+
+fn machine_flag(w: &[String]) -> bool {
+    w.iter()
+        .any(|w| w.contains("machine travel") && w.contains("lower bound"))
+}
+
+#[test]
+fn uiuc_steel1045_extensometer_strain_beside_the_crosshead() {
+    let name = "tensileanalyzer__uiuc_tension_steel1045_1.csv";
+    let i = inspect(name);
+    assert_eq!(i["rows"], 381);
+    // The four geometry columns (one value on row 1) are metadata, not channels.
+    assert_eq!(
+        channels(&i),
+        owned(&[
+            ("Time", "s", "time"),
+            ("Extension", "mm", "other"),
+            ("Load", "kN", "response"),
+            ("Strain", "mm/mm", "control"),
+        ])
+    );
+    assert_eq!(i["metadata"]["Original Length"], "25.4 mm");
+    assert_eq!(i["metadata"]["Original Diameter"], "7.13 mm");
+    let w = i["warnings"].to_string();
+    assert!(w.contains("not strictly increasing"), "{w}");
+
+    // No flags: gauge length and diameter from the file; EA = dF/dε from the extensometer.
+    let a = analyze(name, &["--yield-method", "offset:0.002"]);
+    let ea = stiffness(&a);
+    assert!(within(ea, 7.5e6, 0.05), "EA {ea:e}");
+    let e = a["modulus_pa"].as_f64().unwrap();
+    let area = std::f64::consts::PI * 7.13e-3f64.powi(2) / 4.0;
+    assert!(
+        within(e, ea / area, 1e-9) && (178e9..=197e9).contains(&e),
+        "E {e:e}"
+    );
+    assert_eq!(a["control_channel"]["name"], "Strain");
+    assert_eq!(a["control_channel"]["mount"], "specimen");
+    let w = warnings(&a);
+    assert!(
+        w.iter().any(|w| w.contains("specimen-mounted 'Strain'")),
+        "{w:?}"
+    );
+    assert!(w.iter().any(|w| w.contains("dF/dε")), "{w:?}");
+    assert!(!machine_flag(&w), "{w:?}");
+    let fy = a["yield"]["response"].as_f64().unwrap();
+    let ey = a["yield"]["control"].as_f64().unwrap();
+    assert!((19.7e3..=21.0e3).contains(&fy), "yield {fy}");
+    assert!((0.0028..=0.0065).contains(&ey), "yield strain {ey}");
+
+    // The crosshead by choice: 35× too low, and flagged.
+    let a = analyze(name, &["--control", "Extension"]);
+    assert_eq!(a["control_channel"]["mount"], "machine");
+    assert!(stiffness(&a) < 0.1 * ea);
+    assert!(machine_flag(&warnings(&a)), "{:?}", warnings(&a));
+}
+
+#[test]
+fn sdata_numisheet_units_from_metadata_and_dic_strain() {
+    let name = "sdata__nist_numisheet2020_tct_dp980.csv";
+    let i = inspect(name);
+    assert_eq!(i["rows"], 1623);
+    let ch = channels(&i);
+    let unit = |n: &str| ch.iter().find(|c| c.0 == n).unwrap().1.clone();
+    assert_eq!(
+        [
+            "Time",
+            "Displacement",
+            "Force",
+            "Estress",
+            "StrainA",
+            "eyyA"
+        ]
+        .map(unit),
+        ["s", "mm", "N", "MPa", "mm/mm", "mm/mm"]
+    );
+    assert_eq!(unit("index"), "");
+    // The actuator in mm, read as such: −44.96 … −39.04 mm in the complete rows.
+    let disp = &i["channels"][2];
+    assert_eq!(disp["name"], "Displacement");
+    assert!(
+        within(disp["max"].as_f64().unwrap(), -39.044e-3, 1e-4),
+        "{disp}"
+    );
+    let w = i["warnings"].to_string();
+    assert!(!w.contains("has no unit"), "{w}");
+    assert_eq!(i["kind"], "tension");
+
+    for extra in [
+        &["--length-mm", "36", "--diameter-mm", "5.668"][..],
+        &[
+            "--length-mm",
+            "36",
+            "--diameter-mm",
+            "5.668",
+            "--control",
+            "StrainA",
+        ][..],
+    ] {
+        let mut args = extra.to_vec();
+        args.extend(["--yield-method", "offset:0.002"]);
+        let a = analyze(name, &args);
+        let ea = stiffness(&a);
+        assert!(within(ea, 4.95e6, 0.05), "{extra:?}: EA {ea:e}");
+        let e = a["modulus_pa"].as_f64().unwrap();
+        assert!((186e9..=206e9).contains(&e), "E {e:e}");
+        assert_eq!(a["control_channel"]["mount"], "specimen");
+        let fy = a["yield"]["response"].as_f64().unwrap();
+        assert!((18.5e3..=21.0e3).contains(&fy), "yield {fy}");
+        // The unloading from the first peak is reported, and softer than the loading (DP steel).
+        let unl = a["cycles"][0]["unloading_stiffness"].as_f64().unwrap();
+        assert!(unl < ea, "unloading {unl:e} vs {ea:e}");
+    }
+    // No length at all: a strain control needs none for (EA).
+    let a = analyze(name, &[]);
+    assert!(within(stiffness(&a), 4.95e6, 0.05));
+}
+
+#[test]
+fn mechtesting_steel1045_extensometer_and_machine_pair() {
+    let ext = "mechtesting__tension_steel1045_extensometer.csv";
+    let mach = "mechtesting__tension_steel1045_machine.csv";
+    for (name, rows) in [(ext, 459), (mach, 593)] {
+        let i = inspect(name);
+        assert_eq!(i["rows"], rows);
+        assert_eq!(
+            channels(&i),
+            owned(&[
+                ("time", "", "time"),
+                ("displacement", "", "control"),
+                ("force", "", "response"),
+            ])
+        );
+    }
+    let geom = ["--length-mm", "75", "--diameter-mm", "10"];
+    let mut args = geom.to_vec();
+    args.extend(["--yield-method", "offset:0.002"]);
+    let a = analyze(ext, &args);
+    let ea = stiffness(&a);
+    assert!(within(ea, 1.96e7, 0.06), "EA {ea:e}");
+    let fy = a["yield"]["response"].as_f64().unwrap();
+    assert!(within(fy, 60.1e3, 0.015), "yield {fy}");
+    assert!(!machine_flag(&warnings(&a)), "{:?}", warnings(&a));
+
+    // The machine's deformation: 20× lower, flagged by the file name.
+    let m = analyze(mach, &geom);
+    assert!(stiffness(&m) < 0.1 * ea);
+    assert_eq!(m["control_channel"]["mount"], "machine");
+    let w = warnings(&m);
+    assert!(
+        machine_flag(&w) && w.iter().any(|w| w.contains("file name says 'machine'")),
+        "{w:?}"
+    );
+}
+
+#[test]
+fn testxpert_english_standard_travel_gauge_length_and_cross_section() {
+    let name = "hilhorst__testxpert_tension_mdb1pct_en.TRA";
+    let i = inspect(name);
+    assert_eq!(i["rows"], 3415);
+    assert_eq!(i["format"], "testxpert_ascii");
+    assert_eq!(
+        channels(&i),
+        owned(&[
+            ("Time", "s", "time"),
+            ("Crosshead absolute", "mm", "other"),
+            ("Standard force", "N", "response"),
+            ("Standard travel", "mm", "control"),
+        ])
+    );
+    // No length, no diameter on the command line: the file's gauge length and cross-section.
+    let a = analyze(name, &["--yield-method", "offset:0.002"]);
+    let ea = stiffness(&a);
+    assert!(within(ea, 1.37e6, 0.04), "EA {ea:e}");
+    let e = a["modulus_pa"].as_f64().unwrap();
+    assert!(within(e, ea / 6.3812e-6, 1e-9), "E {e:e} = EA / 6.3812 mm²");
+    assert_eq!(a["control_channel"]["mount"], "specimen");
+    let w = warnings(&a);
+    assert!(
+        w.iter()
+            .any(|w| w.contains("'Standard travel'") && w.contains("'Crosshead absolute'")),
+        "{w:?}"
+    );
+    assert!(w.iter().any(|w| w.contains("6.3812 mm²")), "{w:?}");
+    assert!(w.iter().any(|w| w.contains("20.0000 mm")), "{w:?}");
+    assert!(!machine_flag(&w), "{w:?}");
+    let fy = a["yield"]["response"].as_f64().unwrap();
+    assert!((3300.0..=3480.0).contains(&fy), "yield {fy}");
+
+    // The crosshead by choice: about 3.5× lower, and flagged.
+    let c = analyze(name, &["--control", "Crosshead absolute"]);
+    assert!(stiffness(&c) < 0.5 * ea);
+    assert!(machine_flag(&warnings(&c)), "{:?}", warnings(&c));
+}
+
+#[test]
+fn testxpert_french_course_standard() {
+    let name = "hilhorst__testxpert_tension_allong1_fr.TRA";
+    let i = inspect(name);
+    assert_eq!(i["rows"], 2184);
+    assert_eq!(i["format"], "testxpert_ascii");
+    assert_eq!(
+        channels(&i),
+        owned(&[
+            ("Temps", "s", "time"),
+            ("Traverse absolue", "mm", "other"),
+            ("Force standard", "N", "response"),
+            ("Course standard", "mm", "control"),
+        ])
+    );
+    let a = analyze(name, &[]);
+    let ea = stiffness(&a);
+    assert!(within(ea, 1.166e6, 0.03), "EA {ea:e}");
+    assert!(within(
+        a["modulus_pa"].as_f64().unwrap(),
+        ea / 5.96e-6,
+        1e-9
+    ));
+    assert_eq!(a["control_channel"]["mount"], "specimen");
+}
+
+/// Writes `text` to a temporary file called `name`; returns the folder (kept alive) and path.
+fn temp_file(name: &str, text: &str) -> (tempfile::TempDir, String) {
+    let d = tempfile::tempdir().unwrap();
+    let p = d.path().join(name);
+    std::fs::write(&p, text).unwrap();
+    let s = p.display().to_string();
+    (d, s)
+}
+
+/// A linear bar: (EA) = 2·10⁶ N; the crosshead moves 3× the specimen (a soft load train);
+/// the extensometer's strain is written in %. EA = dF/dε, whatever the length given.
+#[test]
+fn a_strain_in_percent_is_the_sectional_strain() {
+    let ea = 2.0e6;
+    let mut s = String::from("Time (s),Crosshead (mm),Load (N),Strain 1 (%)\n");
+    for k in 0..=200 {
+        let eps = 2e-3 * k as f64 / 200.0;
+        let f = ea * eps + 0.5 * ((k * 7919 % 13) as f64 - 6.0);
+        s += &format!(
+            "{},{},{f},{}\n",
+            0.1 * k as f64,
+            3.0 * eps * 50.0,
+            eps * 100.0
+        );
+    }
+    let (_d, p) = temp_file("bar.csv", &s);
+    for len in ["50", "80"] {
+        let a = json(&["analyze", &p, "--kind", "tension", "--length-mm", len]);
+        assert!(
+            within(stiffness(&a), ea, 0.005),
+            "{len}: {:e}",
+            stiffness(&a)
+        );
+        assert_eq!(a["control_channel"]["name"], "Strain 1");
+        assert_eq!(a["control_channel"]["mount"], "specimen");
+        let w = warnings(&a);
+        assert!(
+            w.iter()
+                .any(|w| w.contains("not from the machine travel 'Crosshead'")),
+            "{w:?}"
+        );
+    }
+    // A strain is no control for a three-point test.
+    let out = cablab()
+        .args(["analyze", &p, "--kind", "three-point", "--length-mm", "50"])
+        .args(["--control", "Strain 1"])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("'Strain 1' (%) is a strain"), "{err}");
+}
+
+/// A torsional extensometer's surface shear strain γ = r θ / l₀ (degrees) beside the machine
+/// angle: (GJ) from γ needs the diameter, and then equals T l₀ / θ.
+#[test]
+fn a_torsional_shear_strain_becomes_the_twist() {
+    let (gj, l0, d) = (170.0, 0.0254, 0.01905);
+    let mut s = String::from("Time (s),Shear Strain (deg),Angle (deg),Torque (N·m)\n");
+    for k in 0..=200 {
+        let theta = 0.02 * k as f64 / 200.0; // rad
+        let gamma = d / 2.0 * theta / l0;
+        let t = gj * theta / l0 + 0.01 * ((k * 7919 % 11) as f64 - 5.0);
+        s += &format!(
+            "{},{},{},{t}\n",
+            k as f64,
+            gamma.to_degrees(),
+            (1.4 * theta).to_degrees()
+        );
+    }
+    let (_d, p) = temp_file("tube.csv", &s);
+    let base = ["analyze", &p, "--kind", "torsion", "--length-mm", "25.4"];
+    let mut args = base.to_vec();
+    args.extend(["--control", "Shear Strain", "--diameter-mm", "19.05"]);
+    let a = json(&args);
+    assert!(within(stiffness(&a), gj, 0.005), "{:e}", stiffness(&a));
+    assert!(
+        warnings(&a)
+            .iter()
+            .any(|w| w.contains("surface shear strain")),
+        "{:?}",
+        warnings(&a)
+    );
+    let out = cablab()
+        .args(base)
+        .args(["--control", "Shear Strain"])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("needs the diameter"), "{err}");
+}
+
+/// A campaign over real exports (folder mode) gets the same stiffness as `analyze`: the strain
+/// control and the file's own gauge length and cross-section go through the pipeline too.
+#[test]
+fn a_campaign_over_real_exports_uses_the_specimen_mounted_channel() {
+    let d = tempfile::tempdir().unwrap();
+    let ex = d.path().join("ex");
+    std::fs::create_dir_all(&ex).unwrap();
+    for n in [
+        "tensileanalyzer__uiuc_tension_steel1045_1.csv",
+        "hilhorst__testxpert_tension_mdb1pct_en.TRA",
+    ] {
+        std::fs::copy(crate::common::root().join(data(n)), ex.join(n)).unwrap();
+    }
+    let o = assert_cmd::Command::cargo_bin("cablab")
+        .unwrap()
+        .current_dir(d.path())
+        .env("CI", "1")
+        .args(["run", "ex", "--kind", "tension", "--name", "r"])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let s: Value =
+        serde_json::from_slice(&std::fs::read(d.path().join("reports/r/summary.json")).unwrap())
+            .unwrap();
+    let by = |part: &str| {
+        s["tests"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|t| t["id"].as_str().unwrap().contains(part))
+            .unwrap()["stiffness"]
+            .as_f64()
+            .unwrap()
+    };
+    assert!(within(by("uiuc"), 7.5e6, 0.05), "{:e}", by("uiuc"));
+    assert!(within(by("mdb1pct"), 1.37e6, 0.04), "{:e}", by("mdb1pct"));
+}
