@@ -88,9 +88,61 @@ pub fn geometry(
     })
 }
 
-/// Millimetres (as flags and pipelines give lengths) to metres.
-pub fn mm(v: Option<f64>) -> Option<f64> {
+/// Millimetres (as flags give lengths) to metres.
+fn mm(v: Option<f64>) -> Option<f64> {
     v.map(|x| x * 1e-3)
+}
+
+/// One test file named on the command line (`analyze`, `diagnose`), handed over to the physics:
+/// read with `t`'s reader flags, [`check`]ed, its geometry from `t`'s flags (mm → m here) or
+/// the file's metadata ([`geometry`]) and its complete rows ([`curve`]). Warnings are pushed to
+/// `warnings` as they arise, so those gathered before a failure can be shown with the error.
+///
+/// Does not condition, segment or analyse the curve.
+pub fn read_test(
+    path: &std::path::Path,
+    t: &crate::cli::TestArgs,
+    roles: Option<RoleCheck>,
+    warnings: &mut Vec<String>,
+) -> Result<(TestRecord, cablab_measure::Geometry, Curve)> {
+    let kind = TestKind::from(t.kind);
+    let opts = read_options(&t.reader, Some(kind))?;
+    let mut rec = cablab_ingest::read_path(path, &opts)?;
+    check(&mut rec, kind, t.force_kind, roles, warnings)?;
+    let geom = geometry(&rec, kind, mm(t.length_mm), mm(t.diameter_mm))?;
+    let curve = curve(&rec)?;
+    Ok((rec, geom, curve))
+}
+
+/// Which channel-role checks [`check`] runs ([`check_roles`]).
+#[derive(Debug, Clone, Copy)]
+pub struct RoleCheck {
+    /// The control column was named (flag or pipeline): it is kept as given.
+    pub control_given: bool,
+    /// A machine compliance is removed from the control (no note on crosshead travel).
+    pub compliance_given: bool,
+}
+
+/// The checks a read record passes before any physics, in this order: the reader's warnings
+/// are taken over, the declared kind is checked against the file's own evidence
+/// ([`check_kind`]) and, with `roles`, the channel roles are checked and a tension control
+/// possibly moved to the extensometer ([`check_roles`]). Every command that reads a test of a
+/// declared kind (`analyze`, `diagnose`, `run`) goes through here. Warnings are pushed to
+/// `warnings` as they arise.
+pub fn check(
+    rec: &mut TestRecord,
+    kind: TestKind,
+    force_kind: bool,
+    roles: Option<RoleCheck>,
+    warnings: &mut Vec<String>,
+) -> Result<()> {
+    warnings.extend(rec.warnings.iter().map(|w| w.to_string()));
+    warnings.extend(check_kind(rec, kind, force_kind)?);
+    if let Some(r) = roles {
+        let notes = check_roles(rec, kind, r.control_given, r.compliance_given)?;
+        warnings.extend(notes);
+    }
+    Ok(())
 }
 
 /// Reader options from the command line's reader flags.

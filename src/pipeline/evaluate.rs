@@ -365,21 +365,19 @@ fn stages(
     let mut rec = cablab_ingest::read_bytes(bytes, &t.id, &opts)?;
     out.format = Some(rec.provenance.format.as_str().to_string());
     out.header = TestHeader::from_metadata(rec.specimen.label.as_deref(), &rec.metadata);
-    out.warnings
-        .extend(rec.warnings.iter().map(|w| w.to_string()));
-    // The declared kind against the file's own evidence, and the channel roles (issue 12).
-    if let Some(w) =
-        crate::bridge::check_kind(&rec, t.kind, t.settings.force_kind.unwrap_or(false))?
-    {
-        out.warnings.push(w);
-    }
-    let notes = crate::bridge::check_roles(
+    // The reader's warnings, the declared kind against the file's own evidence, and the
+    // channel roles (issue 12).
+    let roles = crate::bridge::RoleCheck {
+        control_given: t.control.is_some(),
+        compliance_given: t.settings.compliance.is_some(),
+    };
+    crate::bridge::check(
         &mut rec,
         t.kind,
-        t.control.is_some(),
-        t.settings.compliance.is_some(),
+        t.settings.force_kind.unwrap_or(false),
+        Some(roles),
+        &mut out.warnings,
     )?;
-    out.warnings.extend(notes);
     // Without a length (pipeline or file) the test is still characterised, at the machine level:
     // with l₀ = 1 m the sectional control is numerically the machine control (eqs. (1), (2),
     // (5)), so the fitted slope is the machine stiffness once the three-point factor l₀³/48 is

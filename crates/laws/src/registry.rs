@@ -486,6 +486,18 @@ pub fn param_specs(kind: TestKind, law: &str) -> Vec<ParamSpec> {
     try_param_specs(kind, law).unwrap_or_default()
 }
 
+/// The scale [`example_params`] takes for `kind`: the chapter cable's stiffness in the loaded
+/// component ((EA) = 7.96·10⁴ N, (GJ) = 2.02·10⁻³ N m², (EI) = 1.37·10⁻³ N m²) and a
+/// strength of the same order as its tests reach (54 N, 0.02 N m, 0.01 N m); for benchmarks
+/// and tests. Three-point bending loads the bending component.
+pub fn example_scale(kind: TestKind) -> (f64, f64) {
+    match kind {
+        TestKind::Tension => (7.96e4, 54.0),
+        TestKind::Torsion => (2.02e-3, 0.02),
+        _ => (1.37e-3, 0.01),
+    }
+}
+
 /// Plausible values for every required parameter of `law` for tests of `kind`, scaled to a
 /// loaded `stiffness` and `strength` (yield strain strength/stiffness): for examples, benchmarks
 /// and tests that need "some" law of each name. Optional parameters keep their defaults.
