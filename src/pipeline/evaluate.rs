@@ -858,22 +858,14 @@ mod tests {
 
     #[test]
     fn levels_come_from_the_file_name() {
-        assert_eq!(
-            level_from_name("raw_data/cable/tension_40N_1.TXT").as_deref(),
-            Some("40N")
-        );
-        assert_eq!(
-            level_from_name("three_point_6mm_2.dat").as_deref(),
-            Some("6mm")
-        );
-        assert_eq!(
-            level_from_name("torsion_360deg_3.csv").as_deref(),
-            Some("360deg")
-        );
-        assert_eq!(
-            level_from_name("a/b/zug-1.5kN-7.csv").as_deref(),
-            Some("1.5kN")
-        );
+        for (name, level) in [
+            ("raw_data/cable/tension_40N_1.TXT", "40N"),
+            ("three_point_6mm_2.dat", "6mm"),
+            ("torsion_360deg_3.csv", "360deg"),
+            ("a/b/zug-1.5kN-7.csv", "1.5kN"),
+        ] {
+            assert_eq!(level_from_name(name).as_deref(), Some(level), "{name}");
+        }
         // Replicate numbers, specimen ids and plain words are not levels.
         assert_eq!(level_from_name("cable2.8-T40-1.csv"), None);
         assert_eq!(level_from_name("tension_1.csv"), None);

@@ -720,45 +720,51 @@ mod tests {
                 .map(|s| s.name)
                 .collect::<Vec<_>>()
         };
-        assert_eq!(names(TestKind::Tension, "linear"), ["EA"]);
-        assert_eq!(names(TestKind::Torsion, "linear"), ["GJ"]);
-        assert_eq!(names(TestKind::PureBending, "linear"), ["EI"]);
-        assert_eq!(
-            names(TestKind::ThreePoint, "piecewise_linear"),
-            ["EI1", "EI2", "K_t"]
-        );
-        assert_eq!(
-            names(TestKind::PureBending, "elastoplastic"),
-            ["EI", "M_y", "HI"]
-        );
-        assert_eq!(
-            names(TestKind::Tension, "elastoplastic"),
-            ["EA", "F_y", "H"]
-        );
-        assert_eq!(
-            names(TestKind::Torsion, "elastoplastic"),
-            ["GJ", "M_y", "HI"]
-        );
-        assert_eq!(
-            names(TestKind::PureBending, "kinematic_hardening"),
-            ["EI", "M_y", "HI", "HI_kin"]
-        );
-        assert_eq!(
-            names(TestKind::Tension, "stiffness_degradation"),
-            ["EA", "F_y", "H", "D_inf", "alpha_D"]
-        );
-        assert_eq!(
-            names(TestKind::PureBending, "viscoelasticity"),
-            ["EI", "M_y", "HI", "EI_v1", "tau_v1"]
-        );
-        assert_eq!(
-            names(TestKind::Tension, "friction_hysteresis"),
-            ["EA", "F_y", "H", "EA_f", "F_f"]
-        );
-        assert_eq!(
-            names(TestKind::Torsion, "linear+friction_hysteresis"),
-            ["GJ", "GJ_f", "M_f"]
-        );
+        let want: [(TestKind, &str, &[&str]); 12] = [
+            (TestKind::Tension, "linear", &["EA"][..]),
+            (TestKind::Torsion, "linear", &["GJ"][..]),
+            (TestKind::PureBending, "linear", &["EI"][..]),
+            (
+                TestKind::ThreePoint,
+                "piecewise_linear",
+                &["EI1", "EI2", "K_t"][..],
+            ),
+            (
+                TestKind::PureBending,
+                "elastoplastic",
+                &["EI", "M_y", "HI"][..],
+            ),
+            (TestKind::Tension, "elastoplastic", &["EA", "F_y", "H"][..]),
+            (TestKind::Torsion, "elastoplastic", &["GJ", "M_y", "HI"][..]),
+            (
+                TestKind::PureBending,
+                "kinematic_hardening",
+                &["EI", "M_y", "HI", "HI_kin"][..],
+            ),
+            (
+                TestKind::Tension,
+                "stiffness_degradation",
+                &["EA", "F_y", "H", "D_inf", "alpha_D"][..],
+            ),
+            (
+                TestKind::PureBending,
+                "viscoelasticity",
+                &["EI", "M_y", "HI", "EI_v1", "tau_v1"][..],
+            ),
+            (
+                TestKind::Tension,
+                "friction_hysteresis",
+                &["EA", "F_y", "H", "EA_f", "F_f"][..],
+            ),
+            (
+                TestKind::Torsion,
+                "linear+friction_hysteresis",
+                &["GJ", "GJ_f", "M_f"][..],
+            ),
+        ];
+        for (kind, law, fitted) in want {
+            assert_eq!(names(kind, law), fitted, "{kind} {law}");
+        }
         for k in TestKind::ALL {
             for l in LAW_NAMES {
                 for s in param_specs(k, l) {
