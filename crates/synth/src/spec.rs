@@ -164,21 +164,14 @@ pub struct CycleLimits {
 impl Step {
     /// The limits of a cycle step; None for the other steps.
     pub fn cycles(&self) -> Option<CycleLimits> {
-        match *self {
+        let (lower, upper, rate, count, dwell_s, max_control) = match *self {
             Step::Cycles {
                 lower,
                 upper,
                 rate,
                 count,
                 dwell_s,
-            } => Some(CycleLimits {
-                lower,
-                upper,
-                rate,
-                count,
-                dwell_s,
-                max_control: None,
-            }),
+            } => (lower, upper, rate, count, dwell_s, None),
             Step::ResponseCycles {
                 lower,
                 upper,
@@ -186,16 +179,17 @@ impl Step {
                 count,
                 dwell_s,
                 max_control,
-            } => Some(CycleLimits {
-                lower,
-                upper,
-                rate,
-                count,
-                dwell_s,
-                max_control: Some(max_control),
-            }),
-            _ => None,
-        }
+            } => (lower, upper, rate, count, dwell_s, Some(max_control)),
+            _ => return None,
+        };
+        Some(CycleLimits {
+            lower,
+            upper,
+            rate,
+            count,
+            dwell_s,
+            max_control,
+        })
     }
 }
 
