@@ -392,3 +392,61 @@ pub fn check_roles(
     }
     Ok(notes)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn read(bytes: &[u8], name: &str, kind: TestKind) -> TestRecord {
+        let opts = ReadOptions {
+            kind: Some(kind),
+            ..Default::default()
+        };
+        cablab_ingest::read_bytes(bytes, name, &opts).unwrap()
+    }
+
+    /// A tension log on the machine travel whose time stamp repeats once: the reader's warning
+    /// comes first; the role check, when asked for, adds the crosshead note after it, and no
+    /// note when a compliance is removed.
+    #[test]
+    fn check_gathers_the_reader_warnings_then_the_role_notes() {
+        let bytes =
+            b"Time (s),Crosshead (mm),Force (N)\n0,0,0\n0.1,0.01,2\n0.1,0.02,4\n0.3,0.03,6\n";
+        let rec = read(bytes, "t.csv", TestKind::Tension);
+        let run = |roles: Option<RoleCheck>| {
+            let mut w = Vec::new();
+            check(&mut rec.clone(), TestKind::Tension, false, roles, &mut w).unwrap();
+            w
+        };
+        let reader_only = run(None);
+        assert_eq!(reader_only.len(), 1, "{reader_only:?}");
+        assert!(reader_only[0].contains("not strictly increasing"));
+        let with_roles = run(Some(RoleCheck {
+            control_given: false,
+            compliance_given: false,
+        }));
+        assert_eq!(with_roles.len(), 2, "{with_roles:?}");
+        assert_eq!(with_roles[0], reader_only[0]);
+        assert!(with_roles[1].contains("machine travel"), "{with_roles:?}");
+        let compliance_removed = run(Some(RoleCheck {
+            control_given: false,
+            compliance_given: true,
+        }));
+        assert_eq!(compliance_removed, reader_only);
+    }
+
+    /// A torsion log declared tension: refused naming the evidence; forced, the contradiction
+    /// is a warning.
+    #[test]
+    fn a_contradicted_kind_is_refused_unless_forced() {
+        let bytes = b"Time (s),Angle (deg),Torque (N m)\n0,0,0\n1,1,0.1\n2,2,0.2\n3,3,0.3\n";
+        let mut rec = read(bytes, "t.csv", TestKind::Tension);
+        let mut w = Vec::new();
+        let e = check(&mut rec, TestKind::Tension, false, None, &mut w).unwrap_err();
+        assert!(e.to_string().contains("contradicts the file"), "{e}");
+        assert!(w.is_empty(), "{w:?}");
+        check(&mut rec, TestKind::Tension, true, None, &mut w).unwrap();
+        assert_eq!(w.len(), 1, "{w:?}");
+        assert!(w[0].contains("forced"), "{w:?}");
+    }
+}
