@@ -171,7 +171,7 @@ impl PlasticChannel {
             (val, der, n, na, a_g)
         };
         let g = self.plastic_multiplier(
-            &phi,
+            phi,
             f_tr,
             k_n,
             old.alpha,
@@ -274,7 +274,7 @@ impl PlasticChannel {
             let der = n * a_g - beta - beta_g * g - h;
             (val, der, n, na, a_g)
         };
-        let g = self.plastic_multiplier(&phi, f_tr, k_n, alpha_n, (norm1(e_tr), norm1(x)));
+        let g = self.plastic_multiplier(phi, f_tr, k_n, alpha_n, (norm1(e_tr), norm1(x)));
         let alpha = alpha_n + g;
         let k = self.stiffness_at(alpha);
         let dk = self.stiffness_rate(alpha);
