@@ -217,9 +217,63 @@ pub fn sectional_control(
     }
 }
 
-/// Millimetres (as flags and pipelines give lengths) to metres.
-pub fn mm(v: Option<f64>) -> Option<f64> {
+/// Millimetres (as flags give lengths) to metres.
+fn mm(v: Option<f64>) -> Option<f64> {
     v.map(|x| x * 1e-3)
+}
+
+/// One test file named on the command line (`analyze`, `diagnose`), handed over to the physics:
+/// read with `t`'s reader flags, [`check`]ed, its geometry from `t`'s flags (mm → m here) or
+/// the file's metadata ([`geometry`]) and its complete rows ([`curve`]). Warnings are pushed to
+/// `warnings` as they arise, so those gathered before a failure can be shown with the error.
+///
+/// Does not condition, segment or analyse the curve.
+pub fn read_test(
+    path: &std::path::Path,
+    t: &crate::cli::TestArgs,
+    roles: Option<RoleCheck>,
+    warnings: &mut Vec<String>,
+) -> Result<(TestRecord, cablab_measure::Geometry, Curve)> {
+    let kind = TestKind::from(t.kind);
+    let opts = read_options(&t.reader, Some(kind))?;
+    let mut rec = cablab_ingest::read_path(path, &opts)?;
+    check(&mut rec, kind, t.force_kind, roles, warnings)?;
+    let (geom, notes) = geometry_noted(&rec, kind, mm(t.length_mm), mm(t.diameter_mm))?;
+    warnings.extend(notes);
+    let mut curve = curve(&rec)?;
+    warnings.extend(sectional_control(&rec, kind, &geom, &mut curve)?);
+    Ok((rec, geom, curve))
+}
+
+/// Which channel-role checks [`check`] runs ([`check_roles`]).
+#[derive(Debug, Clone, Copy)]
+pub struct RoleCheck {
+    /// The control column was named (flag or pipeline): it is kept as given.
+    pub control_given: bool,
+    /// A machine compliance is removed from the control (no note on crosshead travel).
+    pub compliance_given: bool,
+}
+
+/// The checks a read record passes before any physics, in this order: the reader's warnings
+/// are taken over, the declared kind is checked against the file's own evidence
+/// ([`check_kind`]) and, with `roles`, the channel roles are checked and a tension control
+/// possibly moved to the extensometer ([`check_roles`]). Every command that reads a test of a
+/// declared kind (`analyze`, `diagnose`, `run`) goes through here. Warnings are pushed to
+/// `warnings` as they arise.
+pub fn check(
+    rec: &mut TestRecord,
+    kind: TestKind,
+    force_kind: bool,
+    roles: Option<RoleCheck>,
+    warnings: &mut Vec<String>,
+) -> Result<()> {
+    warnings.extend(rec.warnings.iter().map(|w| w.to_string()));
+    warnings.extend(check_kind(rec, kind, force_kind)?);
+    if let Some(r) = roles {
+        let notes = check_roles(rec, kind, r.control_given, r.compliance_given)?;
+        warnings.extend(notes);
+    }
+    Ok(())
 }
 
 /// Reader options from the command line's reader flags.
@@ -471,4 +525,62 @@ pub fn check_roles(
         }
     }
     Ok(notes)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn read(bytes: &[u8], name: &str, kind: TestKind) -> TestRecord {
+        let opts = ReadOptions {
+            kind: Some(kind),
+            ..Default::default()
+        };
+        cablab_ingest::read_bytes(bytes, name, &opts).unwrap()
+    }
+
+    /// A tension log on the machine travel whose time stamp repeats once: the reader's warning
+    /// comes first; the role check, when asked for, adds the crosshead note after it, and no
+    /// note when a compliance is removed.
+    #[test]
+    fn check_gathers_the_reader_warnings_then_the_role_notes() {
+        let bytes =
+            b"Time (s),Crosshead (mm),Force (N)\n0,0,0\n0.1,0.01,2\n0.1,0.02,4\n0.3,0.03,6\n";
+        let rec = read(bytes, "t.csv", TestKind::Tension);
+        let run = |roles: Option<RoleCheck>| {
+            let mut w = Vec::new();
+            check(&mut rec.clone(), TestKind::Tension, false, roles, &mut w).unwrap();
+            w
+        };
+        let reader_only = run(None);
+        assert_eq!(reader_only.len(), 1, "{reader_only:?}");
+        assert!(reader_only[0].contains("not strictly increasing"));
+        let with_roles = run(Some(RoleCheck {
+            control_given: false,
+            compliance_given: false,
+        }));
+        assert_eq!(with_roles.len(), 2, "{with_roles:?}");
+        assert_eq!(with_roles[0], reader_only[0]);
+        assert!(with_roles[1].contains("machine travel"), "{with_roles:?}");
+        let compliance_removed = run(Some(RoleCheck {
+            control_given: false,
+            compliance_given: true,
+        }));
+        assert_eq!(compliance_removed, reader_only);
+    }
+
+    /// A torsion log declared tension: refused naming the evidence; forced, the contradiction
+    /// is a warning.
+    #[test]
+    fn a_contradicted_kind_is_refused_unless_forced() {
+        let bytes = b"Time (s),Angle (deg),Torque (N m)\n0,0,0\n1,1,0.1\n2,2,0.2\n3,3,0.3\n";
+        let mut rec = read(bytes, "t.csv", TestKind::Tension);
+        let mut w = Vec::new();
+        let e = check(&mut rec, TestKind::Tension, false, None, &mut w).unwrap_err();
+        assert!(e.to_string().contains("contradicts the file"), "{e}");
+        assert!(w.is_empty(), "{w:?}");
+        check(&mut rec, TestKind::Tension, true, None, &mut w).unwrap();
+        assert_eq!(w.len(), 1, "{w:?}");
+        assert!(w[0].contains("forced"), "{w:?}");
+    }
 }

@@ -23,6 +23,8 @@ pub enum KindArg {
     PureBending,
 }
 
+/// The one place a kind from the command line enters the commands: clap has already checked
+/// the spelling (`three-point` and `three_point` alike), so this cannot fail.
 impl From<KindArg> for TestKind {
     fn from(k: KindArg) -> TestKind {
         match k {
@@ -241,21 +243,36 @@ pub struct ConvertArgs {
     pub reader: ReaderArgs,
 }
 
+/// A test file of a declared kind as `analyze` and `diagnose` take it: the kind, the geometry
+/// the file's metadata may lack, and how to read it.
+#[derive(Debug, Clone, Args)]
+pub struct TestArgs {
+    /// Test kind.
+    #[arg(long, value_name = "KIND")]
+    pub kind: KindArg,
+    /// Free length between the clamps, or the support span for three-point bending, in mm
+    /// (default: from each file's metadata).
+    #[arg(long, value_name = "MM", allow_negative_numbers = true, value_parser = positive_mm)]
+    pub length_mm: Option<f64>,
+    /// Specimen diameter in mm, for the moduli (default: from each file's metadata).
+    #[arg(long, value_name = "MM", allow_negative_numbers = true, value_parser = positive_mm)]
+    pub diameter_mm: Option<f64>,
+    /// Take a file as --kind even where its own evidence (kind words in its metadata or name,
+    /// the units of its control and response) says otherwise; the contradiction is then kept
+    /// as a warning.
+    #[arg(long)]
+    pub force_kind: bool,
+    #[command(flatten)]
+    pub reader: ReaderArgs,
+}
+
 /// `cablab analyze`.
 #[derive(Debug, Args)]
 pub struct AnalyzeArgs {
     /// The raw export of one test.
     pub file: PathBuf,
-    /// Test kind.
-    #[arg(long, value_name = "KIND")]
-    pub kind: KindArg,
-    /// Free length between the clamps, or the support span for three-point bending, in mm
-    /// (default: from the file's metadata).
-    #[arg(long, value_name = "MM", allow_negative_numbers = true, value_parser = positive_mm)]
-    pub length_mm: Option<f64>,
-    /// Specimen diameter in mm, for Young's modulus (default: from the file's metadata).
-    #[arg(long, value_name = "MM", allow_negative_numbers = true, value_parser = positive_mm)]
-    pub diameter_mm: Option<f64>,
+    #[command(flatten)]
+    pub test: TestArgs,
     /// Elastic fit window, as FROM,TO: in the kind's sectional control variable (strain, twist
     /// 1/m, deflection m or curvature 1/m; `0,0.0005`), in response units with a trailing `N`
     /// or `Nm` (`100N,500N`; N m for torsion and bending), or in percent of the maximum
@@ -268,11 +285,6 @@ pub struct AnalyzeArgs {
     /// Poisson ratio used for the torsion modulus (G = E / (2 (1 + nu))).
     #[arg(long, default_value_t = 0.5, value_name = "NU")]
     pub nu: f64,
-    /// Analyse as --kind even where the file's own evidence (kind words in its metadata or
-    /// name, the units of its control and response) says otherwise; the contradiction is then
-    /// kept as a warning.
-    #[arg(long)]
-    pub force_kind: bool,
     /// Yield point: auto (the bend of the virgin envelope: first loading, then every loading
     /// beyond the earlier extremes), first-loading (the bend of the first loading only), or
     /// offset:<value> (offset yield, the value in the kind's sectional control: strain for
@@ -283,8 +295,6 @@ pub struct AnalyzeArgs {
     /// Print JSON (the keys of the scripted contract).
     #[arg(long)]
     pub json: bool,
-    #[command(flatten)]
-    pub reader: ReaderArgs,
 }
 
 /// `cablab simulate`.
@@ -346,15 +356,8 @@ pub struct DiagnoseArgs {
     /// Raw exports of tests of one kind (several: a joint diagnosis).
     #[arg(required = true)]
     pub files: Vec<PathBuf>,
-    /// Test kind.
-    #[arg(long, value_name = "KIND")]
-    pub kind: KindArg,
-    /// Free length or span in mm (default: from each file's metadata).
-    #[arg(long, value_name = "MM", allow_negative_numbers = true, value_parser = positive_mm)]
-    pub length_mm: Option<f64>,
-    /// Diameter in mm (default: from the metadata; only used for reporting moduli).
-    #[arg(long, value_name = "MM", allow_negative_numbers = true, value_parser = positive_mm)]
-    pub diameter_mm: Option<f64>,
+    #[command(flatten)]
+    pub test: TestArgs,
     /// Baseline law the candidates are added to.
     #[arg(long, default_value = "elastoplastic", value_name = "LAW")]
     pub baseline: String,
@@ -365,15 +368,9 @@ pub struct DiagnoseArgs {
     /// until the held-out gap reaches the noise floor, then drop any the final model does not need.
     #[arg(long)]
     pub ladder: bool,
-    /// Diagnose as --kind even where a file's own evidence (kind words, channel units) says
-    /// otherwise; the contradiction is then printed as a warning.
-    #[arg(long)]
-    pub force_kind: bool,
     /// Print JSON (the keys of the scripted contract).
     #[arg(long)]
     pub json: bool,
-    #[command(flatten)]
-    pub reader: ReaderArgs,
 }
 
 /// `cablab synth`.

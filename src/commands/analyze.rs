@@ -5,7 +5,7 @@
 //! analysis') is printed and, with `--json`, in `warnings` — whether the command succeeds or
 //! fails: on failure `--json` prints `{file, error, warnings}` and the command exits 2.
 
-use super::{parse_kind, print_json, CliError, CmdResult};
+use super::{print_json, CliError, CmdResult};
 use crate::cli::AnalyzeArgs;
 use cablab_core::TestKind;
 use std::process::ExitCode;
@@ -17,40 +17,13 @@ pub fn analyze_file(
     a: &AnalyzeArgs,
     warnings: &mut Vec<String>,
 ) -> Result<(cablab_ingest::TestRecord, cablab_measure::Analysis), CliError> {
-    let kind = parse_kind(&a.kind)?;
-    if kind == TestKind::Unknown {
-        return Err(CliError::input(anyhow::anyhow!(
-            "--kind: give one of tension, torsion, three-point, pure-bending"
-        )));
-    }
-    let opts = crate::bridge::read_options(&a.reader, Some(kind)).map_err(CliError::input)?;
-    let mut rec = cablab_ingest::read_path(&a.file, &opts).map_err(CliError::input)?;
-    warnings.extend(rec.warnings.iter().map(|w| w.to_string()));
-    if let Some(w) = crate::bridge::check_kind(&rec, kind, a.force_kind).map_err(CliError::input)? {
-        warnings.push(w);
-    }
-    let notes = crate::bridge::check_roles(
-        &mut rec,
-        kind,
-        a.reader.control.is_some(),
-        a.compliance.is_some(),
-    )
-    .map_err(CliError::input)?;
-    warnings.extend(notes);
-    let (geom, notes) = crate::bridge::geometry_noted(
-        &rec,
-        kind,
-        crate::bridge::mm(a.length_mm),
-        crate::bridge::mm(a.diameter_mm),
-    )
-    .map_err(CliError::input)?;
-    warnings.extend(notes);
-    let mut curve = crate::bridge::curve(&rec).map_err(CliError::input)?;
-    if let Some(n) =
-        crate::bridge::sectional_control(&rec, kind, &geom, &mut curve).map_err(CliError::input)?
-    {
-        warnings.push(n);
-    }
+    let roles = crate::bridge::RoleCheck {
+        control_given: a.test.reader.control.is_some(),
+        compliance_given: a.compliance.is_some(),
+    };
+    let (rec, geom, curve) = crate::bridge::read_test(&a.file, &a.test, Some(roles), warnings)
+        .map_err(CliError::input)?;
+    let kind = TestKind::from(a.test.kind);
     let yield_method: cablab_measure::YieldMethod = a
         .yield_method
         .parse()

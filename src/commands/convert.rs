@@ -1,6 +1,6 @@
 //! `cablab convert`: the canonical record (SI) as Parquet or CSV, written atomically.
 
-use super::{parse_kind, CliError, CmdResult};
+use super::{CliError, CmdResult};
 use crate::cli::ConvertArgs;
 use std::process::ExitCode;
 
@@ -19,7 +19,7 @@ pub fn run(a: ConvertArgs) -> CmdResult {
         )));
     }
     super::refuse_overwrite(&a.output, &[&a.file])?;
-    let kind = a.kind.as_ref().map(parse_kind).transpose()?;
+    let kind = a.kind.map(cablab_core::TestKind::from);
     let opts = crate::bridge::read_options(&a.reader, kind).map_err(CliError::input)?;
     let rec = cablab_ingest::read_path(&a.file, &opts).map_err(CliError::input)?;
     for w in &rec.warnings {

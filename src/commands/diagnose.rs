@@ -1,7 +1,7 @@
 //! `cablab diagnose`: the sim-to-real gap of one or more tests of one kind (CONTRACT.md) —
 //! where it lies, which unmodelled effect causes it, how far it shrinks on held-out data.
 
-use super::{parse_kind, print_json, CliError, CmdResult};
+use super::{print_json, CliError, CmdResult};
 use crate::cli::DiagnoseArgs;
 use cablab_core::TestKind;
 use cablab_diagnose::registry::{Registry, Rod};
@@ -9,25 +9,15 @@ use cablab_diagnose::DiagTest;
 use std::process::ExitCode;
 
 /// Read one file into a diagnosis test (segments from the characterisation's segmenter).
-pub fn diag_test(
-    path: &std::path::Path,
-    kind: TestKind,
-    a: &DiagnoseArgs,
-) -> Result<DiagTest, CliError> {
-    let opts = crate::bridge::read_options(&a.reader, Some(kind)).map_err(CliError::input)?;
-    let rec = cablab_ingest::read_path(path, &opts).map_err(CliError::input)?;
-    // The declared kind against the file's own evidence, as `analyze` and `run` check it.
-    if let Some(w) = crate::bridge::check_kind(&rec, kind, a.force_kind).map_err(CliError::input)? {
+pub fn diag_test(path: &std::path::Path, a: &DiagnoseArgs) -> Result<DiagTest, CliError> {
+    let mut warnings = Vec::new();
+    let read = crate::bridge::read_test(path, &a.test, None, &mut warnings);
+    // The reader's and the kind check's warnings, also when the file is refused.
+    for w in &warnings {
         eprintln!("cablab: warning: {w}");
     }
-    let geom = crate::bridge::geometry(
-        &rec,
-        kind,
-        crate::bridge::mm(a.length_mm),
-        crate::bridge::mm(a.diameter_mm),
-    )
-    .map_err(CliError::input)?;
-    let curve = crate::bridge::curve(&rec).map_err(CliError::input)?;
+    let (rec, geom, curve) = read.map_err(CliError::input)?;
+    let kind = TestKind::from(a.test.kind);
     let (t, _) = crate::bridge::diag_test(kind, &geom, &curve, rec.specimen.label.clone(), None)
         .map_err(|e| CliError::input(anyhow::anyhow!("{}: {e:#}", path.display())))?;
     // A log the diagnosis cannot use (a flat response, too few samples) is bad input: say which
@@ -47,12 +37,7 @@ pub fn diag_test(
 
 /// Run `cablab diagnose`.
 pub fn run(a: DiagnoseArgs) -> CmdResult {
-    let kind = parse_kind(&a.kind)?;
-    if kind == TestKind::Unknown {
-        return Err(CliError::input(anyhow::anyhow!(
-            "--kind: give one of tension, torsion, three-point, pure-bending"
-        )));
-    }
+    let kind = TestKind::from(a.test.kind);
     cablab_laws::try_param_specs(kind, &a.baseline)
         .map_err(|e| CliError::input(anyhow::anyhow!("--baseline: {e}")))?;
     let candidates = match &a.candidates {
@@ -69,7 +54,7 @@ pub fn run(a: DiagnoseArgs) -> CmdResult {
     let tests = a
         .files
         .iter()
-        .map(|f| diag_test(f, kind, &a))
+        .map(|f| diag_test(f, &a))
         .collect::<Result<Vec<_>, _>>()?;
     let rod = Rod::default();
     let ctx = cablab_diagnose::Context {

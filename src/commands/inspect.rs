@@ -1,12 +1,12 @@
 //! `cablab inspect`: what the reader found in a raw export (CONTRACT.md).
 
-use super::{parse_kind, print_json, CliError, CmdResult};
+use super::{print_json, CliError, CmdResult};
 use crate::cli::InspectArgs;
 use std::process::ExitCode;
 
 /// Run `cablab inspect`.
 pub fn run(a: InspectArgs) -> CmdResult {
-    let kind = a.kind.as_ref().map(parse_kind).transpose()?;
+    let kind = a.kind.map(cablab_core::TestKind::from);
     let mut opts = crate::bridge::read_options(&a.reader, kind).map_err(CliError::input)?;
     // Inspect shows a column whose unit cannot be read (with a warning) rather than refusing.
     opts.lenient = true;

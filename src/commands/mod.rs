@@ -1,7 +1,7 @@
 //! One module per subcommand: typed options in, library calls, output out. Nothing here does
 //! physics; it reads files, calls the stage crates and prints or writes what they return.
 
-use crate::cli::{Cli, Command, HelpArgs, KindArg};
+use crate::cli::{Cli, Command, HelpArgs};
 use std::fmt;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -74,13 +74,6 @@ pub fn dispatch(cli: Cli) -> CmdResult {
         Command::Synth(a) => synth::run(a),
         Command::Bench(a) => bench::run(a),
     }
-}
-
-/// A kind from the command line. Clap has already checked the spelling (a [`KindArg`] value
-/// enum, `three-point` and `three_point` alike), so this cannot fail; it stays the one place where
-/// kinds enter the commands.
-pub fn parse_kind(k: &KindArg) -> Result<cablab_core::TestKind, CliError> {
-    Ok((*k).into())
 }
 
 /// The pipeline-file reference (`docs/pipeline.md`), compiled in so that `cablab help pipeline`

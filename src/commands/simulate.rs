@@ -1,6 +1,6 @@
 //! `cablab simulate`: one test in the rod model along a control path (CONTRACT.md).
 
-use super::{parse_kind, print_json, CliError, CmdResult};
+use super::{print_json, CliError, CmdResult};
 use crate::cli::SimulateArgs;
 use crate::output::{write_atomic, write_json};
 use cablab_core::TestKind;
@@ -32,12 +32,7 @@ pub fn parse_params(pairs: &[String]) -> Result<BTreeMap<String, f64>, CliError>
 
 /// Run `cablab simulate`.
 pub fn run(a: SimulateArgs) -> CmdResult {
-    let kind = parse_kind(&a.kind)?;
-    if kind == TestKind::Unknown {
-        return Err(CliError::input(anyhow::anyhow!(
-            "--kind: give one of tension, torsion, three-point, pure-bending"
-        )));
-    }
+    let kind = TestKind::from(a.kind);
     if !(a.length_mm.is_finite() && a.length_mm > 0.0) {
         return Err(CliError::input(anyhow::anyhow!(
             "--length-mm must be positive, got {}",

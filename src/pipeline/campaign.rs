@@ -5,6 +5,7 @@
 
 use super::config::Campaign;
 use super::evaluate::TestOutcome;
+use super::report::PiecewiseRow;
 use crate::output::{sha256_hex, to_json_bytes, write_atomic};
 use crate::VERSION;
 use anyhow::{Context, Result};
@@ -373,26 +374,6 @@ fn abs(p: &Path) -> PathBuf {
 
 /// Table 2 style rows: per specimen type, the piecewise linear elastic parameters from the
 /// pure-bending tests classed piecewise linear elastic (mean and SD over the tests).
-#[derive(Debug, Clone, Serialize)]
-pub struct PiecewiseRow {
-    /// Specimen type.
-    pub specimen: String,
-    /// Tests contributing.
-    pub n: usize,
-    /// (EI)_B,1 mean, N m².
-    pub ei1_mean: f64,
-    /// (EI)_B,1 SD.
-    pub ei1_sd: Option<f64>,
-    /// (EI)_B,2 mean, N m².
-    pub ei2_mean: f64,
-    /// (EI)_B,2 SD.
-    pub ei2_sd: Option<f64>,
-    /// K_B,t mean, 1/m.
-    pub k_t_mean: f64,
-    /// K_B,t SD.
-    pub k_t_sd: Option<f64>,
-}
-
 fn piecewise_rows(outcomes: &[TestOutcome]) -> Vec<PiecewiseRow> {
     let mut specimens: Vec<&str> = outcomes.iter().map(|o| o.specimen.as_str()).collect();
     specimens.dedup();

@@ -365,21 +365,19 @@ fn stages(
     let mut rec = cablab_ingest::read_bytes(bytes, &t.id, &opts)?;
     out.format = Some(rec.provenance.format.as_str().to_string());
     out.header = TestHeader::from_metadata(rec.specimen.label.as_deref(), &rec.metadata);
-    out.warnings
-        .extend(rec.warnings.iter().map(|w| w.to_string()));
-    // The declared kind against the file's own evidence, and the channel roles (issue 12).
-    if let Some(w) =
-        crate::bridge::check_kind(&rec, t.kind, t.settings.force_kind.unwrap_or(false))?
-    {
-        out.warnings.push(w);
-    }
-    let notes = crate::bridge::check_roles(
+    // The reader's warnings, the declared kind against the file's own evidence, and the
+    // channel roles (issue 12).
+    let roles = crate::bridge::RoleCheck {
+        control_given: t.control.is_some(),
+        compliance_given: t.settings.compliance.is_some(),
+    };
+    crate::bridge::check(
         &mut rec,
         t.kind,
-        t.control.is_some(),
-        t.settings.compliance.is_some(),
+        t.settings.force_kind.unwrap_or(false),
+        Some(roles),
+        &mut out.warnings,
     )?;
-    out.warnings.extend(notes);
     // Without a length (pipeline or file) the test is still characterised, at the machine level:
     // with l₀ = 1 m the sectional control is numerically the machine control (eqs. (1), (2),
     // (5)), so the fitted slope is the machine stiffness once the three-point factor l₀³/48 is
@@ -864,22 +862,14 @@ mod tests {
 
     #[test]
     fn levels_come_from_the_file_name() {
-        assert_eq!(
-            level_from_name("raw_data/cable/tension_40N_1.TXT").as_deref(),
-            Some("40N")
-        );
-        assert_eq!(
-            level_from_name("three_point_6mm_2.dat").as_deref(),
-            Some("6mm")
-        );
-        assert_eq!(
-            level_from_name("torsion_360deg_3.csv").as_deref(),
-            Some("360deg")
-        );
-        assert_eq!(
-            level_from_name("a/b/zug-1.5kN-7.csv").as_deref(),
-            Some("1.5kN")
-        );
+        for (name, level) in [
+            ("raw_data/cable/tension_40N_1.TXT", "40N"),
+            ("three_point_6mm_2.dat", "6mm"),
+            ("torsion_360deg_3.csv", "360deg"),
+            ("a/b/zug-1.5kN-7.csv", "1.5kN"),
+        ] {
+            assert_eq!(level_from_name(name).as_deref(), Some(level), "{name}");
+        }
         // Replicate numbers, specimen ids and plain words are not levels.
         assert_eq!(level_from_name("cable2.8-T40-1.csv"), None);
         assert_eq!(level_from_name("tension_1.csv"), None);

@@ -4,7 +4,6 @@
 //! first, then the overlays and stiffness panels, then the per-test detail. A series is a
 //! specimen type and kind, split by protocol level (`campaign::series_of`).
 
-use super::campaign::PiecewiseRow;
 use super::config::Campaign;
 use super::evaluate::TestOutcome;
 use anyhow::Result;
@@ -16,6 +15,7 @@ use cablab_report::campaign::{
 };
 use cablab_report::text::{fmt_mpa, fmt_num, fmt_on_axis, fmt_percent};
 use cablab_report::{Block, Grid, OverlayView, ReportDoc, TestSection};
+use serde::Serialize;
 use std::path::Path;
 
 fn kind_title(k: TestKind) -> &'static str {
@@ -26,6 +26,29 @@ fn kind_title(k: TestKind) -> &'static str {
         TestKind::PureBending => "Pure bending: (EI)_B per specimen",
         TestKind::Unknown => "Stiffness per specimen",
     }
+}
+
+/// A Table 2 style row: for one specimen type, the piecewise linear elastic parameters of its
+/// pure-bending tests classed piecewise linear elastic (mean and SD over the tests). Built by
+/// [`super::campaign`] (also into `summary.json` and `table2.json`), drawn here.
+#[derive(Debug, Clone, Serialize)]
+pub struct PiecewiseRow {
+    /// Specimen type.
+    pub specimen: String,
+    /// Tests contributing.
+    pub n: usize,
+    /// (EI)_B,1 mean, N m².
+    pub ei1_mean: f64,
+    /// (EI)_B,1 SD.
+    pub ei1_sd: Option<f64>,
+    /// (EI)_B,2 mean, N m².
+    pub ei2_mean: f64,
+    /// (EI)_B,2 SD.
+    pub ei2_sd: Option<f64>,
+    /// K_B,t mean, 1/m.
+    pub k_t_mean: f64,
+    /// K_B,t SD.
+    pub k_t_sd: Option<f64>,
 }
 
 /// A campaign figure: file name, caption, SVG.

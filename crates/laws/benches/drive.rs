@@ -4,44 +4,50 @@
 //! Run: `cargo bench -p cablab-laws`. Does not assert anything; the tests check the physics.
 
 use cablab_core::TestKind;
-use cablab_laws::{build, drive_uniform_into, example_params, loaded_component, Law, Strain6};
+use cablab_laws::{
+    build, drive_uniform_into, example_params, example_scale, loaded_component, Law, Strain6,
+    LAW_NAMES,
+};
 
 fn main() {
     divan::main();
 }
 
-/// The laws benchmarked: the registry's names and two compositions.
-const LAWS: [&str; 9] = [
-    "linear",
-    "piecewise_linear",
-    "elastoplastic",
-    "kinematic_hardening",
-    "stiffness_degradation",
-    "viscoelasticity",
-    "friction_hysteresis",
-    "linear+viscoelasticity",
-    "piecewise_linear+friction_hysteresis",
-];
+/// One benchmark: a law driven in the loaded component of a kind.
+#[derive(Debug, Clone, Copy)]
+struct Case {
+    kind: TestKind,
+    law: &'static str,
+}
 
-/// Loaded stiffness and strength of the chapter's cable per kind (yield strain y/k).
-fn scale(kind: TestKind) -> (f64, f64) {
-    match kind {
-        TestKind::Tension => (7.96e4, 54.0),
-        TestKind::Torsion => (2.02e-3, 0.02),
-        _ => (1.37e-3, 0.01),
+impl std::fmt::Display for Case {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}/{}", self.kind, self.law)
     }
+}
+
+/// Every registry law and two compositions, in tension (Γ₃), torsion (K₃) and pure bending
+/// (K₁, a 2-vector channel).
+fn cases() -> impl Iterator<Item = Case> {
+    let laws = LAW_NAMES.into_iter().chain([
+        "linear+viscoelasticity",
+        "piecewise_linear+friction_hysteresis",
+    ]);
+    laws.flat_map(|law| {
+        [TestKind::Tension, TestKind::Torsion, TestKind::PureBending].map(|kind| Case { kind, law })
+    })
 }
 
 /// `law` for `kind` with plausible parameters (every required one set from the kind's scale).
 fn law(kind: TestKind, name: &str) -> Box<dyn Law> {
-    let (k, y) = scale(kind);
+    let (k, y) = example_scale(kind);
     let params = example_params(kind, name, k, y).expect("a law of the registry");
     build(kind, name, &params).expect("law")
 }
 
 /// 20,000 samples, 5 triangular cycles 0 → 4 ε_y → −2 ε_y → 0, sampled every 10 ms.
 fn history(kind: TestKind) -> (Vec<f64>, Vec<f64>) {
-    let (k, y) = scale(kind);
+    let (k, y) = example_scale(kind);
     let ey = y / k;
     let n = 20_000;
     let per = n / 5;
@@ -98,32 +104,14 @@ fn run_full(bencher: divan::Bencher, kind: TestKind, name: &str) {
     });
 }
 
-/// Tension through the full update, 20,000 samples.
-#[divan::bench(args = LAWS, sample_count = 20)]
-fn full_update_tension_20k(bencher: divan::Bencher, name: &str) {
-    run_full(bencher, TestKind::Tension, name);
+/// The uniform-state driver (the uniaxial fast path), 20,000 samples.
+#[divan::bench(args = cases(), sample_count = 20)]
+fn drive_20k(bencher: divan::Bencher, case: Case) {
+    run(bencher, case.kind, case.law);
 }
 
-/// Bending through the full update, 20,000 samples.
-#[divan::bench(args = LAWS, sample_count = 20)]
-fn full_update_bending_20k(bencher: divan::Bencher, name: &str) {
-    run_full(bencher, TestKind::PureBending, name);
-}
-
-/// Tension (Γ₃), 20,000 samples.
-#[divan::bench(args = LAWS, sample_count = 20)]
-fn tension_20k(bencher: divan::Bencher, name: &str) {
-    run(bencher, TestKind::Tension, name);
-}
-
-/// Torsion (K₃), 20,000 samples.
-#[divan::bench(args = LAWS, sample_count = 20)]
-fn torsion_20k(bencher: divan::Bencher, name: &str) {
-    run(bencher, TestKind::Torsion, name);
-}
-
-/// Pure bending (K₁, a 2-vector channel), 20,000 samples.
-#[divan::bench(args = LAWS, sample_count = 20)]
-fn bending_20k(bencher: divan::Bencher, name: &str) {
-    run(bencher, TestKind::PureBending, name);
+/// The same histories through the full update (tension and bending), 20,000 samples.
+#[divan::bench(args = cases().filter(|c| c.kind != TestKind::Torsion), sample_count = 20)]
+fn full_update_20k(bencher: divan::Bencher, case: Case) {
+    run_full(bencher, case.kind, case.law);
 }

@@ -170,30 +170,13 @@ impl PlasticChannel {
             let der = n.dot(&a_g) - beta - beta_g * g - h;
             (val, der, n, na, a_g)
         };
-        let mut g = f_tr / (k_n + c + h);
-        if self.degradation.is_some() || b > 0.0 {
-            // Safeguarded Newton on [0, hi]: φ(0) = f_tr > 0 and, as k(α) ≥ k₀ (1 − D_∞) > 0 and
-            // the kinematic term is ≥ 0, φ(hi) ≤ 0 for hi = (k₀|e_tr| + |x_n|)/(k₀(1 − D_∞) + H).
-            let k_min = self.stiffness_at(f64::INFINITY);
-            let lo = 0.0;
-            let hi = (self.stiffness * e_tr.norm() + old.back_stress.norm()) / (k_min + h);
-            g = g.clamp(lo, hi);
-            let tol = 1e-14
-                * (self.yield_strength
-                    + h * old.alpha
-                    + self.stiffness * e_tr.norm()
-                    + old.back_stress.norm());
-            g = safeguarded_newton(
-                |g| {
-                    let (v, d, ..) = phi(g);
-                    (v, d)
-                },
-                g,
-                lo,
-                hi,
-                tol,
-            );
-        }
+        let g = self.plastic_multiplier(
+            phi,
+            f_tr,
+            k_n,
+            old.alpha,
+            (e_tr.norm(), old.back_stress.norm()),
+        );
         let alpha = old.alpha + g;
         let k = self.stiffness_at(alpha);
         let dk = self.stiffness_rate(alpha);
@@ -211,6 +194,38 @@ impl PlasticChannel {
         let tangent =
             k * id + (dk * (e_tr - g * n) - k * n) * dg.transpose() - (k * g / na) * p * da;
         (stress, tangent, new)
+    }
+
+    /// The plastic multiplier Δγ, the root of the consistency condition φ(Δγ) = 0 (`phi` returns
+    /// φ, φ' and what the caller needs besides), from the trial overstress `f_tr` = φ(0) > 0, the
+    /// stiffness `k_n` at the committed `alpha_n` and `norms` = (|e_tr|, |x_n|). Without
+    /// degradation or recovery φ is linear and the root is f_tr/(k_n + c + H). Otherwise a
+    /// safeguarded Newton on [0, hi] from that guess: φ(0) = f_tr > 0 and, as
+    /// k(α) ≥ k₀ (1 − D_∞) > 0 and the kinematic term is ≥ 0, φ(hi) ≤ 0 for
+    /// hi = (k₀|e_tr| + |x_n|)/(k₀(1 − D_∞) + H). One solver for the vector return mapping and
+    /// its scalar fast path, so both take the same steps.
+    fn plastic_multiplier<N>(
+        &self,
+        phi: impl Fn(f64) -> (f64, f64, N, f64, N),
+        f_tr: f64,
+        k_n: f64,
+        alpha_n: f64,
+        norms: (f64, f64),
+    ) -> f64 {
+        let (c, b, h) = (self.kin_hardening, self.kin_recovery, self.iso_hardening);
+        let g = f_tr / (k_n + c + h);
+        if !(self.degradation.is_some() || b > 0.0) {
+            return g;
+        }
+        let (e_norm, x_norm) = norms;
+        let k_min = self.stiffness_at(f64::INFINITY);
+        let hi = (self.stiffness * e_norm + x_norm) / (k_min + h);
+        let tol = 1e-14 * (self.yield_strength + h * alpha_n + self.stiffness * e_norm + x_norm);
+        let phi = |g| {
+            let (v, d, ..) = phi(g);
+            (v, d)
+        };
+        safeguarded_newton(phi, g.clamp(0.0, hi), 0.0, hi, tol)
     }
 
     /// [`PlasticChannel::return_map`] along one axis: the channel strain and the committed plastic
@@ -259,25 +274,7 @@ impl PlasticChannel {
             let der = n * a_g - beta - beta_g * g - h;
             (val, der, n, na, a_g)
         };
-        let mut g = f_tr / (k_n + c + h);
-        if self.degradation.is_some() || b > 0.0 {
-            let k_min = self.stiffness_at(f64::INFINITY);
-            let lo = 0.0;
-            let hi = (self.stiffness * norm1(e_tr) + norm1(x)) / (k_min + h);
-            g = g.clamp(lo, hi);
-            let tol = 1e-14
-                * (self.yield_strength + h * alpha_n + self.stiffness * norm1(e_tr) + norm1(x));
-            g = safeguarded_newton(
-                |g| {
-                    let (v, d, ..) = phi(g);
-                    (v, d)
-                },
-                g,
-                lo,
-                hi,
-                tol,
-            );
-        }
+        let g = self.plastic_multiplier(phi, f_tr, k_n, alpha_n, (norm1(e_tr), norm1(x)));
         let alpha = alpha_n + g;
         let k = self.stiffness_at(alpha);
         let dk = self.stiffness_rate(alpha);

@@ -49,7 +49,7 @@ pub use linear::{LinearElastic, SectionStiffness};
 pub use parallel::Parallel;
 pub use piecewise::PiecewiseLinear;
 pub use registry::{
-    build, canonical_law_name, example_params, law_for_effect, loaded_component, param_specs,
-    try_param_specs, ParamSpec, LAW_NAMES,
+    build, canonical_law_name, example_params, example_scale, law_for_effect, loaded_component,
+    param_specs, try_param_specs, ParamSpec, LAW_NAMES,
 };
 pub use viscoelastic::{MaxwellBranch, MaxwellBranches};

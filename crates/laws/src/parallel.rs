@@ -94,19 +94,11 @@ mod tests {
     use crate::elastoplastic::Elastoplastic;
     use crate::friction::IwanElements;
     use crate::linear::SectionStiffness;
-    use crate::testutil::assert_tangent_fd;
+    use crate::testutil::{assert_tangent_fd, path};
     use crate::viscoelastic::{MaxwellBranch, MaxwellBranches};
 
     fn cycle() -> (Vec<f64>, Vec<f64>) {
-        let mut k = vec![0.0];
-        for (a, b, n) in [
-            (0.0, 3.0, 60),
-            (3.0, -2.0, 100),
-            (-2.0, 4.0, 120),
-            (4.0, 0.0, 80),
-        ] {
-            k.extend((1..=n).map(|i| a + (b - a) * i as f64 / n as f64));
-        }
+        let k = path(0.0, &[(3.0, 60), (-2.0, 100), (4.0, 120), (0.0, 80)]);
         let t = (0..k.len()).map(|i| 0.1 * i as f64).collect();
         (k, t)
     }

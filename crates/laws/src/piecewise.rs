@@ -105,7 +105,7 @@ impl Law for PiecewiseLinear {
 mod tests {
     use super::*;
     use crate::driver::drive_uniform;
-    use crate::testutil::assert_tangent_fd;
+    use crate::testutil::{assert_tangent_fd, path};
 
     /// Chapter Table 2 (Bowden cable): (EI)_B,1 = 1.40, (EI)_B,2 = 0.19 N m², K_B,t = 0.18 1/m.
     fn bowden() -> PiecewiseLinear {
@@ -147,20 +147,9 @@ mod tests {
     #[test]
     fn loading_equals_unloading() {
         let law = bowden();
-        let n = 401;
-        let k: Vec<f64> = (0..n)
-            .map(|i| {
-                let t = i as f64 / (n - 1) as f64;
-                // 0 → 1 → −1 → 0 (1/m)
-                if t < 0.25 {
-                    4.0 * t
-                } else if t < 0.75 {
-                    1.0 - 4.0 * (t - 0.25)
-                } else {
-                    -1.0 + 4.0 * (t - 0.75)
-                }
-            })
-            .collect();
+        // 0 → 1 → −1 → 0 (1/m)
+        let k = path(0.0, &[(1.0, 100), (-1.0, 200), (0.0, 100)]);
+        let n = k.len();
         let time: Vec<f64> = (0..n).map(|i| i as f64).collect();
         let m = drive_uniform(&law, 3, &k, &time);
         for (ki, mi) in k.iter().zip(&m) {

@@ -1,4 +1,5 @@
-//! Test helpers: the consistent tangent against a central finite difference of the update.
+//! Test helpers: the consistent tangent against a central finite difference of the update, and
+//! piecewise linear strain paths.
 
 use crate::law::{Law, Strain6};
 
@@ -32,4 +33,16 @@ pub fn assert_tangent_fd(law: &dyn Law, eps: &Strain6, dt: f64, state_old: &[f64
             );
         }
     }
+}
+
+/// A path from `start` along straight legs: each `(to, n)` appends `n` samples
+/// `a + (to − a) i/n`, i = 1..=n, from the previous leg's end `a` (so the turning points are
+/// samples and none is repeated).
+pub fn path(start: f64, legs: &[(f64, usize)]) -> Vec<f64> {
+    let mut out = vec![start];
+    for &(to, n) in legs {
+        let a = *out.last().unwrap_or(&start);
+        out.extend((1..=n).map(|i| a + (to - a) * i as f64 / n as f64));
+    }
+    out
 }

@@ -4,7 +4,7 @@
 //! from the reference.
 
 use crate::law::{update_component_via_full, Law, Strain6};
-use crate::registry::{build, example_params, loaded_component, param_specs};
+use crate::registry::{build, example_params, example_scale, loaded_component, param_specs};
 use cablab_core::TestKind;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -26,17 +26,8 @@ const LAWS: [&str; 12] = [
     "piecewise_linear+friction_hysteresis",
 ];
 
-/// Loaded stiffness and strength per kind (the chapter's cable).
-fn scale(kind: TestKind) -> (f64, f64) {
-    match kind {
-        TestKind::Tension => (7.96e4, 54.0),
-        TestKind::Torsion => (2.02e-3, 0.02),
-        _ => (1.37e-3, 0.01),
-    }
-}
-
 fn law(kind: TestKind, name: &str) -> Box<dyn Law> {
-    let (k, y) = scale(kind);
+    let (k, y) = example_scale(kind);
     let ey = y / k;
     let (name, recovery) = match name.strip_suffix("+b") {
         Some(n) => (n, true),
@@ -138,7 +129,7 @@ fn fast_path_equals_full_update_for_every_law_and_kind() {
         .into_iter()
         .filter(|k| *k != TestKind::Unknown)
     {
-        let (k, y) = scale(kind);
+        let (k, y) = example_scale(kind);
         let comp = loaded_component(kind);
         for name in LAWS {
             let law = law(kind, name);
@@ -176,7 +167,7 @@ fn fast_path_equals_full_update_for_every_law_and_kind() {
 #[test]
 fn fast_path_off_axis_states_and_other_components() {
     let kind = TestKind::PureBending;
-    let (k, y) = scale(kind);
+    let (k, y) = example_scale(kind);
     let ey = y / k;
     for name in LAWS {
         let law = law(kind, name);

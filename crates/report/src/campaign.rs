@@ -704,31 +704,6 @@ mod tests {
     }
 
     #[test]
-    fn parameter_table_reproduces_table_2() {
-        let t = parameter_table(
-            "Table 2",
-            &[
-                ParameterRow {
-                    name: "bending stiffness 1".into(),
-                    symbol: "(EI)_B,1".into(),
-                    value: 1.40,
-                    unit: "N m\u{b2}".into(),
-                },
-                ParameterRow {
-                    name: "threshold curvature".into(),
-                    symbol: "K_B,t".into(),
-                    value: 0.18,
-                    unit: "1/m".into(),
-                },
-            ],
-        )
-        .to_table();
-        assert_eq!(t.rows[0][2], "1.40");
-        assert_eq!(t.rows[1][2], "0.180");
-        assert_eq!(t.rows[1][3], "1/m");
-    }
-
-    #[test]
     fn series_cov_only_where_the_values_share_a_sign() {
         let stat = |min: f64, max: f64, mean: f64, sd: f64| SeriesStat {
             series: "s".into(),

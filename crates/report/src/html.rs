@@ -154,6 +154,19 @@ fn looks_like_svg(svg: &str) -> bool {
         && !t.to_ascii_lowercase().contains("<foreignobject")
 }
 
+/// The figures, then the diagnosis in words when there is one: the end of the campaign's
+/// section and of each test's.
+fn figures_and_diagnosis(out: &mut String, figures: &[(String, String)], diagnosis: &str) {
+    for (caption, svg) in figures {
+        figure(out, caption, svg);
+    }
+    if !diagnosis.trim().is_empty() {
+        out.push_str("<h3>Diagnosis</h3>\n<div class=\"diagnosis\">\n");
+        paragraphs(out, diagnosis);
+        out.push_str("</div>\n");
+    }
+}
+
 fn figure(out: &mut String, caption: &str, svg: &str) {
     out.push_str("<figure>\n");
     if looks_like_svg(svg) {
@@ -291,14 +304,7 @@ pub fn render_html(doc: &ReportDoc) -> String {
     for t in &doc.tables {
         table(&mut out, t);
     }
-    for (caption, svg) in &doc.figures {
-        figure(&mut out, caption, svg);
-    }
-    if !doc.diagnosis_text.trim().is_empty() {
-        out.push_str("<h3>Diagnosis</h3>\n<div class=\"diagnosis\">\n");
-        paragraphs(&mut out, &doc.diagnosis_text);
-        out.push_str("</div>\n");
-    }
+    figures_and_diagnosis(&mut out, &doc.figures, &doc.diagnosis_text);
     out.push_str("</section>\n");
 
     out.push_str("<nav id=\"contents\">\n<h2>Tests</h2>\n<ol>\n");
@@ -335,14 +341,7 @@ pub fn render_html(doc: &ReportDoc) -> String {
             }
             out.push_str("</dl>\n");
         }
-        for (caption, svg) in &t.svgs {
-            figure(&mut out, caption, svg);
-        }
-        if !t.diagnosis_text.trim().is_empty() {
-            out.push_str("<h3>Diagnosis</h3>\n<div class=\"diagnosis\">\n");
-            paragraphs(&mut out, &t.diagnosis_text);
-            out.push_str("</div>\n");
-        }
+        figures_and_diagnosis(&mut out, &t.svgs, &t.diagnosis_text);
         out.push_str("<p class=\"back\"><a href=\"#contents\">Back to the list of tests</a></p>\n</section>\n");
     }
     out.push_str("</body>\n</html>\n");

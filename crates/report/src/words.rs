@@ -226,41 +226,6 @@ mod tests {
     }
 
     #[test]
-    fn effect_case_gives_where_which_how_far_and_separation() {
-        let s = DiagnosisSummary {
-            baseline_law: "elastoplastic".into(),
-            gap_before_rel: 0.062,
-            verdict_effect: "kinematic_hardening".into(),
-            gap_after_rel: Some(0.011),
-            equivalent: vec!["stiffness_degradation".into()],
-            separating: vec!["cycles with reversed loading and growing amplitude".into()],
-            noise_rel: 0.009,
-            top_location: Some(("cycle 3 unloading".into(), 0.41)),
-        };
-        let w = diagnosis_words(&s);
-        let paras: Vec<&str> = w.split("\n\n").collect();
-        assert_eq!(paras.len(), 3, "{w}");
-        assert_eq!(
-            paras[0],
-            "Where: the largest share of the squared residual, 41\u{a0}%, lies in cycle 3 unloading."
-        );
-        assert!(paras[1].starts_with("Which: kinematic hardening (the yield limit moves"));
-        assert!(paras[1].contains("from 6.2\u{a0}% to 1.1\u{a0}%"));
-        assert!(
-            paras[1].ends_with("down to the noise floor (0.9\u{a0}%)."),
-            "{}",
-            paras[1]
-        );
-        assert!(paras[2].starts_with("Equally good on the held-out data: stiffness degradation."));
-        assert!(
-            paras[2]
-                .ends_with("To separate them: cycles with reversed loading and growing amplitude."),
-            "{}",
-            paras[2]
-        );
-    }
-
-    #[test]
     fn remaining_gap_is_called_out() {
         let s = DiagnosisSummary {
             baseline_law: "elastoplastic".into(),

@@ -198,13 +198,20 @@ mod tests {
         assert!((rec.response_measured[4] - (20.0 + 0.01 * 0.4 + 0.5)).abs() < 1e-12);
     }
 
-    #[test]
-    fn noise_has_the_requested_level_and_is_seeded() {
-        let n = 20_000;
+    /// `n` samples at 100 Hz with zero control and zero response but for a first sample of
+    /// 80 N, which sets the response full scale to 100 N: what the rig adds is all there is.
+    fn quiet(n: usize) -> (Vec<f64>, Vec<f64>, Vec<f64>) {
         let t: Vec<f64> = (0..n).map(|i| i as f64 * 0.01).collect();
         let c = vec![0.0; n];
         let mut r = vec![0.0; n];
-        r[0] = 80.0; // full scale → 100 N
+        r[0] = 80.0;
+        (t, c, r)
+    }
+
+    #[test]
+    fn noise_has_the_requested_level_and_is_seeded() {
+        let n = 20_000;
+        let (t, c, r) = quiet(n);
         let a = Artefacts {
             noise_rel: 1e-3,
             adc_bits: 0,
@@ -226,10 +233,7 @@ mod tests {
     #[test]
     fn ar1_noise_and_decimated_export() {
         let n = 40_000;
-        let t: Vec<f64> = (0..n).map(|i| i as f64 * 0.01).collect();
-        let c = vec![0.0; n];
-        let mut r = vec![0.0; n];
-        r[0] = 80.0; // full scale → 100 N
+        let (t, c, r) = quiet(n);
         let lag1 = |v: &[f64]| {
             let m = v.iter().sum::<f64>() / v.len() as f64;
             let num: f64 = v.windows(2).map(|w| (w[0] - m) * (w[1] - m)).sum();
@@ -258,41 +262,33 @@ mod tests {
 
     #[test]
     fn quantisation_snaps_to_the_adc_step() {
+        // One sample of 3.3 N, noise-free, through the rig's quantisation.
+        let read = |a: &Artefacts| {
+            let rec = apply(
+                TestKind::Tension,
+                a,
+                &[0.0],
+                &[0.0],
+                &[3.3],
+                &[],
+                1e-3,
+                0.1,
+                0,
+            );
+            (rec.response_quantum, rec.response_measured[0])
+        };
         let a = Artefacts {
             noise_rel: 0.0,
             adc_bits: 8,
             response_full_scale: Some(128.0),
             ..Artefacts::default()
         };
-        let rec = apply(
-            TestKind::Tension,
-            &a,
-            &[0.0],
-            &[0.0],
-            &[3.3],
-            &[],
-            1e-3,
-            0.1,
-            0,
-        );
-        assert_eq!(rec.response_quantum, 1.0);
-        assert_eq!(rec.response_measured[0], 3.0);
+        assert_eq!(read(&a), (1.0, 3.0));
         let a = Artefacts {
             noise_rel: 0.0,
             response_quantum: Some(0.25),
             ..a
         };
-        let rec = apply(
-            TestKind::Tension,
-            &a,
-            &[0.0],
-            &[0.0],
-            &[3.3],
-            &[],
-            1e-3,
-            0.1,
-            0,
-        );
-        assert_eq!(rec.response_measured[0], 3.25);
+        assert_eq!(read(&a).1, 3.25);
     }
 }

@@ -7,7 +7,7 @@
 //! Does not add artefacts and does not write anything; the truth model is abstract ([`Truth`]).
 
 use crate::error::SynthError;
-use crate::spec::{Protocol, Step};
+use crate::spec::{CycleLimits, Protocol, Step};
 use crate::truth::Truth;
 
 /// The discretised control history.
@@ -52,6 +52,17 @@ impl Path {
         self.cycle.push(cycle);
     }
 
+    /// Ramps the control to `to` at `rate` (control units per second).
+    fn ramp_to(&mut self, to: f64, rate: f64, dt: f64, cycle: f64) {
+        let t1 = self.t_end() + (to - self.c_end()).abs() / rate;
+        self.segment_to(t1, to, dt, cycle);
+    }
+    /// Holds the control for `duration_s`.
+    fn hold(&mut self, duration_s: f64, dt: f64, cycle: f64) {
+        let c = self.c_end();
+        self.segment_to(self.t_end() + duration_s, c, dt, cycle);
+    }
+
     /// Appends a straight segment to `(t1, c1)`: every grid time strictly inside, then the end
     /// point (on the grid if it falls on it within 1e-9 of a step).
     fn segment_to(&mut self, t1: f64, c1: f64, dt: f64, cycle: f64) {
@@ -80,30 +91,11 @@ pub fn expand(protocol: &Protocol, dt_s: f64, truth: &dyn Truth) -> Result<Path,
     let mut cycle = 0.0;
     for (i, step) in protocol.steps.iter().enumerate() {
         match *step {
-            Step::Ramp { to, rate } => {
-                let t1 = p.t_end() + (to - p.c_end()).abs() / rate;
-                p.segment_to(t1, to, dt_s, cycle);
-            }
-            Step::Hold { duration_s } => {
-                let c = p.c_end();
-                p.segment_to(p.t_end() + duration_s, c, dt_s, cycle);
-            }
-            Step::Cycles {
-                lower,
-                upper,
-                rate,
-                count,
-                dwell_s,
-            } => {
-                for _ in 0..count {
-                    for target in [upper, lower] {
-                        let t1 = p.t_end() + (target - p.c_end()).abs() / rate;
-                        p.segment_to(t1, target, dt_s, cycle);
-                        cycle += 0.5;
-                        if dwell_s > 0.0 {
-                            p.segment_to(p.t_end() + dwell_s, target, dt_s, cycle);
-                        }
-                    }
+            Step::Ramp { to, rate } => p.ramp_to(to, rate, dt_s, cycle),
+            Step::Hold { duration_s } => p.hold(duration_s, dt_s, cycle),
+            Step::Cycles { .. } | Step::ResponseCycles { .. } => {
+                if let Some(c) = step.cycles() {
+                    cycles(&mut p, truth, i, &c, dt_s, &mut cycle)?;
                 }
             }
             Step::RampToResponse {
@@ -113,28 +105,34 @@ pub fn expand(protocol: &Protocol, dt_s: f64, truth: &dyn Truth) -> Result<Path,
             } => {
                 ramp_to_response(&mut p, truth, i, response, rate, max_control, dt_s, cycle)?;
             }
-            Step::ResponseCycles {
-                lower,
-                upper,
-                rate,
-                count,
-                dwell_s,
-                max_control,
-            } => {
-                for _ in 0..count {
-                    for target in [upper, lower] {
-                        ramp_to_response(&mut p, truth, i, target, rate, max_control, dt_s, cycle)?;
-                        cycle += 0.5;
-                        if dwell_s > 0.0 {
-                            let c = p.c_end();
-                            p.segment_to(p.t_end() + dwell_s, c, dt_s, cycle);
-                        }
-                    }
-                }
-            }
         }
     }
     Ok(p)
+}
+
+/// Runs the cycles of step `step`: to `upper`, dwell, to `lower`, dwell, `count` times. Control
+/// limits are turned at; response limits where the truth's response reaches them.
+fn cycles(
+    p: &mut Path,
+    truth: &dyn Truth,
+    step: usize,
+    c: &CycleLimits,
+    dt_s: f64,
+    cycle: &mut f64,
+) -> Result<(), SynthError> {
+    for _ in 0..c.count {
+        for target in [c.upper, c.lower] {
+            match c.max_control {
+                Some(max) => ramp_to_response(p, truth, step, target, c.rate, max, dt_s, *cycle)?,
+                None => p.ramp_to(target, c.rate, dt_s, *cycle),
+            }
+            *cycle += 0.5;
+            if c.dwell_s > 0.0 {
+                p.hold(c.dwell_s, dt_s, *cycle);
+            }
+        }
+    }
+    Ok(())
 }
 
 /// Ramps from the current point in the direction that moves the response towards `limit` and

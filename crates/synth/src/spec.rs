@@ -143,6 +143,56 @@ pub enum Step {
     },
 }
 
+/// The two cycle steps seen as one: `count` cycles between `lower` and `upper`, on the control
+/// ([`Step::Cycles`], `max_control` None) or on the response ([`Step::ResponseCycles`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CycleLimits {
+    /// Lower turning point (control) or response limit.
+    pub lower: f64,
+    /// Upper turning point (control) or response limit.
+    pub upper: f64,
+    /// Speed, control units per second.
+    pub rate: f64,
+    /// Number of cycles.
+    pub count: u32,
+    /// Dwell at each turning point, s.
+    pub dwell_s: f64,
+    /// For response limits: the control bound (absolute value) beyond which the search fails.
+    pub max_control: Option<f64>,
+}
+
+impl Step {
+    /// The limits of a cycle step; None for the other steps.
+    pub fn cycles(&self) -> Option<CycleLimits> {
+        let (lower, upper, rate, count, dwell_s, max_control) = match *self {
+            Step::Cycles {
+                lower,
+                upper,
+                rate,
+                count,
+                dwell_s,
+            } => (lower, upper, rate, count, dwell_s, None),
+            Step::ResponseCycles {
+                lower,
+                upper,
+                rate,
+                count,
+                dwell_s,
+                max_control,
+            } => (lower, upper, rate, count, dwell_s, Some(max_control)),
+            _ => return None,
+        };
+        Some(CycleLimits {
+            lower,
+            upper,
+            rate,
+            count,
+            dwell_s,
+            max_control,
+        })
+    }
+}
+
 /// What a real rig adds to the truth. Control and response values in SI.
 ///
 /// Order of application (see [`crate::artefacts`]): slack travel and machine compliance change the
@@ -286,6 +336,22 @@ impl SynthSpec {
                     Err(invalid(f(name), format!("must be >= 0, got {v}")))
                 }
             };
+            if let Some(c) = s.cycles() {
+                pos("rate", c.rate)?;
+                if let Some(m) = c.max_control {
+                    pos("max_control", m)?;
+                }
+                nonneg("dwell_s", c.dwell_s)?;
+                if !(c.lower.is_finite() && c.upper.is_finite() && c.upper > c.lower) {
+                    return Err(invalid(
+                        f("upper"),
+                        format!("must exceed lower ({}), got {}", c.lower, c.upper),
+                    ));
+                }
+                if c.count == 0 {
+                    return Err(invalid(f("count"), "must be >= 1"));
+                }
+            }
             match s {
                 Step::Ramp { to, rate } => {
                     pos("rate", *rate)?;
@@ -294,25 +360,8 @@ impl SynthSpec {
                     }
                 }
                 Step::Hold { duration_s } => nonneg("duration_s", *duration_s)?,
-                Step::Cycles {
-                    lower,
-                    upper,
-                    rate,
-                    count,
-                    dwell_s,
-                } => {
-                    pos("rate", *rate)?;
-                    nonneg("dwell_s", *dwell_s)?;
-                    if !(lower.is_finite() && upper.is_finite() && upper > lower) {
-                        return Err(invalid(
-                            f("upper"),
-                            format!("must exceed lower ({lower}), got {upper}"),
-                        ));
-                    }
-                    if *count == 0 {
-                        return Err(invalid(f("count"), "must be >= 1"));
-                    }
-                }
+                // Checked above, on their limits.
+                Step::Cycles { .. } | Step::ResponseCycles { .. } => {}
                 Step::RampToResponse {
                     response,
                     rate,
@@ -322,27 +371,6 @@ impl SynthSpec {
                     pos("max_control", *max_control)?;
                     if !response.is_finite() {
                         return Err(invalid(f("response"), "must be finite"));
-                    }
-                }
-                Step::ResponseCycles {
-                    lower,
-                    upper,
-                    rate,
-                    count,
-                    dwell_s,
-                    max_control,
-                } => {
-                    pos("rate", *rate)?;
-                    pos("max_control", *max_control)?;
-                    nonneg("dwell_s", *dwell_s)?;
-                    if !(lower.is_finite() && upper.is_finite() && upper > lower) {
-                        return Err(invalid(
-                            f("upper"),
-                            format!("must exceed lower ({lower}), got {upper}"),
-                        ));
-                    }
-                    if *count == 0 {
-                        return Err(invalid(f("count"), "must be >= 1"));
                     }
                 }
             }

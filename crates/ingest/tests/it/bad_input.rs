@@ -7,6 +7,14 @@ fn read(b: &[u8]) -> Result<cablab_ingest::TestRecord, IngestError> {
     read_bytes(b, "bad.csv", &ReadOptions::default())
 }
 
+/// The reader's warning whose message contains every one of `words`.
+fn warning<'a>(r: &'a cablab_ingest::TestRecord, words: &[&str]) -> &'a cablab_ingest::Diagnostic {
+    r.warnings
+        .iter()
+        .find(|w| words.iter().all(|x| w.message.contains(x)))
+        .unwrap_or_else(|| panic!("no warning with {words:?}: {:?}", r.warnings))
+}
+
 #[test]
 fn empty_file() {
     for b in [&b""[..], b"\xEF\xBB\xBF", b"\n\n  \r\n"] {
@@ -34,11 +42,7 @@ fn binary_junk() {
 fn truncated_last_line_is_a_warning_with_its_line() {
     let r = read(b"t (s),F (N),x (mm)\n0,1,2\n1,2,3\n2,3").unwrap();
     assert_eq!(r.data.height(), 3);
-    let w = r
-        .warnings
-        .iter()
-        .find(|w| w.message.contains("fewer cells"))
-        .expect("warning");
+    let w = warning(&r, &["fewer cells"]);
     assert_eq!(w.line, Some(4));
     assert!(r.column_values("x").unwrap()[2].is_nan());
 }
@@ -71,34 +75,19 @@ fn no_numeric_rows() {
 #[test]
 fn non_monotonic_and_repeated_time_warn_with_line_and_column() {
     let r = read(b"F (N),t (s),x (mm)\n1,0.0,0\n2,0.1,1\n3,0.1,2\n4,0.05,3\n").unwrap();
-    let w = r
-        .warnings
-        .iter()
-        .find(|w| w.message.contains("not strictly increasing"))
-        .expect("warning");
-    assert_eq!((w.line, w.column), (Some(4), Some(2)));
-    assert!(
-        w.message.contains("1 decreasing and 1 repeated"),
-        "{}",
-        w.message
+    let w = warning(
+        &r,
+        &["not strictly increasing", "1 decreasing and 1 repeated"],
     );
+    assert_eq!((w.line, w.column), (Some(4), Some(2)));
     assert!(w.to_string().starts_with("bad.csv:4:2: warning:"), "{w}");
 }
 
 #[test]
 fn text_where_numbers_belong() {
     let r = read(b"t (s)\tF (N)\tx (mm)\n0\t1\t2\n1\tERR\t3\n2\t3\t4\n").unwrap();
-    let w = r
-        .warnings
-        .iter()
-        .find(|w| w.message.contains("text where a number belongs"))
-        .unwrap();
+    let w = warning(&r, &["text where a number belongs", "'ERR'", "'F (N)'"]);
     assert_eq!((w.line, w.column), (Some(3), Some(2)));
-    assert!(
-        w.message.contains("'ERR'") && w.message.contains("'F (N)'"),
-        "{}",
-        w.message
-    );
 }
 
 #[test]

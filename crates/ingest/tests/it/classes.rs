@@ -9,6 +9,16 @@ fn read(text: &str, name: &str) -> TestRecord {
         .unwrap_or_else(|e| panic!("{name}: {e}"))
 }
 
+/// As `cablab inspect` reads: a column whose unit cannot be read, or a table that is not a
+/// curve, is kept with a warning.
+fn read_lenient(text: &str, name: &str) -> TestRecord {
+    let opts = ReadOptions {
+        lenient: true,
+        ..Default::default()
+    };
+    read_bytes(text.as_bytes(), name, &opts).unwrap_or_else(|e| panic!("{name}: {e}"))
+}
+
 fn col(r: &TestRecord, name: &str) -> Vec<f64> {
     r.column_values(name)
         .unwrap_or_else(|| panic!("no column {name}"))
@@ -217,15 +227,7 @@ fn an_unreadable_unit_is_never_si() {
         );
         assert!(m.contains("--unit"), "{m}");
         // inspect keeps the channel, unit unknown, with a warning.
-        let r = read_bytes(
-            text.as_bytes(),
-            "u.csv",
-            &ReadOptions {
-                lenient: true,
-                ..Default::default()
-            },
-        )
-        .unwrap();
+        let r = read_lenient(&text, "u.csv");
         let ch = r
             .channels
             .iter()
@@ -368,15 +370,7 @@ fn a_per_cycle_trend_table_is_refused_as_a_curve() {
         "{m}"
     );
     // inspect still shows it, with the reason as a warning.
-    let r = read_bytes(
-        text.as_bytes(),
-        "trends.csv",
-        &ReadOptions {
-            lenient: true,
-            ..Default::default()
-        },
-    )
-    .unwrap();
+    let r = read_lenient(&text, "trends.csv");
     assert_eq!(r.data.height(), 15);
     assert!(warned(&r, &["per-cycle summary table"]));
     // A curve whose columns merely mention a statistic elsewhere is not refused.

@@ -47,41 +47,23 @@ fn check_file(entry: &Value, errs: &mut Vec<String>) {
     if Some(p.sha256.as_str()) != s(entry, "sha256") {
         err(format!("sha256 {} differs", p.sha256));
     }
-    if Some(p.encoding.as_str()) != s(entry, "encoding") {
-        err(format!(
-            "encoding {} != {:?}",
-            p.encoding,
-            s(entry, "encoding")
-        ));
+    for (k, ours) in [("encoding", &p.encoding), ("decimal", &p.decimal)] {
+        if Some(ours.as_str()) != s(entry, k) {
+            err(format!("{k} {ours} != {:?}", s(entry, k)));
+        }
     }
     let sep = s(entry, "separator").unwrap();
     if p.separator != sep {
         err(format!("separator {} != {sep}", p.separator));
     }
-    if Some(p.decimal.as_str()) != s(entry, "decimal") {
-        err(format!(
-            "decimal {} != {:?}",
-            p.decimal,
-            s(entry, "decimal")
-        ));
-    }
-    if Some(rec.blocks.len()) != i(entry, "blocks") {
-        err(format!(
-            "blocks {} != {:?}",
-            rec.blocks.len(),
-            i(entry, "blocks")
-        ));
-    }
-    if Some(rec.main_block) != i(entry, "main_block") {
-        err(format!(
-            "main block {} != {:?}",
-            rec.main_block,
-            i(entry, "main_block")
-        ));
-    }
-    let rows = rec.data.height();
-    if Some(rows) != i(entry, "rows") {
-        err(format!("rows {rows} != {:?}", i(entry, "rows")));
+    for (k, ours) in [
+        ("blocks", rec.blocks.len()),
+        ("main_block", rec.main_block),
+        ("rows", rec.data.height()),
+    ] {
+        if Some(ours) != i(entry, k) {
+            err(format!("{k} {ours} != {:?}", i(entry, k)));
+        }
     }
     let b = &rec.blocks[rec.main_block - 1];
     for (k, ours) in [

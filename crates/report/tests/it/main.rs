@@ -6,3 +6,4 @@ mod browser;
 mod fixtures;
 mod html;
 mod svg;
+mod words;
