@@ -463,3 +463,53 @@ fn fit_windows_in_response_units_and_percent_of_the_maximum() {
     assert!(p("10%,500N").is_err());
     assert!(p("40%,10%").is_err());
 }
+
+/// Issue 12 item 6 (first loading against unloading): a first loading at 20 N/mm up to
+/// 1 mm, then an unloading at 30 N/mm to zero force (a cable that beds in on its first
+/// loading) on l₀ = 100 mm: EA = 2000 N from the first loading, 3000 N from the unloading,
+/// and a warning next to the stiffness naming both. The same log unloading at 20 N/mm: the
+/// two agree and nothing is said.
+#[test]
+fn first_loading_and_unloading_stiffness_are_cross_checked() {
+    let log = |k_unload: f64| {
+        let (mut c, mut r) = (Vec::new(), Vec::new());
+        for i in 0..=400 {
+            let x = 1e-3 * i as f64 / 400.0;
+            c.push(x);
+            r.push(2e4 * x + 0.02 * wiggle(i));
+        }
+        let back = 20.0 / k_unload; // control travelled back to zero force, m
+        for i in 1..=300 {
+            let x = 1e-3 - back * i as f64 / 300.0;
+            c.push(x);
+            r.push(20.0 - k_unload * (1e-3 - x) + 0.02 * wiggle(1000 + i));
+        }
+        tension(&c, &r, None)
+    };
+    let a = log(3e4);
+    let s = a.stiffness.as_ref().expect("stiffness");
+    let u = s.first_unloading.as_ref().expect("the unloading check");
+    assert!((s.value / 2000.0 - 1.0).abs() < 0.01, "{s:?}");
+    assert!((u.value / 3000.0 - 1.0).abs() < 0.01, "{u:?}");
+    assert!(!u.agrees);
+    let w = a
+        .warnings
+        .iter()
+        .find(|w| w.contains("disagree"))
+        .expect("a disagreement warning");
+    assert!(
+        w.contains(&format!("{:.4e}", s.value)) && w.contains(&format!("{:.4e}", u.value)),
+        "{w}"
+    );
+    assert!(s.warnings.iter().any(|w| w.contains("disagree")));
+    let a = log(2e4);
+    let s = a.stiffness.as_ref().expect("stiffness");
+    let u = s.first_unloading.as_ref().expect("the unloading check");
+    assert!((u.value / 2000.0 - 1.0).abs() < 0.01, "{u:?}");
+    assert!(u.agrees, "{s:?}");
+    assert!(
+        !a.warnings.iter().any(|w| w.contains("disagree")),
+        "{:?}",
+        a.warnings
+    );
+}

@@ -37,7 +37,7 @@
 use crate::condition::{
     correct_compliance, glitches, noise_level, segment, zero_offsets, Branch, Offsets, Segment,
 };
-use crate::elastic::{auto_elastic_range, user_elastic_range, ElasticRange, Hinge};
+use crate::elastic::{auto_elastic_range_ar1, user_elastic_range, ElasticRange, Hinge};
 use crate::elastica::ThreePointElastica;
 use crate::hysteresis::{cycles, CycleInputs, CycleResult};
 use crate::sectional::{
@@ -201,9 +201,27 @@ pub struct Stiffness {
     pub r2: f64,
     /// Samples in the window.
     pub n: usize,
-    /// Doubts about this number (poor fit, few points, wide interval, implausible modulus),
-    /// also in the analysis' `warnings`.
+    /// Doubts about this number (poor fit, few points, wide interval, implausible modulus,
+    /// disagreement with the first unloading), also in the analysis' `warnings`.
     pub warnings: Vec<String>,
+    /// The first unloading's initial stiffness with its interval, the cross-check of the
+    /// first-loading value (null when there is no unloading, and for three-point, whose
+    /// unloading is not elastica-corrected).
+    pub first_unloading: Option<UnloadingCheck>,
+}
+
+/// The first unloading's stiffness beside the first-loading one (issue 12.6).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct UnloadingCheck {
+    /// Initial unloading stiffness of cycle 1, stiffness unit (the per-cycle
+    /// `unloading_stiffness`).
+    pub value: f64,
+    /// Its 95 % interval (the same AR(1) noise model as the first-loading interval).
+    pub ci95: [f64; 2],
+    /// Samples fitted.
+    pub n: usize,
+    /// Whether the two 95 % intervals overlap; when they do not, a warning names both values.
+    pub agrees: bool,
 }
 
 /// The yield point: the bend in the first loading path.
@@ -603,10 +621,31 @@ pub fn analyze(
         }
         (w, _) => w,
     };
+    // The response noise's serial correlation, measured over the whole record on the residual
+    // series response − k · control (k: the steepest straight piece of the virgin envelope,
+    // so control noise seen through the slope counts too; the series is piecewise linear in
+    // time wherever the test is, which the lag-k second differences do not see). Its σ, scaled
+    // to the virgin envelope's own noise level (a load cell reads a cable's stick-slip louder
+    // at higher loads), is the prior σ of the stiffness interval, with the degrees of freedom
+    // of a MAD of second differences (about 0.37 as efficient as a standard deviation, over
+    // differences with Σρ² = 1.94, and fewer independent samples by the long-run factor).
+    let serial = {
+        let seg = crate::elastic::segment_lines(&fx, &fy, 3);
+        let k = seg.slopes.iter().copied().fold(0.0f64, f64::max);
+        let z: Vec<f64> = xs.iter().zip(&rm).map(|(x, y)| y - k * x).collect();
+        let sn = crate::condition::serial_noise(&z);
+        let z_env: Vec<f64> = env_idx[..fx.len()].iter().map(|&i| z[i]).collect();
+        let (lr, le) = (noise_level(&z), noise_level(&z_env));
+        let scale = if lr > 0.0 && le > 0.0 { le / lr } else { 1.0 };
+        let dof = 0.19 * z_env.len().min(z.len()) as f64 / sn.long_run_factor();
+        (sn, sn.sigma * scale, dof)
+    };
+    let mut user_bounds = (f64::NEG_INFINITY, f64::INFINITY);
     let elastic: Option<ElasticRange> = match fit_window {
         Some((a, b)) => {
             let (ma, mb) = (sign * a, sign * b);
             let map = |v: f64| to_fit_x(v).unwrap_or(v);
+            user_bounds = (map(ma).min(map(mb)), map(ma).max(map(mb)));
             let mut e =
                 user_elastic_range(&fx, &fy, map(ma), map(mb)).map_err(|err| match err {
                     // Name the window as the user gave it.
@@ -619,7 +658,7 @@ pub fn analyze(
             e.window = [ma.min(mb), ma.max(mb)];
             Some(e)
         }
-        None => match auto_elastic_range(&fx, &fy) {
+        None => match auto_elastic_range_ar1(&fx, &fy, serial.0.phi) {
             Ok(e) => Some(e),
             Err(e) => {
                 why.insert(
@@ -637,32 +676,34 @@ pub fn analyze(
             e.window
         };
         let w = if sign > 0.0 { win } else { [-win[1], -win[0]] };
-        // Serially correlated residuals (quantisation, dense sampling of a slightly curved
-        // window) carry fewer independent samples than they number: widen the interval by
-        // the lag-1 autocorrelation's variance factor √((1 + ρ)/(1 − ρ)) (ρ > 0 only).
+        // Serially correlated noise carries fewer independent samples than it numbers: the
+        // interval is that of AR(1) errors with the record's φ over the samples' positions in
+        // the record (`linear_fit_ar1`; the plain one for white noise).
         let (a, b) = e.window_idx;
-        let inflate = if e.automatic && b > a + 3 {
-            correlation_inflation(&fx[a..b], &fy[a..b], &e.fit)
-        } else {
-            1.0
-        };
-        let half = [
-            (e.fit.slope - e.fit.slope_ci95[0]) * inflate,
-            (e.fit.slope_ci95[1] - e.fit.slope) * inflate,
-        ];
+        let k: Vec<usize> = (a..b)
+            .filter(|&k| user_bounds.0 <= fx[k] && fx[k] <= user_bounds.1)
+            .collect();
+        let pick = |v: &[f64]| k.iter().map(|&j| v[j]).collect::<Vec<f64>>();
+        let pos: Vec<usize> = k.iter().map(|&j| env_idx[j]).collect();
+        let ci = crate::stats::linear_fit_ar1(
+            &pick(&fx),
+            &pick(&fy),
+            &pos,
+            serial.0.phi,
+            Some((serial.1, serial.2)),
+        )
+        .map_or(e.fit.slope_ci95, |f| f.slope_ci95);
         Stiffness {
             value: e.fit.slope * factor,
             unit: kind.stiffness_unit(),
-            ci95: [
-                (e.fit.slope - half[0]) * factor,
-                (e.fit.slope + half[1]) * factor,
-            ],
+            ci95: [ci[0] * factor, ci[1] * factor],
             window: w,
             window_unit: sectional_unit(kind),
             window_automatic: e.automatic,
             r2: e.fit.r2,
             n: e.fit.n,
             warnings: Vec::new(),
+            first_unloading: None,
         }
     });
     let first_rise = fy.iter().fold(f64::NEG_INFINITY, |m, &v| m.max(v))
@@ -735,6 +776,35 @@ pub fn analyze(
         zero_sectional: toe_ref.map_or(0.0, |t| t.1),
         toe_end_control: toe_ref.map_or(f64::NEG_INFINITY, |t| t.0 / per_control),
     });
+
+    // First loading against first unloading (issue 12.6): both are the elastic stiffness of
+    // an elastic or elastoplastic specimen; intervals that do not overlap mean the first
+    // loading was not (a toe or seating not separated from the window, slack, damage).
+    if let (Some(s), false) = (stiffness.as_mut(), three) {
+        let check = first_unloading_fit(&segments, &xs, &rm, serial.0.phi, (serial.1, serial.2));
+        if let Some(f) = check {
+            let (lo, hi) = (f.slope_ci95[0] * factor, f.slope_ci95[1] * factor);
+            let agrees = lo <= s.ci95[1] && s.ci95[0] <= hi;
+            s.first_unloading = Some(UnloadingCheck {
+                value: f.slope * factor,
+                ci95: [lo, hi],
+                n: f.n,
+                agrees,
+            });
+            if !agrees {
+                let w = format!(
+                    "the first-loading stiffness {:.4e} {u} (95 % [{:.4e}, {:.4e}]) and the first unloading's {:.4e} {u} (95 % [{lo:.4e}, {hi:.4e}]) disagree beyond their intervals: a toe, seating or slack in the first loading, or damage at the first peak; the first-loading value is reported",
+                    s.value,
+                    s.ci95[0],
+                    s.ci95[1],
+                    f.slope * factor,
+                    u = s.unit,
+                );
+                warnings.push(format!("stiffness: {w}"));
+                s.warnings.push(w);
+            }
+        }
+    }
 
     // Behaviour. Knee positions back from the fitting control to the sectional one.
     let unmap = |h: Hinge| Hinge {
@@ -980,6 +1050,26 @@ pub fn analyze(
     })
 }
 
+/// The initial straight part of cycle 1's first unloading run (sectional `x`, response `y`,
+/// while the response is still positive; [`crate::elastic::initial_window`]) fitted with the
+/// AR(1) interval of the record's noise (`phi`, `prior` σ and its degrees of freedom).
+fn first_unloading_fit(
+    segments: &[Segment],
+    x: &[f64],
+    y: &[f64],
+    phi: f64,
+    prior: (f64, f64),
+) -> Option<crate::stats::Fit> {
+    let s = segments
+        .iter()
+        .find(|s| s.cycle == 1 && s.branch == Branch::Unloading)?;
+    let (a, b) = (s.start.saturating_sub(1), s.end);
+    let pos_end = (a..b).find(|&i| y[i] <= 0.0).unwrap_or(b);
+    let (p, q) = crate::elastic::initial_window(&x[a..pos_end], &y[a..pos_end])?;
+    let pos: Vec<usize> = (a + p..a + q).collect();
+    crate::stats::linear_fit_ar1(&x[a + p..a + q], &y[a + p..a + q], &pos, phi, Some(prior)).ok()
+}
+
 /// Response change over each hold that is not the initial rest (see [`HoldRelaxation`]).
 fn hold_relaxation(segments: &[Segment], control: &[f64], response: &[f64]) -> Vec<HoldRelaxation> {
     let held: Vec<&Segment> = segments
@@ -1023,8 +1113,10 @@ pub const PLAUSIBLE_MODULUS_PA: (f64, f64) = (1e5, 1.2e12);
 pub const MIN_STIFFNESS_SAMPLES: usize = 5;
 
 /// Why a stiffness must not be printed at all, if so: fewer than [`MIN_STIFFNESS_SAMPLES`]
-/// samples in the window, a 95% interval that contains zero, or a first loading whose response
-/// never rises beyond 10 σ of its noise (a flat response: any slope is noise).
+/// samples in the window, or a first loading whose response never rises beyond 10 σ of its
+/// noise (a flat response: any slope is noise). A 95 % interval that contains zero is a doubt
+/// next to the number ([`stiffness_doubts`]), not a refusal: with serially correlated noise a
+/// short window's honest interval can be that wide while the slope is still the best estimate.
 fn refuse_stiffness(s: &Stiffness, first_rise: f64, sigma_r: f64) -> Option<String> {
     if !(first_rise > 10.0 * sigma_r) {
         return Some(format!(
@@ -1037,19 +1129,20 @@ fn refuse_stiffness(s: &Stiffness, first_rise: f64, sigma_r: f64) -> Option<Stri
             s.n
         ));
     }
-    if s.ci95[0] <= 0.0 && s.ci95[1] >= 0.0 {
-        return Some(format!(
-            "the 95 % interval of the slope [{:.4e}, {:.4e}] {} contains zero",
-            s.ci95[0], s.ci95[1], s.unit
-        ));
-    }
     None
 }
 
-/// Doubts about a stiffness that is printed: a negative value, a poor straight-line fit
-/// (r² < 0.99), few samples (< 20), a wide interval (half-width > 5 % of the value).
+/// Doubts about a stiffness that is printed: a negative value, a 95 % interval that contains
+/// zero, a poor straight-line fit (r² < 0.99), few samples (< 20), a wide interval (half-width
+/// > 5 % of the value).
 fn stiffness_doubts(s: &Stiffness) -> Vec<String> {
     let mut out = Vec::new();
+    if s.ci95[0] <= 0.0 && s.ci95[1] >= 0.0 {
+        out.push(format!(
+            "the 95 % interval [{:.4e}, {:.4e}] {} contains zero: the slope is not distinguishable from none",
+            s.ci95[0], s.ci95[1], s.unit
+        ));
+    }
     if !(s.value > 0.0) {
         out.push(format!(
             "the elastic slope is not positive ({:.4e} {})",
@@ -1173,17 +1266,4 @@ fn break_is_abrupt(rm: &[f64], j: usize) -> bool {
     let top = rm[..j].iter().fold(f64::NEG_INFINITY, |m, &v| m.max(v));
     let last_high = (0..j).rev().find(|&i| rm[i] >= 0.9 * top).unwrap_or(0);
     j - last_high <= (rm.len() / 50).max(5)
-}
-
-/// Variance inflation of a slope from the lag-1 autocorrelation ρ of the fit's residuals (in
-/// sample order): √((1 + ρ)/(1 − ρ)) for ρ > 0 (an AR(1) error's effective sample size), 1
-/// otherwise; ρ is capped at 0.95.
-fn correlation_inflation(x: &[f64], y: &[f64], fit: &crate::stats::Fit) -> f64 {
-    let r: Vec<f64> = x.iter().zip(y).map(|(a, b)| b - fit.at(*a)).collect();
-    let ss: f64 = r.iter().map(|v| v * v).sum();
-    if !(ss > 0.0) {
-        return 1.0;
-    }
-    let rho = (r.windows(2).map(|w| w[0] * w[1]).sum::<f64>() / ss).clamp(0.0, 0.95);
-    ((1.0 + rho) / (1.0 - rho)).sqrt()
 }

@@ -26,8 +26,8 @@ pub mod table;
 
 pub use analysis::{
     analyze, Analysis, AnalyzeOptions, Behaviour, BreakPoint, FitWindowUnit, HoldRelaxation,
-    LargeDeflection, MaxResponse, Noise, Piecewise, Stiffness, Toe, YieldMethod, YieldPoint,
-    BREAK_DROP, THREE_POINT_GEOMETRY_LIMIT,
+    LargeDeflection, MaxResponse, Noise, Piecewise, Stiffness, Toe, UnloadingCheck, YieldMethod,
+    YieldPoint, BREAK_DROP, THREE_POINT_GEOMETRY_LIMIT,
 };
 pub use condition::{
     correct_compliance, labels, noise_level, quantum, resolution, reversal_threshold, segment,

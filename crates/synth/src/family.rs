@@ -65,6 +65,10 @@ pub struct FamilyTruth {
     pub noise_ar1: f64,
     /// Export decimation (every k-th row; 0 or 1: none).
     pub decimate: usize,
+    /// Machine control (m or rad) over which the first loading is elastic: from the end of the
+    /// slack to the first ramp's end or, for an elastoplastic law, the yield control, whichever
+    /// comes first (an oracle window for the stiffness).
+    pub elastic_machine: [f64; 2],
 }
 
 /// One case of the family: the virtual lab's spec and the truth.
@@ -253,6 +257,12 @@ pub fn family_case(seed: u64) -> FamilyCase {
         specimen_number: None,
     };
     let (noise_ar1, decimate) = (spec.artefacts.noise_ar1, spec.artefacts.decimate);
+    let slack = spec.artefacts.slack;
+    let elastic_top = if elastoplastic {
+        amps[0].min(cy)
+    } else {
+        amps[0]
+    };
     FamilyCase {
         spec,
         truth: FamilyTruth {
@@ -273,6 +283,7 @@ pub fn family_case(seed: u64) -> FamilyCase {
             noise_rel,
             noise_ar1,
             decimate,
+            elastic_machine: [slack, slack + elastic_top],
         },
     }
 }
