@@ -934,7 +934,7 @@ pub fn analyze(
             sample: k,
         }
     };
-    let break_point = find_break(&cm, &rm).map(|(j, work)| BreakPoint {
+    let break_point = find_break(&cm, &rm, serial.0.sigma).map(|(j, work)| BreakPoint {
         sample: j,
         machine_control: control[j],
         response_before: response[j - 1],
@@ -1236,18 +1236,37 @@ fn offset_yield(
 }
 
 /// The break of an oriented test (`cm`, `rm`: control and response with the first motion
-/// positive): the first sample after the response maximum below [`BREAK_DROP`] of it, when
-/// the response stays below 0.8 of the maximum from there on and the control has not gone back
-/// below its value at the maximum by more than its reversal threshold (an unloading is no
-/// break). Returns the sample and the work
-/// ∫ rm d(cm) up to it.
-fn find_break(cm: &[f64], rm: &[f64]) -> Option<(usize, f64)> {
-    let k = (0..rm.len()).max_by(|&a, &b| rm[a].total_cmp(&rm[b]))?;
+/// positive; `sigma` the response noise's marginal σ, robust to serial correlation,
+/// [`crate::condition::serial_noise`]): the first sample after the response maximum from which
+/// the response stays down, judged so that correlated noise cannot fake it:
+/// * the maximum stands clear of the noise (above 10 σ);
+/// * the drop is sustained: from the break sample on, the median over the next
+///   max(5, 1 % of the record) samples (or all that remain, at least 3) is below
+///   [`BREAK_DROP`] of the maximum, and below it by 10 σ;
+/// * the response never comes back above 0.8 of the maximum, and the control has not gone
+///   back below its value at the maximum by more than its reversal threshold (an unloading is
+///   no break).
+///
+/// The break sample is the first sample of that sustained stretch below the drop level.
+/// Returns it and the work ∫ rm d(cm) up to it.
+fn find_break(cm: &[f64], rm: &[f64], sigma: f64) -> Option<(usize, f64)> {
+    let n = rm.len();
+    let k = (0..n).max_by(|&a, &b| rm[a].total_cmp(&rm[b]))?;
     let top = rm[k];
-    if !(top > 0.0) {
+    if !(top > 0.0 && top > 10.0 * sigma) {
         return None;
     }
-    let j = (k + 1..rm.len()).find(|&j| rm[j] < BREAK_DROP * top)?;
+    let level = BREAK_DROP * top;
+    let d = (n / 100).max(5);
+    let sustained = |j: usize| -> bool {
+        let end = (j + d).min(n);
+        if end - j < 3 {
+            return false;
+        }
+        let m = crate::stats::median(&rm[j..end]);
+        m < level && m < top - 10.0 * sigma
+    };
+    let j = (k + 1..n).find(|&j| rm[j] < level && sustained(j))?;
     let stays = rm[j..].iter().all(|&v| v < 0.8 * top);
     let h = crate::condition::reversal_threshold(cm);
     let onward = cm[k..=j].iter().all(|&v| v >= cm[k] - h);

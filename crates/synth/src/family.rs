@@ -21,7 +21,10 @@
 //!   region in 30 % of the cases, a decimated export (every 2nd–8th row, ≥ 20 rows left on
 //!   the first ramp) in 20 %.
 //!
-//! Does not make rate-dependent, drifting or broken specimens.
+//! [`break_case`] adds monotonic tension tests to fracture (or stopped before it) under white
+//! or AR(1) noise, as curves (the break detection's truth).
+//!
+//! Does not make rate-dependent or drifting specimens.
 
 use crate::spec::{Artefacts, Layout, Protocol, Step, SynthSpec};
 use cablab_core::{Specimen, TestKind};
@@ -285,5 +288,126 @@ pub fn family_case(seed: u64) -> FamilyCase {
             decimate,
             elastic_machine: [slack, slack + elastic_top],
         },
+    }
+}
+
+/// A monotonic tension test to fracture (or not), as a logger records it: the truth of issue
+/// 12 item 5's break detection under correlated noise.
+#[derive(Debug, Clone)]
+pub struct BreakCase {
+    /// Time, s.
+    pub time_s: Vec<f64>,
+    /// Elongation, m (rises throughout).
+    pub control: Vec<f64>,
+    /// Force, N, with the noise.
+    pub response: Vec<f64>,
+    /// Free length, m.
+    pub free_length_m: f64,
+    /// First sample of the fallen response (None: the specimen does not break).
+    pub break_sample: Option<usize>,
+    /// Largest noise-free force, N.
+    pub max_response: f64,
+    /// ∫ F dΔl of the noise-free curve up to the break sample, J (None without a break).
+    pub work_to_break: Option<f64>,
+    /// AR(1) coefficient of the noise (0: white).
+    pub noise_ar1: f64,
+}
+
+/// The monotonic case of `seed`: a bilinear elastoplastic rise (E A of 2·10³–2·10⁵ N, yield
+/// at 0.2–0.6 % strain, hardening 1–20 %) to 2–10 × the yield strain on 200–3000 rows, with
+/// response noise of 0.05–1 % of the maximum, white or AR(1) (φ = 0.3–0.95, in 60 % of the
+/// cases). Two thirds of the cases break: the force falls within 1–3 rows to 0–20 % of its
+/// value and the crosshead runs on for 5–30 % more rows; the others end at their maximum
+/// (a test stopped before fracture) or soften gradually to no less than 70 % of it (necking
+/// without fracture).
+///
+/// Does not make cyclic, compressive or three-point tests.
+pub fn break_case(seed: u64) -> BreakCase {
+    use rand_distr::{Distribution, StandardNormal};
+    let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0xB4EA_C0DE_0012_0005);
+    let l0 = rng.random_range(0.05..0.3);
+    let ea = log_uniform(&mut rng, 2e3, 2e5);
+    let ey = rng.random_range(0.002..0.006);
+    let h = rng.random_range(0.01..0.2);
+    let e_end = ey * rng.random_range(2.0..10.0);
+    let n_rise = log_uniform(&mut rng, 200.0, 3000.0) as usize;
+    let breaks = rng.random_bool(2.0 / 3.0);
+    let soften = !breaks && rng.random_bool(0.5);
+    let tail = if breaks || soften {
+        (n_rise as f64 * rng.random_range(0.05..0.3)) as usize + 5
+    } else {
+        0
+    };
+    let drop_rows = rng.random_range(1..=3usize);
+    let residual = rng.random_range(0.0..0.2);
+    let soft_to = rng.random_range(0.7..0.95);
+    let noise_rel = log_uniform(&mut rng, 5e-4, 1e-2);
+    let phi = if rng.random_bool(0.6) {
+        rng.random_range(0.3..0.95)
+    } else {
+        0.0
+    };
+    let law = |e: f64| -> f64 {
+        if e <= ey {
+            ea * e
+        } else {
+            ea * ey + h * ea * (e - ey)
+        }
+    };
+    let de = e_end / n_rise as f64;
+    let mut strain = Vec::with_capacity(n_rise + tail + 1);
+    let mut clean = Vec::with_capacity(n_rise + tail + 1);
+    for i in 0..=n_rise {
+        let e = de * i as f64;
+        strain.push(e);
+        clean.push(law(e));
+    }
+    let top = clean[n_rise];
+    for i in 1..=tail {
+        let e = e_end + de * i as f64;
+        strain.push(e);
+        clean.push(if breaks {
+            let t = (i as f64 / drop_rows as f64).min(1.0);
+            top * (1.0 - t * (1.0 - residual))
+        } else {
+            top * (1.0 - (1.0 - soft_to) * i as f64 / tail as f64)
+        });
+    }
+    // The first row at or below the drop level of the analysis (half the maximum).
+    let break_sample = breaks.then(|| {
+        (n_rise + 1..clean.len())
+            .find(|&i| clean[i] < 0.5 * top)
+            .unwrap_or(clean.len() - 1)
+    });
+    let work_to_break = break_sample.map(|j| {
+        (0..j)
+            .map(|i| 0.5 * (clean[i] + clean[i + 1]) * (strain[i + 1] - strain[i]) * l0)
+            .sum()
+    });
+    let sd = noise_rel * top;
+    let mut p = 0.0f64;
+    let response: Vec<f64> = clean
+        .iter()
+        .enumerate()
+        .map(|(i, c)| {
+            let e: f64 = StandardNormal.sample(&mut rng);
+            p = if i == 0 {
+                e
+            } else {
+                phi * p + (1.0 - phi * phi).sqrt() * e
+            };
+            c + sd * p
+        })
+        .collect();
+    let rate_hz = 10.0;
+    BreakCase {
+        time_s: (0..clean.len()).map(|i| i as f64 / rate_hz).collect(),
+        control: strain.iter().map(|e| e * l0).collect(),
+        response,
+        free_length_m: l0,
+        break_sample,
+        max_response: top,
+        work_to_break,
+        noise_ar1: phi,
     }
 }
