@@ -390,7 +390,53 @@ fn yield_on_the_virgin_envelope_of_a_step_up_test() {
     let want = e * (eps - d) * 1e-6;
     assert!((y.response / want - 1.0).abs() < 0.01, "{y:?} vs {want}");
     assert_eq!((y.method, y.offset), ("offset", Some(d)));
+    assert_eq!(y.offset_rule.as_deref(), Some("given"));
     assert!("offset:-1".parse::<cablab_measure::YieldMethod>().is_err());
+
+    // `offset` without a value: tension's default is ISO 6892-1's 0.2 % strain, the same point.
+    let a = run("offset");
+    let y = a.yield_point.as_ref().expect("default offset yield");
+    assert!((y.response / want - 1.0).abs() < 0.01, "{y:?} vs {want}");
+    assert_eq!((y.method, y.offset), ("offset", Some(d)));
+    assert!(y
+        .offset_rule
+        .as_deref()
+        .unwrap()
+        .contains("ISO 6892-1 Rp0.2"));
+    // The same numbers as pure bending (end rotation, moment) and torsion (twist, torque): the
+    // default is 0.2 % plastic strain at the surface, a curvature of 2 · 0.002/d and a twist
+    // rate of 2√3 · 0.002/d, which the diameters 2 m and 2√3 m make 0.002 1/m again (so the
+    // analytical point above holds); without a diameter there is no default, and why says so.
+    for (kind, dia) in [
+        (TestKind::PureBending, 2.0),
+        (TestKind::Torsion, 2.0 * 3f64.sqrt()),
+    ] {
+        let o = AnalyzeOptions {
+            yield_method: "offset".parse().unwrap(),
+            ..Default::default()
+        };
+        let g = Geometry {
+            diameter_m: Some(dia),
+            ..geom
+        };
+        let a = analyze(kind, &g, None, &c, &r, &o).unwrap();
+        let y = a.yield_point.as_ref().expect("default offset yield");
+        assert!(
+            (y.offset.unwrap() / d - 1.0).abs() < 1e-12,
+            "{kind:?}: {y:?}"
+        );
+        assert!(
+            (y.response / want - 1.0).abs() < 0.01,
+            "{kind:?}: {y:?} vs {want}"
+        );
+        assert!(
+            y.offset_rule.as_deref().unwrap().contains("surface"),
+            "{y:?}"
+        );
+        let a = analyze(kind, &geom, None, &c, &r, &o).unwrap();
+        assert!(a.yield_point.is_none());
+        assert!(a.why_by_key["yield"].contains("diameter"), "{:?}", a.why);
+    }
 }
 
 /// Issue 12 item 5: a monotonic test to fracture. Linear to 1 mm at 20 N/mm, then the force

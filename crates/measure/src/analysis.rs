@@ -102,6 +102,51 @@ pub enum YieldMethod {
     /// in the kind's sectional control (strain for tension, 1/m for torsion and pure bending,
     /// m for three-point), e.g. `offset:0.002` (0.2 % strain) (`offset:<value>`).
     Offset(f64),
+    /// Offset yield with the default offset of the kind ([`default_yield_offset`]: 0.2 %
+    /// plastic strain at the surface, ISO 6892-1's Rp0.2) (`offset` without a value).
+    OffsetDefault,
+}
+
+/// Plastic strain of the default offset yield: 0.2 % (ISO 6892-1 Rp0.2, ISO 527).
+pub const DEFAULT_OFFSET_STRAIN: f64 = 0.002;
+
+/// The default offset of [`YieldMethod::OffsetDefault`] in the kind's sectional control, and
+/// how it was set: the analogue of ISO 6892-1's Rp0.2 for each kind, a plastic strain of
+/// [`DEFAULT_OFFSET_STRAIN`] where the specimen strains most:
+/// * tension: the axial strain ε = 0.002;
+/// * pure bending: the surface strain (d/2) κ = 0.002, so κ = 0.004/d (1/m);
+/// * torsion: the surface shear strain (d/2) K₃ = γ with the same von Mises equivalent plastic
+///   strain, γ = √3 · 0.002, so K₃ = 2√3 · 0.002/d (1/m);
+/// * three-point: the small-deflection peak surface strain (d/2) · 12 w/l₀² = 0.002, so
+///   w = 0.002 l₀²/(6 d) (m).
+///
+/// Errors (with why) when the kind needs the diameter and it is not known.
+pub fn default_yield_offset(kind: TestKind, geom: &Geometry) -> Result<(f64, String), String> {
+    let e = DEFAULT_OFFSET_STRAIN;
+    if kind == TestKind::Tension {
+        return Ok((e, "default: 0.2 % axial strain (ISO 6892-1 Rp0.2)".into()));
+    }
+    let Some(d) = geom.diameter_m.filter(|d| *d > 0.0) else {
+        return Err(format!(
+            "the default offset (0.2 % plastic strain at the surface) of a {} test needs the diameter: give it, or an explicit offset:<value>",
+            kind.as_str()
+        ));
+    };
+    match kind {
+        TestKind::PureBending => Ok((
+            2.0 * e / d,
+            "default: 0.2 % surface strain, curvature 2·0.002/d (ISO 6892-1 Rp0.2 analogue)".into(),
+        )),
+        TestKind::Torsion => Ok((
+            2.0 * 3f64.sqrt() * e / d,
+            "default: surface shear strain √3·0.2 % (von Mises equivalent of 0.2 % plastic strain), twist 2√3·0.002/d (ISO 6892-1 Rp0.2 analogue)".into(),
+        )),
+        TestKind::ThreePoint => Ok((
+            e * geom.free_length_m.powi(2) / (6.0 * d),
+            "default: 0.2 % small-deflection peak surface strain, deflection 0.002·l0²/(6 d) (ISO 6892-1 Rp0.2 analogue)".into(),
+        )),
+        _ => Err("no default offset for an unknown kind".into()),
+    }
 }
 
 impl YieldMethod {
@@ -110,19 +155,21 @@ impl YieldMethod {
         match self {
             YieldMethod::Auto => "envelope_bend",
             YieldMethod::FirstLoading => "first_loading_bend",
-            YieldMethod::Offset(_) => "offset",
+            YieldMethod::Offset(_) | YieldMethod::OffsetDefault => "offset",
         }
     }
 }
 
 impl std::str::FromStr for YieldMethod {
     type Err = String;
-    /// `auto`, `first-loading` (or `first_loading`), `offset:<value>` (value > 0).
+    /// `auto`, `first-loading` (or `first_loading`), `offset` (the kind's default offset,
+    /// [`default_yield_offset`]), `offset:<value>` (value > 0).
     fn from_str(s: &str) -> Result<Self, String> {
         let t = s.trim().to_lowercase();
         match t.as_str() {
             "auto" => return Ok(YieldMethod::Auto),
             "first-loading" | "first_loading" => return Ok(YieldMethod::FirstLoading),
+            "offset" => return Ok(YieldMethod::OffsetDefault),
             _ => {}
         }
         if let Some(v) = t.strip_prefix("offset:") {
@@ -133,7 +180,7 @@ impl std::str::FromStr for YieldMethod {
             }
         }
         Err(format!(
-            "yield method {s:?}: expected auto, first-loading or offset:<value> (value > 0 in the kind's sectional control, e.g. offset:0.002 for 0.2 % strain)"
+            "yield method {s:?}: expected auto, first-loading, offset (0.2 % plastic strain at the surface) or offset:<value> (value > 0 in the kind's sectional control, e.g. offset:0.002 for 0.2 % strain)"
         ))
     }
 }
@@ -245,6 +292,9 @@ pub struct YieldPoint {
     pub method: &'static str,
     /// The offset of the offset method (sectional control units), else null.
     pub offset: Option<f64>,
+    /// How the offset was set: `given` (offset:<value>) or the default's rule
+    /// ([`default_yield_offset`]); null for the other methods.
+    pub offset_rule: Option<String>,
     /// Cycle the yield point lies in.
     pub cycle: usize,
     /// Branch the yield point lies in (`first_loading` or `reloading`).
@@ -862,6 +912,7 @@ pub fn analyze(
                 peak_moment: three.then(|| sign * three_point_peak_moment(b.knee_y, l0)),
                 method: opts.yield_method.as_str(),
                 offset: None,
+                offset_rule: None,
                 cycle,
                 branch,
             })
@@ -885,8 +936,17 @@ pub fn analyze(
         }
     };
     // The offset method replaces the bend (whatever the class: the user asked for it).
-    let yield_point = match (opts.yield_method, &elastic) {
-        (YieldMethod::Offset(v), Some(e)) => {
+    let offset = match opts.yield_method {
+        YieldMethod::Offset(v) => Some(Ok((v, "given".to_string()))),
+        YieldMethod::OffsetDefault => Some(default_yield_offset(kind, geom)),
+        _ => None,
+    };
+    let yield_point = match (offset, &elastic) {
+        (Some(Err(reason)), _) => {
+            why.insert("yield".into(), format!("offset yield: {reason}"));
+            None
+        }
+        (Some(Ok((v, rule))), Some(e)) => {
             why.remove("yield");
             match offset_yield(&fx, &fy, &e.fit, v, e.window_idx.0) {
                 Some((x, y, xr)) => {
@@ -903,6 +963,7 @@ pub fn analyze(
                         peak_moment: three.then(|| sign * three_point_peak_moment(y, l0)),
                         method: opts.yield_method.as_str(),
                         offset: Some(v),
+                        offset_rule: Some(rule),
                         cycle,
                         branch,
                     })
@@ -918,7 +979,7 @@ pub fn analyze(
                 }
             }
         }
-        (YieldMethod::Offset(_), None) => {
+        (Some(Ok(_)), None) => {
             why.insert("yield".into(), "offset yield: no elastic line".into());
             None
         }
