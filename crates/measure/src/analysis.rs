@@ -209,7 +209,12 @@ pub enum Behaviour {
     PiecewiseLinearElastic,
     /// Yield, hardening, open loops, residual deformation (cables).
     Elastoplastic,
-    /// None of the above (rate dependence, friction loops, drift, or not enough data).
+    /// The response depends on the loading rate: it relaxes toward zero at held control
+    /// after a loading ramp and recovers after an unloading one (viscoelastic or viscoplastic;
+    /// see [`HoldRelaxation::relaxes`]). Takes precedence over the rate-independent classes.
+    RateDependent,
+    /// None of the above (friction loops, drift, rate dependence without a hold to show it, or
+    /// not enough data).
     Other,
     /// The specimen broke abruptly ([`Analysis::break_point`] says where; a gradual fall keeps
     /// its class and the warning); the class before the break is not judged.
@@ -223,6 +228,7 @@ impl Behaviour {
             Behaviour::LinearElastic => "linear_elastic",
             Behaviour::PiecewiseLinearElastic => "piecewise_linear_elastic",
             Behaviour::Elastoplastic => "elastoplastic",
+            Behaviour::RateDependent => "rate_dependent",
             Behaviour::Other => "other",
             Behaviour::Broken => "broken",
         }
@@ -387,10 +393,15 @@ pub struct HoldRelaxation {
     /// Mean response over the last tenth of the hold minus that over the first tenth.
     pub response_change: f64,
     /// Whether the response trends during the hold: the slope of a straight line through the
-    /// hold's samples (against sample index) differs from zero by more than the Student-t
-    /// quantile at α = 10⁻³ shared among the test's holds (Bonferroni), so a test with many
-    /// elastic dwells raises no false alarm from noise.
+    /// hold's samples (against sample index) differs from zero by more than the normal
+    /// quantile at α = 10⁻³ shared among the test's holds (Bonferroni) times its standard
+    /// error under the record's AR(1) noise ([`crate::stats::linear_fit_ar1`]), so neither
+    /// many elastic dwells nor correlated noise raise a false alarm.
     pub significant: bool,
+    /// Whether a significant trend is relaxation: opposite to the control's move into the hold
+    /// (the response falls at a hold after a loading ramp and rises after an unloading one). A
+    /// sensor drift trends the same way at every hold.
+    pub relaxes: bool,
 }
 
 /// Noise levels (σ) of the conditioned channels.
@@ -1072,10 +1083,33 @@ pub fn analyze(
         }
         _ => None,
     };
-    let holds = hold_relaxation(&segments, &c, &r);
-    if holds.iter().any(|h| h.significant) {
+    let holds = hold_relaxation(&segments, &c, &r, serial.0.phi, (serial.1, serial.2));
+    // Rate dependence: every hold that trends relaxes, and two do (or the only one): a viscous
+    // specimen relaxes after loading and recovers after unloading; a drift trends one way at
+    // every hold, whatever the control did before it; one hold's fluke among several is not a
+    // material.
+    let trending: Vec<&HoldRelaxation> = holds.iter().filter(|h| h.significant).collect();
+    let rate_dependent = trending.iter().all(|h| h.relaxes)
+        && (trending.len() >= 2 || (holds.len() == 1 && trending.len() == 1));
+    if rate_dependent {
         warnings.push("the response relaxes during holds: the material is rate dependent (viscous); rate-independent results are approximate".into());
+    } else if trending.iter().any(|h| h.relaxes) && trending.iter().all(|h| h.relaxes) {
+        warnings.push(format!(
+            "the response relaxes during {} of {} holds: possibly rate dependent",
+            trending.len(),
+            holds.len()
+        ));
+    } else if !trending.is_empty() {
+        warnings.push(format!(
+            "the response trends during {} hold(s), not all toward relaxation: a drifting sensor or an unsteady rig",
+            trending.len()
+        ));
     }
+    let behaviour = if rate_dependent && behaviour != Behaviour::Broken {
+        Behaviour::RateDependent
+    } else {
+        behaviour
+    };
     // Report cycles in the original orientation.
     let cycles_out: Vec<CycleResult> = cyc
         .into_iter()
@@ -1126,34 +1160,62 @@ fn first_unloading_fit(
         .find(|s| s.cycle == 1 && s.branch == Branch::Unloading)?;
     let (a, b) = (s.start.saturating_sub(1), s.end);
     let pos_end = (a..b).find(|&i| y[i] <= 0.0).unwrap_or(b);
-    let (p, q) = crate::elastic::initial_window(&x[a..pos_end], &y[a..pos_end])?;
+    let (p, q) = crate::elastic::initial_window(&x[a..pos_end], &y[a..pos_end], phi)?;
     let pos: Vec<usize> = (a + p..a + q).collect();
     crate::stats::linear_fit_ar1(&x[a + p..a + q], &y[a + p..a + q], &pos, phi, Some(prior)).ok()
 }
 
-/// Response change over each hold that is not the initial rest (see [`HoldRelaxation`]).
-fn hold_relaxation(segments: &[Segment], control: &[f64], response: &[f64]) -> Vec<HoldRelaxation> {
+/// Response change over each hold that is not the initial rest (see [`HoldRelaxation`];
+/// `phi` and `prior` the record's AR(1) noise, as for the stiffness interval).
+fn hold_relaxation(
+    segments: &[Segment],
+    control: &[f64],
+    response: &[f64],
+    phi: f64,
+    prior: (f64, f64),
+) -> Vec<HoldRelaxation> {
     let held: Vec<&Segment> = segments
         .iter()
         .filter(|s| s.branch == Branch::Hold && s.start > 0 && s.end - s.start >= 20)
         .collect();
     let alpha = 1e-3 / held.len().max(1) as f64;
+    let z = crate::stats::normal_quantile(1.0 - alpha / 2.0);
+    // A hold's band reaches into the ramps on either side (it is one reversal threshold
+    // wide): only its core, where the control is within its noise or resolution of the
+    // hold's median, is still; the ramps' ends would otherwise pass for relaxation.
+    let tol = (3.0 * noise_level(control)).max(crate::condition::resolution(control));
     held.into_iter()
-        .map(|s| {
+        .filter_map(|s| {
+            let med = crate::stats::median(&control[s.start..s.end]);
+            let still = |i: &usize| (control[*i] - med).abs() <= tol;
+            let a = (s.start..s.end).find(still)?;
+            let b = (s.start..s.end).rev().find(still)? + 1;
+            (b >= a + 20).then_some((s, a, b))
+        })
+        .map(|(s, a, b)| {
+            let s = &Segment {
+                start: a,
+                end: b,
+                ..*s
+            };
             let y = &response[s.start..s.end];
             let b = (y.len() / 10).max(3);
             let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len() as f64;
             let change = mean(&y[y.len() - b..]) - mean(&y[..b]);
             let idx: Vec<f64> = (0..y.len()).map(|i| i as f64).collect();
-            let significant = match crate::stats::line_fit(&idx, y) {
-                Ok(f) if f.slope_se > 0.0 => {
-                    let t =
-                        crate::stats::student_t_quantile(1.0 - alpha / 2.0, (y.len() - 2) as f64);
-                    f.slope.abs() > t * f.slope_se
-                }
+            let pos: Vec<usize> = (s.start..s.end).collect();
+            let significant = match crate::stats::linear_fit_ar1(&idx, y, &pos, phi, Some(prior)) {
+                Ok(f) if f.slope_se > 0.0 => f.slope.abs() > z * f.slope_se,
                 Ok(f) => f.slope != 0.0,
                 Err(_) => false,
             };
+            // The control's move into the hold: from the start of the segment before it.
+            let before = segments
+                .iter()
+                .rev()
+                .find(|p| p.end <= s.start && p.branch != Branch::Hold)
+                .map_or(0, |p| p.start);
+            let into = control[s.start] - control[before];
             HoldRelaxation {
                 cycle: s.cycle,
                 start: s.start,
@@ -1161,6 +1223,7 @@ fn hold_relaxation(segments: &[Segment], control: &[f64], response: &[f64]) -> V
                 control: mean(&control[s.start..s.end]),
                 response_change: change,
                 significant,
+                relaxes: significant && change * into < 0.0,
             }
         })
         .collect()

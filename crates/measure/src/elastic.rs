@@ -565,25 +565,25 @@ fn straighten(
 /// Initial straight part of a branch that starts at a turning point (unloading, reloading):
 /// the first of at most two segments (module doc, step 2), trimmed like the elastic window.
 pub fn initial_slope(x: &[f64], y: &[f64]) -> Option<Fit> {
-    let (a, b) = initial_window(x, y)?;
+    let (a, b) = initial_window(x, y, 0.0)?;
     linear_fit(&x[a..b], &y[a..b]).ok()
 }
 
 /// [`initial_slope`] without the slope interval (the per-cycle stiffnesses need only the line).
 pub(crate) fn initial_line(x: &[f64], y: &[f64]) -> Option<Line> {
-    let (a, b) = initial_window(x, y)?;
+    let (a, b) = initial_window(x, y, 0.0)?;
     line_fit(&x[a..b], &y[a..b]).ok()
 }
 
-/// The index window of [`initial_slope`].
-pub(crate) fn initial_window(x: &[f64], y: &[f64]) -> Option<(usize, usize)> {
+/// The index window of [`initial_slope`], for noise of lag-1 correlation `phi` (0: white).
+pub(crate) fn initial_window(x: &[f64], y: &[f64], phi: f64) -> Option<(usize, usize)> {
     let n = x.len();
     if n < 5 {
         return None;
     }
-    let seg = segment_lines(x, y, 2);
+    let seg = segment_lines_ar1(x, y, 2, phi);
     let end = seg.breaks.first().copied().unwrap_or(n);
-    trim_window(x, y, 0, end, 0.0).ok()
+    trim_window(x, y, 0, end, phi).ok()
 }
 
 #[cfg(test)]

@@ -24,14 +24,23 @@
 //! [`break_case`] adds monotonic tension tests to fracture (or stopped before it) under white
 //! or AR(1) noise, as curves (the break detection's truth).
 //!
-//! Does not make rate-dependent or drifting specimens.
+//! A share ([`RATE_DEPENDENT_SHARE`]) of the tension, torsion and bending cases is
+//! rate-dependent instead: `linear+viscoelasticity` (a Maxwell branch of 0.2–1 × the elastic
+//! stiffness, relaxation time 0.2–2 × the first ramp's duration), with dwells of 1–3
+//! relaxation times in two thirds of them, the rate changes above in all.
+//!
+//! Does not make drifting specimens.
 
-use crate::spec::{Artefacts, Layout, Protocol, Step, SynthSpec};
+use crate::spec::{Artefacts, Extension, Layout, Protocol, Step, SynthSpec};
 use cablab_core::{Specimen, TestKind};
 use cablab_laws::linear::GA_PER_EA;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use std::collections::BTreeMap;
+
+/// Share of the family's cases (not three-point) with a rate-dependent law: `linear` with a
+/// viscoelastic Maxwell branch (`linear+viscoelasticity`).
+pub const RATE_DEPENDENT_SHARE: f64 = 0.15;
 
 /// Amplitude schedule of a case.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -47,7 +56,8 @@ pub enum Schedule {
 /// What a generated case should measure as.
 #[derive(Debug, Clone, PartialEq)]
 pub struct FamilyTruth {
-    /// Elastic stiffness (EA N, GJ or EI N m²).
+    /// Elastic stiffness (EA N, GJ or EI N m²); NaN for a rate-dependent law (its apparent
+    /// stiffness depends on the rate).
     pub stiffness: f64,
     /// Relative accuracy of `stiffness` as the virtual lab reproduces it: 0 where the rod's
     /// answer is exact (uniform tension, torsion, pure bending); 10⁻³ for three-point, the
@@ -56,7 +66,7 @@ pub struct FamilyTruth {
     pub stiffness_tol: f64,
     /// Yield response (F_y N or M_y N m) when the law yields within the test.
     pub yield_response: Option<f64>,
-    /// Expected behaviour class (`linear_elastic` or `elastoplastic`).
+    /// Expected behaviour class (`linear_elastic`, `elastoplastic` or `rate_dependent`).
     pub class: &'static str,
     /// The schedule drawn.
     pub schedule: Schedule,
@@ -68,6 +78,8 @@ pub struct FamilyTruth {
     pub noise_ar1: f64,
     /// Export decimation (every k-th row; 0 or 1: none).
     pub decimate: usize,
+    /// Dwell at every turning point, s (0: none).
+    pub dwell_s: f64,
     /// Machine control (m or rad) over which the first loading is elastic: from the end of the
     /// slack to the first ramp's end or, for an elastoplastic law, the yield control, whichever
     /// comes first (an oracle window for the stiffness).
@@ -99,6 +111,10 @@ fn log_uniform(rng: &mut ChaCha8Rng, lo: f64, hi: f64) -> f64 {
 /// The case of `seed` (see the module doc for the distributions).
 pub fn family_case(seed: u64) -> FamilyCase {
     let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0x5EED_FA41_1700_0012);
+    // Rate-dependent cases come from a stream of their own, so the other cases' draws are
+    // those of the family without them.
+    let mut visco_rng = ChaCha8Rng::seed_from_u64(seed ^ 0x0DA5_4B07_1200_0004);
+    let rate_dependent = visco_rng.random_bool(RATE_DEPENDENT_SHARE);
     let u: f64 = rng.random();
     let kind = if u < 0.4 {
         TestKind::Tension
@@ -122,6 +138,8 @@ pub fn family_case(seed: u64) -> FamilyCase {
     let ey = rng.random_range(0.002..0.006);
     let h = rng.random_range(0.02..0.3);
     let elastoplastic = kind != TestKind::ThreePoint && rng.random_bool(0.6);
+    let rate_dependent = rate_dependent && kind != TestKind::ThreePoint;
+    let elastoplastic = elastoplastic && !rate_dependent;
     // Stiffness, yield response and the control at yield (machine units).
     let (stiff_name, yname, hname, stiffness, y, cy) = match kind {
         TestKind::Tension => ("EA", "F_y", "H", e * area, e * area * ey, ey * l0),
@@ -174,6 +192,20 @@ pub fn family_case(seed: u64) -> FamilyCase {
     } else {
         rng.random_range(0.0..30.0)
     };
+    // A Maxwell branch of 0.2–1 × the elastic stiffness relaxing in 0.2–2 × the first ramp's
+    // duration; in two thirds of these cases the dwells last 1–3 relaxation times.
+    let ramp_s = amps[0] / base_rate;
+    let visco = rate_dependent.then(|| {
+        let tau = ramp_s * visco_rng.random_range(0.2..2.0);
+        let k_v = visco_rng.random_range(0.2..1.0);
+        let dwell = if visco_rng.random_bool(2.0 / 3.0) {
+            tau * visco_rng.random_range(1.0..3.0)
+        } else {
+            0.0
+        };
+        (tau, k_v, dwell)
+    });
+    let dwell = visco.map_or(dwell, |v| v.2);
     let mut steps = Vec::new();
     let mut rate = base_rate;
     for (k, &a) in amps.iter().enumerate() {
@@ -235,6 +267,13 @@ pub fn family_case(seed: u64) -> FamilyCase {
         params.insert(yname.to_string(), y);
         params.insert(hname.to_string(), h * stiffness);
     }
+    let extension = visco.map(|(tau, k_v, _)| Extension {
+        name: "viscoelasticity".into(),
+        params: BTreeMap::from([
+            (format!("{stiff_name}_v1"), k_v * stiffness),
+            ("tau_v1".to_string(), tau),
+        ]),
+    });
     let spec = SynthSpec {
         kind,
         specimen: Specimen {
@@ -249,7 +288,7 @@ pub fn family_case(seed: u64) -> FamilyCase {
         }
         .into(),
         params,
-        extension: None,
+        extension,
         rig: Default::default(),
         protocol: Protocol { steps },
         artefacts,
@@ -269,14 +308,16 @@ pub fn family_case(seed: u64) -> FamilyCase {
     FamilyCase {
         spec,
         truth: FamilyTruth {
-            stiffness,
+            stiffness: if rate_dependent { f64::NAN } else { stiffness },
             stiffness_tol: if kind == TestKind::ThreePoint {
                 1e-3
             } else {
                 0.0
             },
             yield_response: elastoplastic.then_some(y),
-            class: if elastoplastic {
+            class: if rate_dependent {
+                "rate_dependent"
+            } else if elastoplastic {
                 "elastoplastic"
             } else {
                 "linear_elastic"
@@ -287,6 +328,7 @@ pub fn family_case(seed: u64) -> FamilyCase {
             noise_ar1,
             decimate,
             elastic_machine: [slack, slack + elastic_top],
+            dwell_s: dwell,
         },
     }
 }
