@@ -180,7 +180,7 @@ fn breaks_are_found_and_not_faked_by_correlated_noise() {
         let mut p = 0.0f64;
         let noise: Vec<f64> = (0..c.control.len())
             .map(|i| {
-                p = 0.9 * p + 0.436 * wiggle_at(seed, i);
+                p = 0.9 * p + 0.436 * crate::trust::wiggle(i + 1_000_000 * seed as usize);
                 p
             })
             .collect();
@@ -194,22 +194,10 @@ fn breaks_are_found_and_not_faked_by_correlated_noise() {
             &c.control,
             &noise,
             &AnalyzeOptions::default(),
-        );
-        if let Ok(a) = a {
-            assert!(a.break_point.is_none(), "seed {seed}: {:?}", a.break_point);
-        }
+        )
+        .unwrap_or_else(|e| panic!("seed {seed}: {e}"));
+        assert!(a.break_point.is_none(), "seed {seed}: {:?}", a.break_point);
     }
-}
-
-/// Deterministic white pseudo-noise in [-1, 1) (SplitMix64 of seed and index).
-fn wiggle_at(seed: u64, i: usize) -> f64 {
-    let mut z = (i as u64 ^ seed.rotate_left(32))
-        .wrapping_add(1)
-        .wrapping_mul(0x9E37_79B9_7F4A_7C15);
-    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-    z ^= z >> 31;
-    (z >> 11) as f64 / (1u64 << 52) as f64 - 1.0
 }
 
 /// The class `rate_dependent` over the family (issue 12.4), on a fixed set: the first 12
@@ -247,9 +235,11 @@ fn family_figures() {
     let n = 500u64;
     let (mut with_s, mut covered, mut within1, mut low_noise, mut low_within1) = (0, 0, 0, 0, 0);
     let mut meets = 0;
-    // Cases with a first-unloading check, and those where it disagrees (a false alarm: the
-    // family's laws unload at the elastic stiffness).
+    // Cases with a first-unloading check, and those where it disagrees (a false alarm for the
+    // rate-independent laws, which unload at the elastic stiffness; expected for a viscous
+    // one, whose apparent stiffness depends on the rate).
     let (mut checked, mut disagree) = (0usize, Vec::new());
+    let (mut visco_checked, mut visco_disagree) = (0usize, 0usize);
     // Cases with a break (none of the family breaks).
     let mut breaks = Vec::new();
     // (cases with a stiffness, CI holds, |error| <= 1 %) for white / AR(1) noise and for
@@ -280,9 +270,14 @@ fn family_figures() {
                     .as_ref()
                     .and_then(|s| s.first_unloading.as_ref())
                 {
-                    checked += 1;
-                    if !u.agrees {
-                        disagree.push(seed);
+                    if t.class != "rate_dependent" {
+                        checked += 1;
+                        if !u.agrees {
+                            disagree.push(seed);
+                        }
+                    } else {
+                        visco_checked += 1;
+                        visco_disagree += (!u.agrees) as usize;
                     }
                 }
                 if let Some((err, cov, meet)) = stiffness_check(&t, &a) {
@@ -348,7 +343,7 @@ fn family_figures() {
     println!("  by noise (cases, CI holds the truth, |error| <= 1 %): {by_noise:?}");
     println!("  breaks found (none expected): {breaks:?}");
     println!(
-        "  first loading vs first unloading: {checked} checked, {} disagree (seeds {:?})",
+        "  first loading vs first unloading, rate-independent laws: {checked} checked, {} disagree (false alarms; seeds {:?}); rate-dependent: {visco_disagree} of {visco_checked} disagree",
         disagree.len(),
         &disagree[..disagree.len().min(20)]
     );

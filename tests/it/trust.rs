@@ -41,7 +41,7 @@ fn analyze_tension_json(p: &Path) -> (Option<i32>, Value) {
 }
 
 /// Deterministic white pseudo-noise in [-1, 1) (SplitMix64 of the sample index).
-fn wiggle(i: usize) -> f64 {
+pub(crate) fn wiggle(i: usize) -> f64 {
     let mut z = (i as u64)
         .wrapping_add(1)
         .wrapping_mul(0x9E37_79B9_7F4A_7C15);

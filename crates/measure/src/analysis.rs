@@ -27,9 +27,19 @@
 //! * a bend, loops that do not close and a significant residual deformation → `elastoplastic`;
 //! * anything else (loops without a bend: friction, viscosity, drift; or no unloading to judge
 //!   reversibility by, while the first loading bends) → `other`;
+//! * holds whose response relaxes (falls after a loading ramp, recovers after an unloading
+//!   one; at least two such holds, or the only hold, and no hold trending the other way) →
+//!   `rate_dependent`, over any of the above ([`HoldRelaxation`]);
 //! * an abrupt break (the response falls from 90 % of its maximum below [`BREAK_DROP`] of it
 //!   within 5 samples or 2 % of the record, and stays there) → `broken`, whatever came before
 //!   it (the yield point and stiffness are still reported).
+//!
+//! Noise: the response noise is modelled as AR(1) over the whole record
+//! ([`crate::condition::serial_noise`] of response − k · control), so serially correlated
+//! noise (a logger's filter, AR(1), decimated exports) neither narrows the stiffness interval
+//! ([`crate::stats::linear_fit_ar1`], exact for the window's samples) nor moves the window,
+//! fakes a hold's relaxation or a break. Does not classify rate dependence from rate changes
+//! alone (a test without a hold of ≥ 20 samples shows none).
 //!
 //! The yield point is the bend of an `elastoplastic` (or unjudgeable) test; a reversible bend is
 //! reported as the piecewise threshold K_t instead. Pure: numbers in, numbers out.

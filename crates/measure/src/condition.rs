@@ -75,7 +75,7 @@ impl SerialNoise {
 /// Noise σ and serial correlation φ of a signal that is piecewise smooth in sample order (a
 /// ramp-dwell-ramp record, or a residual series `response − slope · control` over a test).
 ///
-/// Second differences at lag k, d = s[i + 2k] − 2 s[i + k] + s[i], of AR(1) noise have the
+/// Second differences at lag k, d = `s[i + 2k] − 2 s[i + k] + s[i]`, of AR(1) noise have the
 /// variance 6 σ² g_k(φ), g_k(φ) = (1 − φᵏ)(3 − φᵏ)/3 (1 for white noise at every lag), while a
 /// straight stretch of signal contributes nothing and a smooth one about (k² s″)². So the
 /// robust scales v_k = MAD(d)/(0.6745·√6) at lags k = 1, 2, 3, 4, 6, 8, … (each on ≥ 20 k

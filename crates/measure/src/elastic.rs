@@ -22,6 +22,11 @@
 //!    noise (|z| > 3.29, α = 10⁻³), the window loses a tenth at its curved end (top if concave,
 //!    bottom if convex), down to a fifth of its length: a rounded knee does not bend the line.
 //!
+//! Correlated noise ([`auto_elastic_range_ar1`], φ the lag-1 correlation of the record's noise):
+//! the break threshold and the knee intervals' SSE allowance grow by the long-run variance
+//! factor (1 + φ)/(1 − φ); a trimmed block's mean and the curvature term get their exact AR(1)
+//! variances. Without that, runs of correlated noise pass for bends and cut the window.
+//!
 //! What it does not do: decide whether a bend is yield or reversible (that needs the unloading,
 //! see [`crate::hysteresis`]), or convert slopes to stiffnesses (see [`crate::sectional`]).
 

@@ -169,7 +169,7 @@ pub fn ar1_form(v: &[f64], t: &[usize], phi: f64) -> f64 {
 ///
 /// Var(slope) = σ² dᵀRd / (dᵀd)² with d = x − x̄ and R_ij = φ^|t_i − t_j| ([`ar1_form`]).
 /// σ² comes from the fit's own residuals, made unbiased for the correlation:
-/// E[SSE] = σ² tr((I − H)R) = σ² ν with ν = n − 1ᵀR1/n − dᵀRd/dᵀd (n − 2 for white noise;
+/// `E[SSE]` = σ² tr((I − H)R) = σ² ν with ν = n − 1ᵀR1/n − dᵀRd/dᵀd (n − 2 for white noise;
 /// few when the window is short against the correlation length, where the line absorbs most of
 /// the noise). A σ measured elsewhere on the same channel (`prior`: σ and its degrees of
 /// freedom, e.g. over the whole record) is pooled with it, σ² = (SSE + ν_p σ_p²)/(ν + ν_p), so
