@@ -246,6 +246,8 @@ fn family_figures() {
     // decimated exports.
     let mut by_noise: std::collections::BTreeMap<&str, (usize, usize, usize)> = Default::default();
     let mut errors = Vec::new();
+    // |relative stiffness error| by noise model and by kind, for the quantiles.
+    let mut abs_err: std::collections::BTreeMap<String, Vec<f64>> = Default::default();
     let mut yield_err = Vec::new();
     let mut confusion: std::collections::BTreeMap<(String, String), usize> = Default::default();
     let mut by_kind: std::collections::BTreeMap<TestKind, (usize, usize, usize, usize)> =
@@ -291,6 +293,12 @@ fn family_figures() {
                         e.2 += (err.abs() <= 0.01) as usize;
                     };
                     tally(if t.noise_ar1 > 0.0 { "ar1" } else { "white" });
+                    for key in [
+                        if t.noise_ar1 > 0.0 { "ar1" } else { "white" }.to_string(),
+                        format!("{:?}", a.kind),
+                    ] {
+                        abs_err.entry(key).or_default().push(err.abs());
+                    }
                     if t.decimate > 1 {
                         tally("decimated");
                     }
@@ -341,6 +349,17 @@ fn family_figures() {
         "  per kind (cases, |error| <= 1 %, CI holds the truth, CI meets its band): {by_kind:?}"
     );
     println!("  by noise (cases, CI holds the truth, |error| <= 1 %): {by_noise:?}");
+    for (key, v) in abs_err.iter_mut() {
+        v.sort_by(f64::total_cmp);
+        println!(
+            "  |error| quantiles, {key} ({}): median {:.4}, 90 % {:.4}, 95 % {:.4}, max {:.4}",
+            v.len(),
+            q(v, 0.5),
+            q(v, 0.9),
+            q(v, 0.95),
+            q(v, 1.0)
+        );
+    }
     println!("  breaks found (none expected): {breaks:?}");
     println!(
         "  first loading vs first unloading, rate-independent laws: {checked} checked, {} disagree (false alarms; seeds {:?}); rate-dependent: {visco_disagree} of {visco_checked} disagree",
