@@ -164,7 +164,7 @@ pub fn serial_noise(signal: &[f64]) -> SerialNoise {
             best = (e, phi, a);
         }
     }
-    if !(best.2 > 0.0) {
+    if best.2.is_nan() || best.2 <= 0.0 {
         return white;
     }
     SerialNoise {
