@@ -286,10 +286,13 @@ pub struct AnalyzeArgs {
     #[arg(long, default_value_t = 0.5, value_name = "NU")]
     pub nu: f64,
     /// Yield point: auto (the bend of the virgin envelope: first loading, then every loading
-    /// beyond the earlier extremes), first-loading (the bend of the first loading only), or
-    /// offset:<value> (offset yield, the value in the kind's sectional control: strain for
-    /// tension, e.g. offset:0.002 for 0.2 %; 1/m for torsion and pure bending; m for
-    /// three-point).
+    /// beyond the earlier extremes), first-loading (the bend of the first loading only),
+    /// offset (offset yield at the default 0.2 % plastic strain at the surface, ISO 6892-1
+    /// Rp0.2 and its analogues: 0.002 strain in tension, curvature 0.004/d in bending, twist
+    /// rate 2√3·0.002/d in torsion, deflection 0.002·l0²/(6 d) in three-point; needs the
+    /// diameter except in tension), or offset:<value> (the value in the kind's sectional
+    /// control: strain for tension, e.g. offset:0.002 for 0.2 %; 1/m for torsion and pure
+    /// bending; m for three-point).
     #[arg(long, default_value = "auto", value_name = "METHOD")]
     pub yield_method: String,
     /// Print JSON (the keys of the scripted contract).

@@ -6,7 +6,7 @@
 
 use cablab_core::TestKind;
 use cablab_measure::{analyze, Analysis, AnalyzeOptions, Geometry};
-use cablab_synth::family::{family_case, FamilyTruth};
+use cablab_synth::family::{break_case, family_case, FamilyTruth};
 use proptest::prelude::*;
 
 /// Generate case `seed`, write it, read it back and analyse it.
@@ -39,7 +39,7 @@ fn measure(seed: u64) -> Result<(FamilyTruth, Analysis), String> {
 /// Relative stiffness error, whether the CI holds the truth, and whether it meets the truth's
 /// accuracy band (`stiffness_tol`), when there is a stiffness.
 fn stiffness_check(t: &FamilyTruth, a: &Analysis) -> Option<(f64, bool, bool)> {
-    let s = a.stiffness.as_ref()?;
+    let s = a.stiffness.as_ref().filter(|_| t.stiffness.is_finite())?;
     let (lo, hi) = (
         t.stiffness * (1.0 - t.stiffness_tol),
         t.stiffness * (1.0 + t.stiffness_tol),
@@ -78,16 +78,176 @@ proptest! {
     }
 }
 
+/// The stiffness interval is honest on correlated noise (issue 12.2), on a fixed set: the
+/// first 40 family cases with AR(1) noise of φ ≥ 0.5 (at the logger's rate; decimated
+/// exports included). At least 35 of the 40 95 % intervals hold the truth (a calibrated
+/// interval misses 2 on average; the former lag-1 inflation held 82.7 % of the bench's AR(1)
+/// cases), the standardised errors (value − truth)/(half-width/1.96) have a mean within
+/// ±0.35 (no bias from the window's choice) and a spread of 0.6–1.4 (intervals neither too
+/// narrow nor widened by a blanket factor).
+#[test]
+fn stiffness_interval_is_calibrated_on_correlated_noise() {
+    let seeds: Vec<u64> = (0..2000u64)
+        .filter(|&s| {
+            let t = family_case(s).truth;
+            t.noise_ar1 >= 0.5 && t.stiffness.is_finite()
+        })
+        .take(40)
+        .collect();
+    let (mut held, mut z) = (0, Vec::new());
+    for &seed in &seeds {
+        let (t, a) = measure(seed).unwrap_or_else(|e| panic!("seed {seed}: {e}"));
+        let s = a
+            .stiffness
+            .as_ref()
+            .unwrap_or_else(|| panic!("seed {seed}: no stiffness ({:?})", a.why));
+        let (_, _, meets) = stiffness_check(&t, &a).unwrap();
+        held += meets as usize;
+        // Cyclic tests under correlated noise never break.
+        assert!(a.break_point.is_none(), "seed {seed}: {:?}", a.break_point);
+        z.push((s.value - t.stiffness) / (0.5 * (s.ci95[1] - s.ci95[0]) / 1.96));
+    }
+    let n = z.len() as f64;
+    let mean = z.iter().sum::<f64>() / n;
+    let sd = (z.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / n).sqrt();
+    assert!(
+        held >= 35,
+        "{held} of {} intervals hold the truth",
+        seeds.len()
+    );
+    assert!(mean.abs() <= 0.35, "mean standardised error {mean:.2}");
+    assert!(
+        (0.6..=1.4).contains(&sd),
+        "spread of standardised errors {sd:.2}"
+    );
+}
+
+/// Break detection under white and AR(1) noise (issue 12.5) on 48 generated monotonic tension
+/// tests (`break_case`): every fracture is found at its first fallen row (±1) with the work to
+/// break within 2 % and the class `broken`; tests stopped at their maximum or softening
+/// gradually to 70–95 % of it have no break.
+#[test]
+fn breaks_are_found_and_not_faked_by_correlated_noise() {
+    let (mut found, mut clean) = (0, 0);
+    for seed in 0..48u64 {
+        let c = break_case(seed);
+        let geom = Geometry {
+            free_length_m: c.free_length_m,
+            diameter_m: None,
+        };
+        let a = analyze(
+            TestKind::Tension,
+            &geom,
+            Some(&c.time_s),
+            &c.control,
+            &c.response,
+            &AnalyzeOptions::default(),
+        )
+        .unwrap_or_else(|e| panic!("seed {seed}: {e}"));
+        match (c.break_sample, a.break_point.as_ref()) {
+            (Some(j), Some(b)) => {
+                found += 1;
+                assert!(
+                    b.sample.abs_diff(j) <= 1,
+                    "seed {seed}: {} vs {j}",
+                    b.sample
+                );
+                let w = c.work_to_break.unwrap();
+                assert!(
+                    (b.work_to_break / w - 1.0).abs() < 0.02,
+                    "seed {seed}: work {} vs {w}",
+                    b.work_to_break
+                );
+                assert_eq!(a.behaviour.as_str(), "broken", "seed {seed}");
+            }
+            (None, None) => {
+                clean += 1;
+                assert_ne!(a.behaviour.as_str(), "broken", "seed {seed}");
+            }
+            (t, b) => panic!("seed {seed} (φ {}): truth {t:?}, found {b:?}", c.noise_ar1),
+        }
+    }
+    assert!(
+        found >= 20 && clean >= 10,
+        "{found} breaks, {clean} without"
+    );
+    // A specimen that never takes load (it slipped out of the grips): the force is AR(1)
+    // noise about zero while the crosshead runs on; its largest wander is no maximum to
+    // break from.
+    for seed in 0..8u64 {
+        let c = break_case(seed);
+        // AR(1) noise, φ = 0.9, from uniform white pseudo-noise.
+        let mut p = 0.0f64;
+        let noise: Vec<f64> = (0..c.control.len())
+            .map(|i| {
+                p = 0.9 * p + 0.436 * crate::trust::wiggle(i + 1_000_000 * seed as usize);
+                p
+            })
+            .collect();
+        let a = analyze(
+            TestKind::Tension,
+            &Geometry {
+                free_length_m: c.free_length_m,
+                diameter_m: None,
+            },
+            Some(&c.time_s),
+            &c.control,
+            &noise,
+            &AnalyzeOptions::default(),
+        )
+        .unwrap_or_else(|e| panic!("seed {seed}: {e}"));
+        assert!(a.break_point.is_none(), "seed {seed}: {:?}", a.break_point);
+    }
+}
+
+/// The class `rate_dependent` over the family (issue 12.4), on a fixed set: the first 12
+/// rate-dependent cases (`linear+viscoelasticity`) with dwells of at least 20 exported rows
+/// (a hold the segmentation can see) are `rate_dependent` (at least 11 of them), and none of
+/// the first 24 rate-independent cases with such dwells (elastic and elastoplastic laws,
+/// white and AR(1) noise) is.
+#[test]
+fn rate_dependent_class_over_the_family() {
+    let pick = |visco: bool, n: usize| -> Vec<u64> {
+        (0..4000u64)
+            .filter(|&s| {
+                let c = family_case(s);
+                let rows = c.truth.dwell_s * c.spec.sample_rate_hz / c.truth.decimate.max(1) as f64;
+                rows >= 20.0 && (c.truth.class == "rate_dependent") == visco
+            })
+            .take(n)
+            .collect()
+    };
+    let class = |seed: u64| {
+        let (_, a) = measure(seed).unwrap_or_else(|e| panic!("seed {seed}: {e}"));
+        a.behaviour.as_str()
+    };
+    let visco: Vec<(u64, &str)> = pick(true, 12).into_iter().map(|s| (s, class(s))).collect();
+    let hits = visco.iter().filter(|v| v.1 == "rate_dependent").count();
+    assert!(hits >= 11, "{visco:?}");
+    for seed in pick(false, 24) {
+        assert_ne!(class(seed), "rate_dependent", "seed {seed}");
+    }
+}
+
 #[test]
 #[ignore = "measures the README figures over 500 generated logs (minutes)"]
 fn family_figures() {
     let n = 500u64;
     let (mut with_s, mut covered, mut within1, mut low_noise, mut low_within1) = (0, 0, 0, 0, 0);
     let mut meets = 0;
+    // Cases with a first-unloading check, and those where it disagrees (a false alarm for the
+    // rate-independent laws, which unload at the elastic stiffness; expected for a viscous
+    // one, whose apparent stiffness depends on the rate).
+    let (mut checked, mut disagree) = (0usize, Vec::new());
+    let (mut visco_checked, mut visco_disagree) = (0usize, 0usize);
+    // Cases with a break (none of the family breaks).
+    let mut breaks = Vec::new();
     // (cases with a stiffness, CI holds, |error| <= 1 %) for white / AR(1) noise and for
     // decimated exports.
     let mut by_noise: std::collections::BTreeMap<&str, (usize, usize, usize)> = Default::default();
     let mut errors = Vec::new();
+    // |relative stiffness error| by noise model and by kind, for the quantiles.
+    let mut abs_err: std::collections::BTreeMap<String, Vec<f64>> = Default::default();
     let mut yield_err = Vec::new();
     let mut confusion: std::collections::BTreeMap<(String, String), usize> = Default::default();
     let mut by_kind: std::collections::BTreeMap<TestKind, (usize, usize, usize, usize)> =
@@ -102,8 +262,26 @@ fn family_figures() {
                 *confusion
                     .entry((t.class.to_string(), a.behaviour.as_str().to_string()))
                     .or_default() += 1;
+                if a.break_point.is_some() {
+                    breaks.push(seed);
+                }
                 let k = by_kind.entry(a.kind).or_default();
                 k.0 += 1;
+                if let Some(u) = a
+                    .stiffness
+                    .as_ref()
+                    .and_then(|s| s.first_unloading.as_ref())
+                {
+                    if t.class != "rate_dependent" {
+                        checked += 1;
+                        if !u.agrees {
+                            disagree.push(seed);
+                        }
+                    } else {
+                        visco_checked += 1;
+                        visco_disagree += (!u.agrees) as usize;
+                    }
+                }
                 if let Some((err, cov, meet)) = stiffness_check(&t, &a) {
                     with_s += 1;
                     covered += cov as usize;
@@ -115,6 +293,12 @@ fn family_figures() {
                         e.2 += (err.abs() <= 0.01) as usize;
                     };
                     tally(if t.noise_ar1 > 0.0 { "ar1" } else { "white" });
+                    for key in [
+                        if t.noise_ar1 > 0.0 { "ar1" } else { "white" }.to_string(),
+                        format!("{:?}", a.kind),
+                    ] {
+                        abs_err.entry(key).or_default().push(err.abs());
+                    }
                     if t.decimate > 1 {
                         tally("decimated");
                     }
@@ -165,6 +349,23 @@ fn family_figures() {
         "  per kind (cases, |error| <= 1 %, CI holds the truth, CI meets its band): {by_kind:?}"
     );
     println!("  by noise (cases, CI holds the truth, |error| <= 1 %): {by_noise:?}");
+    for (key, v) in abs_err.iter_mut() {
+        v.sort_by(f64::total_cmp);
+        println!(
+            "  |error| quantiles, {key} ({}): median {:.4}, 90 % {:.4}, 95 % {:.4}, max {:.4}",
+            v.len(),
+            q(v, 0.5),
+            q(v, 0.9),
+            q(v, 0.95),
+            q(v, 1.0)
+        );
+    }
+    println!("  breaks found (none expected): {breaks:?}");
+    println!(
+        "  first loading vs first unloading, rate-independent laws: {checked} checked, {} disagree (false alarms; seeds {:?}); rate-dependent: {visco_disagree} of {visco_checked} disagree",
+        disagree.len(),
+        &disagree[..disagree.len().min(20)]
+    );
     for e in errors.iter().take(10) {
         println!("  {e}");
     }
@@ -182,4 +383,203 @@ fn family_write_case() {
     let p = std::env::temp_dir().join(&out.file_name);
     std::fs::write(&p, &out.bytes).unwrap();
     println!("{}\n{:?}\n{:?}", p.display(), case.spec, case.truth);
+}
+
+/// Sample-level diagnosis of the stiffness (debugging aid for issue 12.2): for every case,
+/// the automatic window's fit and interval, the fit on the truth's elastic range (an oracle
+/// window) and alternative standard errors of the slope on both, one CSV row per case, to
+/// `FAMILY_DUMP` (default `family_dump.csv` in the temp dir).
+#[test]
+#[ignore = "debugging aid: writes a CSV of per-case stiffness diagnostics (minutes)"]
+fn family_stiffness_dump() {
+    use std::fmt::Write as _;
+    let n: u64 = std::env::var("FAMILY_N")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(500);
+    let path = std::env::var("FAMILY_DUMP")
+        .map(std::path::PathBuf::from)
+        .unwrap_or_else(|_| std::env::temp_dir().join("family_dump.csv"));
+    let mut out = String::from("seed,kind,class,schedule,two_sided,noise_rel,ar1,decimate,adc_bits,slack,fs,layout,truth,tol,a_val,a_lo,a_hi,a_n,a_w0,a_w1,o_val,o_lo,o_hi,o_n,toe,bend,oracle_w0,oracle_w1,phi,sigma,a_m,a_slope,a_sse,a_sxx,a_q1,a_qd,o_m,o_slope,o_sse,o_sxx,o_q1,o_qd\n");
+    for seed in 0..n {
+        let case = family_case(seed);
+        let Ok(out_) = cablab_synth::generate(&case.spec) else {
+            continue;
+        };
+        let opts = cablab_ingest::ReadOptions {
+            kind: Some(case.spec.kind),
+            ..Default::default()
+        };
+        let Ok(rec) = cablab_ingest::read_bytes(&out_.bytes, &out_.file_name, &opts) else {
+            continue;
+        };
+        let Ok(curve) = cablab::bridge::curve(&rec) else {
+            continue;
+        };
+        let l0 = case.spec.specimen.free_length_m.unwrap_or(0.1);
+        let geom = Geometry {
+            free_length_m: l0,
+            diameter_m: case.spec.specimen.diameter_m,
+        };
+        let run = |o: &AnalyzeOptions| {
+            analyze(
+                case.spec.kind,
+                &geom,
+                curve.time_s.as_deref(),
+                &curve.control,
+                &curve.response,
+                o,
+            )
+        };
+        let Ok(a) = run(&AnalyzeOptions::default()) else {
+            continue;
+        };
+        let t = &case.truth;
+        let three = case.spec.kind == TestKind::ThreePoint;
+        let per = if three { 1.0 } else { 1.0 / l0 };
+        let [s0, s1] = t.elastic_machine;
+        let ow = ((s0 + 0.05 * (s1 - s0)) * per, (s0 + 0.95 * (s1 - s0)) * per);
+        let o = run(&AnalyzeOptions {
+            fit_window: Some(ow),
+            ..AnalyzeOptions::default()
+        })
+        .ok();
+        // The virgin envelope's samples in fit coordinates (no glitches in the family).
+        let (oc, or) = a.offsets.map_or((0.0, 0.0), |o| (o.control, o.response));
+        let xs: Vec<f64> = curve.control.iter().map(|c| (c - oc) * per).collect();
+        let ys: Vec<f64> = curve.response.iter().map(|r| r - or).collect();
+        let mut env = Vec::new();
+        let mut top = f64::NEG_INFINITY;
+        for s in &a.segments {
+            let first = s.branch == cablab_measure::Branch::FirstLoading;
+            let reloading = s.branch == cablab_measure::Branch::Reloading;
+            env.extend((s.start..s.end).filter(|&i| first || (reloading && xs[i] > top)));
+            top = xs[..s.end].iter().copied().fold(top, f64::max);
+        }
+        let pick = |w: [f64; 2]| -> (Vec<f64>, Vec<f64>, Vec<usize>) {
+            let idx: Vec<usize> = env
+                .iter()
+                .copied()
+                .filter(|&i| xs[i] >= w[0] && xs[i] <= w[1])
+                .collect();
+            (
+                idx.iter().map(|&i| xs[i]).collect(),
+                idx.iter().map(|&i| ys[i]).collect(),
+                idx,
+            )
+        };
+        // The record's noise model, from the residual series response − slope · control.
+        let slope = a.stiffness.as_ref().map_or(0.0, |s| s.value);
+        let z: Vec<f64> = xs.iter().zip(&ys).map(|(x, y)| y - slope * x).collect();
+        let sn = cablab_measure::condition::serial_noise(&z);
+        // n, slope, sse, sxx, 1ᵀR1, dᵀRd at the record's φ.
+        let diag = |w: [f64; 2]| -> String {
+            let (x, y, idx) = pick(w);
+            if x.len() < 5 || three {
+                return ",,,,,".into();
+            }
+            let f = cablab_measure::linear_fit(&x, &y).unwrap();
+            let mx = x.iter().sum::<f64>() / x.len() as f64;
+            let sxx: f64 = x.iter().map(|v| (v - mx).powi(2)).sum();
+            let d: Vec<f64> = x.iter().map(|v| v - mx).collect();
+            let q1 = cablab_measure::stats::ar1_form(&vec![1.0; x.len()], &idx, sn.phi);
+            let qd = cablab_measure::stats::ar1_form(&d, &idx, sn.phi);
+            format!(
+                "{},{:.8e},{:.6e},{:.6e},{:.6e},{:.6e}",
+                x.len(),
+                f.slope,
+                f.residual_sd.powi(2) * (x.len() as f64 - 2.0),
+                sxx,
+                q1,
+                qd
+            )
+        };
+        let (a_val, a_lo, a_hi, a_n, a_w) = a
+            .stiffness
+            .as_ref()
+            .map_or((f64::NAN, f64::NAN, f64::NAN, 0, [f64::NAN; 2]), |s| {
+                (s.value, s.ci95[0], s.ci95[1], s.n, s.window)
+            });
+        let a_diag = if a_w[0].is_finite() {
+            diag(a_w)
+        } else {
+            ",,,,,".into()
+        };
+        let (o_val, o_lo, o_hi, o_n) = o
+            .as_ref()
+            .and_then(|o| o.stiffness.as_ref())
+            .map_or((f64::NAN, f64::NAN, f64::NAN, 0), |s| {
+                (s.value, s.ci95[0], s.ci95[1], s.n)
+            });
+        let o_diag = diag([ow.0, ow.1]);
+        let _ = writeln!(
+            out,
+            "{seed},{:?},{},{:?},{},{:.3e},{:.3},{},{},{:.3e},{:.3},{:?},{:.6e},{},{:.6e},{:.6e},{:.6e},{a_n},{:.4e},{:.4e},{:.6e},{:.6e},{:.6e},{o_n},{},{},{:.4e},{:.4e},{:.4},{:.4e},{a_diag},{o_diag}",
+            case.spec.kind,
+            t.class,
+            t.schedule,
+            t.two_sided,
+            t.noise_rel,
+            t.noise_ar1,
+            t.decimate,
+            case.spec.artefacts.adc_bits,
+            case.spec.artefacts.slack,
+            case.spec.sample_rate_hz,
+            case.spec.layout,
+            t.stiffness,
+            t.stiffness_tol,
+            a_val,
+            a_lo,
+            a_hi,
+            a_w[0],
+            a_w[1],
+            o_val,
+            o_lo,
+            o_hi,
+            a.toe.is_some(),
+            a.stiffness.is_some() && a.yield_point.is_some(),
+            ow.0,
+            ow.1,
+            sn.phi,
+            sn.sigma
+        );
+    }
+    std::fs::write(&path, out).unwrap();
+    println!("wrote {}", path.display());
+}
+
+#[test]
+#[ignore = "debugging aid: FAMILY_SEEDS=a,b,c prints the stiffness checks of those cases"]
+fn family_debug_seeds() {
+    let seeds: Vec<u64> = std::env::var("FAMILY_SEEDS")
+        .unwrap_or_default()
+        .split(',')
+        .filter_map(|s| s.trim().parse().ok())
+        .collect();
+    for seed in seeds {
+        let case = family_case(seed);
+        match measure(seed) {
+            Ok((t, a)) => {
+                let s = a.stiffness.as_ref();
+                println!(
+                    "seed {seed} {:?} {} {:?} ar1 {:.2} dec {} dwell {:.1} slack {:.2e} | truth {:.4e} | {} | value {:?} ci {:?} n {:?} | unload {:?} | holds {:?}",
+                    case.spec.kind,
+                    t.class,
+                    t.schedule,
+                    t.noise_ar1,
+                    t.decimate,
+                    t.dwell_s,
+                    case.spec.artefacts.slack,
+                    t.stiffness,
+                    a.behaviour.as_str(),
+                    s.map(|s| s.value),
+                    s.map(|s| s.ci95),
+                    s.map(|s| s.n),
+                    s.and_then(|s| s.first_unloading.as_ref()),
+                    a.holds.iter().map(|h| (h.significant, h.relaxes, h.response_change)).collect::<Vec<_>>()
+                );
+            }
+            Err(e) => println!("seed {seed}: {e}"),
+        }
+    }
 }

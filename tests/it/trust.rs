@@ -41,7 +41,7 @@ fn analyze_tension_json(p: &Path) -> (Option<i32>, Value) {
 }
 
 /// Deterministic white pseudo-noise in [-1, 1) (SplitMix64 of the sample index).
-fn wiggle(i: usize) -> f64 {
+pub(crate) fn wiggle(i: usize) -> f64 {
     let mut z = (i as u64)
         .wrapping_add(1)
         .wrapping_mul(0x9E37_79B9_7F4A_7C15);
@@ -390,7 +390,53 @@ fn yield_on_the_virgin_envelope_of_a_step_up_test() {
     let want = e * (eps - d) * 1e-6;
     assert!((y.response / want - 1.0).abs() < 0.01, "{y:?} vs {want}");
     assert_eq!((y.method, y.offset), ("offset", Some(d)));
+    assert_eq!(y.offset_rule.as_deref(), Some("given"));
     assert!("offset:-1".parse::<cablab_measure::YieldMethod>().is_err());
+
+    // `offset` without a value: tension's default is ISO 6892-1's 0.2 % strain, the same point.
+    let a = run("offset");
+    let y = a.yield_point.as_ref().expect("default offset yield");
+    assert!((y.response / want - 1.0).abs() < 0.01, "{y:?} vs {want}");
+    assert_eq!((y.method, y.offset), ("offset", Some(d)));
+    assert!(y
+        .offset_rule
+        .as_deref()
+        .unwrap()
+        .contains("ISO 6892-1 Rp0.2"));
+    // The same numbers as pure bending (end rotation, moment) and torsion (twist, torque): the
+    // default is 0.2 % plastic strain at the surface, a curvature of 2 · 0.002/d and a twist
+    // rate of 2√3 · 0.002/d, which the diameters 2 m and 2√3 m make 0.002 1/m again (so the
+    // analytical point above holds); without a diameter there is no default, and why says so.
+    for (kind, dia) in [
+        (TestKind::PureBending, 2.0),
+        (TestKind::Torsion, 2.0 * 3f64.sqrt()),
+    ] {
+        let o = AnalyzeOptions {
+            yield_method: "offset".parse().unwrap(),
+            ..Default::default()
+        };
+        let g = Geometry {
+            diameter_m: Some(dia),
+            ..geom
+        };
+        let a = analyze(kind, &g, None, &c, &r, &o).unwrap();
+        let y = a.yield_point.as_ref().expect("default offset yield");
+        assert!(
+            (y.offset.unwrap() / d - 1.0).abs() < 1e-12,
+            "{kind:?}: {y:?}"
+        );
+        assert!(
+            (y.response / want - 1.0).abs() < 0.01,
+            "{kind:?}: {y:?} vs {want}"
+        );
+        assert!(
+            y.offset_rule.as_deref().unwrap().contains("surface"),
+            "{y:?}"
+        );
+        let a = analyze(kind, &geom, None, &c, &r, &o).unwrap();
+        assert!(a.yield_point.is_none());
+        assert!(a.why_by_key["yield"].contains("diameter"), "{:?}", a.why);
+    }
 }
 
 /// Issue 12 item 5: a monotonic test to fracture. Linear to 1 mm at 20 N/mm, then the force
@@ -462,4 +508,54 @@ fn fit_windows_in_response_units_and_percent_of_the_maximum() {
     assert_eq!(p("0,0.0005"), Ok((0.0, 0.0005, U::Control)));
     assert!(p("10%,500N").is_err());
     assert!(p("40%,10%").is_err());
+}
+
+/// Issue 12 item 6 (first loading against unloading): a first loading at 20 N/mm up to
+/// 1 mm, then an unloading at 30 N/mm to zero force (a cable that beds in on its first
+/// loading) on l₀ = 100 mm: EA = 2000 N from the first loading, 3000 N from the unloading,
+/// and a warning next to the stiffness naming both. The same log unloading at 20 N/mm: the
+/// two agree and nothing is said.
+#[test]
+fn first_loading_and_unloading_stiffness_are_cross_checked() {
+    let log = |k_unload: f64| {
+        let (mut c, mut r) = (Vec::new(), Vec::new());
+        for i in 0..=400 {
+            let x = 1e-3 * i as f64 / 400.0;
+            c.push(x);
+            r.push(2e4 * x + 0.02 * wiggle(i));
+        }
+        let back = 20.0 / k_unload; // control travelled back to zero force, m
+        for i in 1..=300 {
+            let x = 1e-3 - back * i as f64 / 300.0;
+            c.push(x);
+            r.push(20.0 - k_unload * (1e-3 - x) + 0.02 * wiggle(1000 + i));
+        }
+        tension(&c, &r, None)
+    };
+    let a = log(3e4);
+    let s = a.stiffness.as_ref().expect("stiffness");
+    let u = s.first_unloading.as_ref().expect("the unloading check");
+    assert!((s.value / 2000.0 - 1.0).abs() < 0.01, "{s:?}");
+    assert!((u.value / 3000.0 - 1.0).abs() < 0.01, "{u:?}");
+    assert!(!u.agrees);
+    let w = a
+        .warnings
+        .iter()
+        .find(|w| w.contains("disagree"))
+        .expect("a disagreement warning");
+    assert!(
+        w.contains(&format!("{:.4e}", s.value)) && w.contains(&format!("{:.4e}", u.value)),
+        "{w}"
+    );
+    assert!(s.warnings.iter().any(|w| w.contains("disagree")));
+    let a = log(2e4);
+    let s = a.stiffness.as_ref().expect("stiffness");
+    let u = s.first_unloading.as_ref().expect("the unloading check");
+    assert!((u.value / 2000.0 - 1.0).abs() < 0.01, "{u:?}");
+    assert!(u.agrees, "{s:?}");
+    assert!(
+        !a.warnings.iter().any(|w| w.contains("disagree")),
+        "{:?}",
+        a.warnings
+    );
 }

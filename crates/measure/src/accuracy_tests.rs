@@ -701,7 +701,13 @@ fn dwell_plateaus_do_not_split_cycles() {
         .count();
     assert_eq!(holds, 7, "{:?}", a.segments); // initial rest + 6 dwells
     assert!(rel_err(a.stiffness.unwrap().value, ea) < 0.01);
-    assert_eq!(a.behaviour, Behaviour::LinearElastic);
+    assert_eq!(
+        a.behaviour,
+        Behaviour::LinearElastic,
+        "{:?} {:?}",
+        a.holds,
+        a.warnings
+    );
 }
 
 /// The JSON object carries the contract keys, with null + why where nothing can be said.

@@ -27,9 +27,19 @@
 //! * a bend, loops that do not close and a significant residual deformation → `elastoplastic`;
 //! * anything else (loops without a bend: friction, viscosity, drift; or no unloading to judge
 //!   reversibility by, while the first loading bends) → `other`;
+//! * holds whose response relaxes (falls after a loading ramp, recovers after an unloading
+//!   one; at least two such holds, or the only hold, and no hold trending the other way) →
+//!   `rate_dependent`, over any of the above ([`HoldRelaxation`]);
 //! * an abrupt break (the response falls from 90 % of its maximum below [`BREAK_DROP`] of it
 //!   within 5 samples or 2 % of the record, and stays there) → `broken`, whatever came before
 //!   it (the yield point and stiffness are still reported).
+//!
+//! Noise: the response noise is modelled as AR(1) over the whole record
+//! ([`crate::condition::serial_noise`] of response − k · control), so serially correlated
+//! noise (a logger's filter, AR(1), decimated exports) neither narrows the stiffness interval
+//! ([`crate::stats::linear_fit_ar1`], exact for the window's samples) nor moves the window,
+//! fakes a hold's relaxation or a break. Does not classify rate dependence from rate changes
+//! alone (a test without a hold of ≥ 20 samples shows none).
 //!
 //! The yield point is the bend of an `elastoplastic` (or unjudgeable) test; a reversible bend is
 //! reported as the piecewise threshold K_t instead. Pure: numbers in, numbers out.
@@ -37,7 +47,7 @@
 use crate::condition::{
     correct_compliance, glitches, noise_level, segment, zero_offsets, Branch, Offsets, Segment,
 };
-use crate::elastic::{auto_elastic_range, user_elastic_range, ElasticRange, Hinge};
+use crate::elastic::{auto_elastic_range_ar1, user_elastic_range, ElasticRange, Hinge};
 use crate::elastica::ThreePointElastica;
 use crate::hysteresis::{cycles, CycleInputs, CycleResult};
 use crate::sectional::{
@@ -102,6 +112,51 @@ pub enum YieldMethod {
     /// in the kind's sectional control (strain for tension, 1/m for torsion and pure bending,
     /// m for three-point), e.g. `offset:0.002` (0.2 % strain) (`offset:<value>`).
     Offset(f64),
+    /// Offset yield with the default offset of the kind ([`default_yield_offset`]: 0.2 %
+    /// plastic strain at the surface, ISO 6892-1's Rp0.2) (`offset` without a value).
+    OffsetDefault,
+}
+
+/// Plastic strain of the default offset yield: 0.2 % (ISO 6892-1 Rp0.2, ISO 527).
+pub const DEFAULT_OFFSET_STRAIN: f64 = 0.002;
+
+/// The default offset of [`YieldMethod::OffsetDefault`] in the kind's sectional control, and
+/// how it was set: the analogue of ISO 6892-1's Rp0.2 for each kind, a plastic strain of
+/// [`DEFAULT_OFFSET_STRAIN`] where the specimen strains most:
+/// * tension: the axial strain ε = 0.002;
+/// * pure bending: the surface strain (d/2) κ = 0.002, so κ = 0.004/d (1/m);
+/// * torsion: the surface shear strain (d/2) K₃ = γ with the same von Mises equivalent plastic
+///   strain, γ = √3 · 0.002, so K₃ = 2√3 · 0.002/d (1/m);
+/// * three-point: the small-deflection peak surface strain (d/2) · 12 w/l₀² = 0.002, so
+///   w = 0.002 l₀²/(6 d) (m).
+///
+/// Errors (with why) when the kind needs the diameter and it is not known.
+pub fn default_yield_offset(kind: TestKind, geom: &Geometry) -> Result<(f64, String), String> {
+    let e = DEFAULT_OFFSET_STRAIN;
+    if kind == TestKind::Tension {
+        return Ok((e, "default: 0.2 % axial strain (ISO 6892-1 Rp0.2)".into()));
+    }
+    let Some(d) = geom.diameter_m.filter(|d| *d > 0.0) else {
+        return Err(format!(
+            "the default offset (0.2 % plastic strain at the surface) of a {} test needs the diameter: give it, or an explicit offset:<value>",
+            kind.as_str()
+        ));
+    };
+    match kind {
+        TestKind::PureBending => Ok((
+            2.0 * e / d,
+            "default: 0.2 % surface strain, curvature 2·0.002/d (ISO 6892-1 Rp0.2 analogue)".into(),
+        )),
+        TestKind::Torsion => Ok((
+            2.0 * 3f64.sqrt() * e / d,
+            "default: surface shear strain √3·0.2 % (von Mises equivalent of 0.2 % plastic strain), twist 2√3·0.002/d (ISO 6892-1 Rp0.2 analogue)".into(),
+        )),
+        TestKind::ThreePoint => Ok((
+            e * geom.free_length_m.powi(2) / (6.0 * d),
+            "default: 0.2 % small-deflection peak surface strain, deflection 0.002·l0²/(6 d) (ISO 6892-1 Rp0.2 analogue)".into(),
+        )),
+        _ => Err("no default offset for an unknown kind".into()),
+    }
 }
 
 impl YieldMethod {
@@ -110,19 +165,21 @@ impl YieldMethod {
         match self {
             YieldMethod::Auto => "envelope_bend",
             YieldMethod::FirstLoading => "first_loading_bend",
-            YieldMethod::Offset(_) => "offset",
+            YieldMethod::Offset(_) | YieldMethod::OffsetDefault => "offset",
         }
     }
 }
 
 impl std::str::FromStr for YieldMethod {
     type Err = String;
-    /// `auto`, `first-loading` (or `first_loading`), `offset:<value>` (value > 0).
+    /// `auto`, `first-loading` (or `first_loading`), `offset` (the kind's default offset,
+    /// [`default_yield_offset`]), `offset:<value>` (value > 0).
     fn from_str(s: &str) -> Result<Self, String> {
         let t = s.trim().to_lowercase();
         match t.as_str() {
             "auto" => return Ok(YieldMethod::Auto),
             "first-loading" | "first_loading" => return Ok(YieldMethod::FirstLoading),
+            "offset" => return Ok(YieldMethod::OffsetDefault),
             _ => {}
         }
         if let Some(v) = t.strip_prefix("offset:") {
@@ -133,7 +190,7 @@ impl std::str::FromStr for YieldMethod {
             }
         }
         Err(format!(
-            "yield method {s:?}: expected auto, first-loading or offset:<value> (value > 0 in the kind's sectional control, e.g. offset:0.002 for 0.2 % strain)"
+            "yield method {s:?}: expected auto, first-loading, offset (0.2 % plastic strain at the surface) or offset:<value> (value > 0 in the kind's sectional control, e.g. offset:0.002 for 0.2 % strain)"
         ))
     }
 }
@@ -162,7 +219,12 @@ pub enum Behaviour {
     PiecewiseLinearElastic,
     /// Yield, hardening, open loops, residual deformation (cables).
     Elastoplastic,
-    /// None of the above (rate dependence, friction loops, drift, or not enough data).
+    /// The response depends on the loading rate: it relaxes toward zero at held control
+    /// after a loading ramp and recovers after an unloading one (viscoelastic or viscoplastic;
+    /// see [`HoldRelaxation::relaxes`]). Takes precedence over the rate-independent classes.
+    RateDependent,
+    /// None of the above (friction loops, drift, rate dependence without a hold to show it, or
+    /// not enough data).
     Other,
     /// The specimen broke abruptly ([`Analysis::break_point`] says where; a gradual fall keeps
     /// its class and the warning); the class before the break is not judged.
@@ -176,6 +238,7 @@ impl Behaviour {
             Behaviour::LinearElastic => "linear_elastic",
             Behaviour::PiecewiseLinearElastic => "piecewise_linear_elastic",
             Behaviour::Elastoplastic => "elastoplastic",
+            Behaviour::RateDependent => "rate_dependent",
             Behaviour::Other => "other",
             Behaviour::Broken => "broken",
         }
@@ -201,9 +264,27 @@ pub struct Stiffness {
     pub r2: f64,
     /// Samples in the window.
     pub n: usize,
-    /// Doubts about this number (poor fit, few points, wide interval, implausible modulus),
-    /// also in the analysis' `warnings`.
+    /// Doubts about this number (poor fit, few points, wide interval, implausible modulus,
+    /// disagreement with the first unloading), also in the analysis' `warnings`.
     pub warnings: Vec<String>,
+    /// The first unloading's initial stiffness with its interval, the cross-check of the
+    /// first-loading value (null when there is no unloading, and for three-point, whose
+    /// unloading is not elastica-corrected).
+    pub first_unloading: Option<UnloadingCheck>,
+}
+
+/// The first unloading's stiffness beside the first-loading one (issue 12.6).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct UnloadingCheck {
+    /// Initial unloading stiffness of cycle 1, stiffness unit (the per-cycle
+    /// `unloading_stiffness`).
+    pub value: f64,
+    /// Its 95 % interval (the same AR(1) noise model as the first-loading interval).
+    pub ci95: [f64; 2],
+    /// Samples fitted.
+    pub n: usize,
+    /// Whether the two 95 % intervals overlap; when they do not, a warning names both values.
+    pub agrees: bool,
 }
 
 /// The yield point: the bend in the first loading path.
@@ -227,6 +308,9 @@ pub struct YieldPoint {
     pub method: &'static str,
     /// The offset of the offset method (sectional control units), else null.
     pub offset: Option<f64>,
+    /// How the offset was set: `given` (offset:<value>) or the default's rule
+    /// ([`default_yield_offset`]); null for the other methods.
+    pub offset_rule: Option<String>,
     /// Cycle the yield point lies in.
     pub cycle: usize,
     /// Branch the yield point lies in (`first_loading` or `reloading`).
@@ -319,10 +403,15 @@ pub struct HoldRelaxation {
     /// Mean response over the last tenth of the hold minus that over the first tenth.
     pub response_change: f64,
     /// Whether the response trends during the hold: the slope of a straight line through the
-    /// hold's samples (against sample index) differs from zero by more than the Student-t
-    /// quantile at α = 10⁻³ shared among the test's holds (Bonferroni), so a test with many
-    /// elastic dwells raises no false alarm from noise.
+    /// hold's samples (against sample index) differs from zero by more than the normal
+    /// quantile at α = 10⁻³ shared among the test's holds (Bonferroni) times its standard
+    /// error under the record's AR(1) noise ([`crate::stats::linear_fit_ar1`]), so neither
+    /// many elastic dwells nor correlated noise raise a false alarm.
     pub significant: bool,
+    /// Whether a significant trend is relaxation: opposite to the control's move into the hold
+    /// (the response falls at a hold after a loading ramp and rises after an unloading one). A
+    /// sensor drift trends the same way at every hold.
+    pub relaxes: bool,
 }
 
 /// Noise levels (σ) of the conditioned channels.
@@ -603,10 +692,31 @@ pub fn analyze(
         }
         (w, _) => w,
     };
+    // The response noise's serial correlation, measured over the whole record on the residual
+    // series response − k · control (k: the steepest straight piece of the virgin envelope,
+    // so control noise seen through the slope counts too; the series is piecewise linear in
+    // time wherever the test is, which the lag-k second differences do not see). Its σ, scaled
+    // to the virgin envelope's own noise level (a load cell reads a cable's stick-slip louder
+    // at higher loads), is the prior σ of the stiffness interval, with the degrees of freedom
+    // of a MAD of second differences (about 0.37 as efficient as a standard deviation, over
+    // differences with Σρ² = 1.94, and fewer independent samples by the long-run factor).
+    let serial = {
+        let seg = crate::elastic::segment_lines(&fx, &fy, 3);
+        let k = seg.slopes.iter().copied().fold(0.0f64, f64::max);
+        let z: Vec<f64> = xs.iter().zip(&rm).map(|(x, y)| y - k * x).collect();
+        let sn = crate::condition::serial_noise(&z);
+        let z_env: Vec<f64> = env_idx[..fx.len()].iter().map(|&i| z[i]).collect();
+        let (lr, le) = (noise_level(&z), noise_level(&z_env));
+        let scale = if lr > 0.0 && le > 0.0 { le / lr } else { 1.0 };
+        let dof = 0.19 * z_env.len().min(z.len()) as f64 / sn.long_run_factor();
+        (sn, sn.sigma * scale, dof)
+    };
+    let mut user_bounds = (f64::NEG_INFINITY, f64::INFINITY);
     let elastic: Option<ElasticRange> = match fit_window {
         Some((a, b)) => {
             let (ma, mb) = (sign * a, sign * b);
             let map = |v: f64| to_fit_x(v).unwrap_or(v);
+            user_bounds = (map(ma).min(map(mb)), map(ma).max(map(mb)));
             let mut e =
                 user_elastic_range(&fx, &fy, map(ma), map(mb)).map_err(|err| match err {
                     // Name the window as the user gave it.
@@ -619,7 +729,7 @@ pub fn analyze(
             e.window = [ma.min(mb), ma.max(mb)];
             Some(e)
         }
-        None => match auto_elastic_range(&fx, &fy) {
+        None => match auto_elastic_range_ar1(&fx, &fy, serial.0.phi) {
             Ok(e) => Some(e),
             Err(e) => {
                 why.insert(
@@ -637,32 +747,34 @@ pub fn analyze(
             e.window
         };
         let w = if sign > 0.0 { win } else { [-win[1], -win[0]] };
-        // Serially correlated residuals (quantisation, dense sampling of a slightly curved
-        // window) carry fewer independent samples than they number: widen the interval by
-        // the lag-1 autocorrelation's variance factor √((1 + ρ)/(1 − ρ)) (ρ > 0 only).
+        // Serially correlated noise carries fewer independent samples than it numbers: the
+        // interval is that of AR(1) errors with the record's φ over the samples' positions in
+        // the record (`linear_fit_ar1`; the plain one for white noise).
         let (a, b) = e.window_idx;
-        let inflate = if e.automatic && b > a + 3 {
-            correlation_inflation(&fx[a..b], &fy[a..b], &e.fit)
-        } else {
-            1.0
-        };
-        let half = [
-            (e.fit.slope - e.fit.slope_ci95[0]) * inflate,
-            (e.fit.slope_ci95[1] - e.fit.slope) * inflate,
-        ];
+        let k: Vec<usize> = (a..b)
+            .filter(|&k| user_bounds.0 <= fx[k] && fx[k] <= user_bounds.1)
+            .collect();
+        let pick = |v: &[f64]| k.iter().map(|&j| v[j]).collect::<Vec<f64>>();
+        let pos: Vec<usize> = k.iter().map(|&j| env_idx[j]).collect();
+        let ci = crate::stats::linear_fit_ar1(
+            &pick(&fx),
+            &pick(&fy),
+            &pos,
+            serial.0.phi,
+            Some((serial.1, serial.2)),
+        )
+        .map_or(e.fit.slope_ci95, |f| f.slope_ci95);
         Stiffness {
             value: e.fit.slope * factor,
             unit: kind.stiffness_unit(),
-            ci95: [
-                (e.fit.slope - half[0]) * factor,
-                (e.fit.slope + half[1]) * factor,
-            ],
+            ci95: [ci[0] * factor, ci[1] * factor],
             window: w,
             window_unit: sectional_unit(kind),
             window_automatic: e.automatic,
             r2: e.fit.r2,
             n: e.fit.n,
             warnings: Vec::new(),
+            first_unloading: None,
         }
     });
     let first_rise = fy.iter().fold(f64::NEG_INFINITY, |m, &v| m.max(v))
@@ -736,6 +848,35 @@ pub fn analyze(
         toe_end_control: toe_ref.map_or(f64::NEG_INFINITY, |t| t.0 / per_control),
     });
 
+    // First loading against first unloading (issue 12.6): both are the elastic stiffness of
+    // an elastic or elastoplastic specimen; intervals that do not overlap mean the first
+    // loading was not (a toe or seating not separated from the window, slack, damage).
+    if let (Some(s), false) = (stiffness.as_mut(), three) {
+        let check = first_unloading_fit(&segments, &xs, &rm, serial.0.phi, (serial.1, serial.2));
+        if let Some(f) = check {
+            let (lo, hi) = (f.slope_ci95[0] * factor, f.slope_ci95[1] * factor);
+            let agrees = lo <= s.ci95[1] && s.ci95[0] <= hi;
+            s.first_unloading = Some(UnloadingCheck {
+                value: f.slope * factor,
+                ci95: [lo, hi],
+                n: f.n,
+                agrees,
+            });
+            if !agrees {
+                let w = format!(
+                    "the first-loading stiffness {:.4e} {u} (95 % [{:.4e}, {:.4e}]) and the first unloading's {:.4e} {u} (95 % [{lo:.4e}, {hi:.4e}]) disagree beyond their intervals: a toe, seating or slack in the first loading, or damage at the first peak; the first-loading value is reported",
+                    s.value,
+                    s.ci95[0],
+                    s.ci95[1],
+                    f.slope * factor,
+                    u = s.unit,
+                );
+                warnings.push(format!("stiffness: {w}"));
+                s.warnings.push(w);
+            }
+        }
+    }
+
     // Behaviour. Knee positions back from the fitting control to the sectional one.
     let unmap = |h: Hinge| Hinge {
         knee_x: from_fit_x(h.knee_x),
@@ -792,6 +933,7 @@ pub fn analyze(
                 peak_moment: three.then(|| sign * three_point_peak_moment(b.knee_y, l0)),
                 method: opts.yield_method.as_str(),
                 offset: None,
+                offset_rule: None,
                 cycle,
                 branch,
             })
@@ -815,8 +957,17 @@ pub fn analyze(
         }
     };
     // The offset method replaces the bend (whatever the class: the user asked for it).
-    let yield_point = match (opts.yield_method, &elastic) {
-        (YieldMethod::Offset(v), Some(e)) => {
+    let offset = match opts.yield_method {
+        YieldMethod::Offset(v) => Some(Ok((v, "given".to_string()))),
+        YieldMethod::OffsetDefault => Some(default_yield_offset(kind, geom)),
+        _ => None,
+    };
+    let yield_point = match (offset, &elastic) {
+        (Some(Err(reason)), _) => {
+            why.insert("yield".into(), format!("offset yield: {reason}"));
+            None
+        }
+        (Some(Ok((v, rule))), Some(e)) => {
             why.remove("yield");
             match offset_yield(&fx, &fy, &e.fit, v, e.window_idx.0) {
                 Some((x, y, xr)) => {
@@ -833,6 +984,7 @@ pub fn analyze(
                         peak_moment: three.then(|| sign * three_point_peak_moment(y, l0)),
                         method: opts.yield_method.as_str(),
                         offset: Some(v),
+                        offset_rule: Some(rule),
                         cycle,
                         branch,
                     })
@@ -848,7 +1000,7 @@ pub fn analyze(
                 }
             }
         }
-        (YieldMethod::Offset(_), None) => {
+        (Some(Ok(_)), None) => {
             why.insert("yield".into(), "offset yield: no elastic line".into());
             None
         }
@@ -864,7 +1016,7 @@ pub fn analyze(
             sample: k,
         }
     };
-    let break_point = find_break(&cm, &rm).map(|(j, work)| BreakPoint {
+    let break_point = find_break(&cm, &rm, serial.0.sigma).map(|(j, work)| BreakPoint {
         sample: j,
         machine_control: control[j],
         response_before: response[j - 1],
@@ -941,10 +1093,33 @@ pub fn analyze(
         }
         _ => None,
     };
-    let holds = hold_relaxation(&segments, &c, &r);
-    if holds.iter().any(|h| h.significant) {
+    let holds = hold_relaxation(&segments, &c, &r, serial.0.phi, (serial.1, serial.2));
+    // Rate dependence: every hold that trends relaxes, and two do (or the only one): a viscous
+    // specimen relaxes after loading and recovers after unloading; a drift trends one way at
+    // every hold, whatever the control did before it; one hold's fluke among several is not a
+    // material.
+    let trending: Vec<&HoldRelaxation> = holds.iter().filter(|h| h.significant).collect();
+    let rate_dependent = trending.iter().all(|h| h.relaxes)
+        && (trending.len() >= 2 || (holds.len() == 1 && trending.len() == 1));
+    if rate_dependent {
         warnings.push("the response relaxes during holds: the material is rate dependent (viscous); rate-independent results are approximate".into());
+    } else if trending.iter().any(|h| h.relaxes) && trending.iter().all(|h| h.relaxes) {
+        warnings.push(format!(
+            "the response relaxes during {} of {} holds: possibly rate dependent",
+            trending.len(),
+            holds.len()
+        ));
+    } else if !trending.is_empty() {
+        warnings.push(format!(
+            "the response trends during {} hold(s), not all toward relaxation: a drifting sensor or an unsteady rig",
+            trending.len()
+        ));
     }
+    let behaviour = if rate_dependent && behaviour != Behaviour::Broken {
+        Behaviour::RateDependent
+    } else {
+        behaviour
+    };
     // Report cycles in the original orientation.
     let cycles_out: Vec<CycleResult> = cyc
         .into_iter()
@@ -980,29 +1155,77 @@ pub fn analyze(
     })
 }
 
-/// Response change over each hold that is not the initial rest (see [`HoldRelaxation`]).
-fn hold_relaxation(segments: &[Segment], control: &[f64], response: &[f64]) -> Vec<HoldRelaxation> {
+/// The initial straight part of cycle 1's first unloading run (sectional `x`, response `y`,
+/// while the response is still positive; [`crate::elastic::initial_window`]) fitted with the
+/// AR(1) interval of the record's noise (`phi`, `prior` σ and its degrees of freedom).
+fn first_unloading_fit(
+    segments: &[Segment],
+    x: &[f64],
+    y: &[f64],
+    phi: f64,
+    prior: (f64, f64),
+) -> Option<crate::stats::Fit> {
+    let s = segments
+        .iter()
+        .find(|s| s.cycle == 1 && s.branch == Branch::Unloading)?;
+    let (a, b) = (s.start.saturating_sub(1), s.end);
+    let pos_end = (a..b).find(|&i| y[i] <= 0.0).unwrap_or(b);
+    let (p, q) = crate::elastic::initial_window(&x[a..pos_end], &y[a..pos_end], phi)?;
+    let pos: Vec<usize> = (a + p..a + q).collect();
+    crate::stats::linear_fit_ar1(&x[a + p..a + q], &y[a + p..a + q], &pos, phi, Some(prior)).ok()
+}
+
+/// Response change over each hold that is not the initial rest (see [`HoldRelaxation`];
+/// `phi` and `prior` the record's AR(1) noise, as for the stiffness interval).
+fn hold_relaxation(
+    segments: &[Segment],
+    control: &[f64],
+    response: &[f64],
+    phi: f64,
+    prior: (f64, f64),
+) -> Vec<HoldRelaxation> {
     let held: Vec<&Segment> = segments
         .iter()
         .filter(|s| s.branch == Branch::Hold && s.start > 0 && s.end - s.start >= 20)
         .collect();
     let alpha = 1e-3 / held.len().max(1) as f64;
+    let z = crate::stats::normal_quantile(1.0 - alpha / 2.0);
+    // A hold's band reaches into the ramps on either side (it is one reversal threshold
+    // wide): only its core, where the control is within its noise or resolution of the
+    // hold's median, is still; the ramps' ends would otherwise pass for relaxation.
+    let tol = (3.0 * noise_level(control)).max(crate::condition::resolution(control));
     held.into_iter()
-        .map(|s| {
+        .filter_map(|s| {
+            let med = crate::stats::median(&control[s.start..s.end]);
+            let still = |i: &usize| (control[*i] - med).abs() <= tol;
+            let a = (s.start..s.end).find(still)?;
+            let b = (s.start..s.end).rev().find(still)? + 1;
+            (b >= a + 20).then_some((s, a, b))
+        })
+        .map(|(s, a, b)| {
+            let s = &Segment {
+                start: a,
+                end: b,
+                ..*s
+            };
             let y = &response[s.start..s.end];
             let b = (y.len() / 10).max(3);
             let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len() as f64;
             let change = mean(&y[y.len() - b..]) - mean(&y[..b]);
             let idx: Vec<f64> = (0..y.len()).map(|i| i as f64).collect();
-            let significant = match crate::stats::line_fit(&idx, y) {
-                Ok(f) if f.slope_se > 0.0 => {
-                    let t =
-                        crate::stats::student_t_quantile(1.0 - alpha / 2.0, (y.len() - 2) as f64);
-                    f.slope.abs() > t * f.slope_se
-                }
+            let pos: Vec<usize> = (s.start..s.end).collect();
+            let significant = match crate::stats::linear_fit_ar1(&idx, y, &pos, phi, Some(prior)) {
+                Ok(f) if f.slope_se > 0.0 => f.slope.abs() > z * f.slope_se,
                 Ok(f) => f.slope != 0.0,
                 Err(_) => false,
             };
+            // The control's move into the hold: from the start of the segment before it.
+            let before = segments
+                .iter()
+                .rev()
+                .find(|p| p.end <= s.start && p.branch != Branch::Hold)
+                .map_or(0, |p| p.start);
+            let into = control[s.start] - control[before];
             HoldRelaxation {
                 cycle: s.cycle,
                 start: s.start,
@@ -1010,6 +1233,7 @@ fn hold_relaxation(segments: &[Segment], control: &[f64], response: &[f64]) -> V
                 control: mean(&control[s.start..s.end]),
                 response_change: change,
                 significant,
+                relaxes: significant && change * into < 0.0,
             }
         })
         .collect()
@@ -1023,8 +1247,10 @@ pub const PLAUSIBLE_MODULUS_PA: (f64, f64) = (1e5, 1.2e12);
 pub const MIN_STIFFNESS_SAMPLES: usize = 5;
 
 /// Why a stiffness must not be printed at all, if so: fewer than [`MIN_STIFFNESS_SAMPLES`]
-/// samples in the window, a 95% interval that contains zero, or a first loading whose response
-/// never rises beyond 10 σ of its noise (a flat response: any slope is noise).
+/// samples in the window, or a first loading whose response never rises beyond 10 σ of its
+/// noise (a flat response: any slope is noise). A 95 % interval that contains zero is a doubt
+/// next to the number ([`stiffness_doubts`]), not a refusal: with serially correlated noise a
+/// short window's honest interval can be that wide while the slope is still the best estimate.
 fn refuse_stiffness(s: &Stiffness, first_rise: f64, sigma_r: f64) -> Option<String> {
     if !(first_rise > 10.0 * sigma_r) {
         return Some(format!(
@@ -1037,19 +1263,20 @@ fn refuse_stiffness(s: &Stiffness, first_rise: f64, sigma_r: f64) -> Option<Stri
             s.n
         ));
     }
-    if s.ci95[0] <= 0.0 && s.ci95[1] >= 0.0 {
-        return Some(format!(
-            "the 95 % interval of the slope [{:.4e}, {:.4e}] {} contains zero",
-            s.ci95[0], s.ci95[1], s.unit
-        ));
-    }
     None
 }
 
-/// Doubts about a stiffness that is printed: a negative value, a poor straight-line fit
-/// (r² < 0.99), few samples (< 20), a wide interval (half-width > 5 % of the value).
+/// Doubts about a stiffness that is printed: a negative value, a 95 % interval that contains
+/// zero, a poor straight-line fit (r² < 0.99), few samples (< 20), a wide interval (half-width
+/// > 5 % of the value).
 fn stiffness_doubts(s: &Stiffness) -> Vec<String> {
     let mut out = Vec::new();
+    if s.ci95[0] <= 0.0 && s.ci95[1] >= 0.0 {
+        out.push(format!(
+            "the 95 % interval [{:.4e}, {:.4e}] {} contains zero: the slope is not distinguishable from none",
+            s.ci95[0], s.ci95[1], s.unit
+        ));
+    }
     if !(s.value > 0.0) {
         out.push(format!(
             "the elastic slope is not positive ({:.4e} {})",
@@ -1143,18 +1370,37 @@ fn offset_yield(
 }
 
 /// The break of an oriented test (`cm`, `rm`: control and response with the first motion
-/// positive): the first sample after the response maximum below [`BREAK_DROP`] of it, when
-/// the response stays below 0.8 of the maximum from there on and the control has not gone back
-/// below its value at the maximum by more than its reversal threshold (an unloading is no
-/// break). Returns the sample and the work
-/// ∫ rm d(cm) up to it.
-fn find_break(cm: &[f64], rm: &[f64]) -> Option<(usize, f64)> {
-    let k = (0..rm.len()).max_by(|&a, &b| rm[a].total_cmp(&rm[b]))?;
+/// positive; `sigma` the response noise's marginal σ, robust to serial correlation,
+/// [`crate::condition::serial_noise`]): the first sample after the response maximum from which
+/// the response stays down, judged so that correlated noise cannot fake it:
+/// * the maximum stands clear of the noise (above 10 σ);
+/// * the drop is sustained: from the break sample on, the median over the next
+///   max(5, 1 % of the record) samples (or all that remain, at least 3) is below
+///   [`BREAK_DROP`] of the maximum, and below it by 10 σ;
+/// * the response never comes back above 0.8 of the maximum, and the control has not gone
+///   back below its value at the maximum by more than its reversal threshold (an unloading is
+///   no break).
+///
+/// The break sample is the first sample of that sustained stretch below the drop level.
+/// Returns it and the work ∫ rm d(cm) up to it.
+fn find_break(cm: &[f64], rm: &[f64], sigma: f64) -> Option<(usize, f64)> {
+    let n = rm.len();
+    let k = (0..n).max_by(|&a, &b| rm[a].total_cmp(&rm[b]))?;
     let top = rm[k];
-    if !(top > 0.0) {
+    if !(top > 0.0 && top > 10.0 * sigma) {
         return None;
     }
-    let j = (k + 1..rm.len()).find(|&j| rm[j] < BREAK_DROP * top)?;
+    let level = BREAK_DROP * top;
+    let d = (n / 100).max(5);
+    let sustained = |j: usize| -> bool {
+        let end = (j + d).min(n);
+        if end - j < 3 {
+            return false;
+        }
+        let m = crate::stats::median(&rm[j..end]);
+        m < level && m < top - 10.0 * sigma
+    };
+    let j = (k + 1..n).find(|&j| rm[j] < level && sustained(j))?;
     let stays = rm[j..].iter().all(|&v| v < 0.8 * top);
     let h = crate::condition::reversal_threshold(cm);
     let onward = cm[k..=j].iter().all(|&v| v >= cm[k] - h);
@@ -1173,17 +1419,4 @@ fn break_is_abrupt(rm: &[f64], j: usize) -> bool {
     let top = rm[..j].iter().fold(f64::NEG_INFINITY, |m, &v| m.max(v));
     let last_high = (0..j).rev().find(|&i| rm[i] >= 0.9 * top).unwrap_or(0);
     j - last_high <= (rm.len() / 50).max(5)
-}
-
-/// Variance inflation of a slope from the lag-1 autocorrelation ρ of the fit's residuals (in
-/// sample order): √((1 + ρ)/(1 − ρ)) for ρ > 0 (an AR(1) error's effective sample size), 1
-/// otherwise; ρ is capped at 0.95.
-fn correlation_inflation(x: &[f64], y: &[f64], fit: &crate::stats::Fit) -> f64 {
-    let r: Vec<f64> = x.iter().zip(y).map(|(a, b)| b - fit.at(*a)).collect();
-    let ss: f64 = r.iter().map(|v| v * v).sum();
-    if !(ss > 0.0) {
-        return 1.0;
-    }
-    let rho = (r.windows(2).map(|w| w[0] * w[1]).sum::<f64>() / ss).clamp(0.0, 0.95);
-    ((1.0 + rho) / (1.0 - rho)).sqrt()
 }

@@ -22,6 +22,11 @@
 //!    noise (|z| > 3.29, α = 10⁻³), the window loses a tenth at its curved end (top if concave,
 //!    bottom if convex), down to a fifth of its length: a rounded knee does not bend the line.
 //!
+//! Correlated noise ([`auto_elastic_range_ar1`], φ the lag-1 correlation of the record's noise):
+//! the break threshold and the knee intervals' SSE allowance grow by the long-run variance
+//! factor (1 + φ)/(1 − φ); a trimmed block's mean and the curvature term get their exact AR(1)
+//! variances. Without that, runs of correlated noise pass for bends and cut the window.
+//!
 //! What it does not do: decide whether a bend is yield or reversible (that needs the unloading,
 //! see [`crate::hysteresis`]), or convert slopes to stiffnesses (see [`crate::sectional`]).
 
@@ -83,6 +88,13 @@ pub struct Segmentation {
 
 /// Segments a branch into 1–3 straight pieces (see module doc, step 2).
 pub fn segment_lines(x: &[f64], y: &[f64], max_segments: usize) -> Segmentation {
+    segment_lines_ar1(x, y, max_segments, 0.0)
+}
+
+/// [`segment_lines`] for noise with lag-1 correlation `phi` between consecutive samples: the
+/// SSE a break must remove is scaled by the long-run variance factor (1 + φ)/(1 − φ) (a break
+/// fitted to correlated noise removes that much more of it than of white noise).
+pub fn segment_lines_ar1(x: &[f64], y: &[f64], max_segments: usize, phi: f64) -> Segmentation {
     let n = x.len();
     let sigma = residual_noise(x, y);
     let (mx, my) = (mean(x), mean(y));
@@ -102,7 +114,7 @@ pub fn segment_lines(x: &[f64], y: &[f64], max_segments: usize) -> Segmentation 
     let step = ((n - 2 * min_len) / 300).max(1);
     let cands: Vec<usize> = (min_len..=n - min_len).step_by(step).collect();
     let k = cands.len().max(1) as f64;
-    let thr = sigma * sigma * 2.0 * (k / BREAK_ALPHA).ln();
+    let thr = sigma * sigma * 2.0 * (k / BREAK_ALPHA).ln() * long_run_factor(phi);
 
     let mut b2 = (f64::INFINITY, 0usize);
     for &c in &cands {
@@ -134,6 +146,12 @@ pub fn segment_lines(x: &[f64], y: &[f64], max_segments: usize) -> Segmentation 
         best.slopes = vec![p.fit(0, b3.1).1, p.fit(b3.1, b3.2).1, p.fit(b3.2, n).1];
     }
     best
+}
+
+/// (1 + φ)/(1 − φ), φ clamped to [0, 0.999].
+fn long_run_factor(phi: f64) -> f64 {
+    let p = phi.clamp(0.0, 0.999);
+    (1.0 + p) / (1.0 - p)
 }
 
 fn mean(v: &[f64]) -> f64 {
@@ -219,6 +237,12 @@ fn hinge_at(x: &[f64], y: &[f64], xk: f64) -> Option<(f64, f64, f64, f64)> {
 /// Continuous hinge fit of (x, y) with the knee searched in [lo, hi] (x units): a 101-point
 /// grid, then a 101-point grid between the best point's neighbours; interval by profile SSE.
 pub fn hinge_fit(x: &[f64], y: &[f64], lo: f64, hi: f64) -> Option<Hinge> {
+    hinge_fit_ar1(x, y, lo, hi, 0.0)
+}
+
+/// [`hinge_fit`] for noise with lag-1 correlation `phi`: the profile interval's SSE allowance
+/// grows by the long-run variance factor (1 + φ)/(1 − φ).
+pub fn hinge_fit_ar1(x: &[f64], y: &[f64], lo: f64, hi: f64, phi: f64) -> Option<Hinge> {
     let n = x.len();
     if n < 8 || hi.is_nan() || lo.is_nan() || hi <= lo {
         return None;
@@ -261,7 +285,7 @@ pub fn hinge_fit(x: &[f64], y: &[f64], lo: f64, hi: f64) -> Option<Hinge> {
     }
     let (sse, a, b, c) = hinge_at(&xs, &ys, to_s(best.1))?;
     let s2 = sse / (n as f64 - 4.0).max(1.0);
-    let accept = sse + CHI2_1_95 * s2;
+    let accept = sse + CHI2_1_95 * s2 * long_run_factor(phi);
     let ok: Vec<&(f64, f64, f64)> = evals.iter().filter(|e| e.1 <= accept).collect();
     let ci_x = ok
         .iter()
@@ -321,8 +345,13 @@ fn x_span(x: &[f64], a: usize, b: usize) -> (f64, f64) {
 
 /// Locates toe and bend on a loading branch (x increasing) without fitting a window.
 pub fn find_toe_and_bend(x: &[f64], y: &[f64]) -> (Option<Hinge>, Option<Hinge>, f64) {
+    find_toe_and_bend_ar1(x, y, 0.0)
+}
+
+/// [`find_toe_and_bend`] for noise with lag-1 correlation `phi`.
+fn find_toe_and_bend_ar1(x: &[f64], y: &[f64], phi: f64) -> (Option<Hinge>, Option<Hinge>, f64) {
     let n = x.len();
-    let seg = segment_lines(x, y, 3);
+    let seg = segment_lines_ar1(x, y, 3, phi);
     let mut bounds = vec![0];
     bounds.extend(seg.breaks.iter().copied());
     bounds.push(n);
@@ -333,20 +362,34 @@ pub fn find_toe_and_bend(x: &[f64], y: &[f64]) -> (Option<Hinge>, Option<Hinge>,
         elastic = 1;
         let (lo, _) = x_span(x, bounds[0] + (bounds[1] - bounds[0]) / 2, bounds[1]);
         let (_, hi) = x_span(x, bounds[1], bounds[1] + (bounds[2] - bounds[1]) / 2);
-        toe = hinge_fit(&x[..bounds[2]], &y[..bounds[2]], lo, hi);
+        toe = hinge_fit_ar1(&x[..bounds[2]], &y[..bounds[2]], lo, hi, phi);
     }
     let mut bend = None;
     if nseg > elastic + 1 && seg.slopes[elastic + 1] < seg.slopes[elastic] {
         let (a, m, b) = (bounds[elastic], bounds[elastic + 1], bounds[elastic + 2]);
         let (lo, _) = x_span(x, a + (m - a) / 2, m);
         let (_, hi) = x_span(x, m, m + (b - m) / 2);
-        bend = hinge_fit(&x[a..b], &y[a..b], lo, hi);
+        bend = hinge_fit_ar1(&x[a..b], &y[a..b], lo, hi, phi);
     }
     (toe, bend, seg.sigma)
 }
 
 /// Automatic elastic window and fit on a first loading branch (see module doc).
 pub fn auto_elastic_range(x: &[f64], y: &[f64]) -> Result<ElasticRange, MeasureError> {
+    auto_elastic_range_ar1(x, y, 0.0)
+}
+
+/// [`auto_elastic_range`] for response noise with lag-1 correlation `phi` between consecutive
+/// samples (measured over the whole record, [`crate::condition::serial_noise`]): every test
+/// of the window's choice (breaks, knee intervals, trimmed blocks, curvature) allows for the
+/// correlation, so runs of correlated noise neither cut the window nor pass for a bend. The fit
+/// is the plain least-squares line (its interval is the caller's, e.g.
+/// [`crate::stats::linear_fit_ar1`]).
+pub fn auto_elastic_range_ar1(
+    x: &[f64],
+    y: &[f64],
+    phi: f64,
+) -> Result<ElasticRange, MeasureError> {
     let n = x.len();
     if n < 10 {
         return Err(MeasureError::TooFewSamples {
@@ -355,7 +398,7 @@ pub fn auto_elastic_range(x: &[f64], y: &[f64]) -> Result<ElasticRange, MeasureE
             got: n,
         });
     }
-    let (toe, bend, sigma) = find_toe_and_bend(x, y);
+    let (toe, bend, sigma) = find_toe_and_bend_ar1(x, y, phi);
     let lo = toe.map_or(f64::NEG_INFINITY, |t| t.knee_x_ci95[1]);
     let hi = bend.map_or(f64::INFINITY, |b| b.knee_x_ci95[0]);
     let (mut a, mut b) = index_range(x, lo, hi);
@@ -368,8 +411,8 @@ pub fn auto_elastic_range(x: &[f64], y: &[f64]) -> Result<ElasticRange, MeasureE
     if b - a < 3 {
         return Err(MeasureError::NoElasticRange);
     }
-    let (a, b) = trim_window(x, y, a, b)?;
-    let (a, b) = straighten(x, y, a, b, sigma);
+    let (a, b) = trim_window(x, y, a, b, phi)?;
+    let (a, b) = straighten(x, y, a, b, sigma, phi);
     let fit = linear_fit(&x[a..b], &y[a..b])?;
     let (w0, w1) = x_span(x, a, b);
     Ok(ElasticRange {
@@ -420,18 +463,22 @@ pub fn user_elastic_range(
 }
 
 /// Trims the window `a..b` by blocks while an end block's mean residual is beyond 3 standard
-/// errors (at most half the window).
+/// errors (at most half the window); with noise of lag-1 correlation `phi`, a block mean's
+/// variance is σ² 1ᵀR1/B² rather than σ²/B.
 fn trim_window(
     x: &[f64],
     y: &[f64],
     mut a: usize,
     mut b: usize,
+    phi: f64,
 ) -> Result<(usize, usize), MeasureError> {
     let n0 = b - a;
     let block = (n0 / 20).max(5);
+    let pos: Vec<usize> = (0..block).collect();
+    let block_var = crate::stats::ar1_form(&vec![1.0; block], &pos, phi.clamp(0.0, 0.999));
     while b - a >= 3 * block && (b - a) * 2 > n0 {
         let fit = line_fit(&x[a..b], &y[a..b])?;
-        let se = 3.0 * fit.residual_sd / (block as f64).sqrt();
+        let se = 3.0 * fit.residual_sd * block_var.sqrt() / block as f64;
         let mean_res =
             |p: usize, q: usize| (p..q).map(|i| y[i] - fit.at(x[i])).sum::<f64>() / (q - p) as f64;
         let (top, bottom) = (mean_res(b - block, b), mean_res(a, a + block));
@@ -447,8 +494,10 @@ fn trim_window(
 }
 
 /// Quadratic coefficient of y = c0 + c1 x + c2 x² over `a..b` and its z-score for a known
-/// noise σ (x centred and scaled for conditioning).
-fn curvature_z(x: &[f64], y: &[f64], a: usize, b: usize, sigma: f64) -> Option<f64> {
+/// noise σ with lag-1 correlation `phi` between consecutive samples (x centred and scaled for
+/// conditioning; the coefficient is wᵀy with w the third row of (XᵀX)⁻¹Xᵀ, so its variance
+/// is σ² wᵀRw).
+fn curvature_z(x: &[f64], y: &[f64], a: usize, b: usize, sigma: f64, phi: f64) -> Option<f64> {
     let xs = &x[a..b];
     let m = mean(xs);
     let sc = xs.iter().map(|v| (v - m).abs()).fold(0.0, f64::max);
@@ -465,7 +514,21 @@ fn curvature_z(x: &[f64], y: &[f64], a: usize, b: usize, sigma: f64) -> Option<f
     }
     let inv = mat.try_inverse()?;
     let c = inv * v;
-    let se = sigma * inv[(2, 2)].max(0.0).sqrt();
+    let var = if phi > 0.0 {
+        let w: Vec<f64> = xs
+            .iter()
+            .map(|&xi| {
+                let u = (xi - m) / sc;
+                let r = inv * Vector3::new(1.0, u, u * u);
+                r[2]
+            })
+            .collect();
+        let pos: Vec<usize> = (0..w.len()).collect();
+        crate::stats::ar1_form(&w, &pos, phi.clamp(0.0, 0.999))
+    } else {
+        inv[(2, 2)]
+    };
+    let se = sigma * var.max(0.0).sqrt();
     (se > 0.0).then(|| c[2] / se)
 }
 
@@ -473,12 +536,19 @@ fn curvature_z(x: &[f64], y: &[f64], a: usize, b: usize, sigma: f64) -> Option<f
 /// 3.29, α = 10⁻³, with the measured noise σ): a concave window loses its top tenth (the bend is
 /// near), a convex one its bottom tenth (a gradual toe), down to a fifth of the window or 10
 /// samples. So a rounded knee does not bend the elastic line.
-fn straighten(x: &[f64], y: &[f64], mut a: usize, mut b: usize, sigma: f64) -> (usize, usize) {
+fn straighten(
+    x: &[f64],
+    y: &[f64],
+    mut a: usize,
+    mut b: usize,
+    sigma: f64,
+    phi: f64,
+) -> (usize, usize) {
     let z_crit = crate::stats::normal_quantile(1.0 - 1e-3 / 2.0);
     let n0 = b - a;
     let min_len = (n0 / 5).max(10);
     while b - a > min_len {
-        let Some(z) = curvature_z(x, y, a, b, sigma) else {
+        let Some(z) = curvature_z(x, y, a, b, sigma, phi) else {
             break;
         };
         if z.abs() <= z_crit {
@@ -500,25 +570,25 @@ fn straighten(x: &[f64], y: &[f64], mut a: usize, mut b: usize, sigma: f64) -> (
 /// Initial straight part of a branch that starts at a turning point (unloading, reloading):
 /// the first of at most two segments (module doc, step 2), trimmed like the elastic window.
 pub fn initial_slope(x: &[f64], y: &[f64]) -> Option<Fit> {
-    let (a, b) = initial_window(x, y)?;
+    let (a, b) = initial_window(x, y, 0.0)?;
     linear_fit(&x[a..b], &y[a..b]).ok()
 }
 
 /// [`initial_slope`] without the slope interval (the per-cycle stiffnesses need only the line).
 pub(crate) fn initial_line(x: &[f64], y: &[f64]) -> Option<Line> {
-    let (a, b) = initial_window(x, y)?;
+    let (a, b) = initial_window(x, y, 0.0)?;
     line_fit(&x[a..b], &y[a..b]).ok()
 }
 
-/// The index window of [`initial_slope`].
-fn initial_window(x: &[f64], y: &[f64]) -> Option<(usize, usize)> {
+/// The index window of [`initial_slope`], for noise of lag-1 correlation `phi` (0: white).
+pub(crate) fn initial_window(x: &[f64], y: &[f64], phi: f64) -> Option<(usize, usize)> {
     let n = x.len();
     if n < 5 {
         return None;
     }
-    let seg = segment_lines(x, y, 2);
+    let seg = segment_lines_ar1(x, y, 2, phi);
     let end = seg.breaks.first().copied().unwrap_or(n);
-    trim_window(x, y, 0, end).ok()
+    trim_window(x, y, 0, end, phi).ok()
 }
 
 #[cfg(test)]

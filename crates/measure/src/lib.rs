@@ -25,9 +25,9 @@ pub mod stats;
 pub mod table;
 
 pub use analysis::{
-    analyze, Analysis, AnalyzeOptions, Behaviour, BreakPoint, FitWindowUnit, HoldRelaxation,
-    LargeDeflection, MaxResponse, Noise, Piecewise, Stiffness, Toe, YieldMethod, YieldPoint,
-    BREAK_DROP, THREE_POINT_GEOMETRY_LIMIT,
+    analyze, default_yield_offset, Analysis, AnalyzeOptions, Behaviour, BreakPoint, FitWindowUnit,
+    HoldRelaxation, LargeDeflection, MaxResponse, Noise, Piecewise, Stiffness, Toe, UnloadingCheck,
+    YieldMethod, YieldPoint, BREAK_DROP, DEFAULT_OFFSET_STRAIN, THREE_POINT_GEOMETRY_LIMIT,
 };
 pub use condition::{
     correct_compliance, labels, noise_level, quantum, resolution, reversal_threshold, segment,

@@ -140,6 +140,80 @@ pub(crate) fn line_fit(x: &[f64], y: &[f64]) -> Result<Line, MeasureError> {
     })
 }
 
+/// The quadratic form vᵀRv of the AR(1) correlation matrix R_ij = φ^|t_i − t_j| over sample
+/// positions `t` (ascending; gaps allowed, as when a window joins two stretches of a record).
+/// O(n), by the filters f_i = v_i + φ^(t_i − t_{i−1}) f_{i−1} forward and b backward:
+/// vᵀRv = Σ v_i (f_i + b_i − v_i). Equals vᵀv for φ = 0.
+pub fn ar1_form(v: &[f64], t: &[usize], phi: f64) -> f64 {
+    let n = v.len().min(t.len());
+    if phi <= 0.0 {
+        return v[..n].iter().map(|a| a * a).sum();
+    }
+    let w = |i: usize| phi.powi(t[i].abs_diff(t[i - 1]).min(i32::MAX as usize) as i32);
+    let mut f = vec![0.0; n];
+    for i in 0..n {
+        f[i] = v[i] + if i > 0 { w(i) * f[i - 1] } else { 0.0 };
+    }
+    let mut b = 0.0;
+    let mut q = 0.0;
+    for i in (0..n).rev() {
+        b = v[i] + if i + 1 < n { w(i + 1) * b } else { 0.0 };
+        q += v[i] * (f[i] + b - v[i]);
+    }
+    q
+}
+
+/// Least-squares line with the slope's interval for AR(1) errors of lag-1 correlation `phi`
+/// between consecutive sample positions `t` (the OLS slope stays the estimate: it is unbiased
+/// under any stationary noise, and the samples' weights need no model).
+///
+/// Var(slope) = σ² dᵀRd / (dᵀd)² with d = x − x̄ and R_ij = φ^|t_i − t_j| ([`ar1_form`]).
+/// σ² comes from the fit's own residuals, made unbiased for the correlation:
+/// `E[SSE]` = σ² tr((I − H)R) = σ² ν with ν = n − 1ᵀR1/n − dᵀRd/dᵀd (n − 2 for white noise;
+/// few when the window is short against the correlation length, where the line absorbs most of
+/// the noise). A σ measured elsewhere on the same channel (`prior`: σ and its degrees of
+/// freedom, e.g. over the whole record) is pooled with it, σ² = (SSE + ν_p σ_p²)/(ν + ν_p), so
+/// a window short against the correlation length is not left with one degree of freedom; the
+/// 95 % interval uses Student t with ν + ν_p degrees of freedom (at least 1). With φ = 0 and
+/// no prior this is [`linear_fit`]. Does not estimate φ or the prior (see
+/// [`crate::condition::serial_noise`]).
+pub fn linear_fit_ar1(
+    x: &[f64],
+    y: &[f64],
+    t: &[usize],
+    phi: f64,
+    prior: Option<(f64, f64)>,
+) -> Result<Fit, MeasureError> {
+    let mut f = linear_fit(x, y)?;
+    if t.len() != x.len() {
+        return Err(MeasureError::LengthMismatch {
+            what: "linear fit x and sample positions",
+            left: x.len(),
+            right: t.len(),
+        });
+    }
+    let phi = phi.clamp(0.0, 0.999);
+    let (sp, np) = prior
+        .filter(|p| p.0.is_finite() && p.1.is_finite() && p.0 >= 0.0 && p.1 > 0.0)
+        .unwrap_or((0.0, 0.0));
+    if phi == 0.0 && np == 0.0 {
+        return Ok(f);
+    }
+    let n = f.n as f64;
+    let mx = x.iter().sum::<f64>() / n;
+    let d: Vec<f64> = x.iter().map(|v| v - mx).collect();
+    let sxx: f64 = d.iter().map(|v| v * v).sum();
+    let q1 = ar1_form(&vec![1.0; f.n], t, phi);
+    let qd = ar1_form(&d, t, phi);
+    let sse = f.residual_sd.powi(2) * (n - 2.0);
+    let nu = (n - q1 / n - qd / sxx).max(0.0);
+    let dof = (nu + np).max(1.0);
+    let q = student_t_quantile(0.975, dof);
+    f.slope_se = ((sse + np * sp * sp) / dof * qd).sqrt() / sxx;
+    f.slope_ci95 = [f.slope - q * f.slope_se, f.slope + q * f.slope_se];
+    Ok(f)
+}
+
 /// Mean and sample standard deviation (n − 1); the SD is NaN for fewer than two values.
 pub fn mean_sd(values: &[f64]) -> (f64, f64) {
     let n = values.len() as f64;
@@ -356,9 +430,66 @@ pub fn normal_quantile(p: f64) -> f64 {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use approx::assert_relative_eq;
+
+    /// AR(1) noise of lag-1 correlation φ and unit marginal σ (the first sample stationary).
+    pub(crate) fn ar1_noise(n: usize, phi: f64, seed: u64) -> Vec<f64> {
+        use rand::SeedableRng;
+        use rand_distr::{Distribution, StandardNormal};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+        let mut p = 0.0f64;
+        (0..n)
+            .map(|i| {
+                let e: f64 = StandardNormal.sample(&mut rng);
+                p = if i == 0 {
+                    e
+                } else {
+                    phi * p + (1.0 - phi * phi).sqrt() * e
+                };
+                p
+            })
+            .collect()
+    }
+
+    /// The O(n) filter form equals the double sum Σ v_i v_j φ^|t_i − t_j|, gaps included.
+    #[test]
+    fn ar1_form_matches_the_double_sum() {
+        let t: Vec<usize> = vec![0, 1, 2, 5, 6, 7, 20, 21, 22, 23];
+        let v: Vec<f64> = (0..t.len()).map(|i| (i as f64 * 0.7).sin() - 0.2).collect();
+        for phi in [0.0, 0.3, 0.9] {
+            let mut brute = 0.0;
+            for i in 0..t.len() {
+                for j in 0..t.len() {
+                    brute += v[i] * v[j] * f64::powi(phi, t[i].abs_diff(t[j]) as i32);
+                }
+            }
+            assert_relative_eq!(ar1_form(&v, &t, phi), brute, max_relative = 1e-12);
+        }
+    }
+
+    /// Over 400 windows of 60 samples on a line with AR(1) noise (φ = 0.8, the true φ given),
+    /// the AR(1) interval holds the true slope in 92–98 % of the windows; the white-noise
+    /// interval of the same fits holds it in far fewer (it is about 3× too narrow).
+    #[test]
+    fn ar1_interval_covers_at_the_nominal_rate() {
+        let (n, phi, trials) = (60, 0.8, 400);
+        let x: Vec<f64> = (0..n).map(|i| i as f64 / n as f64).collect();
+        let t: Vec<usize> = (0..n).collect();
+        let (mut ar, mut white) = (0, 0);
+        for seed in 0..trials {
+            let e = ar1_noise(n, phi, seed);
+            let y: Vec<f64> = x.iter().zip(&e).map(|(x, e)| 3.0 * x + 0.05 * e).collect();
+            let f = linear_fit_ar1(&x, &y, &t, phi, None).unwrap();
+            ar += (f.slope_ci95[0] <= 3.0 && 3.0 <= f.slope_ci95[1]) as usize;
+            let w = linear_fit(&x, &y).unwrap();
+            white += (w.slope_ci95[0] <= 3.0 && 3.0 <= w.slope_ci95[1]) as usize;
+        }
+        let (ar, white) = (ar as f64 / trials as f64, white as f64 / trials as f64);
+        assert!((0.92..=0.98).contains(&ar), "AR(1) coverage {ar}");
+        assert!(white < 0.75, "white-noise coverage {white}");
+    }
 
     #[test]
     fn t_quantiles_match_tables() {

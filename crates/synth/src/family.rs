@@ -21,14 +21,26 @@
 //!   region in 30 % of the cases, a decimated export (every 2nd–8th row, ≥ 20 rows left on
 //!   the first ramp) in 20 %.
 //!
-//! Does not make rate-dependent, drifting or broken specimens.
+//! [`break_case`] adds monotonic tension tests to fracture (or stopped before it) under white
+//! or AR(1) noise, as curves (the break detection's truth).
+//!
+//! A share ([`RATE_DEPENDENT_SHARE`]) of the tension, torsion and bending cases is
+//! rate-dependent instead: `linear+viscoelasticity` (a Maxwell branch of 0.2–1 × the elastic
+//! stiffness, relaxation time 0.2–2 × the first ramp's duration), with dwells of 1–3
+//! relaxation times in two thirds of them, the rate changes above in all.
+//!
+//! Does not make drifting specimens.
 
-use crate::spec::{Artefacts, Layout, Protocol, Step, SynthSpec};
+use crate::spec::{Artefacts, Extension, Layout, Protocol, Step, SynthSpec};
 use cablab_core::{Specimen, TestKind};
 use cablab_laws::linear::GA_PER_EA;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use std::collections::BTreeMap;
+
+/// Share of the family's cases (not three-point) with a rate-dependent law: `linear` with a
+/// viscoelastic Maxwell branch (`linear+viscoelasticity`).
+pub const RATE_DEPENDENT_SHARE: f64 = 0.15;
 
 /// Amplitude schedule of a case.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -44,7 +56,8 @@ pub enum Schedule {
 /// What a generated case should measure as.
 #[derive(Debug, Clone, PartialEq)]
 pub struct FamilyTruth {
-    /// Elastic stiffness (EA N, GJ or EI N m²).
+    /// Elastic stiffness (EA N, GJ or EI N m²); NaN for a rate-dependent law (its apparent
+    /// stiffness depends on the rate).
     pub stiffness: f64,
     /// Relative accuracy of `stiffness` as the virtual lab reproduces it: 0 where the rod's
     /// answer is exact (uniform tension, torsion, pure bending); 10⁻³ for three-point, the
@@ -53,7 +66,7 @@ pub struct FamilyTruth {
     pub stiffness_tol: f64,
     /// Yield response (F_y N or M_y N m) when the law yields within the test.
     pub yield_response: Option<f64>,
-    /// Expected behaviour class (`linear_elastic` or `elastoplastic`).
+    /// Expected behaviour class (`linear_elastic`, `elastoplastic` or `rate_dependent`).
     pub class: &'static str,
     /// The schedule drawn.
     pub schedule: Schedule,
@@ -65,6 +78,12 @@ pub struct FamilyTruth {
     pub noise_ar1: f64,
     /// Export decimation (every k-th row; 0 or 1: none).
     pub decimate: usize,
+    /// Dwell at every turning point, s (0: none).
+    pub dwell_s: f64,
+    /// Machine control (m or rad) over which the first loading is elastic: from the end of the
+    /// slack to the first ramp's end or, for an elastoplastic law, the yield control, whichever
+    /// comes first (an oracle window for the stiffness).
+    pub elastic_machine: [f64; 2],
 }
 
 /// One case of the family: the virtual lab's spec and the truth.
@@ -92,6 +111,10 @@ fn log_uniform(rng: &mut ChaCha8Rng, lo: f64, hi: f64) -> f64 {
 /// The case of `seed` (see the module doc for the distributions).
 pub fn family_case(seed: u64) -> FamilyCase {
     let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0x5EED_FA41_1700_0012);
+    // Rate-dependent cases come from a stream of their own, so the other cases' draws are
+    // those of the family without them.
+    let mut visco_rng = ChaCha8Rng::seed_from_u64(seed ^ 0x0DA5_4B07_1200_0004);
+    let rate_dependent = visco_rng.random_bool(RATE_DEPENDENT_SHARE);
     let u: f64 = rng.random();
     let kind = if u < 0.4 {
         TestKind::Tension
@@ -115,6 +138,8 @@ pub fn family_case(seed: u64) -> FamilyCase {
     let ey = rng.random_range(0.002..0.006);
     let h = rng.random_range(0.02..0.3);
     let elastoplastic = kind != TestKind::ThreePoint && rng.random_bool(0.6);
+    let rate_dependent = rate_dependent && kind != TestKind::ThreePoint;
+    let elastoplastic = elastoplastic && !rate_dependent;
     // Stiffness, yield response and the control at yield (machine units).
     let (stiff_name, yname, hname, stiffness, y, cy) = match kind {
         TestKind::Tension => ("EA", "F_y", "H", e * area, e * area * ey, ey * l0),
@@ -167,6 +192,20 @@ pub fn family_case(seed: u64) -> FamilyCase {
     } else {
         rng.random_range(0.0..30.0)
     };
+    // A Maxwell branch of 0.2–1 × the elastic stiffness relaxing in 0.2–2 × the first ramp's
+    // duration; in two thirds of these cases the dwells last 1–3 relaxation times.
+    let ramp_s = amps[0] / base_rate;
+    let visco = rate_dependent.then(|| {
+        let tau = ramp_s * visco_rng.random_range(0.2..2.0);
+        let k_v = visco_rng.random_range(0.2..1.0);
+        let dwell = if visco_rng.random_bool(2.0 / 3.0) {
+            tau * visco_rng.random_range(1.0..3.0)
+        } else {
+            0.0
+        };
+        (tau, k_v, dwell)
+    });
+    let dwell = visco.map_or(dwell, |v| v.2);
     let mut steps = Vec::new();
     let mut rate = base_rate;
     for (k, &a) in amps.iter().enumerate() {
@@ -228,6 +267,13 @@ pub fn family_case(seed: u64) -> FamilyCase {
         params.insert(yname.to_string(), y);
         params.insert(hname.to_string(), h * stiffness);
     }
+    let extension = visco.map(|(tau, k_v, _)| Extension {
+        name: "viscoelasticity".into(),
+        params: BTreeMap::from([
+            (format!("{stiff_name}_v1"), k_v * stiffness),
+            ("tau_v1".to_string(), tau),
+        ]),
+    });
     let spec = SynthSpec {
         kind,
         specimen: Specimen {
@@ -242,7 +288,7 @@ pub fn family_case(seed: u64) -> FamilyCase {
         }
         .into(),
         params,
-        extension: None,
+        extension,
         rig: Default::default(),
         protocol: Protocol { steps },
         artefacts,
@@ -253,17 +299,25 @@ pub fn family_case(seed: u64) -> FamilyCase {
         specimen_number: None,
     };
     let (noise_ar1, decimate) = (spec.artefacts.noise_ar1, spec.artefacts.decimate);
+    let slack = spec.artefacts.slack;
+    let elastic_top = if elastoplastic {
+        amps[0].min(cy)
+    } else {
+        amps[0]
+    };
     FamilyCase {
         spec,
         truth: FamilyTruth {
-            stiffness,
+            stiffness: if rate_dependent { f64::NAN } else { stiffness },
             stiffness_tol: if kind == TestKind::ThreePoint {
                 1e-3
             } else {
                 0.0
             },
             yield_response: elastoplastic.then_some(y),
-            class: if elastoplastic {
+            class: if rate_dependent {
+                "rate_dependent"
+            } else if elastoplastic {
                 "elastoplastic"
             } else {
                 "linear_elastic"
@@ -273,6 +327,129 @@ pub fn family_case(seed: u64) -> FamilyCase {
             noise_rel,
             noise_ar1,
             decimate,
+            elastic_machine: [slack, slack + elastic_top],
+            dwell_s: dwell,
         },
+    }
+}
+
+/// A monotonic tension test to fracture (or not), as a logger records it: the truth of issue
+/// 12 item 5's break detection under correlated noise.
+#[derive(Debug, Clone)]
+pub struct BreakCase {
+    /// Time, s.
+    pub time_s: Vec<f64>,
+    /// Elongation, m (rises throughout).
+    pub control: Vec<f64>,
+    /// Force, N, with the noise.
+    pub response: Vec<f64>,
+    /// Free length, m.
+    pub free_length_m: f64,
+    /// First sample of the fallen response (None: the specimen does not break).
+    pub break_sample: Option<usize>,
+    /// Largest noise-free force, N.
+    pub max_response: f64,
+    /// ∫ F dΔl of the noise-free curve up to the break sample, J (None without a break).
+    pub work_to_break: Option<f64>,
+    /// AR(1) coefficient of the noise (0: white).
+    pub noise_ar1: f64,
+}
+
+/// The monotonic case of `seed`: a bilinear elastoplastic rise (E A of 2·10³–2·10⁵ N, yield
+/// at 0.2–0.6 % strain, hardening 1–20 %) to 2–10 × the yield strain on 200–3000 rows, with
+/// response noise of 0.05–1 % of the maximum, white or AR(1) (φ = 0.3–0.95, in 60 % of the
+/// cases). Two thirds of the cases break: the force falls within 1–3 rows to 0–20 % of its
+/// value and the crosshead runs on for 5–30 % more rows; the others end at their maximum
+/// (a test stopped before fracture) or soften gradually to no less than 70 % of it (necking
+/// without fracture).
+///
+/// Does not make cyclic, compressive or three-point tests.
+pub fn break_case(seed: u64) -> BreakCase {
+    use rand_distr::{Distribution, StandardNormal};
+    let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0xB4EA_C0DE_0012_0005);
+    let l0 = rng.random_range(0.05..0.3);
+    let ea = log_uniform(&mut rng, 2e3, 2e5);
+    let ey = rng.random_range(0.002..0.006);
+    let h = rng.random_range(0.01..0.2);
+    let e_end = ey * rng.random_range(2.0..10.0);
+    let n_rise = log_uniform(&mut rng, 200.0, 3000.0) as usize;
+    let breaks = rng.random_bool(2.0 / 3.0);
+    let soften = !breaks && rng.random_bool(0.5);
+    let tail = if breaks || soften {
+        (n_rise as f64 * rng.random_range(0.05..0.3)) as usize + 5
+    } else {
+        0
+    };
+    let drop_rows = rng.random_range(1..=3usize);
+    let residual = rng.random_range(0.0..0.2);
+    let soft_to = rng.random_range(0.7..0.95);
+    let noise_rel = log_uniform(&mut rng, 5e-4, 1e-2);
+    let phi = if rng.random_bool(0.6) {
+        rng.random_range(0.3..0.95)
+    } else {
+        0.0
+    };
+    let law = |e: f64| -> f64 {
+        if e <= ey {
+            ea * e
+        } else {
+            ea * ey + h * ea * (e - ey)
+        }
+    };
+    let de = e_end / n_rise as f64;
+    let mut strain = Vec::with_capacity(n_rise + tail + 1);
+    let mut clean = Vec::with_capacity(n_rise + tail + 1);
+    for i in 0..=n_rise {
+        let e = de * i as f64;
+        strain.push(e);
+        clean.push(law(e));
+    }
+    let top = clean[n_rise];
+    for i in 1..=tail {
+        let e = e_end + de * i as f64;
+        strain.push(e);
+        clean.push(if breaks {
+            let t = (i as f64 / drop_rows as f64).min(1.0);
+            top * (1.0 - t * (1.0 - residual))
+        } else {
+            top * (1.0 - (1.0 - soft_to) * i as f64 / tail as f64)
+        });
+    }
+    // The first row at or below the drop level of the analysis (half the maximum).
+    let break_sample = breaks.then(|| {
+        (n_rise + 1..clean.len())
+            .find(|&i| clean[i] < 0.5 * top)
+            .unwrap_or(clean.len() - 1)
+    });
+    let work_to_break = break_sample.map(|j| {
+        (0..j)
+            .map(|i| 0.5 * (clean[i] + clean[i + 1]) * (strain[i + 1] - strain[i]) * l0)
+            .sum()
+    });
+    let sd = noise_rel * top;
+    let mut p = 0.0f64;
+    let response: Vec<f64> = clean
+        .iter()
+        .enumerate()
+        .map(|(i, c)| {
+            let e: f64 = StandardNormal.sample(&mut rng);
+            p = if i == 0 {
+                e
+            } else {
+                phi * p + (1.0 - phi * phi).sqrt() * e
+            };
+            c + sd * p
+        })
+        .collect();
+    let rate_hz = 10.0;
+    BreakCase {
+        time_s: (0..clean.len()).map(|i| i as f64 / rate_hz).collect(),
+        control: strain.iter().map(|e| e * l0).collect(),
+        response,
+        free_length_m: l0,
+        break_sample,
+        max_response: top,
+        work_to_break,
+        noise_ar1: phi,
     }
 }
