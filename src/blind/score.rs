@@ -178,8 +178,7 @@ pub fn run_matrix_observed(
                         .map(|q| super::cases::set_label(&q.effects))
                         .collect();
                     let truth_is_equivalent_set = c.truths.len() > 1
-                        && d
-                            .verdict
+                        && d.verdict
                             .equivalent_sets
                             .iter()
                             .any(|q| same_set(&q.effects, &c.truths));

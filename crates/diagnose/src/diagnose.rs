@@ -44,10 +44,10 @@
 //! What it does not do: read files or print (the CLI does), or simulate (see `model`).
 
 use crate::error::DiagError;
-use crate::ladder::{climb, ladder};
+use crate::ladder::{climb, exchange, ladder};
 use crate::locate::span_of_baseline;
 use crate::model::{DiagTest, ModelSpec};
-use crate::select::{choose, compare, elastic_limit, fit_failure, score};
+use crate::select::{choose, compare, elastic_limit, fit_failure, score, Scored};
 use cablab_core::{Effect, TestKind};
 use serde::Serialize;
 
@@ -445,8 +445,33 @@ pub fn diagnose(
                     set.retain(|e| *e != r.effect);
                 }
             }
-            gap_after = abs_rms(&last.held_resid);
+            let mut last = last;
+            let mut alternatives = alternatives;
             steps = all;
+            if set.len() > 1 {
+                // Judge each member again now that the others are in (`exchange`).
+                let ex = exchange(
+                    ctx,
+                    tests,
+                    &base.model,
+                    &set,
+                    last,
+                    opts.candidates.as_deref(),
+                    &train,
+                    &held,
+                    &noise,
+                    opts,
+                );
+                set = ex.members;
+                last = ex.model;
+                alternatives = ex.equivalent;
+                if ex.swapped.is_some() {
+                    steps = waterfall(
+                        ctx, tests, &base, &scored, &set, &last, &train, &held, &noise, opts, scale,
+                    );
+                }
+            }
+            gap_after = abs_rms(&last.held_resid);
             if set.len() > 1 {
                 equivalent_sets = alternatives
                     .iter()
@@ -529,6 +554,80 @@ pub fn diagnose(
         },
         failed,
     })
+}
+
+/// "How far" over a set the exchange changed: from the baseline, its members added one at a
+/// time, the one that closes most on its own first (`singles`: every candidate scored alone on
+/// the baseline), each step's model fitted (warm-started from the previous one) unless it is a
+/// single candidate already scored or the whole set (`full`).
+#[allow(clippy::too_many_arguments)]
+fn waterfall(
+    ctx: Context,
+    tests: &[DiagTest],
+    base: &Scored,
+    singles: &[Scored],
+    set: &[Effect],
+    full: &Scored,
+    train: &[Vec<usize>],
+    held: &[Vec<usize>],
+    noise: &[f64],
+    opts: &DiagnoseOptions,
+    scale: f64,
+) -> Vec<Rung> {
+    let rms = |s: &Scored| {
+        (s.held_resid.iter().flatten().map(|v| v * v).sum::<f64>() / s.n_held.max(1) as f64).sqrt()
+    };
+    let alone = |e: Effect| singles.iter().find(|s| s.effect == e);
+    let mut order = set.to_vec();
+    order.sort_by(|a, b| {
+        let g = |e: Effect| alone(e).map_or(f64::INFINITY, |s| s.rss_noise);
+        g(*a).total_cmp(&g(*b))
+    });
+    let mut steps = Vec::new();
+    let mut prev = base.clone();
+    let mut model = base.model.clone();
+    for (i, &e) in order.iter().enumerate() {
+        model = model.with(e);
+        let next = if i + 1 == order.len() {
+            Some(full.clone())
+        } else if i == 0 {
+            alone(e).cloned()
+        } else {
+            score(
+                ctx,
+                tests,
+                &model,
+                e,
+                train,
+                held,
+                noise,
+                Some(&prev.cal.params),
+                None,
+                opts,
+            )
+            .ok()
+        };
+        let Some(next) = next else {
+            // Not fitted: the waterfall ends at the set.
+            steps.push(Rung {
+                step: "add",
+                effect: e,
+                model: full.model.label(),
+                gap_before_rel: rms(&prev) / scale,
+                gap_after_rel: rms(full) / scale,
+            });
+            break;
+        };
+        steps.push(Rung {
+            step: "add",
+            effect: e,
+            model: next.model.label(),
+            gap_before_rel: rms(&prev) / scale,
+            gap_after_rel: rms(&next) / scale,
+        });
+        prev = next;
+    }
+    steps
 }
 
 /// The `unexplained` verdict in plain words: how far above the noise floor the held-out gap is
