@@ -44,7 +44,7 @@
 //! What it does not do: read files or print (the CLI does), or simulate (see `model`).
 
 use crate::error::DiagError;
-use crate::ladder::{climb, exchange, ladder};
+use crate::ladder::{climb, exchange, ladder, refit};
 use crate::locate::span_of_baseline;
 use crate::model::{DiagTest, ModelSpec};
 use crate::select::{choose, compare, elastic_limit, fit_failure, score, Scored};
@@ -593,31 +593,11 @@ fn waterfall(
         } else if i == 0 {
             alone(e).cloned()
         } else {
-            score(
-                ctx,
-                tests,
-                &model,
-                e,
-                train,
-                held,
-                noise,
-                Some(&prev.cal.params),
-                None,
-                opts,
-            )
-            .ok()
+            refit(ctx, tests, &model, e, &prev, train, held, noise, opts)
         };
-        let Some(next) = next else {
-            // Not fitted: the waterfall ends at the set.
-            steps.push(Rung {
-                step: "add",
-                effect: e,
-                model: full.model.label(),
-                gap_before_rel: rms(&prev) / scale,
-                gap_after_rel: rms(full) / scale,
-            });
-            break;
-        };
+        // A step that cannot be fitted ends the waterfall at the set.
+        let last = next.is_none();
+        let next = next.unwrap_or_else(|| full.clone());
         steps.push(Rung {
             step: "add",
             effect: e,
@@ -625,6 +605,9 @@ fn waterfall(
             gap_before_rel: rms(&prev) / scale,
             gap_after_rel: rms(&next) / scale,
         });
+        if last {
+            break;
+        }
         prev = next;
     }
     steps

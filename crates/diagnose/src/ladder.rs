@@ -152,20 +152,7 @@ pub(crate) fn climb(
         let tried: Vec<(Effect, Scored)> = reduced
             .par_iter()
             .filter_map(|(e, m)| {
-                score(
-                    ctx,
-                    tests,
-                    m,
-                    Effect::None,
-                    train,
-                    held,
-                    noise,
-                    Some(&cur.cal.params),
-                    None,
-                    opts,
-                )
-                .ok()
-                .map(|s| (*e, s))
+                refit(ctx, tests, m, Effect::None, &cur, train, held, noise, opts).map(|s| (*e, s))
             })
             .collect();
         // The reduced model that fits the held-out data best, if the rule prefers it to the
@@ -194,6 +181,35 @@ pub(crate) fn climb(
         alternatives.clear();
     }
     (rungs, cur, alternatives)
+}
+
+/// `model` fitted warm-started from `from`'s parameters and scored on the held-out data, labelled
+/// `effect`; `None` when it cannot be fitted.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn refit(
+    ctx: Context,
+    tests: &[DiagTest],
+    model: &ModelSpec,
+    effect: Effect,
+    from: &Scored,
+    train: &[Vec<usize>],
+    held: &[Vec<usize>],
+    noise: &[f64],
+    opts: &DiagnoseOptions,
+) -> Option<Scored> {
+    score(
+        ctx,
+        tests,
+        model,
+        effect,
+        train,
+        held,
+        noise,
+        Some(&from.cal.params),
+        None,
+        opts,
+    )
+    .ok()
 }
 
 /// The outcome of [`exchange`].
@@ -268,20 +284,7 @@ pub(crate) fn exchange(
     let tried: Vec<(Effect, Scored)> = swaps
         .par_iter()
         .filter_map(|(out, inn, m)| {
-            score(
-                ctx,
-                tests,
-                m,
-                *inn,
-                train,
-                held,
-                noise,
-                Some(&cur.cal.params),
-                None,
-                opts,
-            )
-            .ok()
-            .map(|s| (*out, s))
+            refit(ctx, tests, m, *inn, &cur, train, held, noise, opts).map(|s| (*out, s))
         })
         .collect();
     // The rule of `choose` among the set and its swaps.
