@@ -445,6 +445,10 @@ pub enum BenchWhat {
         /// Also withhold every applicable pair of effects per kind (issue 13.6).
         #[arg(long)]
         pairs: bool,
+        /// Keep only the cases whose name (`kind/effects/noise/seed/layout`) contains one of
+        /// these, comma-separated (`--only +sensor_drift,noise1.0%`): to rerun a class of cases.
+        #[arg(long, value_delimiter = ',')]
+        only: Vec<String>,
         /// Write the report (Markdown) here as well as to stdout.
         #[arg(long, short = 'o')]
         output: Option<PathBuf>,

@@ -55,6 +55,7 @@ pub fn bench(
     seeds: u64,
     kind_names: &[String],
     pairs: bool,
+    only: &[String],
     out: Option<&std::path::Path>,
     json: Option<&std::path::Path>,
 ) -> CmdResult {
@@ -76,6 +77,9 @@ pub fn bench(
         let (more, more_errors) = cases::pair_matrix(&kinds, &[0.003, 0.01], &seed_list);
         cases.extend(more);
         errors.extend(more_errors);
+    }
+    if !only.is_empty() {
+        cases.retain(|c| only.iter().any(|o| c.name.contains(o.as_str())));
     }
     cases.retain_mut(|c| match through_readers(c) {
         Ok(()) => true,
@@ -109,13 +113,18 @@ pub fn bench(
     let kinds_text: Vec<&str> = kinds.iter().map(|k| k.as_str()).collect();
     let mut text = format!(
         "# Blind check of the gap diagnosis, through the real readers\n\n\
-         `cablab bench blind --seeds {seeds} --kinds {}{}`: every effect that applies to the kind, \
+         `cablab bench blind --seeds {seeds} --kinds {}{}{}`: every effect that applies to the kind, \
          withheld, plus null cases{}; noise 0.3 % and 1 % of full scale; {seeds} parameter draws \
          each; layouts testXpert II, Bluehill CSV and MTS 793 in turn, written by the virtual lab \
          and read back by cablab-ingest; the diagnosis is not told the truth. Three-point cases \
          replay the rod at up to {} points per history.\n\n```\n",
         kinds_text.join(","),
         if pairs { " --pairs" } else { "" },
+        if only.is_empty() {
+            String::new()
+        } else {
+            format!(" --only {}", only.join(","))
+        },
         if pairs {
             " and every pair of effects that can coexist in a cable (`cases::pairs_for`)"
         } else {

@@ -41,6 +41,14 @@ pub struct CaseOutcome {
     pub gap_before_over_noise: f64,
     /// Held-out gap after the true effect / estimated noise floor (when it was scored).
     pub gap_after_over_noise: Option<f64>,
+    /// Held-out gap the verdict's model leaves / estimated noise floor (`verdict.gap_after_rel`
+    /// over `verdict.noise_rel`), whatever the verdict.
+    pub verdict_gap_over_noise: f64,
+    /// For a pair: the held-out gap each withheld effect leaves on its own (scored as a single
+    /// candidate on the baseline) / estimated noise floor, in the order of `truths`.
+    pub member_gaps_over_noise: Vec<Option<f64>>,
+    /// The equivalent sets the verdict reported (`verdict.equivalent_sets`), members joined by `+`.
+    pub equivalent_sets: Vec<String>,
     /// Wall time of the diagnosis, s.
     pub seconds: f64,
     /// Why the diagnosis failed, if it did.
@@ -150,6 +158,9 @@ pub fn run_matrix_observed(
                 noise_rel: c.noise_rel,
                 gap_before_over_noise: f64::NAN,
                 gap_after_over_noise: None,
+                verdict_gap_over_noise: f64::NAN,
+                member_gaps_over_noise: vec![],
+                equivalent_sets: vec![],
                 seconds: 0.0,
                 error: None,
             };
@@ -160,13 +171,37 @@ pub fn run_matrix_observed(
                     o.right = same_set(&d.verdict.effects, &c.truths)
                         && (c.truths.contains(&v) || (c.truths.is_empty() && v == Effect::None));
                     o.effects = d.verdict.effects.clone();
-                    o.right_or_equivalent =
-                        o.right || (c.truths.len() == 1 && d.verdict.equivalent.contains(&c.truth));
+                    o.equivalent_sets = d
+                        .verdict
+                        .equivalent_sets
+                        .iter()
+                        .map(|q| super::cases::set_label(&q.effects))
+                        .collect();
+                    let truth_is_equivalent_set = c.truths.len() > 1
+                        && d.verdict
+                            .equivalent_sets
+                            .iter()
+                            .any(|q| same_set(&q.effects, &c.truths));
+                    o.right_or_equivalent = o.right
+                        || (c.truths.len() == 1 && d.verdict.equivalent.contains(&c.truth))
+                        || truth_is_equivalent_set;
                     o.equivalent = d.verdict.equivalent.clone();
                     let noise = d.verdict.noise.max(f64::MIN_POSITIVE);
                     o.gap_before_over_noise = d.baseline.gap_heldout_rel * d.verdict.noise
                         / d.verdict.noise_rel.max(f64::MIN_POSITIVE)
                         / noise;
+                    o.verdict_gap_over_noise =
+                        d.verdict.gap_after_rel / d.verdict.noise_rel.max(f64::MIN_POSITIVE);
+                    o.member_gaps_over_noise = c
+                        .truths
+                        .iter()
+                        .map(|t| {
+                            d.effects
+                                .iter()
+                                .find(|e| e.effect == *t)
+                                .map(|e| e.gap_after / noise)
+                        })
+                        .collect();
                     o.gap_after_over_noise = if c.truth == Effect::None {
                         Some(o.gap_before_over_noise)
                     } else if c.truths.len() > 1 {
@@ -420,14 +455,30 @@ pub fn render(r: &BlindReport) -> String {
                 Some(_) if o.effects.len() > 1 => super::cases::set_label(&o.effects),
                 Some(v) => v.to_string(),
             };
-            let eq: Vec<&str> = o.equivalent.iter().map(|e| e.as_str()).collect();
+            let eq: Vec<&str> = o
+                .equivalent
+                .iter()
+                .map(|e| e.as_str())
+                .chain(o.equivalent_sets.iter().map(String::as_str))
+                .collect();
+            let members: Vec<String> = o
+                .member_gaps_over_noise
+                .iter()
+                .map(|g| g.map_or("-".to_string(), |g| format!("{g:.2}")))
+                .collect();
             let _ = writeln!(
                 s,
-                "  {:<48} verdict {:<22} equivalent [{}] gap/noise {:.2}{}",
+                "  {:<48} verdict {:<22} equivalent [{}] gap/noise {:.2} -> {:.2}{}{}",
                 o.name,
                 v,
                 eq.join(", "),
                 o.gap_before_over_noise,
+                o.verdict_gap_over_noise,
+                if members.len() > 1 {
+                    format!(" (each member alone: {})", members.join(", "))
+                } else {
+                    String::new()
+                },
                 o.error
                     .as_ref()
                     .map_or(String::new(), |e| format!(" error: {e}"))

@@ -25,6 +25,7 @@ pub fn run(a: BenchArgs) -> CmdResult {
             seeds,
             kinds,
             pairs,
+            only,
             output,
             json,
         } => {
@@ -32,7 +33,14 @@ pub fn run(a: BenchArgs) -> CmdResult {
                 .into_iter()
                 .map(|k| cablab_core::TestKind::from(k).as_str().to_string())
                 .collect();
-            crate::blind::bench(seeds, &kinds, pairs, output.as_deref(), json.as_deref())
+            crate::blind::bench(
+                seeds,
+                &kinds,
+                pairs,
+                &only,
+                output.as_deref(),
+                json.as_deref(),
+            )
         }
     }
 }

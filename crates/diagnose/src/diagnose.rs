@@ -44,10 +44,10 @@
 //! What it does not do: read files or print (the CLI does), or simulate (see `model`).
 
 use crate::error::DiagError;
-use crate::ladder::{climb, ladder};
+use crate::ladder::{climb, exchange, ladder, refit};
 use crate::locate::span_of_baseline;
 use crate::model::{DiagTest, ModelSpec};
-use crate::select::{choose, compare, elastic_limit, fit_failure, score};
+use crate::select::{choose, compare, elastic_limit, fit_failure, score, Scored};
 use cablab_core::{Effect, TestKind};
 use serde::Serialize;
 
@@ -162,8 +162,8 @@ pub struct Verdict {
     /// gap well above the floor remains that no candidate closes, otherwise the effect.
     pub effect: Effect,
     /// The set of effects the verdict names (CONTRACT.md): `[]` for `none` and `unexplained`;
-    /// `[effect]` when one effect leaves less than [`UNEXPLAINED_GAP`] × the noise floor;
-    /// otherwise the simplest set found from it by forward selection (up to three effects, each
+    /// `[effect]` when one effect fits to the noise floor ([`NOISE_FLOOR_FIT`]) or nothing
+    /// joins it; otherwise the simplest set found from it by forward selection (up to three effects, each
     /// step scored on held-out data by the same rules) and backward elimination, `effect` first.
     pub effects: Vec<Effect>,
     /// "How far" over the set: the held-out gap after each step from the baseline (the first
@@ -399,8 +399,12 @@ pub fn diagnose(
         .iter()
         .find(|e| e.effect == verdict_effect)
         .map_or(gap_before, |e| e.gap_after);
-    // Sets of effects: when the best single effect leaves a gap well above the noise floor,
-    // climb from it (forward selection, then backward elimination over the whole set).
+    // Sets of effects: when the best single effect does not fit to the noise floor, climb from
+    // it (forward selection, then backward elimination over the whole set). The same floor as
+    // every forward step's (`NOISE_FLOOR_FIT`), not the `unexplained` threshold: a second effect
+    // worth less than the first (a drift, a compliance, a small friction loop) often leaves
+    // 1.1–1.5 × the noise after the first alone, and the climb's own rules (materiality,
+    // information criterion, resolution) decide whether it is there.
     let mut set = vec![];
     let mut steps = vec![];
     let mut verdict_effect = verdict_effect;
@@ -415,7 +419,7 @@ pub fn diagnose(
             gap_after_rel: gap_after / scale,
         });
         let g1 = (first.rss_noise / first.n_held.max(1) as f64).sqrt();
-        if g1 >= UNEXPLAINED_GAP {
+        if g1 > NOISE_FLOOR_FIT {
             let start = crate::select::Scored {
                 effect: Effect::None,
                 ..first.clone()
@@ -441,8 +445,33 @@ pub fn diagnose(
                     set.retain(|e| *e != r.effect);
                 }
             }
-            gap_after = abs_rms(&last.held_resid);
+            let mut last = last;
+            let mut alternatives = alternatives;
             steps = all;
+            if set.len() > 1 {
+                // Judge each member again now that the others are in (`exchange`).
+                let ex = exchange(
+                    ctx,
+                    tests,
+                    &base.model,
+                    &set,
+                    last,
+                    opts.candidates.as_deref(),
+                    &train,
+                    &held,
+                    &noise,
+                    opts,
+                );
+                set = ex.members;
+                last = ex.model;
+                alternatives = ex.equivalent;
+                if ex.swapped.is_some() {
+                    steps = waterfall(
+                        ctx, tests, &base, &scored, &set, &last, &train, &held, &noise, opts, scale,
+                    );
+                }
+            }
+            gap_after = abs_rms(&last.held_resid);
             if set.len() > 1 {
                 equivalent_sets = alternatives
                     .iter()
@@ -525,6 +554,63 @@ pub fn diagnose(
         },
         failed,
     })
+}
+
+/// "How far" over a set the exchange changed: from the baseline, its members added one at a
+/// time, the one that closes most on its own first (`singles`: every candidate scored alone on
+/// the baseline), each step's model fitted (warm-started from the previous one) unless it is a
+/// single candidate already scored or the whole set (`full`).
+#[allow(clippy::too_many_arguments)]
+fn waterfall(
+    ctx: Context,
+    tests: &[DiagTest],
+    base: &Scored,
+    singles: &[Scored],
+    set: &[Effect],
+    full: &Scored,
+    train: &[Vec<usize>],
+    held: &[Vec<usize>],
+    noise: &[f64],
+    opts: &DiagnoseOptions,
+    scale: f64,
+) -> Vec<Rung> {
+    let rms = |s: &Scored| {
+        (s.held_resid.iter().flatten().map(|v| v * v).sum::<f64>() / s.n_held.max(1) as f64).sqrt()
+    };
+    let alone = |e: Effect| singles.iter().find(|s| s.effect == e);
+    let mut order = set.to_vec();
+    order.sort_by(|a, b| {
+        let g = |e: Effect| alone(e).map_or(f64::INFINITY, |s| s.rss_noise);
+        g(*a).total_cmp(&g(*b))
+    });
+    let mut steps = Vec::new();
+    let mut prev = base.clone();
+    let mut model = base.model.clone();
+    for (i, &e) in order.iter().enumerate() {
+        model = model.with(e);
+        let next = if i + 1 == order.len() {
+            Some(full.clone())
+        } else if i == 0 {
+            alone(e).cloned()
+        } else {
+            refit(ctx, tests, &model, e, &prev, train, held, noise, opts)
+        };
+        // A step that cannot be fitted ends the waterfall at the set.
+        let last = next.is_none();
+        let next = next.unwrap_or_else(|| full.clone());
+        steps.push(Rung {
+            step: "add",
+            effect: e,
+            model: next.model.label(),
+            gap_before_rel: rms(&prev) / scale,
+            gap_after_rel: rms(&next) / scale,
+        });
+        if last {
+            break;
+        }
+        prev = next;
+    }
+    steps
 }
 
 /// The `unexplained` verdict in plain words: how far above the noise floor the held-out gap is

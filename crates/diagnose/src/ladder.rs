@@ -4,7 +4,10 @@ use crate::error::DiagError;
 use crate::floors::{resolution_floor, rounding_like};
 use crate::model::{DiagTest, ModelSpec};
 use crate::options::{Context, DiagnoseOptions};
-use crate::select::{applicable, choose, compare, fit_failure, score, Scored, NOISE_FLOOR_FIT};
+use crate::select::{
+    applicable, choose, compare, fit_failure, ic, ic_tolerance, n_eff_of, score, simpler, Scored,
+    NOISE_FLOOR_FIT,
+};
 use cablab_core::Effect;
 use rayon::prelude::*;
 use serde::Serialize;
@@ -149,20 +152,7 @@ pub(crate) fn climb(
         let tried: Vec<(Effect, Scored)> = reduced
             .par_iter()
             .filter_map(|(e, m)| {
-                score(
-                    ctx,
-                    tests,
-                    m,
-                    Effect::None,
-                    train,
-                    held,
-                    noise,
-                    Some(&cur.cal.params),
-                    None,
-                    opts,
-                )
-                .ok()
-                .map(|s| (*e, s))
+                refit(ctx, tests, m, Effect::None, &cur, train, held, noise, opts).map(|s| (*e, s))
             })
             .collect();
         // The reduced model that fits the held-out data best, if the rule prefers it to the
@@ -191,4 +181,181 @@ pub(crate) fn climb(
         alternatives.clear();
     }
     (rungs, cur, alternatives)
+}
+
+/// `model` fitted warm-started from `from`'s parameters and scored on the held-out data, labelled
+/// `effect`; `None` when it cannot be fitted.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn refit(
+    ctx: Context,
+    tests: &[DiagTest],
+    model: &ModelSpec,
+    effect: Effect,
+    from: &Scored,
+    train: &[Vec<usize>],
+    held: &[Vec<usize>],
+    noise: &[f64],
+    opts: &DiagnoseOptions,
+) -> Option<Scored> {
+    score(
+        ctx,
+        tests,
+        model,
+        effect,
+        train,
+        held,
+        noise,
+        Some(&from.cal.params),
+        None,
+        opts,
+    )
+    .ok()
+}
+
+/// The outcome of [`exchange`].
+pub(crate) struct Exchanged {
+    /// The members of the set kept, in the order of `members` (a swapped member replaced in place).
+    pub(crate) members: Vec<Effect>,
+    /// Its fitted model.
+    pub(crate) model: Scored,
+    /// The member swapped out and the effect swapped in, when the rule preferred a swap.
+    pub(crate) swapped: Option<[Effect; 2]>,
+    /// Sets one swap away from the kept set that the rule cannot tell from it: (the kept set's
+    /// member swapped out, the other set's model, whose `effect` is the member swapped in).
+    pub(crate) equivalent: Vec<(Effect, Scored)>,
+}
+
+/// The model of `members` on the baseline law `base` (each added as [`ModelSpec::with`] does),
+/// if it holds every member (piecewise elasticity replaces a law whose hardening rules go with it).
+fn model_of(base: &ModelSpec, members: &[Effect]) -> Option<ModelSpec> {
+    let m = members.iter().fold(base.clone(), |m, &e| m.with(e));
+    members.iter().all(|&e| m.has(e)).then_some(m)
+}
+
+/// Sequential replacement over a set of two or more effects found by [`climb`]: each member is
+/// swapped in turn for every other applicable effect (only `allowed` ones if given), each swapped
+/// set fitted (warm-started from the set's parameters) and scored on the held-out data; the set
+/// kept is the simplest among those the information criterion cannot tell from the best (the
+/// rule of [`choose`](crate::select::choose)), the others one swap away from it are returned as
+/// its equivalents.
+///
+/// Why: forward selection picks its first member on data that still hold the second effect, so
+/// the first pick stands in for both (a long Maxwell branch takes a drift's slow trend and the
+/// back stress of kinematic hardening at once); once the second member is in, the first is
+/// judged again against every alternative. Does not swap more than one member at a time, nor
+/// add or drop members (that is [`climb`]'s).
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn exchange(
+    ctx: Context,
+    tests: &[DiagTest],
+    base: &ModelSpec,
+    members: &[Effect],
+    cur: Scored,
+    allowed: Option<&[Effect]>,
+    train: &[Vec<usize>],
+    held: &[Vec<usize>],
+    noise: &[f64],
+    opts: &DiagnoseOptions,
+) -> Exchanged {
+    let kind = tests[0].kind;
+    // Every set one swap away: (member out, effect in, its model).
+    let mut swaps: Vec<(Effect, Effect, ModelSpec)> = Vec::new();
+    for (i, &out) in members.iter().enumerate() {
+        let rest: Vec<Effect> = members
+            .iter()
+            .enumerate()
+            .filter(|&(j, _)| j != i)
+            .map(|(_, &e)| e)
+            .collect();
+        let Some(reduced) = model_of(base, &rest) else {
+            continue;
+        };
+        for inn in applicable(ctx, kind, &reduced) {
+            if inn == out || members.contains(&inn) || allowed.is_some_and(|c| !c.contains(&inn)) {
+                continue;
+            }
+            let mut set = members.to_vec();
+            set[i] = inn;
+            if let Some(m) = model_of(base, &set) {
+                swaps.push((out, inn, m));
+            }
+        }
+    }
+    let tried: Vec<(Effect, Scored)> = swaps
+        .par_iter()
+        .filter_map(|(out, inn, m)| {
+            refit(ctx, tests, m, *inn, &cur, train, held, noise, opts).map(|s| (*out, s))
+        })
+        .collect();
+    // The rule of `choose` among the set and its swaps.
+    let cur = Scored {
+        effect: Effect::None,
+        ..cur
+    };
+    let all: Vec<(Option<Effect>, &Scored)> = std::iter::once((None, &cur))
+        .chain(tried.iter().map(|(out, s)| (Some(*out), s)))
+        .collect();
+    let best = all
+        .iter()
+        .map(|a| a.1)
+        .min_by(|a, b| a.rss_noise.total_cmp(&b.rss_noise))
+        .unwrap_or(&cur);
+    let n_eff = n_eff_of(best);
+    let ics: Vec<f64> = all.iter().map(|a| ic(a.1, n_eff, cur.n_held)).collect();
+    let ic_best = ics.iter().copied().fold(f64::INFINITY, f64::min);
+    let tol = ic_tolerance(n_eff);
+    let mut near: Vec<usize> = (0..all.len())
+        .filter(|&i| ics[i] - ic_best <= tol)
+        .collect();
+    near.sort_by(|&a, &b| simpler(all[a].1, ics[a], all[b].1, ics[b]));
+    let pick = near.first().copied().unwrap_or(0);
+    let set_of = |i: usize| -> Vec<Effect> {
+        match all[i].0 {
+            None => members.to_vec(),
+            Some(out) => members
+                .iter()
+                .map(|&e| if e == out { all[i].1.effect } else { e })
+                .collect(),
+        }
+    };
+    let kept = set_of(pick);
+    // Sets of `near` one swap away from the kept one: (kept member out, that set's model with
+    // its effect = the member swapped in).
+    let equivalent = near
+        .iter()
+        .filter(|&&i| i != pick)
+        .filter_map(|&i| {
+            let other = set_of(i);
+            let out: Vec<Effect> = kept
+                .iter()
+                .copied()
+                .filter(|e| !other.contains(e))
+                .collect();
+            let inn: Vec<Effect> = other
+                .iter()
+                .copied()
+                .filter(|e| !kept.contains(e))
+                .collect();
+            (out.len() == 1 && inn.len() == 1).then(|| {
+                (
+                    out[0],
+                    Scored {
+                        effect: inn[0],
+                        ..all[i].1.clone()
+                    },
+                )
+            })
+        })
+        .collect();
+    let swapped = all[pick].0.map(|out| [out, all[pick].1.effect]);
+    let model = Scored {
+        effect: Effect::None,
+        ..all[pick].1.clone()
+    };
+    Exchanged {
+        members: kept,
+        model,
+        swapped,
+        equivalent,
+    }
 }

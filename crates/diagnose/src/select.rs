@@ -271,6 +271,31 @@ impl Choice {
     }
 }
 
+/// The effective held-out sample size for comparisons among models, read from `best` (the
+/// best-fitting model's residuals, closest to white noise) with the noise's lag-1 correlation
+/// from their differences (`stats::noise_lag1_from_differences`).
+pub(crate) fn n_eff_of(best: &Scored) -> f64 {
+    let series: Vec<&[f64]> = best.held_resid.iter().map(Vec::as_slice).collect();
+    let rho = stats::noise_lag1_from_differences(&series);
+    stats::effective_sample_size(best.n_held, rho)
+}
+
+/// The tolerance within which two models' information criteria cannot be told apart: twice the
+/// price of one parameter, plus 2 (the AR(1) n_eff and the estimated noise floor both flatter
+/// small improvements).
+pub(crate) fn ic_tolerance(n_eff: f64) -> f64 {
+    2.0 * n_eff.max(2.0).ln() + 2.0
+}
+
+/// Simpler first: fewer effective parameters, then fewer nominal ones, then the better IC.
+pub(crate) fn simpler(a: &Scored, ic_a: f64, b: &Scored, ic_b: f64) -> std::cmp::Ordering {
+    a.cal
+        .effective_params()
+        .cmp(&b.cal.effective_params())
+        .then(a.cal.values().len().cmp(&b.cal.values().len()))
+        .then(ic_a.total_cmp(&ic_b))
+}
+
 pub(crate) fn ic(s: &Scored, n_eff: f64, n_held: usize) -> f64 {
     n_eff * (s.rss_noise / n_held as f64).max(f64::MIN_POSITIVE).ln()
         + n_eff.max(2.0).ln() * s.cal.effective_params() as f64
@@ -296,17 +321,14 @@ pub(crate) fn choose(base: &Scored, scored: &[Scored], resolved: &[bool]) -> Cho
         .chain(std::iter::once(base))
         .min_by(|a, b| a.rss_noise.total_cmp(&b.rss_noise))
         .unwrap_or(base);
-    let series: Vec<&[f64]> = best.held_resid.iter().map(Vec::as_slice).collect();
-    let rho = stats::noise_lag1_from_differences(&series);
-    let n_eff = stats::effective_sample_size(n_held, rho);
+    let n_eff = n_eff_of(best);
     let all: Vec<&Scored> = std::iter::once(base)
         .chain(scored.iter().copied())
         .collect();
     let ics: Vec<f64> = all.iter().map(|s| ic(s, n_eff, n_held)).collect();
     let ic_best = ics.iter().copied().fold(f64::INFINITY, f64::min);
-    // Indistinguishable: within twice the price of one parameter (plus 2) of the best. Twice,
-    // because the AR(1) n_eff and the estimated noise floor both flatter small improvements.
-    let tol = 2.0 * n_eff.max(2.0).ln() + 2.0;
+    // Indistinguishable: within twice the price of one parameter (plus 2) of the best.
+    let tol = ic_tolerance(n_eff);
     let g0 = (base.rss_noise / n_held as f64).sqrt();
     // The set of models indistinguishable from the best.
     let mut set: Vec<usize> = (0..all.len())
@@ -315,14 +337,7 @@ pub(crate) fn choose(base: &Scored, scored: &[Scored], resolved: &[bool]) -> Cho
     if g0 <= NOISE_FLOOR_FIT {
         set = vec![0];
     }
-    set.sort_by(|&a, &b| {
-        let (sa, sb) = (all[a], all[b]);
-        sa.cal
-            .effective_params()
-            .cmp(&sb.cal.effective_params())
-            .then(sa.cal.values().len().cmp(&sb.cal.values().len()))
-            .then(ics[a].total_cmp(&ics[b]))
-    });
+    set.sort_by(|&a, &b| simpler(all[a], ics[a], all[b], ics[b]));
     let pick = set[0];
     let effect = all[pick].effect;
     let equivalent = if effect == Effect::None {
