@@ -55,31 +55,39 @@ pub(crate) fn mad_sigma_of_second_differences(d2: &[f64]) -> f64 {
 }
 
 /// Isolated glitch samples of `signal`: a sample `i` that jumps away from both neighbours in
-/// the same direction by more than 12 σ (σ = [`noise_level`], so any jump when the channel is
-/// noise-free) while its neighbours agree with each other to within half that jump, and the
+/// the same direction by more than 12 σ (σ = [`jitter_level`], the noise over a few samples, so
+/// the counts a quantised channel jitters by are no glitch) while its neighbours agree with each
+/// other to within half that jump, *and* that lies more than 12 σ and half the jump away from
+/// the straight continuation of each side (2·x(i−1) − x(i−2) and 2·x(i+1) − x(i+2)), and the
 /// `partner` channel does not turn at `i` (at a sampled turning point both channels turn
 /// together; a glitch is in one channel only). A break (the response falls and stays down) is
-/// no glitch: the neighbours disagree.
+/// no glitch: the neighbours disagree. A smooth extremum is no glitch either: each side's
+/// continuation reaches it (a testXpert export records a row per 1.1 N of force, so its force
+/// maximum is a one-sample peak of ±1.1 N on a curve whose second differences are ~0).
 ///
-/// Does not modify anything and does not find glitches of two or more consecutive samples.
+/// Does not modify anything and does not find glitches of two or more consecutive samples, nor
+/// in the first or last two samples.
 pub fn glitches(signal: &[f64], partner: &[f64]) -> Vec<usize> {
     let n = signal.len();
-    if n < 3 || partner.len() != n {
+    if n < 5 || partner.len() != n {
         return Vec::new();
     }
-    let sigma = noise_level(signal);
+    let sigma = jitter_level(signal);
     let sigma_p = noise_level(partner);
     let turns = |v: &[f64], i: usize, s: f64| {
         let (a, b) = (v[i] - v[i - 1], v[i] - v[i + 1]);
         a * b > 0.0 && a.abs().min(b.abs()) > 3.0 * s
     };
-    (1..n - 1)
+    (2..n - 2)
         .filter(|&i| {
             let (a, b) = (signal[i] - signal[i - 1], signal[i] - signal[i + 1]);
             let m = a.abs().min(b.abs());
+            let far = |d: f64| d.abs() > (12.0 * sigma).max(0.5 * m);
             a * b > 0.0
                 && m > 12.0 * sigma
                 && (signal[i + 1] - signal[i - 1]).abs() < 0.5 * m
+                && far(signal[i] - (2.0 * signal[i - 1] - signal[i - 2]))
+                && far(signal[i] - (2.0 * signal[i + 1] - signal[i + 2]))
                 && !turns(partner, i, sigma_p)
         })
         .collect()
@@ -162,9 +170,38 @@ fn approx_gcd(a: f64, b: f64, tol: f64) -> f64 {
 /// analysis resolves.
 pub fn reversal_threshold(signal: &[f64]) -> f64 {
     let n = signal.len().max(2) as f64;
-    let sigma = noise_level(signal);
+    let sigma = jitter_level(signal);
     let (lo, hi) = min_max(signal);
     (1.5 * 2.0 * sigma * (2.0 * n.ln()).sqrt()).max(MIN_REVERSAL_FRACTION * (hi - lo))
+}
+
+/// Longest lag (samples) at which [`jitter_level`] looks at the signal.
+pub const JITTER_MAX_LAG: usize = 4;
+
+/// σ of a control's jitter over a few samples: the largest MAD σ of the second differences
+/// x(i+2k) − 2x(i+k) + x(i) at lags k = 1, 2, 4 (each scaled as [`noise_level`]; a lag is used
+/// only on ≥ 20k samples). On white noise all lags agree with [`noise_level`]. A quantised slow
+/// ramp (70 % of its steps zero: the median second difference is exactly zero, σ = 0 at lag 1)
+/// or a stick-slip drive that moves in bursts and backs off by a few counts (a real Partner
+/// torsion export: 1.7 % of its range, every few samples) is seen at the longer lags, where
+/// its excursions are no longer hidden by the zero steps; a smooth ramp or a triangle adds
+/// nothing there (its second differences vanish away from the turning points, which a median
+/// ignores). A sine of period P samples adds about 7·A·(2π/P)² at lag 4, negligible for
+/// P ≥ 60 samples per cycle.
+///
+/// Does not look at lags beyond [`JITTER_MAX_LAG`]: curvature grows as k², and a densely
+/// cycled test would read as jitter.
+pub fn jitter_level(signal: &[f64]) -> f64 {
+    let mut sigma = noise_level(signal);
+    let mut k = 2;
+    while k <= JITTER_MAX_LAG && signal.len() >= 20 * k {
+        let d2: Vec<f64> = (0..signal.len() - 2 * k)
+            .map(|i| signal[i + 2 * k] - 2.0 * signal[i + k] + signal[i])
+            .collect();
+        sigma = sigma.max(mad_sigma_of_second_differences(&d2));
+        k *= 2;
+    }
+    sigma
 }
 
 fn min_max(v: &[f64]) -> (f64, f64) {
