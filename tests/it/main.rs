@@ -8,5 +8,6 @@ mod common;
 mod diagnosis;
 mod family;
 mod folder_mode;
+mod real_shapes;
 mod shards;
 mod trust;

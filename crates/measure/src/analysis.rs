@@ -25,14 +25,20 @@
 //! * every cycle's loading and unloading coincide and no residual deformation → reversible:
 //!   `linear_elastic` without a bend in the first loading, `piecewise_linear_elastic` with one;
 //! * a bend, loops that do not close and a significant residual deformation → `elastoplastic`;
-//! * anything else (loops without a bend: friction, viscosity, drift; or no unloading to judge
-//!   reversibility by, while the first loading bends) → `other`;
+//! * no unloading at all (a monotonic test): straight → `linear_elastic`; a bend →
+//!   `elastoplastic`, with a warning that a reversible threshold cannot be ruled out;
+//! * anything else (loops without a bend: friction, viscosity, drift) → `other`;
 //! * an abrupt break (the response falls from 90 % of its maximum below [`BREAK_DROP`] of it
 //!   within 5 samples or 2 % of the record, and stays there) → `broken`, whatever came before
 //!   it (the yield point and stiffness are still reported).
 //!
-//! The yield point is the bend of an `elastoplastic` (or unjudgeable) test; a reversible bend is
-//! reported as the piecewise threshold K_t instead. Pure: numbers in, numbers out.
+//! A bend counts only where the slope falls by at least [`BEND_MIN_DROP`] and stays down to the
+//! end of the envelope: a few per cent of seating softening or an extensometer slip, which a
+//! quiet load cell makes statistically significant, is no yield. The yield point is the bend of
+//! an `elastoplastic` (or unjudgeable) test, at the response the envelope carried there; a
+//! reversible bend is reported as the piecewise threshold K_t instead. Three-point: the
+//! automatic window stays within the small-deflection range when the first loading has an
+//! elastic range there. Pure: numbers in, numbers out.
 
 use crate::condition::{
     correct_compliance, glitches, noise_level, segment, zero_offsets, Branch, Offsets, Segment,
@@ -211,11 +217,13 @@ pub struct Stiffness {
 pub struct YieldPoint {
     /// Sectional control at the bend (strain, 1/m, or deflection m for three-point).
     pub control: f64,
-    /// Response at the bend (N or N m).
+    /// Response at the bend (N or N m): the measured envelope there (a short local line), not
+    /// the corner of the two-slope fit, so never above the test's maximum; for the offset
+    /// method, where the envelope crosses the offset line.
     pub response: f64,
     /// 95% interval of `control` (profile likelihood of the bend).
     pub control_ci95: [f64; 2],
-    /// Range of `response` over that interval.
+    /// Range of the measured `response` over that interval.
     pub response_ci95: [f64; 2],
     /// Machine control at the bend (m or rad).
     pub machine_control: f64,

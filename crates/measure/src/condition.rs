@@ -8,8 +8,9 @@
 //!   count, an ADC's least significant bit). On a slow ramp the rounding error of a quantised
 //!   control is not noise but a constant offset along a branch, which no σ estimate sees, so the
 //!   branch comparisons in [`crate::hysteresis`] allow for one resolution step.
-//! * Reversals: [`reversal_threshold`] is the largest excursion that pure noise of that σ is
-//!   expected to make over the record, 2σ√(2 ln N) (the expected range of N Gaussian samples),
+//! * Reversals: [`reversal_threshold`] is the largest excursion that pure noise of the
+//!   control's jitter σ ([`jitter_level`]: the noise over 1–4 samples, which also sees a
+//!   quantised stick-slip drive) is expected to make over the record, 2σ√(2 ln N) (the expected range of N Gaussian samples),
 //!   times a safety factor 1.5, and at least half a percent of the signal's range (smooth servo
 //!   wander at a hold is no noise the second differences see); a turning point needs the signal to retreat by more than that
 //!   from its running extremum ([`turning_points`], a zig-zag with hysteresis). Noise on a dwell
@@ -162,7 +163,9 @@ fn approx_gcd(a: f64, b: f64, tol: f64) -> f64 {
     a
 }
 
-/// The smallest retreat that counts as a reversal: 1.5 · 2σ√(2 ln N) with σ = [`noise_level`],
+/// The smallest retreat that counts as a reversal: 1.5 · 2σ√(2 ln N) with σ = [`jitter_level`]
+/// (a slow quantised ramp whose drive backs off by a few counts is one loading, not dozens of
+/// cycles),
 /// floored at [`MIN_REVERSAL_FRACTION`] of the signal's range: a servo holding a position
 /// wanders smoothly (a real WaveMatrix torsion export wanders by 0.01° while the axial step
 /// runs), which the second differences do not see as noise, and every wiggle would otherwise
@@ -178,30 +181,49 @@ pub fn reversal_threshold(signal: &[f64]) -> f64 {
 /// Longest lag (samples) at which [`jitter_level`] looks at the signal.
 pub const JITTER_MAX_LAG: usize = 4;
 
-/// σ of a control's jitter over a few samples: the largest MAD σ of the second differences
-/// x(i+2k) − 2x(i+k) + x(i) at lags k = 1, 2, 4 (each scaled as [`noise_level`]; a lag is used
-/// only on ≥ 20k samples). On white noise all lags agree with [`noise_level`]. A quantised slow
-/// ramp (70 % of its steps zero: the median second difference is exactly zero, σ = 0 at lag 1)
-/// or a stick-slip drive that moves in bursts and backs off by a few counts (a real Partner
-/// torsion export: 1.7 % of its range, every few samples) is seen at the longer lags, where
-/// its excursions are no longer hidden by the zero steps; a smooth ramp or a triangle adds
-/// nothing there (its second differences vanish away from the turning points, which a median
-/// ignores). A sine of period P samples adds about 7·A·(2π/P)² at lag 4, negligible for
-/// P ≥ 60 samples per cycle.
+/// σ of a control's jitter over a few samples: the largest of the MAD σ of the second
+/// differences x(i+2k) − 2x(i+k) + x(i) at lags k = 1, 2, 4 and their trimmed RMS σ at lags 1
+/// and 2 (the largest [`JITTER_TRIM`] of |d| left out; each scaled as [`noise_level`]; a lag is
+/// used only on ≥ 20k samples). On white noise all agree with [`noise_level`]. A quantised slow
+/// ramp whose drive moves in bursts and backs off by a few counts (a real Partner torsion
+/// export: 0.0028° counts, 70 % of the steps zero, back-offs of 1.7 % of its range every few
+/// samples) has a median second difference of exactly zero, σ = 0 at lag 1: the longer lags
+/// see its wander, the trimmed RMS its sparse jumps. A smooth ramp or a triangle adds nothing
+/// (its second differences vanish away from the few turning points, which the median ignores
+/// and the trim drops); a sine of P samples per cycle adds about 7·A·(2π/P)² at lag 4,
+/// negligible for P ≥ 60.
 ///
 /// Does not look at lags beyond [`JITTER_MAX_LAG`]: curvature grows as k², and a densely
 /// cycled test would read as jitter.
 pub fn jitter_level(signal: &[f64]) -> f64 {
     let mut sigma = noise_level(signal);
-    let mut k = 2;
+    let mut k = 1;
     while k <= JITTER_MAX_LAG && signal.len() >= 20 * k {
         let d2: Vec<f64> = (0..signal.len() - 2 * k)
             .map(|i| signal[i + 2 * k] - 2.0 * signal[i + k] + signal[i])
             .collect();
         sigma = sigma.max(mad_sigma_of_second_differences(&d2));
+        if k <= 2 {
+            sigma = sigma.max(trimmed_rms(&d2, JITTER_TRIM) / 6f64.sqrt());
+        }
         k *= 2;
     }
     sigma
+}
+
+/// Share of the largest second differences [`jitter_level`]'s RMS leaves out (turning points,
+/// glitches).
+pub const JITTER_TRIM: f64 = 0.02;
+
+/// RMS of `v` without its largest `trim` share of |v| (NaN-free input).
+fn trimmed_rms(v: &[f64], trim: f64) -> f64 {
+    let mut a: Vec<f64> = v.iter().map(|x| x.abs()).filter(|x| x.is_finite()).collect();
+    a.sort_by(f64::total_cmp);
+    let keep = ((a.len() as f64) * (1.0 - trim)).floor() as usize;
+    if keep == 0 {
+        return 0.0;
+    }
+    (a[..keep].iter().map(|x| x * x).sum::<f64>() / keep as f64).sqrt()
 }
 
 fn min_max(v: &[f64]) -> (f64, f64) {
@@ -851,6 +873,57 @@ mod tests {
         let s = noise_level(&noisy(&clean, 0.05, 1));
         assert!((s / 0.05 - 1.0).abs() < 0.06, "sigma {s}");
         assert!(noise_level(&clean) < 1e-4);
+    }
+
+    /// `jitter_level` equals `noise_level` on white noise; on clean triangle cycles and on a
+    /// sine of 80 samples per cycle it stays far below the amplitude (ten cycles still counted);
+    /// on a quantised ramp whose drive backs off by a few counts (70 % zero steps: σ = 0 at lag
+    /// 1) it sees the back-offs, so the ramp is one loading.
+    #[test]
+    fn jitter_level_sees_stick_slip_but_not_smooth_cycles() {
+        let white = noisy(&vec![0.0; 4000], 0.01, 5);
+        assert!((jitter_level(&white) / noise_level(&white) - 1.0).abs() < 0.1);
+        let tri: Vec<f64> = (0..2000)
+            .map(|i| {
+                let p = (i % 200) as f64 / 100.0;
+                if p < 1.0 {
+                    p
+                } else {
+                    2.0 - p
+                }
+            })
+            .collect();
+        assert!(jitter_level(&tri) < 2e-3, "{}", jitter_level(&tri));
+        let sine: Vec<f64> = (0..800)
+            .map(|i| (std::f64::consts::TAU * i as f64 / 80.0).sin())
+            .collect();
+        assert!(jitter_level(&sine) < 0.05, "{}", jitter_level(&sine));
+        let segs = segment(None, &sine, &sine).unwrap();
+        assert_eq!(segs.iter().map(|s| s.cycle).max(), Some(10), "{segs:?}");
+        // Stick-slip: 0.18 counts per sample on average; the drive's offset from the ramp
+        // jumps to a new value (σ 2.5 counts) on 15 % of the samples and sticks in between.
+        let q = 1.0;
+        let mut rng = ChaCha8Rng::seed_from_u64(11);
+        let d = Normal::new(0.0, 2.5).unwrap();
+        let mut wander = 0.0f64;
+        let ramp: Vec<f64> = (0..2000)
+            .map(|i| {
+                if (i * 7919) % 100 < 15 {
+                    wander = d.sample(&mut rng);
+                }
+                ((0.18 * i as f64 + wander) / q).round() * q
+            })
+            .collect();
+        let zero = ramp.windows(2).filter(|w| w[1] == w[0]).count();
+        assert!(zero > 1300, "{zero} zero steps of 1999");
+        // The threshold from the lag-1 noise alone cuts the ramp into cycles; the jitter's
+        // does not.
+        let (lo, hi) = min_max(&ramp);
+        let lag1 = (3.0 * noise_level(&ramp) * (2.0 * 2000f64.ln()).sqrt())
+            .max(MIN_REVERSAL_FRACTION * (hi - lo));
+        assert!(turning_points(&ramp, lag1).len() > 2);
+        let tps = turning_points(&ramp, reversal_threshold(&ramp));
+        assert!(tps.is_empty(), "{tps:?}");
     }
 
     #[test]
