@@ -1129,14 +1129,13 @@ fn virgin_envelope(segments: &[Segment], cm: &[f64], first_idx: &[usize]) -> Vec
     out
 }
 
-/// Fewest first-loading samples within the small-deflection range for a three-point window
-/// there.
+/// Fewest samples of a three-point window moved into the small-deflection range.
 const MIN_SMALL_DEFLECTION_SAMPLES: usize = 20;
 
 /// Three-point: an automatic elastic window `e` that reaches beyond the small-deflection limit
 /// (`limit_w`, punch deflection in m, where eq. (3) errs by the tolerance) is found again on
-/// the part of the envelope within the limit, when that part holds at least
-/// [`MIN_SMALL_DEFLECTION_SAMPLES`] samples and an elastic range; the toe and the bend stay those
+/// the part of the envelope within the limit, when that part holds an elastic range of at
+/// least [`MIN_SMALL_DEFLECTION_SAMPLES`] samples; the toe and the bend stay those
 /// of the whole envelope. Returns the range and, when the window was moved, the slope of the
 /// wider window: the reported interval must span it, since the two differ by the choice of
 /// window (on a real MTS export of a PLA beam, 5.63·10⁻² N m² ± 0.15 % at w/l₀ = 0.03–0.065
@@ -1162,7 +1161,7 @@ fn small_deflection_window(
     let inner = (m >= MIN_SMALL_DEFLECTION_SAMPLES)
         .then(|| auto_elastic_range(&fx[..m], &fy[..m]).ok())
         .flatten()
-        .filter(|f| f.fit.n >= MIN_STIFFNESS_SAMPLES && f.fit.slope > 0.0);
+        .filter(|f| f.fit.n >= MIN_SMALL_DEFLECTION_SAMPLES && f.fit.slope > 0.0);
     let (top, limit) = (top / l0, limit_w / l0);
     match inner {
         Some(f) => {
@@ -1239,30 +1238,23 @@ fn bend_is_material(b: &Hinge, x: &[f64], y: &[f64]) -> bool {
 }
 
 /// The measured response of the envelope (x = control, y = response) at control `at`: the
-/// straight line through the 7 samples nearest to `at` in x, evaluated at `at` and kept within
-/// the measured range of y (few samples: at a sharp knee a wider line would cut the corner). This is where the specimen was at the
-/// bend; the knee of a hinge fit is where its two straight lines meet, which lies above a
-/// rounded (gradual) yield, by up to the whole rounding: a real machine-travel export of a
-/// steel bar gave a "yield" 2.8 % above the test's maximum force.
+/// polyline through the samples, interpolated on the first pair (in sample order) that brackets
+/// `at` (the nearest sample when none does). This is where the specimen was at the bend; the
+/// knee of a hinge fit is where its two straight lines meet, which lies above a rounded
+/// (gradual) yield by up to the whole rounding: a real machine-travel export of a steel bar
+/// gave a "yield" 2.8 % above the test's maximum force. A local straight line through several
+/// samples would cut a sharp corner, and on a sparse (digitised) curve span half of it.
 fn response_on_envelope(x: &[f64], y: &[f64], at: f64) -> f64 {
-    let n = x.len();
-    if n == 0 {
-        return f64::NAN;
+    let bracket = (1..x.len()).find(|&j| (x[j - 1] - at) * (x[j] - at) <= 0.0);
+    match bracket {
+        Some(j) if x[j] != x[j - 1] => {
+            y[j - 1] + (y[j] - y[j - 1]) * (at - x[j - 1]) / (x[j] - x[j - 1])
+        }
+        Some(j) => 0.5 * (y[j - 1] + y[j]),
+        None => (0..x.len())
+            .min_by(|&a, &b| (x[a] - at).abs().total_cmp(&(x[b] - at).abs()))
+            .map_or(f64::NAN, |k| y[k]),
     }
-    let k = 3;
-    let mut idx: Vec<usize> = (0..n).collect();
-    idx.sort_by(|&a, &b| (x[a] - at).abs().total_cmp(&(x[b] - at).abs()));
-    idx.truncate((2 * k + 1).min(n));
-    let xs: Vec<f64> = idx.iter().map(|&i| x[i]).collect();
-    let ys: Vec<f64> = idx.iter().map(|&i| y[i]).collect();
-    let (lo, hi) = y.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
-        (a.min(v), b.max(v))
-    });
-    let v = match crate::stats::line_fit(&xs, &ys) {
-        Ok(f) => f.at(at),
-        Err(_) => ys.iter().sum::<f64>() / ys.len() as f64,
-    };
-    v.clamp(lo, hi)
 }
 
 /// Cycle and branch of the envelope sample nearest to the sectional control `x`.
