@@ -1139,9 +1139,10 @@ const MIN_SMALL_DEFLECTION_SAMPLES: usize = 20;
 /// of the whole envelope. Returns the range and, when the window was moved, the slope of the
 /// wider window: the reported interval must span it, since the two differ by the choice of
 /// window (on a real MTS export of a PLA beam, 5.63·10⁻² N m² ± 0.15 % at w/l₀ = 0.03–0.065
-/// against 5.0–5.3·10⁻² from lines within 10–50 % of the maximum). Either way a warning says
-/// what happened; a window that cannot be moved is kept with a warning that it lies beyond
-/// the limit.
+/// against 5.0–5.3·10⁻² from lines within 10–50 % of the maximum). A warning says so when the
+/// wider slope lies outside the interval (where the elastica correction holds, as on the
+/// virtual lab's rods, the two agree and nothing is said); a window that cannot be moved is
+/// kept with a warning that it lies beyond the limit.
 ///
 /// Does not touch a user-set window.
 fn small_deflection_window(
@@ -1166,10 +1167,14 @@ fn small_deflection_window(
     match inner {
         Some(f) => {
             let wider = e.fit.slope;
-            warnings.push(format!(
-                "stiffness: the automatic window reached w/l0 = {top:.4}, beyond the small-deflection limit {limit:.4}; it is fitted within the limit instead, and its 95 % interval spans the slope of the wider window ({:+.1} %)",
-                100.0 * (wider / f.fit.slope - 1.0)
-            ));
+            // Said only where the choice matters: the wider window's slope lies outside the
+            // interval of the window within the limit.
+            if !(f.fit.slope_ci95[0]..=f.fit.slope_ci95[1]).contains(&wider) {
+                warnings.push(format!(
+                    "stiffness: the automatic window reached w/l0 = {top:.4}, beyond the small-deflection limit {limit:.4}; it is fitted within the limit instead, and its 95 % interval spans the slope of the wider window ({:+.1} %)",
+                    100.0 * (wider / f.fit.slope - 1.0)
+                ));
+            }
             (
                 ElasticRange {
                     window_idx: f.window_idx,
