@@ -779,7 +779,8 @@ pub struct Offsets {
 /// 1% of the record, up to where the control has moved a tenth of its range or has come within
 /// a tenth of its farthest excursion in that stretch (at least 5 samples), so that neither a
 /// single noisy sample, nor the first rise of the curve, nor a dwell after a short first ramp
-/// sets the zero.
+/// sets the zero; the response's line covers only the first twentieth of that stretch (at
+/// least 5 samples), so that a slack start does not pull its zero below the flat level.
 pub fn zero_offsets(control: &mut [f64], response: &mut [f64]) -> Offsets {
     let n = control.len().min(response.len());
     if n == 0 {
@@ -819,8 +820,16 @@ pub fn zero_offsets(control: &mut [f64], response: &mut [f64]) -> Offsets {
             .unwrap_or(m0);
         let m = m0.min(corner.max(5));
         let idx: Vec<f64> = (0..m).map(|i| i as f64).collect();
-        let at0 = |v: &[f64]| crate::stats::line_fit(&idx, &v[..m]).map_or(v[0], |f| f.intercept);
-        (at0(control), at0(response))
+        let at0 = |v: &[f64], m: usize| {
+            crate::stats::line_fit(&idx[..m], &v[..m]).map_or(v[0], |f| f.intercept)
+        };
+        // The response over the first twentieth of that stretch only (at least 5 samples): a
+        // slack (toe) start keeps the response flat while the control moves, and a line
+        // through the flat start and the rise after it meets the first sample far below the
+        // flat level (a generated torsion log with a 45-sample toe: zero 0.51 N m low, every
+        // later response and its yield 0.51 N m high).
+        let mr = (m / 20).max(5).min(m);
+        (at0(control, m), at0(response, mr))
     };
     control.iter_mut().for_each(|c| *c -= oc);
     response.iter_mut().for_each(|r| *r -= or);
@@ -1286,6 +1295,24 @@ mod tests {
         );
         let cc = correct_compliance(&[1.0, 2.0], &[10.0, 20.0], 0.01);
         assert_eq!(cc, vec![0.9, 1.8]);
+    }
+
+    /// A slack start without a rest (family seed 341374): the control ramps from the first
+    /// sample, the response stays at its offset for 45 samples, then rises. Before, the line
+    /// through the whole first 1 % put the response zero far below the flat level (0.51 N m
+    /// low on the generated log, its yield 7.6 % high).
+    #[test]
+    fn a_slack_start_does_not_pull_the_response_zero_down() {
+        let n = 40_000;
+        let mut c: Vec<f64> = (0..n).map(|i| 0.01 + 1e-3 * i as f64).collect();
+        let clean: Vec<f64> = (0..n)
+            .map(|i| 2.0 + 9.6 * (i as f64 - 45.0).max(0.0))
+            .collect();
+        let mut r = noisy(&clean, 0.5, 3);
+        let o = zero_offsets(&mut c, &mut r);
+        assert_eq!(o.samples_at_rest, 0);
+        assert!((o.response - 2.0).abs() < 1.0, "{o:?}");
+        assert!((o.control - 0.01).abs() < 1e-9, "{o:?}");
     }
 
     /// A step-up schedule without a rest (family seeds 297, 458, 486): a 40-sample first ramp to
