@@ -317,7 +317,9 @@ fn real_nexygen_three_point_cables() {
         assert!(cycles_with(&a, Branch::Unloading).is_empty(), "{name}");
         assert_eq!(a.behaviour, Behaviour::Elastoplastic, "{name}");
         assert!(
-            a.warnings.iter().any(|w| w.contains("monotonic test that bends")),
+            a.warnings
+                .iter()
+                .any(|w| w.contains("monotonic test that bends")),
             "{name}: {:?}",
             a.warnings
         );

@@ -84,8 +84,16 @@ fn a_testxpert_force_maximum_is_no_glitch() {
 #[test]
 fn monotonic_steel_tests_with_a_yield_are_elastoplastic() {
     for (file, l0, d) in [
-        ("tensileanalyzer__uiuc_tension_steel1045_1.csv", "25.4", "7.13"),
-        ("mechtesting__tension_steel1045_extensometer.csv", "75", "10"),
+        (
+            "tensileanalyzer__uiuc_tension_steel1045_1.csv",
+            "25.4",
+            "7.13",
+        ),
+        (
+            "mechtesting__tension_steel1045_extensometer.csv",
+            "75",
+            "10",
+        ),
         ("mechtesting__tension_steel1045_machine.csv", "75", "10"),
     ] {
         let v = analyze_json(
@@ -95,7 +103,9 @@ fn monotonic_steel_tests_with_a_yield_are_elastoplastic() {
         assert!(v["yield"].is_object(), "{file}: {}", v["why"]);
         assert_eq!(v["behaviour"], "elastoplastic", "{file}");
         assert!(
-            v["warnings"].to_string().contains("monotonic test that bends"),
+            v["warnings"]
+                .to_string()
+                .contains("monotonic test that bends"),
             "{file}: {}",
             v["warnings"]
         );

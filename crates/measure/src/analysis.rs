@@ -217,7 +217,7 @@ pub struct Stiffness {
 pub struct YieldPoint {
     /// Sectional control at the bend (strain, 1/m, or deflection m for three-point).
     pub control: f64,
-    /// Response at the bend (N or N m): the measured envelope there (a short local line), not
+    /// Response at the bend (N or N m): the measured envelope there (interpolated), not
     /// the corner of the two-slope fit, so never above the test's maximum; for the offset
     /// method, where the envelope crosses the offset line.
     pub response: f64,
@@ -1157,7 +1157,10 @@ fn small_deflection_window(
     if !(top > limit_w) {
         return (e, None);
     }
-    let m = fw.iter().position(|v| v.abs() > limit_w).unwrap_or(fw.len());
+    let m = fw
+        .iter()
+        .position(|v| v.abs() > limit_w)
+        .unwrap_or(fw.len());
     let inner = (m >= MIN_SMALL_DEFLECTION_SAMPLES)
         .then(|| auto_elastic_range(&fx[..m], &fy[..m]).ok())
         .flatten()

@@ -217,7 +217,11 @@ pub const JITTER_TRIM: f64 = 0.02;
 
 /// RMS of `v` without its largest `trim` share of |v| (NaN-free input).
 fn trimmed_rms(v: &[f64], trim: f64) -> f64 {
-    let mut a: Vec<f64> = v.iter().map(|x| x.abs()).filter(|x| x.is_finite()).collect();
+    let mut a: Vec<f64> = v
+        .iter()
+        .map(|x| x.abs())
+        .filter(|x| x.is_finite())
+        .collect();
     a.sort_by(f64::total_cmp);
     let keep = ((a.len() as f64) * (1.0 - trim)).floor() as usize;
     if keep == 0 {
@@ -833,8 +837,8 @@ pub fn zero_offsets(control: &mut [f64], response: &mut [f64]) -> Offsets {
         let line = crate::stats::line_fit(&idx, &response[..m]).ok();
         let r0 = match line {
             Some(f) => {
-                let early = response[..k].iter().sum::<f64>() / k as f64
-                    - f.slope * (k - 1) as f64 / 2.0;
+                let early =
+                    response[..k].iter().sum::<f64>() / k as f64 - f.slope * (k - 1) as f64 / 2.0;
                 let tol = 3.0 * jitter_level(&response[..m]) / (k as f64).sqrt();
                 f.intercept.clamp(early - tol, early + tol)
             }

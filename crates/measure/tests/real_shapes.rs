@@ -52,7 +52,10 @@ fn a_stick_slip_quantised_torsion_ramp_is_one_monotonic_loading() {
                 (rate * (i - 18) as f64 + 2.5 * q * ar).max(0.0)
             };
             angle.push(quantise(twist, q));
-            torque.push(quantise(k * twist + 0.001 * white.sample(&mut rng), 0.00113));
+            torque.push(quantise(
+                k * twist + 0.001 * white.sample(&mut rng),
+                0.00113,
+            ));
             time.push(0.1 * i as f64);
         }
         let a = run(TestKind::Torsion, l0, Some(&time), &angle, &torque);
@@ -68,11 +71,19 @@ fn a_stick_slip_quantised_torsion_ramp_is_one_monotonic_loading() {
         assert!(a.cycles[0].loop_area.is_none(), "{tag}");
         assert!(a.yield_point.is_none(), "{tag}: {:?}", a.yield_point);
         assert_eq!(a.behaviour, Behaviour::LinearElastic, "{tag}");
-        assert!(a.excluded_samples.is_empty(), "{tag}: {:?}", a.excluded_samples);
+        assert!(
+            a.excluded_samples.is_empty(),
+            "{tag}: {:?}",
+            a.excluded_samples
+        );
         // GJ = k l0; the stick-slip wander is in the control, so the slope is attenuated a
         // little (errors in x): within 5 %.
         let gj = a.stiffness.as_ref().expect("stiffness").value;
-        assert!((gj / (k * l0) - 1.0).abs() < 0.05, "{tag}: {gj} vs {}", k * l0);
+        assert!(
+            (gj / (k * l0) - 1.0).abs() < 0.05,
+            "{tag}: {gj} vs {}",
+            k * l0
+        );
     }
 }
 
@@ -116,7 +127,11 @@ fn the_yield_response_lies_on_the_measured_curve() {
     assert!(yp.response_ci95[1] <= a.max_response.response, "{yp:?}");
     // Monotonic, bends: elastoplastic (monotonic), said in a warning.
     assert_eq!(a.behaviour, Behaviour::Elastoplastic);
-    assert!(a.warnings.iter().any(|w| w.contains("monotonic")), "{:?}", a.warnings);
+    assert!(
+        a.warnings.iter().any(|w| w.contains("monotonic")),
+        "{:?}",
+        a.warnings
+    );
 }
 
 /// Linear-elastic torsion logs with a load cell resolving 2.5·10⁻⁴ of the range (Partner
@@ -246,8 +261,10 @@ fn a_force_drop_under_a_rising_control_is_no_unloading() {
         "{:?}",
         a.segments
     );
-    assert!(a.cycles.iter().all(|c| c.loop_area.is_none()
-        && c.unloading_stiffness.is_none()));
+    assert!(a
+        .cycles
+        .iter()
+        .all(|c| c.loop_area.is_none() && c.unloading_stiffness.is_none()));
     assert!(a.break_point.is_some());
 }
 
@@ -263,7 +280,9 @@ fn a_three_point_window_stays_within_the_small_deflection_range() {
     let n = 3000;
     let mut rng = ChaCha8Rng::seed_from_u64(850);
     let d = Normal::new(0.0, 0.02).unwrap();
-    let w: Vec<f64> = (0..n).map(|i| 0.1 * l0 * i as f64 / (n - 1) as f64).collect();
+    let w: Vec<f64> = (0..n)
+        .map(|i| 0.1 * l0 * i as f64 / (n - 1) as f64)
+        .collect();
     // 48 EI / l0³ with EI = 0.05 N m², stiffening by 25 % over the travel.
     let k = 48.0 * 0.05 / l0.powi(3);
     let f: Vec<f64> = w
@@ -278,7 +297,9 @@ fn a_three_point_window_stays_within_the_small_deflection_range() {
         "{ld:?} {s:?}"
     );
     assert!(
-        a.warnings.iter().any(|w| w.contains("small-deflection limit")),
+        a.warnings
+            .iter()
+            .any(|w| w.contains("small-deflection limit")),
         "{:?}",
         a.warnings
     );
