@@ -9,5 +9,6 @@ mod diagnosis;
 mod family;
 mod folder_mode;
 mod real_exports;
+mod real_shapes;
 mod shards;
 mod trust;

@@ -8,8 +8,9 @@
 //!   count, an ADC's least significant bit). On a slow ramp the rounding error of a quantised
 //!   control is not noise but a constant offset along a branch, which no σ estimate sees, so the
 //!   branch comparisons in [`crate::hysteresis`] allow for one resolution step.
-//! * Reversals: [`reversal_threshold`] is the largest excursion that pure noise of that σ is
-//!   expected to make over the record, 2σ√(2 ln N) (the expected range of N Gaussian samples),
+//! * Reversals: [`reversal_threshold`] is the largest excursion that pure noise of the
+//!   control's jitter σ ([`jitter_level`]: the noise over 1–4 samples, which also sees a
+//!   quantised stick-slip drive) is expected to make over the record, 2σ√(2 ln N) (the expected range of N Gaussian samples),
 //!   times a safety factor 1.5, and at least half a percent of the signal's range (smooth servo
 //!   wander at a hold is no noise the second differences see); a turning point needs the signal to retreat by more than that
 //!   from its running extremum ([`turning_points`], a zig-zag with hysteresis). Noise on a dwell
@@ -174,31 +175,39 @@ pub fn serial_noise(signal: &[f64]) -> SerialNoise {
 }
 
 /// Isolated glitch samples of `signal`: a sample `i` that jumps away from both neighbours in
-/// the same direction by more than 12 σ (σ = [`noise_level`], so any jump when the channel is
-/// noise-free) while its neighbours agree with each other to within half that jump, and the
+/// the same direction by more than 12 σ (σ = [`jitter_level`], the noise over a few samples, so
+/// the counts a quantised channel jitters by are no glitch) while its neighbours agree with each
+/// other to within half that jump, *and* that lies more than 12 σ and half the jump away from
+/// the straight continuation of each side (2·x(i−1) − x(i−2) and 2·x(i+1) − x(i+2)), and the
 /// `partner` channel does not turn at `i` (at a sampled turning point both channels turn
 /// together; a glitch is in one channel only). A break (the response falls and stays down) is
-/// no glitch: the neighbours disagree.
+/// no glitch: the neighbours disagree. A smooth extremum is no glitch either: each side's
+/// continuation reaches it (a testXpert export records a row per 1.1 N of force, so its force
+/// maximum is a one-sample peak of ±1.1 N on a curve whose second differences are ~0).
 ///
-/// Does not modify anything and does not find glitches of two or more consecutive samples.
+/// Does not modify anything and does not find glitches of two or more consecutive samples, nor
+/// in the first or last two samples.
 pub fn glitches(signal: &[f64], partner: &[f64]) -> Vec<usize> {
     let n = signal.len();
-    if n < 3 || partner.len() != n {
+    if n < 5 || partner.len() != n {
         return Vec::new();
     }
-    let sigma = noise_level(signal);
+    let sigma = jitter_level(signal);
     let sigma_p = noise_level(partner);
     let turns = |v: &[f64], i: usize, s: f64| {
         let (a, b) = (v[i] - v[i - 1], v[i] - v[i + 1]);
         a * b > 0.0 && a.abs().min(b.abs()) > 3.0 * s
     };
-    (1..n - 1)
+    (2..n - 2)
         .filter(|&i| {
             let (a, b) = (signal[i] - signal[i - 1], signal[i] - signal[i + 1]);
             let m = a.abs().min(b.abs());
+            let far = |d: f64| d.abs() > (12.0 * sigma).max(0.5 * m);
             a * b > 0.0
                 && m > 12.0 * sigma
                 && (signal[i + 1] - signal[i - 1]).abs() < 0.5 * m
+                && far(signal[i] - (2.0 * signal[i - 1] - signal[i - 2]))
+                && far(signal[i] - (2.0 * signal[i + 1] - signal[i + 2]))
                 && !turns(partner, i, sigma_p)
         })
         .collect()
@@ -273,7 +282,9 @@ fn approx_gcd(a: f64, b: f64, tol: f64) -> f64 {
     a
 }
 
-/// The smallest retreat that counts as a reversal: 1.5 · 2σ√(2 ln N) with σ = [`noise_level`],
+/// The smallest retreat that counts as a reversal: 1.5 · 2σ√(2 ln N) with σ = [`jitter_level`]
+/// (a slow quantised ramp whose drive backs off by a few counts is one loading, not dozens of
+/// cycles),
 /// floored at [`MIN_REVERSAL_FRACTION`] of the signal's range: a servo holding a position
 /// wanders smoothly (a real WaveMatrix torsion export wanders by 0.01° while the axial step
 /// runs), which the second differences do not see as noise, and every wiggle would otherwise
@@ -281,9 +292,61 @@ fn approx_gcd(a: f64, b: f64, tol: f64) -> f64 {
 /// analysis resolves.
 pub fn reversal_threshold(signal: &[f64]) -> f64 {
     let n = signal.len().max(2) as f64;
-    let sigma = noise_level(signal);
+    let sigma = jitter_level(signal);
     let (lo, hi) = min_max(signal);
     (1.5 * 2.0 * sigma * (2.0 * n.ln()).sqrt()).max(MIN_REVERSAL_FRACTION * (hi - lo))
+}
+
+/// Longest lag (samples) at which [`jitter_level`] looks at the signal.
+pub const JITTER_MAX_LAG: usize = 4;
+
+/// σ of a control's jitter over a few samples: the largest of the MAD σ of the second
+/// differences x(i+2k) − 2x(i+k) + x(i) at lags k = 1, 2, 4 and their trimmed RMS σ at lags 1
+/// and 2 (the largest [`JITTER_TRIM`] of |d| left out; each scaled as [`noise_level`]; a lag is
+/// used only on ≥ 20k samples). On white noise all agree with [`noise_level`]. A quantised slow
+/// ramp whose drive moves in bursts and backs off by a few counts (a real Partner torsion
+/// export: 0.0028° counts, 70 % of the steps zero, back-offs of 1.7 % of its range every few
+/// samples) has a median second difference of exactly zero, σ = 0 at lag 1: the longer lags
+/// see its wander, the trimmed RMS its sparse jumps. A smooth ramp or a triangle adds nothing
+/// (its second differences vanish away from the few turning points, which the median ignores
+/// and the trim drops); a sine of P samples per cycle adds about 7·A·(2π/P)² at lag 4,
+/// negligible for P ≥ 60.
+///
+/// Does not look at lags beyond [`JITTER_MAX_LAG`]: curvature grows as k², and a densely
+/// cycled test would read as jitter.
+pub fn jitter_level(signal: &[f64]) -> f64 {
+    let mut sigma = noise_level(signal);
+    let mut k = 1;
+    while k <= JITTER_MAX_LAG && signal.len() >= 20 * k {
+        let d2: Vec<f64> = (0..signal.len() - 2 * k)
+            .map(|i| signal[i + 2 * k] - 2.0 * signal[i + k] + signal[i])
+            .collect();
+        sigma = sigma.max(mad_sigma_of_second_differences(&d2));
+        if k <= 2 {
+            sigma = sigma.max(trimmed_rms(&d2, JITTER_TRIM) / 6f64.sqrt());
+        }
+        k *= 2;
+    }
+    sigma
+}
+
+/// Share of the largest second differences [`jitter_level`]'s RMS leaves out (turning points,
+/// glitches).
+pub const JITTER_TRIM: f64 = 0.02;
+
+/// RMS of `v` without its largest `trim` share of |v| (NaN-free input).
+fn trimmed_rms(v: &[f64], trim: f64) -> f64 {
+    let mut a: Vec<f64> = v
+        .iter()
+        .map(|x| x.abs())
+        .filter(|x| x.is_finite())
+        .collect();
+    a.sort_by(f64::total_cmp);
+    let keep = ((a.len() as f64) * (1.0 - trim)).floor() as usize;
+    if keep == 0 {
+        return 0.0;
+    }
+    (a[..keep].iter().map(|x| x * x).sum::<f64>() / keep as f64).sqrt()
 }
 
 fn min_max(v: &[f64]) -> (f64, f64) {
@@ -839,7 +902,9 @@ pub struct Offsets {
 /// 1% of the record, up to where the control has moved a tenth of its range or has come within
 /// a tenth of its farthest excursion in that stretch (at least 5 samples), so that neither a
 /// single noisy sample, nor the first rise of the curve, nor a dwell after a short first ramp
-/// sets the zero.
+/// sets the zero; the response's zero is kept within the noise (3σ/√5) of what its first 5
+/// samples say along that line's slope, so that a slack start does not pull it below the flat
+/// level.
 pub fn zero_offsets(control: &mut [f64], response: &mut [f64]) -> Offsets {
     let n = control.len().min(response.len());
     if n == 0 {
@@ -879,8 +944,26 @@ pub fn zero_offsets(control: &mut [f64], response: &mut [f64]) -> Offsets {
             .unwrap_or(m0);
         let m = m0.min(corner.max(5));
         let idx: Vec<f64> = (0..m).map(|i| i as f64).collect();
-        let at0 = |v: &[f64]| crate::stats::line_fit(&idx, &v[..m]).map_or(v[0], |f| f.intercept);
-        (at0(control), at0(response))
+        let at0 = |v: &[f64], m: usize| {
+            crate::stats::line_fit(&idx[..m], &v[..m]).map_or(v[0], |f| f.intercept)
+        };
+        // A slack (toe) start keeps the response flat while the control moves, and a line
+        // through the flat start and the rise after it meets the first sample far from the
+        // flat level (a generated torsion log with a 45-sample toe: zero 0.51 N m low, every
+        // later response and its yield 0.51 N m high). So the response's zero stays within
+        // the noise of what its first 5 samples say, given the line's slope.
+        let k = 5.min(m);
+        let line = crate::stats::line_fit(&idx, &response[..m]).ok();
+        let r0 = match line {
+            Some(f) => {
+                let early =
+                    response[..k].iter().sum::<f64>() / k as f64 - f.slope * (k - 1) as f64 / 2.0;
+                let tol = 3.0 * jitter_level(&response[..m]) / (k as f64).sqrt();
+                f.intercept.clamp(early - tol, early + tol)
+            }
+            None => response[0],
+        };
+        (at0(control, m), r0)
     };
     control.iter_mut().for_each(|c| *c -= oc);
     response.iter_mut().for_each(|r| *r -= or);
@@ -967,6 +1050,57 @@ mod tests {
         let s = noise_level(&noisy(&clean, 0.05, 1));
         assert!((s / 0.05 - 1.0).abs() < 0.06, "sigma {s}");
         assert!(noise_level(&clean) < 1e-4);
+    }
+
+    /// `jitter_level` equals `noise_level` on white noise; on clean triangle cycles and on a
+    /// sine of 80 samples per cycle it stays far below the amplitude (ten cycles still counted);
+    /// on a quantised ramp whose drive backs off by a few counts (70 % zero steps: σ = 0 at lag
+    /// 1) it sees the back-offs, so the ramp is one loading.
+    #[test]
+    fn jitter_level_sees_stick_slip_but_not_smooth_cycles() {
+        let white = noisy(&vec![0.0; 4000], 0.01, 5);
+        assert!((jitter_level(&white) / noise_level(&white) - 1.0).abs() < 0.1);
+        let tri: Vec<f64> = (0..2000)
+            .map(|i| {
+                let p = (i % 200) as f64 / 100.0;
+                if p < 1.0 {
+                    p
+                } else {
+                    2.0 - p
+                }
+            })
+            .collect();
+        assert!(jitter_level(&tri) < 2e-3, "{}", jitter_level(&tri));
+        let sine: Vec<f64> = (0..800)
+            .map(|i| (std::f64::consts::TAU * i as f64 / 80.0).sin())
+            .collect();
+        assert!(jitter_level(&sine) < 0.05, "{}", jitter_level(&sine));
+        let segs = segment(None, &sine, &sine).unwrap();
+        assert_eq!(segs.iter().map(|s| s.cycle).max(), Some(10), "{segs:?}");
+        // Stick-slip: 0.18 counts per sample on average; the drive's offset from the ramp
+        // jumps to a new value (σ 2.5 counts) on 15 % of the samples and sticks in between.
+        let q = 1.0;
+        let mut rng = ChaCha8Rng::seed_from_u64(11);
+        let d = Normal::new(0.0, 2.5).unwrap();
+        let mut wander = 0.0f64;
+        let ramp: Vec<f64> = (0..2000)
+            .map(|i| {
+                if (i * 7919) % 100 < 15 {
+                    wander = d.sample(&mut rng);
+                }
+                ((0.18 * i as f64 + wander) / q).round() * q
+            })
+            .collect();
+        let zero = ramp.windows(2).filter(|w| w[1] == w[0]).count();
+        assert!(zero > 1300, "{zero} zero steps of 1999");
+        // The threshold from the lag-1 noise alone cuts the ramp into cycles; the jitter's
+        // does not.
+        let (lo, hi) = min_max(&ramp);
+        let lag1 = (3.0 * noise_level(&ramp) * (2.0 * 2000f64.ln()).sqrt())
+            .max(MIN_REVERSAL_FRACTION * (hi - lo));
+        assert!(turning_points(&ramp, lag1).len() > 2);
+        let tps = turning_points(&ramp, reversal_threshold(&ramp));
+        assert!(tps.is_empty(), "{tps:?}");
     }
 
     #[test]
@@ -1329,6 +1463,25 @@ mod tests {
         );
         let cc = correct_compliance(&[1.0, 2.0], &[10.0, 20.0], 0.01);
         assert_eq!(cc, vec![0.9, 1.8]);
+    }
+
+    /// A slack start without a rest (family seed 341374): the control ramps from the first
+    /// sample, the response stays at its offset for 45 samples, then rises. Before, the line
+    /// through the whole first 1 % put the response zero far below the flat level (0.51 N m
+    /// low on the generated log, its yield 7.6 % high; 0.04 N m and 0.6 % now).
+    #[test]
+    fn a_slack_start_does_not_pull_the_response_zero_down() {
+        let n = 40_000;
+        let mut c: Vec<f64> = (0..n).map(|i| 0.01 + 1e-3 * i as f64).collect();
+        let clean: Vec<f64> = (0..n)
+            .map(|i| 2.0 + 9.6 * (i as f64 - 45.0).max(0.0))
+            .collect();
+        let mut r = noisy(&clean, 0.5, 3);
+        let o = zero_offsets(&mut c, &mut r);
+        assert_eq!(o.samples_at_rest, 0);
+        // Within three samples' rise (9.6 each) of the flat level; the line alone: −327.
+        assert!((o.response - 2.0).abs() < 3.0 * 9.6, "{o:?}");
+        assert!((o.control - 0.01).abs() < 1e-9, "{o:?}");
     }
 
     /// A step-up schedule without a rest (family seeds 297, 458, 486): a 40-sample first ramp to
