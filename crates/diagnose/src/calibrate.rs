@@ -16,6 +16,7 @@ use levenberg_marquardt::{LeastSquaresProblem, LevenbergMarquardt};
 use nalgebra::{storage::Owned, DMatrix, DVector, Dyn};
 use rayon::prelude::*;
 use serde::Serialize;
+use std::sync::atomic::{AtomicU64, Ordering};
 
 /// A forward model: parameters in, one simulated response history per test out.
 pub trait Forward: Sync {
@@ -234,6 +235,11 @@ struct Problem<'a> {
     z: DVector<f64>,
     r: DVector<f64>,
     fd_step: f64,
+    /// Cost at the last Jacobian (bits of an f64), and the least decrease since then worth
+    /// another one: below it the descent has converged and Levenberg–Marquardt stops at its last
+    /// accepted point.
+    last_cost: AtomicU64,
+    converged_below: f64,
 }
 
 impl Problem<'_> {
@@ -267,6 +273,11 @@ impl LeastSquaresProblem<f64, Dyn, Dyn> for Problem<'_> {
         Some(self.r.clone())
     }
     fn jacobian(&self) -> Option<DMatrix<f64>> {
+        let cost = self.r.norm_squared();
+        let before = f64::from_bits(self.last_cost.swap(cost.to_bits(), Ordering::Relaxed));
+        if before - cost < self.converged_below {
+            return None;
+        }
         let k = self.z.len();
         let cols: Vec<DVector<f64>> = (0..k)
             .into_par_iter()
@@ -295,10 +306,21 @@ pub fn fit(fwd: &dyn Forward, data: &FitData, starts: &[Vec<f64>], opts: &FitOpt
     fit_coarse(fwd, data, None, starts, opts)
 }
 
-/// Levenberg–Marquardt iterations of the polish on every fitted sample after a descent on a
-/// coarse problem: the decimated optimum is already within a fraction of a noise unit of the full
-/// one, and one or two Gauss–Newton steps close that.
+/// A start or end of a descent whose cost on the coarse problem exceeds this multiple of the best
+/// end's (plus [`COST_TIE`]) is not scored on every fitted sample: a decimation of the same
+/// histories does not rank two parameter vectors that far apart the other way round.
+pub const PRUNE_FACTOR: f64 = 2.0;
+
+/// Levenberg–Marquardt patience of the polish on every fitted sample after a descent on a
+/// coarse problem (at most `POLISH_ITERATIONS · (k + 1)` residual evaluations, k parameters):
+/// the decimated optimum is already within a fraction of a noise unit of the full one, and a few
+/// Gauss–Newton steps close that.
 const POLISH_ITERATIONS: usize = 2;
+
+/// The polish stops once an accepted step lowers the cost (χ² in noise units) by less than this
+/// (a parameter move of a tenth of its standard error): each further Jacobian costs one
+/// simulation per parameter over every sample and moves nothing the comparison resolves.
+pub const POLISH_CONVERGED: f64 = 0.01;
 
 /// [`fit`], with the starts descending on `coarse` (the same parameters over fewer samples: a
 /// decimation of the same histories) when given: each start's end, then each start itself, is
@@ -316,18 +338,25 @@ pub fn fit_coarse(
     let specs = fwd.specs();
     let (cf, cd) = coarse.unwrap_or((fwd, data));
     let iterations = opts.patience.max(1) / (specs.len() + 1).max(1) + 1;
-    let mut runs: Vec<(Vec<f64>, f64, usize)> = starts
+    let descents: Vec<((Vec<f64>, f64, usize), f64)> = starts
         .par_iter()
-        .map(|p0| descend(cf, cd, p0, iterations, opts))
+        .map(|p0| descend(cf, cd, p0, iterations, f64::NEG_INFINITY, opts))
         .collect();
+    let mut runs: Vec<(Vec<f64>, f64, usize)> = descents.iter().map(|d| d.0.clone()).collect();
     if coarse.is_some() {
         // Every end, then every start, on all the fitted samples: a descent on the decimation
         // may end a little off the full problem's optimum, and a nested start (the special
-        // case's optimum) must stay a floor the fit cannot end above.
-        runs.extend(starts.iter().map(|p| (p.clone(), 0.0, 0)));
+        // case's optimum) must stay a floor the fit cannot end above. Those far above the best
+        // end on the decimation are not scored (they cannot be the best on every sample).
+        let best_coarse = runs.iter().map(|r| r.1).fold(f64::INFINITY, f64::min);
+        let worth = |c: f64| c <= PRUNE_FACTOR * best_coarse + COST_TIE;
+        runs.extend(starts.iter().zip(&descents).map(|(p, d)| (p.clone(), d.1, 0)));
         runs = runs
             .into_par_iter()
-            .map(|(p, _, ev)| {
+            .map(|(p, coarse_cost, ev)| {
+                if !worth(coarse_cost) {
+                    return (p, f64::INFINITY, ev);
+                }
                 let cost = residuals(fwd, data, &p).map_or(f64::INFINITY, |r| r.norm_squared());
                 (p, cost, ev + 1)
             })
@@ -342,7 +371,15 @@ pub fn fit_coarse(
         .unwrap_or_else(|| (specs.iter().map(|s| s.initial).collect(), f64::INFINITY, 0));
     let (mut params, mut cost) = (best.0, best.1);
     if coarse.is_some() && cost.is_finite() {
-        let (p, c, ev) = descend(fwd, data, &params, POLISH_ITERATIONS, opts);
+        let (p, c, ev) = descend(
+            fwd,
+            data,
+            &params,
+            POLISH_ITERATIONS,
+            POLISH_CONVERGED,
+            opts,
+        )
+        .0;
         evaluations += ev;
         if c < cost {
             (params, cost) = (p, c);
@@ -351,15 +388,18 @@ pub fn fit_coarse(
     finish(fwd, data, params, cost, starts.len(), evaluations)
 }
 
-/// One Levenberg–Marquardt descent from physical parameters `p0` with at most `iterations`
-/// Jacobians: the end (physical), its cost and the residual evaluations spent.
+/// One Levenberg–Marquardt descent from physical parameters `p0` with a patience of
+/// `iterations` (at most `iterations · (k + 1)` residual evaluations, k parameters), stopping
+/// when an accepted step lowers the cost by less than `converged_below`: the end (physical), its
+/// cost and the residual evaluations spent; and the cost at `p0`.
 fn descend(
     fwd: &dyn Forward,
     data: &FitData,
     p0: &[f64],
     iterations: usize,
+    converged_below: f64,
     opts: &FitOptions,
-) -> (Vec<f64>, f64, usize) {
+) -> ((Vec<f64>, f64, usize), f64) {
     let specs = fwd.specs();
     let z0 = DVector::from_iterator(
         specs.len(),
@@ -371,8 +411,11 @@ fn descend(
         z: z0.clone(),
         r: DVector::zeros(0),
         fd_step: opts.fd_step,
+        last_cost: AtomicU64::new(f64::INFINITY.to_bits()),
+        converged_below,
     };
     prob.set_params(&z0);
+    let cost0 = prob.r.norm_squared();
     let lm = LevenbergMarquardt::new()
         .with_tol(opts.tol)
         .with_patience(iterations);
@@ -384,7 +427,10 @@ fn descend(
     };
     let p = prob.phys(&prob.z);
     let cost = prob.r.norm_squared();
-    (p, cost, report.map_or(1, |r| r.number_of_evaluations))
+    (
+        (p, cost, report.map_or(1, |r| r.number_of_evaluations)),
+        cost0,
+    )
 }
 
 /// Uncertainties, bounds and residual statistics at the optimum.

@@ -7,7 +7,10 @@
 //! and the holds' ends — and at most [`FitOptions::per_branch`](crate::calibrate::FitOptions)
 //! samples in between, up to the last fitted sample; three-point histories at most
 //! [`ROD_COARSE_POINTS`] samples on a rod of half the elements with 3× the sub-step). The ends
-//! and the starts are then scored on every fitted sample, the best is polished there, and its
+//! and the starts are then scored on every fitted sample (those far above the best end on the
+//! decimation are not, [`PRUNE_FACTOR`](crate::calibrate::PRUNE_FACTOR)), the best is polished
+//! there until a step gains less than
+//! [`POLISH_CONVERGED`](crate::calibrate::POLISH_CONVERGED), and its
 //! cost, χ², uncertainties and gaps are those of every fitted sample: what the comparison of
 //! models reads is unchanged, only the path to the optimum is cheaper (about 3× fewer CPU-seconds
 //! per diagnosis). It does not change the model: a rate-independent law replays the same
@@ -84,6 +87,10 @@ pub struct Calibration {
     /// Constant response offset per test added to the simulation (response units; zeros unless
     /// the offset was profiled out, [`CalibrateOptions::free_offset`]).
     pub response_offset: Vec<f64>,
+    /// The fitted model's simulated response per test over every sample, without the offset
+    /// (what scoring on held-out samples reads, so that it does not simulate again).
+    #[serde(skip)]
+    pub(crate) simulated: Vec<Vec<f64>>,
 }
 
 impl Calibration {
@@ -272,17 +279,15 @@ pub fn calibrate(
         f.std_err = std_err;
         f.at_bound = at_bound;
     }
-    let mut sims = full.simulate_all(&f.params)?;
+    let sims = full.simulate_all(&f.params)?;
     let response_offset = calibrate::offsets(&data, &sims);
-    for (s, c) in sims.iter_mut().zip(&response_offset) {
-        s.iter_mut().for_each(|v| *v += c);
-    }
     let gap_rms = tests
         .iter()
         .zip(&sims)
         .zip(&data.fit_idx)
-        .map(|((t, s), idx)| {
-            let r: Vec<f64> = idx.iter().map(|&i| t.response[i] - s[i]).collect();
+        .zip(&response_offset)
+        .map(|(((t, s), idx), c)| {
+            let r: Vec<f64> = idx.iter().map(|&i| t.response[i] - (s[i] + c)).collect();
             stats::rms(&r)
         })
         .collect();
@@ -318,6 +323,7 @@ pub fn calibrate(
         std: f.std_err,
         k_eff: f.k_eff,
         response_offset,
+        simulated: sims,
     })
 }
 

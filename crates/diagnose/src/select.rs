@@ -6,7 +6,7 @@ use crate::calibration::{calibrate, CalibrateOptions, Calibration, ParamMap};
 use crate::diagnose::Failed;
 use crate::error::DiagError;
 use crate::floors::shift_in_resolution;
-use crate::model::{DiagTest, ModelForward, ModelSpec, TEST_LEVEL};
+use crate::model::{DiagTest, ModelSpec, TEST_LEVEL};
 use crate::options::{Context, DiagnoseOptions};
 use crate::stats;
 use cablab_core::{Effect, TestKind};
@@ -51,6 +51,13 @@ pub(crate) fn elastic_limit(
         return (base, true);
     }
     let pinned = ParamMap(vec![(spec.name.clone(), spec.upper)]);
+    // Warm from the free fit: the elastic limit keeps its stiffness, so its warm start and the
+    // data-informed one suffice (no quasi-random starts).
+    let el_opts = DiagnoseOptions {
+        starts: 1,
+        rod_starts: 1,
+        ..opts.clone()
+    };
     let Ok(el) = score(
         ctx,
         tests,
@@ -61,7 +68,7 @@ pub(crate) fn elastic_limit(
         noise,
         Some(&base.cal.params),
         Some(&pinned),
-        opts,
+        &el_opts,
     ) else {
         return (base, false);
     };
@@ -130,9 +137,9 @@ pub(crate) fn score(
         pinned: pinned.cloned(),
         free_offset: opts.free_offset,
     };
-    let cal = calibrate(ctx, tests, model, &copts)?;
-    let fwd = ModelForward::new(tests, model, ctx.catalog, ctx.rod)?;
-    let sims = fwd.simulate_all(cal.values())?;
+    let mut cal = calibrate(ctx, tests, model, &copts)?;
+    // The calibration's own simulation at the fitted values (not kept twice).
+    let sims = std::mem::take(&mut cal.simulated);
     let all_resid: Vec<Vec<f64>> = tests
         .iter()
         .zip(&sims)
