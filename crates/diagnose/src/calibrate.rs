@@ -16,7 +16,7 @@ use levenberg_marquardt::{LeastSquaresProblem, LevenbergMarquardt};
 use nalgebra::{storage::Owned, DMatrix, DVector, Dyn};
 use rayon::prelude::*;
 use serde::Serialize;
-use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
 
 /// A forward model: parameters in, one simulated response history per test out.
 pub trait Forward: Sync {
@@ -239,7 +239,30 @@ struct Problem<'a> {
     /// another one: below it the descent has converged and Levenberg–Marquardt stops at its last
     /// accepted point.
     last_cost: AtomicU64,
+    /// Jacobians computed so far.
+    jacobians: AtomicUsize,
+    stop: Stop,
+}
+
+/// When a descent stops before its patience runs out.
+#[derive(Debug, Clone, Copy)]
+struct Stop {
+    /// An accepted step lowered the cost by less than this: converged.
     converged_below: f64,
+    /// After `give_up_after` Jacobians the cost is still above this and the last step lowered
+    /// it by less than [`GIVE_UP_STALL`] of itself: the descent cannot beat an end already
+    /// found.
+    give_up_above: f64,
+    give_up_after: usize,
+}
+
+impl Stop {
+    /// Run until the patience runs out or Levenberg–Marquardt converges.
+    const NEVER: Stop = Stop {
+        converged_below: f64::NEG_INFINITY,
+        give_up_above: f64::INFINITY,
+        give_up_after: usize::MAX,
+    };
 }
 
 impl Problem<'_> {
@@ -275,7 +298,11 @@ impl LeastSquaresProblem<f64, Dyn, Dyn> for Problem<'_> {
     fn jacobian(&self) -> Option<DMatrix<f64>> {
         let cost = self.r.norm_squared();
         let before = f64::from_bits(self.last_cost.swap(cost.to_bits(), Ordering::Relaxed));
-        if before - cost < self.converged_below {
+        let done = self.jacobians.fetch_add(1, Ordering::Relaxed);
+        let stalled_far = done >= self.stop.give_up_after
+            && cost > self.stop.give_up_above
+            && before - cost < GIVE_UP_STALL * cost;
+        if before - cost < self.stop.converged_below || stalled_far {
             return None;
         }
         let k = self.z.len();
@@ -311,6 +338,20 @@ pub fn fit(fwd: &dyn Forward, data: &FitData, starts: &[Vec<f64>], opts: &FitOpt
 /// histories does not rank two parameter vectors that far apart the other way round.
 pub const PRUNE_FACTOR: f64 = 2.0;
 
+/// Jacobians after which a quasi-random start on a coarse problem gives up when its cost is
+/// still above [`GIVE_UP_FACTOR`] times the best end of the informed starts (first and last)
+/// plus [`COST_TIE`] and it has stalled ([`GIVE_UP_STALL`]).
+pub const GIVE_UP_AFTER: usize = 4;
+
+/// See [`GIVE_UP_AFTER`]. Generous: a start that far above after a few steps has rarely found a
+/// better basin.
+pub const GIVE_UP_FACTOR: f64 = 10.0;
+
+/// A start only gives up ([`GIVE_UP_AFTER`]) when its last step lowered the cost by less than
+/// this share: one still descending fast may be on its way to a better basin (friction's Iwan
+/// elements: giving up on cost alone lost better minima in the blind check).
+pub const GIVE_UP_STALL: f64 = 0.1;
+
 /// Levenberg–Marquardt patience of the polish on every fitted sample after a descent on a
 /// coarse problem (at most `POLISH_ITERATIONS · (k + 1)` residual evaluations, k parameters):
 /// the decimated optimum is already within a fraction of a noise unit of the full one, and a few
@@ -338,10 +379,38 @@ pub fn fit_coarse(
     let specs = fwd.specs();
     let (cf, cd) = coarse.unwrap_or((fwd, data));
     let iterations = opts.patience.max(1) / (specs.len() + 1).max(1) + 1;
-    let descents: Vec<((Vec<f64>, f64, usize), f64)> = starts
+    // The first start (warm or data-informed) and the last (a nested start, when warm) descend
+    // in full; every other gives up once, after GIVE_UP_AFTER Jacobians, it still sits far
+    // above their better end. All are still descents on the coarse problem when given.
+    let informed: Vec<usize> = if coarse.is_some() && starts.len() > 2 {
+        vec![0, starts.len() - 1]
+    } else {
+        (0..starts.len()).collect()
+    };
+    let first: Vec<((Vec<f64>, f64, usize), f64)> = informed
         .par_iter()
-        .map(|p0| descend(cf, cd, p0, iterations, f64::NEG_INFINITY, opts))
+        .map(|&i| descend(cf, cd, &starts[i], iterations, Stop::NEVER, opts))
         .collect();
+    let best_informed = first.iter().map(|d| d.0 .1).fold(f64::INFINITY, f64::min);
+    let give_up = Stop {
+        give_up_above: GIVE_UP_FACTOR * best_informed + COST_TIE,
+        give_up_after: GIVE_UP_AFTER,
+        ..Stop::NEVER
+    };
+    let others: Vec<((Vec<f64>, f64, usize), f64)> = (0..starts.len())
+        .into_par_iter()
+        .filter(|i| !informed.contains(i))
+        .map(|i| descend(cf, cd, &starts[i], iterations, give_up, opts))
+        .collect();
+    let mut descents = Vec::with_capacity(starts.len());
+    let (mut a, mut b) = (first.into_iter(), others.into_iter());
+    for i in 0..starts.len() {
+        descents.extend(if informed.contains(&i) {
+            a.next()
+        } else {
+            b.next()
+        });
+    }
     let mut runs: Vec<(Vec<f64>, f64, usize)> = descents.iter().map(|d| d.0.clone()).collect();
     if coarse.is_some() {
         // Every end, then every start, on all the fitted samples: a descent on the decimation
@@ -350,7 +419,12 @@ pub fn fit_coarse(
         // end on the decimation are not scored (they cannot be the best on every sample).
         let best_coarse = runs.iter().map(|r| r.1).fold(f64::INFINITY, f64::min);
         let worth = |c: f64| c <= PRUNE_FACTOR * best_coarse + COST_TIE;
-        runs.extend(starts.iter().zip(&descents).map(|(p, d)| (p.clone(), d.1, 0)));
+        runs.extend(
+            starts
+                .iter()
+                .zip(&descents)
+                .map(|(p, d)| (p.clone(), d.1, 0)),
+        );
         runs = runs
             .into_par_iter()
             .map(|(p, coarse_cost, ev)| {
@@ -376,7 +450,10 @@ pub fn fit_coarse(
             data,
             &params,
             POLISH_ITERATIONS,
-            POLISH_CONVERGED,
+            Stop {
+                converged_below: POLISH_CONVERGED,
+                ..Stop::NEVER
+            },
             opts,
         )
         .0;
@@ -389,15 +466,15 @@ pub fn fit_coarse(
 }
 
 /// One Levenberg–Marquardt descent from physical parameters `p0` with a patience of
-/// `iterations` (at most `iterations · (k + 1)` residual evaluations, k parameters), stopping
-/// when an accepted step lowers the cost by less than `converged_below`: the end (physical), its
-/// cost and the residual evaluations spent; and the cost at `p0`.
+/// `iterations` (at most `iterations · (k + 1)` residual evaluations, k parameters) or until
+/// `stop` says so: the end (physical), its cost and the residual evaluations spent; and the cost
+/// at `p0`.
 fn descend(
     fwd: &dyn Forward,
     data: &FitData,
     p0: &[f64],
     iterations: usize,
-    converged_below: f64,
+    stop: Stop,
     opts: &FitOptions,
 ) -> ((Vec<f64>, f64, usize), f64) {
     let specs = fwd.specs();
@@ -412,7 +489,8 @@ fn descend(
         r: DVector::zeros(0),
         fd_step: opts.fd_step,
         last_cost: AtomicU64::new(f64::INFINITY.to_bits()),
-        converged_below,
+        jacobians: AtomicUsize::new(0),
+        stop,
     };
     prob.set_params(&z0);
     let cost0 = prob.r.norm_squared();
