@@ -67,6 +67,10 @@ pub struct FitOptions {
     /// decimation, see [`crate::calibration`]); 0: every sample. The end is scored, polished and
     /// given its uncertainties on every fitted sample.
     pub per_branch: usize,
+    /// Most Jacobians of the polish on every fitted sample after a coarse descent (each one
+    /// simulation per parameter over every fitted sample); it also stops once a step gains less
+    /// than [`POLISH_CONVERGED`].
+    pub polish_jacobians: usize,
 }
 
 impl Default for FitOptions {
@@ -76,6 +80,7 @@ impl Default for FitOptions {
             tol: 1e-9,
             fd_step: 1e-6,
             per_branch: 64,
+            polish_jacobians: POLISH_JACOBIANS,
         }
     }
 }
@@ -254,6 +259,8 @@ struct Stop {
     /// found.
     give_up_above: f64,
     give_up_after: usize,
+    /// At most this many Jacobians.
+    max_jacobians: usize,
 }
 
 impl Stop {
@@ -262,6 +269,7 @@ impl Stop {
         converged_below: f64::NEG_INFINITY,
         give_up_above: f64::INFINITY,
         give_up_after: usize::MAX,
+        max_jacobians: usize::MAX,
     };
 }
 
@@ -302,7 +310,10 @@ impl LeastSquaresProblem<f64, Dyn, Dyn> for Problem<'_> {
         let stalled_far = done >= self.stop.give_up_after
             && cost > self.stop.give_up_above
             && before - cost < GIVE_UP_STALL * cost;
-        if before - cost < self.stop.converged_below || stalled_far {
+        if before - cost < self.stop.converged_below
+            || stalled_far
+            || done >= self.stop.max_jacobians
+        {
             return None;
         }
         let k = self.z.len();
@@ -357,6 +368,10 @@ pub const GIVE_UP_STALL: f64 = 0.1;
 /// the decimated optimum is already within a fraction of a noise unit of the full one, and a few
 /// Gauss–Newton steps close that.
 const POLISH_ITERATIONS: usize = 2;
+
+/// The polish's default most Jacobians ([`FitOptions::polish_jacobians`]): a few Gauss–Newton
+/// steps from the coarse optimum.
+pub const POLISH_JACOBIANS: usize = 3;
 
 /// The polish stops once an accepted step lowers the cost (χ² in noise units) by less than this
 /// (a parameter move of a tenth of its standard error): each further Jacobian costs one
@@ -452,6 +467,7 @@ pub fn fit_coarse(
             POLISH_ITERATIONS,
             Stop {
                 converged_below: POLISH_CONVERGED,
+                max_jacobians: opts.polish_jacobians,
                 ..Stop::NEVER
             },
             opts,

@@ -2,6 +2,7 @@
 //! module doc): fit a model on the training samples, score it on the held-out ones, and pick the
 //! simplest adequate one under the information criterion, materiality and resolution rules.
 
+use crate::calibrate::FitOptions;
 use crate::calibration::{calibrate, CalibrateOptions, Calibration, ParamMap};
 use crate::diagnose::Failed;
 use crate::error::DiagError;
@@ -130,7 +131,16 @@ pub(crate) fn score(
             opts.starts
         },
         seed: opts.seed,
-        fit: opts.fit,
+        // The baseline (and its elastic limit) anchors every comparison: its polish runs to
+        // convergence; a candidate's stops after a few steps.
+        fit: FitOptions {
+            polish_jacobians: if effect == Effect::None {
+                usize::MAX
+            } else {
+                opts.fit.polish_jacobians
+            },
+            ..opts.fit
+        },
         fit_idx: Some(train.to_vec()),
         noise: Some(noise.to_vec()),
         warm: warm.cloned(),
