@@ -16,6 +16,7 @@ use levenberg_marquardt::{LeastSquaresProblem, LevenbergMarquardt};
 use nalgebra::{storage::Owned, DMatrix, DVector, Dyn};
 use rayon::prelude::*;
 use serde::Serialize;
+use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
 
 /// A forward model: parameters in, one simulated response history per test out.
 pub trait Forward: Sync {
@@ -66,6 +67,10 @@ pub struct FitOptions {
     /// decimation, see [`crate::calibration`]); 0: every sample. The end is scored, polished and
     /// given its uncertainties on every fitted sample.
     pub per_branch: usize,
+    /// Most Jacobians of the polish on every fitted sample after a coarse descent (each one
+    /// simulation per parameter over every fitted sample); it also stops once a step gains less
+    /// than [`POLISH_CONVERGED`].
+    pub polish_jacobians: usize,
 }
 
 impl Default for FitOptions {
@@ -75,6 +80,7 @@ impl Default for FitOptions {
             tol: 1e-9,
             fd_step: 1e-6,
             per_branch: 64,
+            polish_jacobians: POLISH_JACOBIANS,
         }
     }
 }
@@ -234,6 +240,37 @@ struct Problem<'a> {
     z: DVector<f64>,
     r: DVector<f64>,
     fd_step: f64,
+    /// Cost at the last Jacobian (bits of an f64), and the least decrease since then worth
+    /// another one: below it the descent has converged and Levenberg–Marquardt stops at its last
+    /// accepted point.
+    last_cost: AtomicU64,
+    /// Jacobians computed so far.
+    jacobians: AtomicUsize,
+    stop: Stop,
+}
+
+/// When a descent stops before its patience runs out.
+#[derive(Debug, Clone, Copy)]
+struct Stop {
+    /// An accepted step lowered the cost by less than this: converged.
+    converged_below: f64,
+    /// After `give_up_after` Jacobians the cost is still above this and the last step lowered
+    /// it by less than [`GIVE_UP_STALL`] of itself: the descent cannot beat an end already
+    /// found.
+    give_up_above: f64,
+    give_up_after: usize,
+    /// At most this many Jacobians.
+    max_jacobians: usize,
+}
+
+impl Stop {
+    /// Run until the patience runs out or Levenberg–Marquardt converges.
+    const NEVER: Stop = Stop {
+        converged_below: f64::NEG_INFINITY,
+        give_up_above: f64::INFINITY,
+        give_up_after: usize::MAX,
+        max_jacobians: usize::MAX,
+    };
 }
 
 impl Problem<'_> {
@@ -267,6 +304,18 @@ impl LeastSquaresProblem<f64, Dyn, Dyn> for Problem<'_> {
         Some(self.r.clone())
     }
     fn jacobian(&self) -> Option<DMatrix<f64>> {
+        let cost = self.r.norm_squared();
+        let before = f64::from_bits(self.last_cost.swap(cost.to_bits(), Ordering::Relaxed));
+        let done = self.jacobians.fetch_add(1, Ordering::Relaxed);
+        let stalled_far = done >= self.stop.give_up_after
+            && cost > self.stop.give_up_above
+            && before - cost < GIVE_UP_STALL * cost;
+        if before - cost < self.stop.converged_below
+            || stalled_far
+            || done >= self.stop.max_jacobians
+        {
+            return None;
+        }
         let k = self.z.len();
         let cols: Vec<DVector<f64>> = (0..k)
             .into_par_iter()
@@ -295,10 +344,39 @@ pub fn fit(fwd: &dyn Forward, data: &FitData, starts: &[Vec<f64>], opts: &FitOpt
     fit_coarse(fwd, data, None, starts, opts)
 }
 
-/// Levenberg–Marquardt iterations of the polish on every fitted sample after a descent on a
-/// coarse problem: the decimated optimum is already within a fraction of a noise unit of the full
-/// one, and one or two Gauss–Newton steps close that.
+/// A start or end of a descent whose cost on the coarse problem exceeds this multiple of the best
+/// end's (plus [`COST_TIE`]) is not scored on every fitted sample: a decimation of the same
+/// histories does not rank two parameter vectors that far apart the other way round.
+pub const PRUNE_FACTOR: f64 = 2.0;
+
+/// Jacobians after which a quasi-random start on a coarse problem gives up when its cost is
+/// still above [`GIVE_UP_FACTOR`] times the best end of the informed starts (first and last)
+/// plus [`COST_TIE`] and it has stalled ([`GIVE_UP_STALL`]).
+pub const GIVE_UP_AFTER: usize = 4;
+
+/// See [`GIVE_UP_AFTER`]. Generous: a start that far above after a few steps has rarely found a
+/// better basin.
+pub const GIVE_UP_FACTOR: f64 = 10.0;
+
+/// A start only gives up ([`GIVE_UP_AFTER`]) when its last step lowered the cost by less than
+/// this share: one still descending fast may be on its way to a better basin (friction's Iwan
+/// elements: giving up on cost alone lost better minima in the blind check).
+pub const GIVE_UP_STALL: f64 = 0.1;
+
+/// Levenberg–Marquardt patience of the polish on every fitted sample after a descent on a
+/// coarse problem (at most `POLISH_ITERATIONS · (k + 1)` residual evaluations, k parameters):
+/// the decimated optimum is already within a fraction of a noise unit of the full one, and a few
+/// Gauss–Newton steps close that.
 const POLISH_ITERATIONS: usize = 2;
+
+/// The polish's default most Jacobians ([`FitOptions::polish_jacobians`]): a few Gauss–Newton
+/// steps from the coarse optimum.
+pub const POLISH_JACOBIANS: usize = 3;
+
+/// The polish stops once an accepted step lowers the cost (χ² in noise units) by less than this
+/// (a parameter move of a tenth of its standard error): each further Jacobian costs one
+/// simulation per parameter over every sample and moves nothing the comparison resolves.
+pub const POLISH_CONVERGED: f64 = 0.01;
 
 /// [`fit`], with the starts descending on `coarse` (the same parameters over fewer samples: a
 /// decimation of the same histories) when given: each start's end, then each start itself, is
@@ -316,18 +394,58 @@ pub fn fit_coarse(
     let specs = fwd.specs();
     let (cf, cd) = coarse.unwrap_or((fwd, data));
     let iterations = opts.patience.max(1) / (specs.len() + 1).max(1) + 1;
-    let mut runs: Vec<(Vec<f64>, f64, usize)> = starts
+    // The first start (warm or data-informed) and the last (a nested start, when warm) descend
+    // in full; every other gives up once, after GIVE_UP_AFTER Jacobians, it still sits far
+    // above their better end. All are still descents on the coarse problem when given.
+    let informed: Vec<usize> = if coarse.is_some() && starts.len() > 2 {
+        vec![0, starts.len() - 1]
+    } else {
+        (0..starts.len()).collect()
+    };
+    let first: Vec<((Vec<f64>, f64, usize), f64)> = informed
         .par_iter()
-        .map(|p0| descend(cf, cd, p0, iterations, opts))
+        .map(|&i| descend(cf, cd, &starts[i], iterations, Stop::NEVER, opts))
         .collect();
+    let best_informed = first.iter().map(|d| d.0 .1).fold(f64::INFINITY, f64::min);
+    let give_up = Stop {
+        give_up_above: GIVE_UP_FACTOR * best_informed + COST_TIE,
+        give_up_after: GIVE_UP_AFTER,
+        ..Stop::NEVER
+    };
+    let others: Vec<((Vec<f64>, f64, usize), f64)> = (0..starts.len())
+        .into_par_iter()
+        .filter(|i| !informed.contains(i))
+        .map(|i| descend(cf, cd, &starts[i], iterations, give_up, opts))
+        .collect();
+    let mut descents = Vec::with_capacity(starts.len());
+    let (mut a, mut b) = (first.into_iter(), others.into_iter());
+    for i in 0..starts.len() {
+        descents.extend(if informed.contains(&i) {
+            a.next()
+        } else {
+            b.next()
+        });
+    }
+    let mut runs: Vec<(Vec<f64>, f64, usize)> = descents.iter().map(|d| d.0.clone()).collect();
     if coarse.is_some() {
         // Every end, then every start, on all the fitted samples: a descent on the decimation
         // may end a little off the full problem's optimum, and a nested start (the special
-        // case's optimum) must stay a floor the fit cannot end above.
-        runs.extend(starts.iter().map(|p| (p.clone(), 0.0, 0)));
+        // case's optimum) must stay a floor the fit cannot end above. Those far above the best
+        // end on the decimation are not scored (they cannot be the best on every sample).
+        let best_coarse = runs.iter().map(|r| r.1).fold(f64::INFINITY, f64::min);
+        let worth = |c: f64| c <= PRUNE_FACTOR * best_coarse + COST_TIE;
+        runs.extend(
+            starts
+                .iter()
+                .zip(&descents)
+                .map(|(p, d)| (p.clone(), d.1, 0)),
+        );
         runs = runs
             .into_par_iter()
-            .map(|(p, _, ev)| {
+            .map(|(p, coarse_cost, ev)| {
+                if !worth(coarse_cost) {
+                    return (p, f64::INFINITY, ev);
+                }
                 let cost = residuals(fwd, data, &p).map_or(f64::INFINITY, |r| r.norm_squared());
                 (p, cost, ev + 1)
             })
@@ -342,7 +460,19 @@ pub fn fit_coarse(
         .unwrap_or_else(|| (specs.iter().map(|s| s.initial).collect(), f64::INFINITY, 0));
     let (mut params, mut cost) = (best.0, best.1);
     if coarse.is_some() && cost.is_finite() {
-        let (p, c, ev) = descend(fwd, data, &params, POLISH_ITERATIONS, opts);
+        let (p, c, ev) = descend(
+            fwd,
+            data,
+            &params,
+            POLISH_ITERATIONS,
+            Stop {
+                converged_below: POLISH_CONVERGED,
+                max_jacobians: opts.polish_jacobians,
+                ..Stop::NEVER
+            },
+            opts,
+        )
+        .0;
         evaluations += ev;
         if c < cost {
             (params, cost) = (p, c);
@@ -351,15 +481,18 @@ pub fn fit_coarse(
     finish(fwd, data, params, cost, starts.len(), evaluations)
 }
 
-/// One Levenberg–Marquardt descent from physical parameters `p0` with at most `iterations`
-/// Jacobians: the end (physical), its cost and the residual evaluations spent.
+/// One Levenberg–Marquardt descent from physical parameters `p0` with a patience of
+/// `iterations` (at most `iterations · (k + 1)` residual evaluations, k parameters) or until
+/// `stop` says so: the end (physical), its cost and the residual evaluations spent; and the cost
+/// at `p0`.
 fn descend(
     fwd: &dyn Forward,
     data: &FitData,
     p0: &[f64],
     iterations: usize,
+    stop: Stop,
     opts: &FitOptions,
-) -> (Vec<f64>, f64, usize) {
+) -> ((Vec<f64>, f64, usize), f64) {
     let specs = fwd.specs();
     let z0 = DVector::from_iterator(
         specs.len(),
@@ -371,8 +504,12 @@ fn descend(
         z: z0.clone(),
         r: DVector::zeros(0),
         fd_step: opts.fd_step,
+        last_cost: AtomicU64::new(f64::INFINITY.to_bits()),
+        jacobians: AtomicUsize::new(0),
+        stop,
     };
     prob.set_params(&z0);
+    let cost0 = prob.r.norm_squared();
     let lm = LevenbergMarquardt::new()
         .with_tol(opts.tol)
         .with_patience(iterations);
@@ -384,7 +521,10 @@ fn descend(
     };
     let p = prob.phys(&prob.z);
     let cost = prob.r.norm_squared();
-    (p, cost, report.map_or(1, |r| r.number_of_evaluations))
+    (
+        (p, cost, report.map_or(1, |r| r.number_of_evaluations)),
+        cost0,
+    )
 }
 
 /// Uncertainties, bounds and residual statistics at the optimum.

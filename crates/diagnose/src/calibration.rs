@@ -7,11 +7,17 @@
 //! and the holds' ends — and at most [`FitOptions::per_branch`](crate::calibrate::FitOptions)
 //! samples in between, up to the last fitted sample; three-point histories at most
 //! [`ROD_COARSE_POINTS`] samples on a rod of half the elements with 3× the sub-step). The ends
-//! and the starts are then scored on every fitted sample, the best is polished there, and its
+//! and the starts are then scored on every fitted sample (those far above the best end on the
+//! decimation are not, [`PRUNE_FACTOR`](crate::calibrate::PRUNE_FACTOR)), the best is polished
+//! there until a step gains less than
+//! [`POLISH_CONVERGED`](crate::calibrate::POLISH_CONVERGED), and its
 //! cost, χ², uncertainties and gaps are those of every fitted sample: what the comparison of
 //! models reads is unchanged, only the path to the optimum is cheaper (about 3× fewer CPU-seconds
-//! per diagnosis). It does not change the model: a rate-independent law replays the same
-//! reversals exactly, a rate-dependent one sees the same holds at a coarser time step.
+//! per diagnosis; quasi-random starts that stall far above the informed ones give up early,
+//! [`GIVE_UP_AFTER`](crate::calibrate::GIVE_UP_AFTER), and every fitted-sample replay of a
+//! uniform test stops at its last fitted sample, [`up_to_fitted`]). It does not change the
+//! model: a rate-independent law replays the same reversals exactly, a rate-dependent one sees
+//! the same holds at a coarser time step.
 
 use crate::calibrate::{self, FitData, FitOptions, Forward};
 use crate::error::DiagError;
@@ -84,6 +90,10 @@ pub struct Calibration {
     /// Constant response offset per test added to the simulation (response units; zeros unless
     /// the offset was profiled out, [`CalibrateOptions::free_offset`]).
     pub response_offset: Vec<f64>,
+    /// The fitted model's simulated response per test over every sample, without the offset
+    /// (what scoring on held-out samples reads, so that it does not simulate again).
+    #[serde(skip)]
+    pub(crate) simulated: Vec<Vec<f64>>,
 }
 
 impl Calibration {
@@ -173,11 +183,6 @@ pub fn calibrate(
         t.validate(i)?;
     }
     let full = ModelForward::new(tests, model, ctx.catalog, ctx.rod)?;
-    let pinned = pinned_on(&full, opts.pinned.as_ref(), model)?;
-    let fwd: &dyn Forward = match &pinned {
-        Some(p) => p,
-        None => &full,
-    };
     let noise = opts.noise.clone().unwrap_or_else(|| noise_floor(tests));
     let fit_idx = opts.fit_idx.clone().unwrap_or_else(|| {
         tests
@@ -185,6 +190,18 @@ pub fn calibrate(
             .map(|t| (0..t.control.len()).collect())
             .collect()
     });
+    // The fit replays each uniform history only up to its last fitted sample (`up_to_fitted`).
+    let upto: Vec<DiagTest> = tests
+        .iter()
+        .zip(&fit_idx)
+        .map(|(t, idx)| up_to_fitted(t, idx))
+        .collect();
+    let fitted = full.replaying(&upto);
+    let pinned = pinned_on(&fitted, opts.pinned.as_ref(), model)?;
+    let fwd: &dyn Forward = match &pinned {
+        Some(p) => p,
+        None => &fitted,
+    };
     if fit_idx.iter().map(Vec::len).sum::<usize>() <= fwd.specs().len() {
         return Err(DiagError::NotEnoughData(format!(
             "{} fitted samples for {} parameters",
@@ -272,17 +289,15 @@ pub fn calibrate(
         f.std_err = std_err;
         f.at_bound = at_bound;
     }
-    let mut sims = full.simulate_all(&f.params)?;
+    let sims = full.simulate_all(&f.params)?;
     let response_offset = calibrate::offsets(&data, &sims);
-    for (s, c) in sims.iter_mut().zip(&response_offset) {
-        s.iter_mut().for_each(|v| *v += c);
-    }
     let gap_rms = tests
         .iter()
         .zip(&sims)
         .zip(&data.fit_idx)
-        .map(|((t, s), idx)| {
-            let r: Vec<f64> = idx.iter().map(|&i| t.response[i] - s[i]).collect();
+        .zip(&response_offset)
+        .map(|(((t, s), idx), c)| {
+            let r: Vec<f64> = idx.iter().map(|&i| t.response[i] - (s[i] + c)).collect();
             stats::rms(&r)
         })
         .collect();
@@ -318,6 +333,7 @@ pub fn calibrate(
         std: f.std_err,
         k_eff: f.k_eff,
         response_offset,
+        simulated: sims,
     })
 }
 
@@ -391,6 +407,19 @@ pub(crate) fn decimation(
         a = b + 1;
     }
     keep
+}
+
+/// `test` up to its last fitted sample (`fit_idx`) when it is a uniformly loaded test: its replay
+/// is causal (a sample's response depends only on the history up to it; only the
+/// machine-compliance solve's tolerance, 10⁻¹² of the largest control, follows the part
+/// replayed), so the held-out samples after it cost a fit nothing. A rod-driven test (its replay spreads a bounded number of points over the whole
+/// history) and a test without fitted samples are kept whole.
+fn up_to_fitted(test: &DiagTest, fit_idx: &[usize]) -> DiagTest {
+    let end = fit_idx.iter().max().map_or(0, |&m| m + 1);
+    if !cablab_rod::uniform::is_uniform(test.kind) || end == 0 || end >= test.control.len() {
+        return test.clone();
+    }
+    pick(test, &(0..end).collect::<Vec<usize>>())
 }
 
 /// `test` restricted to the samples `idx` (increasing).
@@ -575,6 +604,55 @@ mod tests {
         // 0 per branch: every sample up to the last fitted one.
         assert_eq!(decimation(&t, &prefix, 0, usize::MAX), prefix);
         assert!(decimation(&t, &[], 10, usize::MAX).is_empty());
+    }
+
+    #[test]
+    fn samples_after_the_last_fitted_one_do_not_change_the_fit() {
+        // Elastoplastic tension past yield (labelled branches), the last 150 samples held out:
+        // the fit equals the fit of the history cut after its last fitted sample.
+        let mut t = triangle();
+        let ctx = Context::project();
+        let model = ModelSpec::law("elastoplastic");
+        let tests = [t.clone()];
+        let fwd = ModelForward::new(&tests, &model, ctx.catalog, ctx.rod).unwrap();
+        let p: Vec<f64> = fwd
+            .specs()
+            .iter()
+            .map(|s| match s.name.as_str() {
+                "EA" => 7.96e4,
+                "F_y" => 54.0,
+                _ => 2400.0,
+            })
+            .collect();
+        t.response = fwd.simulate_all(&p).unwrap().remove(0);
+        for (i, r) in t.response.iter_mut().enumerate() {
+            *r += 0.05 * ((i * 7919 % 13) as f64 - 6.0) / 6.0;
+        }
+        let cut = 300;
+        let short = pick(&t, &(0..cut).collect::<Vec<usize>>());
+        let opts = |fit_idx| CalibrateOptions {
+            noise: Some(vec![0.05]),
+            fit_idx,
+            free_offset: true,
+            ..CalibrateOptions::default()
+        };
+        let whole = calibrate(ctx, &[t], &model, &opts(Some(vec![(0..cut).collect()]))).unwrap();
+        let part = calibrate(ctx, &[short], &model, &opts(None)).unwrap();
+        // The same optimum (bounds and starts are scaled to each history's data, so the paths
+        // to it differ in the last digits).
+        assert_eq!(whole.n_fit, cut);
+        for (a, b) in whole.values().iter().zip(part.values()) {
+            assert!((a / b - 1.0).abs() < 1e-8, "{a} vs {b}");
+        }
+        assert!((whole.chi2 / part.chi2 - 1.0).abs() < 1e-9);
+        assert!((whole.response_offset[0] - part.response_offset[0]).abs() < 1e-6);
+        // The held-out part is still simulated for scoring.
+        assert_eq!(whole.simulated[0].len(), 450);
+        assert!(
+            whole.chi2 / cut as f64 > 0.05,
+            "noise of 1/3 σ rms: {}",
+            whole.chi2
+        );
     }
 
     #[test]

@@ -2,11 +2,12 @@
 //! module doc): fit a model on the training samples, score it on the held-out ones, and pick the
 //! simplest adequate one under the information criterion, materiality and resolution rules.
 
+use crate::calibrate::FitOptions;
 use crate::calibration::{calibrate, CalibrateOptions, Calibration, ParamMap};
 use crate::diagnose::Failed;
 use crate::error::DiagError;
 use crate::floors::shift_in_resolution;
-use crate::model::{DiagTest, ModelForward, ModelSpec, TEST_LEVEL};
+use crate::model::{DiagTest, ModelSpec, TEST_LEVEL};
 use crate::options::{Context, DiagnoseOptions};
 use crate::stats;
 use cablab_core::{Effect, TestKind};
@@ -51,6 +52,13 @@ pub(crate) fn elastic_limit(
         return (base, true);
     }
     let pinned = ParamMap(vec![(spec.name.clone(), spec.upper)]);
+    // Warm from the free fit: the elastic limit keeps its stiffness, so its warm start and the
+    // data-informed one suffice (no quasi-random starts).
+    let el_opts = DiagnoseOptions {
+        starts: 1,
+        rod_starts: 1,
+        ..opts.clone()
+    };
     let Ok(el) = score(
         ctx,
         tests,
@@ -61,7 +69,7 @@ pub(crate) fn elastic_limit(
         noise,
         Some(&base.cal.params),
         Some(&pinned),
-        opts,
+        &el_opts,
     ) else {
         return (base, false);
     };
@@ -123,16 +131,25 @@ pub(crate) fn score(
             opts.starts
         },
         seed: opts.seed,
-        fit: opts.fit,
+        // The baseline (and its elastic limit) anchors every comparison: its polish runs to
+        // convergence; a candidate's stops after a few steps.
+        fit: FitOptions {
+            polish_jacobians: if effect == Effect::None {
+                usize::MAX
+            } else {
+                opts.fit.polish_jacobians
+            },
+            ..opts.fit
+        },
         fit_idx: Some(train.to_vec()),
         noise: Some(noise.to_vec()),
         warm: warm.cloned(),
         pinned: pinned.cloned(),
         free_offset: opts.free_offset,
     };
-    let cal = calibrate(ctx, tests, model, &copts)?;
-    let fwd = ModelForward::new(tests, model, ctx.catalog, ctx.rod)?;
-    let sims = fwd.simulate_all(cal.values())?;
+    let mut cal = calibrate(ctx, tests, model, &copts)?;
+    // The calibration's own simulation at the fitted values (not kept twice).
+    let sims = std::mem::take(&mut cal.simulated);
     let all_resid: Vec<Vec<f64>> = tests
         .iter()
         .zip(&sims)
