@@ -13,7 +13,7 @@
 //!
 //! Does not: convert a machine's control into strain, or know a test's geometry (`cablab-rod`).
 
-use crate::law::Law;
+use crate::law::{ComponentStep, Law};
 
 /// One integration point loaded in one strain component (the others held at 0): committed state,
 /// trial steps from it, and commit. A trial may be repeated from the same committed state (a
@@ -49,8 +49,12 @@ impl<'a> UniformSection<'a> {
     /// state (the trial state is kept for [`commit`](Self::commit)).
     #[inline]
     pub fn trial(&mut self, strain: f64, dt: f64) -> (f64, f64) {
-        self.law
-            .update_component(self.component, strain, dt, &self.old, &mut self.new)
+        let step = ComponentStep {
+            component: self.component,
+            strain,
+            dt,
+        };
+        self.law.update_component(step, &self.old, &mut self.new)
     }
 
     /// Make the last trial the committed state.

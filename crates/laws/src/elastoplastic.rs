@@ -22,7 +22,7 @@
 //! `uniaxial_tests` hold it to the vector code at 1e-12, in practice bit for bit).
 
 use crate::channel::{eye, norm1, Channel};
-use crate::law::{Law, LawResponse, Strain6, Tangent6};
+use crate::law::{ComponentStep, Law, LawResponse, Strain6, Tangent6};
 use crate::linear::SectionStiffness;
 use nalgebra::{Matrix2, Vector2};
 
@@ -452,14 +452,11 @@ impl Law for Elastoplastic {
         }
         t
     }
-    fn update_component(
-        &self,
-        component: usize,
-        strain: f64,
-        _dt: f64,
-        state_old: &[f64],
-        state_new: &mut [f64],
-    ) -> (f64, f64) {
+    fn update_component(&self, step: ComponentStep, old: &[f64], new: &mut [f64]) -> (f64, f64) {
+        let ComponentStep {
+            component, strain, ..
+        } = step;
+        let (state_old, state_new) = (old, new);
         if component > 5 {
             return (f64::NAN, f64::NAN);
         }

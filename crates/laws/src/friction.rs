@@ -8,7 +8,7 @@
 //! compose it with a baseline through [`crate::Parallel`].
 
 use crate::channel::{eye, norm1, Channel};
-use crate::law::{Law, LawResponse, Strain6, Stress6, Tangent6};
+use crate::law::{ComponentStep, Law, LawResponse, Strain6, Stress6, Tangent6};
 use nalgebra::{Matrix2, Vector2};
 
 /// One Jenkins element.
@@ -149,26 +149,19 @@ impl Law for IwanElements {
     /// Scalar radial return per element when every slip lies on the loaded axis (a scalar
     /// channel, or bending without slip off the axis), the same operations as `update`; the
     /// vector update otherwise.
-    fn update_component(
-        &self,
-        component: usize,
-        strain: f64,
-        dt: f64,
-        state_old: &[f64],
-        state_new: &mut [f64],
-    ) -> (f64, f64) {
+    fn update_component(&self, step: ComponentStep, old: &[f64], new: &mut [f64]) -> (f64, f64) {
+        let ComponentStep {
+            component, strain, ..
+        } = step;
+        let (state_old, state_new) = (old, new);
         let ch = self.channel;
         let d = ch.dim();
         let Some(pos) = ch.position(component) else {
-            return crate::law::update_component_via_full(
-                self, component, strain, dt, state_old, state_new,
-            );
+            return crate::law::update_component_via_full(self, step, state_old, state_new);
         };
         let on_axis = d == 1 || state_old.iter().skip(1 - pos).step_by(2).all(|&v| v == 0.0);
         if !on_axis {
-            return crate::law::update_component_via_full(
-                self, component, strain, dt, state_old, state_new,
-            );
+            return crate::law::update_component_via_full(self, step, state_old, state_new);
         }
         let mut s = 0.0;
         let mut c = 0.0;

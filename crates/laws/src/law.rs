@@ -62,16 +62,21 @@ pub trait Law: Send + Sync + std::fmt::Debug {
     /// override with a scalar return mapping of the same mathematics (no 6×6 work); the default
     /// goes through `update`. A `component` > 5 gives `(NaN, NaN)` and leaves `state_new` as it
     /// is.
-    fn update_component(
-        &self,
-        component: usize,
-        strain: f64,
-        dt: f64,
-        state_old: &[f64],
-        state_new: &mut [f64],
-    ) -> (f64, f64) {
-        update_component_via_full(self, component, strain, dt, state_old, state_new)
+    fn update_component(&self, step: ComponentStep, old: &[f64], new: &mut [f64]) -> (f64, f64) {
+        update_component_via_full(self, step, old, new)
     }
+}
+
+/// One step of [`Law::update_component`]: the loaded component (0..6), its strain and the time
+/// step in s.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ComponentStep {
+    /// Index of the loaded strain component (0..6).
+    pub component: usize,
+    /// Its strain at the end of the step.
+    pub strain: f64,
+    /// The step's duration, s.
+    pub dt: f64,
 }
 
 /// [`Law::update_component`] through the full [`Law::update`]: the reference the scalar fast
@@ -79,12 +84,15 @@ pub trait Law: Send + Sync + std::fmt::Debug {
 /// with history off the loaded axis).
 pub fn update_component_via_full<L: Law + ?Sized>(
     law: &L,
-    component: usize,
-    strain: f64,
-    dt: f64,
+    step: ComponentStep,
     state_old: &[f64],
     state_new: &mut [f64],
 ) -> (f64, f64) {
+    let ComponentStep {
+        component,
+        strain,
+        dt,
+    } = step;
     if component > 5 {
         return (f64::NAN, f64::NAN);
     }

@@ -44,7 +44,9 @@ pub use driver::{drive_uniform, drive_uniform_into};
 pub use elastoplastic::{ChannelState, Degradation, Elastoplastic, PlasticChannel};
 pub use error::LawError;
 pub use friction::{IwanElements, JenkinsElement};
-pub use law::{update_component_via_full, Law, LawResponse, Strain6, Stress6, Tangent6};
+pub use law::{
+    update_component_via_full, ComponentStep, Law, LawResponse, Strain6, Stress6, Tangent6,
+};
 pub use linear::{LinearElastic, SectionStiffness};
 pub use parallel::Parallel;
 pub use piecewise::PiecewiseLinear;

@@ -5,7 +5,7 @@
 //! components it does not treat inelastically, with the documented defaults. No history, no rate.
 
 use crate::channel::Channel;
-use crate::law::{Law, LawResponse, Strain6, Tangent6};
+use crate::law::{ComponentStep, Law, LawResponse, Strain6, Tangent6};
 use nalgebra::Vector6;
 
 /// Diagonal elastic stiffnesses of an isotropic circular section (chapter eq. (17)).
@@ -112,14 +112,10 @@ impl Law for LinearElastic {
         Tangent6::from_diagonal(&self.stiffness.diagonal())
     }
 
-    fn update_component(
-        &self,
-        component: usize,
-        strain: f64,
-        _dt: f64,
-        _old: &[f64],
-        _new: &mut [f64],
-    ) -> (f64, f64) {
+    fn update_component(&self, step: ComponentStep, _old: &[f64], _new: &mut [f64]) -> (f64, f64) {
+        let ComponentStep {
+            component, strain, ..
+        } = step;
         match self.stiffness.diagonal().get(component) {
             Some(&k) => (k * strain, k),
             None => (f64::NAN, f64::NAN),

@@ -6,7 +6,7 @@
 //! Kinematic hardening and stiffness degradation modify the plastic flow itself and are options
 //! of [`crate::Elastoplastic`] instead.
 
-use crate::law::{Law, LawResponse, Strain6, Tangent6};
+use crate::law::{ComponentStep, Law, LawResponse, Strain6, Tangent6};
 
 /// Two laws in parallel.
 #[derive(Debug)]
@@ -67,21 +67,12 @@ impl Law for Parallel {
     fn elastic_tangent(&self) -> Tangent6 {
         self.base.elastic_tangent() + self.extension.elastic_tangent()
     }
-    fn update_component(
-        &self,
-        component: usize,
-        strain: f64,
-        dt: f64,
-        state_old: &[f64],
-        state_new: &mut [f64],
-    ) -> (f64, f64) {
+    fn update_component(&self, step: ComponentStep, old: &[f64], new: &mut [f64]) -> (f64, f64) {
         let nb = self.base.n_state();
-        let (bo, eo) = state_old.split_at(nb);
-        let (bn, en) = state_new.split_at_mut(nb);
-        let (sb, tb) = self.base.update_component(component, strain, dt, bo, bn);
-        let (se, te) = self
-            .extension
-            .update_component(component, strain, dt, eo, en);
+        let (bo, eo) = old.split_at(nb);
+        let (bn, en) = new.split_at_mut(nb);
+        let (sb, tb) = self.base.update_component(step, bo, bn);
+        let (se, te) = self.extension.update_component(step, eo, en);
         (sb + se, tb + te)
     }
 }

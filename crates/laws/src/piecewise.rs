@@ -6,7 +6,7 @@
 //! response is isotropic in the bending plane. Other components are linear elastic. No history.
 
 use crate::channel::{eye, norm1, Channel};
-use crate::law::{Law, LawResponse, Strain6, Tangent6};
+use crate::law::{ComponentStep, Law, LawResponse, Strain6, Tangent6};
 use crate::linear::SectionStiffness;
 use nalgebra::{Matrix2, Vector2};
 
@@ -75,14 +75,10 @@ impl Law for PiecewiseLinear {
     }
     /// On the channel's axis the response vector is parallel to the strain, so the scalar form
     /// of `channel_response` (same operations, |ε| as the norm of (ε, 0)) gives the same entry.
-    fn update_component(
-        &self,
-        component: usize,
-        strain: f64,
-        _dt: f64,
-        _old: &[f64],
-        _new: &mut [f64],
-    ) -> (f64, f64) {
+    fn update_component(&self, step: ComponentStep, _old: &[f64], _new: &mut [f64]) -> (f64, f64) {
+        let ComponentStep {
+            component, strain, ..
+        } = step;
         if component > 5 {
             return (f64::NAN, f64::NAN);
         }

@@ -3,7 +3,7 @@
 //! histories, stress, tangent entry and state at every step, so the fast path cannot drift
 //! from the reference.
 
-use crate::law::{update_component_via_full, Law, Strain6};
+use crate::law::{update_component_via_full, ComponentStep, Law, Strain6};
 use crate::registry::{build, example_params, example_scale, loaded_component, param_specs};
 use cablab_core::TestKind;
 use rand::{Rng, SeedableRng};
@@ -108,7 +108,12 @@ fn compare(
         let mut eps = Strain6::zeros();
         eps[component] = e;
         let r = law.update(&eps, dt, &ro, &mut rn);
-        let (s, k) = law.update_component(component, e, dt, &fo, &mut fnew);
+        let step = ComponentStep {
+            component,
+            strain: e,
+            dt,
+        };
+        let (s, k) = law.update_component(step, &fo, &mut fnew);
         ds = ds.max(rel(r.stress[component], s));
         dt_ = dt_.max(rel(r.tangent[(component, component)], k));
         for (a, b) in rn.iter().zip(&fnew) {
@@ -206,9 +211,14 @@ fn out_of_range_component_is_nan() {
     let law = law(TestKind::Tension, "friction_hysteresis");
     let old = vec![0.0; law.n_state()];
     let mut new = old.clone();
-    let (s, k) = law.update_component(6, 1.0, 0.0, &old, &mut new);
+    let step = |component| ComponentStep {
+        component,
+        strain: 1.0,
+        dt: 0.0,
+    };
+    let (s, k) = law.update_component(step(6), &old, &mut new);
     assert!(s.is_nan() && k.is_nan());
-    let (s, k) = update_component_via_full(law.as_ref(), 9, 1.0, 0.0, &old, &mut new);
+    let (s, k) = update_component_via_full(law.as_ref(), step(9), &old, &mut new);
     assert!(s.is_nan() && k.is_nan());
 }
 

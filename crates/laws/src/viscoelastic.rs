@@ -9,7 +9,7 @@
 //! baseline through [`crate::Parallel`].
 
 use crate::channel::{eye, Channel};
-use crate::law::{Law, LawResponse, Strain6, Stress6, Tangent6};
+use crate::law::{ComponentStep, Law, LawResponse, Strain6, Stress6, Tangent6};
 
 /// One Maxwell branch.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -91,14 +91,13 @@ impl Law for MaxwellBranches {
     }
     /// The vector update entry by entry (each entry of the exact integration is independent), so
     /// the loaded entry and the state are those of `update`.
-    fn update_component(
-        &self,
-        component: usize,
-        strain: f64,
-        dt: f64,
-        state_old: &[f64],
-        state_new: &mut [f64],
-    ) -> (f64, f64) {
+    fn update_component(&self, step: ComponentStep, old: &[f64], new: &mut [f64]) -> (f64, f64) {
+        let ComponentStep {
+            component,
+            strain,
+            dt,
+        } = step;
+        let (state_old, state_new) = (old, new);
         if component > 5 {
             return (f64::NAN, f64::NAN);
         }
