@@ -72,7 +72,12 @@ pub fn run(a: DiagnoseArgs) -> CmdResult {
         print_json(&d)?;
     } else {
         println!("{}", crate::pipeline::evaluate::words(&d));
-        if let Some(w) = &d.verdict.unexplained {
+        if let Some(w) = d
+            .verdict
+            .unexplained
+            .as_ref()
+            .or(d.verdict.remainder.as_ref())
+        {
             println!();
             println!("{w}");
         }

@@ -191,6 +191,11 @@ pub struct Verdict {
     /// residual lies and what was tried.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub unexplained: Option<String>,
+    /// When the verdict names effects but their model still leaves at least [`UNEXPLAINED_GAP`]
+    /// times the noise floor on held-out data: in plain words, that part of the gap is
+    /// unexplained (the named set explains some of it, not all). Absent otherwise.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub remainder: Option<String>,
     /// Noise floor / largest |measured response|.
     pub noise_rel: f64,
     /// Noise floor (response units, RMS over tests).
@@ -502,6 +507,7 @@ pub fn diagnose(
             verdict_effect = set.first().copied().unwrap_or(verdict_effect);
         }
     }
+    let remainder = remainder_words(&set, gap_after, noise_rms);
     let ladder = if opts.ladder {
         Some(ladder(ctx, tests, &train, &held, &noise, opts, scale)?)
     } else {
@@ -541,6 +547,7 @@ pub fn diagnose(
             gap_rel: gap_before / scale,
             gap_after_rel: gap_after / scale,
             unexplained,
+            remainder,
             noise_rel: noise_rms / scale,
             noise: noise_rms,
             n_eff: choice.n_eff,
@@ -611,6 +618,24 @@ fn waterfall(
         prev = next;
     }
     steps
+}
+
+/// [`Verdict::remainder`]: the named `set`'s held-out gap (`gap_after`, RMS) over the noise
+/// floor (`noise_rms`), in words when it is at least [`UNEXPLAINED_GAP`]; `None` for an empty
+/// set (`none`, `unexplained`) or a set that closes the gap.
+fn remainder_words(set: &[Effect], gap_after: f64, noise_rms: f64) -> Option<String> {
+    let ratio = gap_after / noise_rms;
+    if set.is_empty() || !(ratio >= UNEXPLAINED_GAP) {
+        return None;
+    }
+    let names: Vec<&str> = set.iter().map(|e| e.as_str()).collect();
+    Some(format!(
+        "{} leave{} {ratio:.1} times the noise floor on held-out data: part of the gap is still \
+         unexplained (an effect outside the vocabulary, a fixture or data problem, or a \
+         combination the set search did not reach)",
+        names.join(" + "),
+        if set.len() == 1 { "s" } else { "" }
+    ))
 }
 
 /// The `unexplained` verdict in plain words: how far above the noise floor the held-out gap is

@@ -628,3 +628,43 @@ fn two_withheld_effects_are_named_as_a_set_with_its_waterfall() {
         d.verdict.equivalent.len() + d.verdict.equivalent_sets.len()
     );
 }
+
+#[test]
+fn a_named_effect_that_leaves_a_gap_says_part_is_unexplained() {
+    // A strong sensor drift (explained by `sensor_drift`) plus the swinging-cable oscillation of
+    // the test above (explained by nothing): the verdict names the drift and says that part of
+    // the gap remains; without the oscillation the drift closes the gap and nothing is said.
+    let make = |swing: f64| {
+        let mut t = tension(
+            "elastoplastic",
+            &TRUTH,
+            None,
+            Artefacts {
+                noise_rel: 0.003,
+                drift_per_s: 0.5,
+                ..Artefacts::default()
+            },
+        );
+        let peak = t.response_scale();
+        for (r, &s) in t.response.iter_mut().zip(&t.time_s) {
+            *r += swing * peak * (2.0 * std::f64::consts::PI * 0.2 * s).sin();
+        }
+        diagnose(ctx(), &[t], &DiagnoseOptions::default()).unwrap()
+    };
+    let d = make(0.03);
+    assert!(
+        d.verdict.effects.contains(&Effect::SensorDrift),
+        "{:?}",
+        d.verdict.effects
+    );
+    let g = d.verdict.gap_after_rel / d.verdict.noise_rel;
+    assert!(g >= UNEXPLAINED_GAP, "gap after {g}");
+    let words = d.verdict.remainder.as_deref().unwrap();
+    assert!(
+        words.contains("part of the gap is still unexplained"),
+        "{words}"
+    );
+    let d = make(0.0);
+    assert_eq!(d.verdict.effects, [Effect::SensorDrift]);
+    assert!(d.verdict.remainder.is_none(), "{:?}", d.verdict.remainder);
+}
