@@ -529,24 +529,32 @@ fn no_extension_ends_worse_than_the_baseline_it_contains() {
     }
 }
 
-#[test]
-fn a_gap_no_candidate_closes_is_unexplained_not_none() {
-    // A slow oscillation of the load reading (a cable of the rig swinging against the load cell,
-    // 0.2 Hz, 3 % of the peak): far above the noise, and nothing in the vocabulary moves with time
-    // like that.
+/// The elastoplastic tension truth at 0.3 % noise with a sensor drift of `drift_per_s` and a
+/// slow oscillation of the load reading (a cable of the rig swinging against the load cell,
+/// 0.2 Hz) of `swing` × the peak response.
+fn swinging(drift_per_s: f64, swing: f64) -> DiagTest {
     let mut t = tension(
         "elastoplastic",
         &TRUTH,
         None,
         Artefacts {
             noise_rel: 0.003,
+            drift_per_s,
             ..Artefacts::default()
         },
     );
     let peak = t.response_scale();
     for (r, &s) in t.response.iter_mut().zip(&t.time_s) {
-        *r += 0.03 * peak * (2.0 * std::f64::consts::PI * 0.2 * s).sin();
+        *r += swing * peak * (2.0 * std::f64::consts::PI * 0.2 * s).sin();
     }
+    t
+}
+
+#[test]
+fn a_gap_no_candidate_closes_is_unexplained_not_none() {
+    // A slow oscillation of the load reading (`swinging`): far above the noise, and nothing in
+    // the vocabulary moves with time like that.
+    let t = swinging(0.0, 0.03);
     let d = diagnose(ctx(), &[t], &DiagnoseOptions::default()).unwrap();
     assert_eq!(
         d.verdict.effect,
@@ -635,20 +643,7 @@ fn a_named_effect_that_leaves_a_gap_says_part_is_unexplained() {
     // the test above (explained by nothing): the verdict names the drift and says that part of
     // the gap remains; without the oscillation the drift closes the gap and nothing is said.
     let make = |swing: f64| {
-        let mut t = tension(
-            "elastoplastic",
-            &TRUTH,
-            None,
-            Artefacts {
-                noise_rel: 0.003,
-                drift_per_s: 0.5,
-                ..Artefacts::default()
-            },
-        );
-        let peak = t.response_scale();
-        for (r, &s) in t.response.iter_mut().zip(&t.time_s) {
-            *r += swing * peak * (2.0 * std::f64::consts::PI * 0.2 * s).sin();
-        }
+        let t = swinging(0.5, swing);
         diagnose(ctx(), &[t], &DiagnoseOptions::default()).unwrap()
     };
     let d = make(0.03);
