@@ -249,7 +249,7 @@ pub fn quantum(signal: &[f64]) -> f64 {
     if v.len() < 2 {
         return 0.0;
     }
-    v.sort_by(f64::total_cmp);
+    crate::stats::sort_total(&mut v);
     let range = v[v.len() - 1] - v[0];
     let tol = 1e-9 * range;
     let mut q = f64::NAN;
@@ -315,7 +315,13 @@ pub const JITTER_MAX_LAG: usize = 4;
 /// Does not look at lags beyond [`JITTER_MAX_LAG`]: curvature grows as k², and a densely
 /// cycled test would read as jitter.
 pub fn jitter_level(signal: &[f64]) -> f64 {
-    let mut sigma = noise_level(signal);
+    // On ≥ 20 samples the lag-1 pass below is `noise_level` itself, the same differences in the
+    // same order: start from NaN (`NaN.max(x)` is x) instead of computing it twice.
+    let mut sigma = if signal.len() >= 20 {
+        f64::NAN
+    } else {
+        noise_level(signal)
+    };
     let mut k = 1;
     while k <= JITTER_MAX_LAG && signal.len() >= 20 * k {
         let d2: Vec<f64> = (0..signal.len() - 2 * k)
@@ -341,7 +347,8 @@ fn trimmed_rms(v: &[f64], trim: f64) -> f64 {
         .map(|x| x.abs())
         .filter(|x| x.is_finite())
         .collect();
-    a.sort_by(f64::total_cmp);
+    // Summed smallest first, as before the radix sort: the same number to the last bit.
+    crate::stats::sort_total(&mut a);
     let keep = ((a.len() as f64) * (1.0 - trim)).floor() as usize;
     if keep == 0 {
         return 0.0;
@@ -1050,6 +1057,56 @@ mod tests {
         let s = noise_level(&noisy(&clean, 0.05, 1));
         assert!((s / 0.05 - 1.0).abs() < 0.06, "sigma {s}");
         assert!(noise_level(&clean) < 1e-4);
+    }
+
+    /// `jitter_level` is its definition to the last bit (the lag-1 scale computed once, the
+    /// trimmed RMS over a radix sort): the largest of `noise_level`, the MAD σ at lags 1, 2, 4
+    /// and the trimmed RMS σ at lags 1 and 2 over comparison-sorted |d|, on short and long
+    /// noisy ramps, a quantised staircase and signals with NaNs.
+    #[test]
+    fn jitter_level_is_its_definition_bit_for_bit() {
+        fn by_definition(signal: &[f64]) -> f64 {
+            let trimmed = |v: &[f64]| {
+                let mut a: Vec<f64> = v.iter().map(|x| x.abs()).filter(|x| x.is_finite()).collect();
+                a.sort_by(f64::total_cmp);
+                let keep = ((a.len() as f64) * (1.0 - JITTER_TRIM)).floor() as usize;
+                if keep == 0 {
+                    return 0.0;
+                }
+                (a[..keep].iter().map(|x| x * x).sum::<f64>() / keep as f64).sqrt()
+            };
+            let mut sigma = noise_level(signal);
+            for k in [1, 2, 4] {
+                if signal.len() < 20 * k {
+                    break;
+                }
+                let d2: Vec<f64> = (0..signal.len() - 2 * k)
+                    .map(|i| signal[i + 2 * k] - 2.0 * signal[i + k] + signal[i])
+                    .collect();
+                sigma = sigma.max(mad_sigma_of_second_differences(&d2));
+                if k <= 2 {
+                    sigma = sigma.max(trimmed(&d2) / 6f64.sqrt());
+                }
+            }
+            sigma
+        }
+        for (seed, n) in [(1u64, 5usize), (2, 19), (3, 20), (4, 79), (5, 600), (6, 20_000)] {
+            let ramp: Vec<f64> = (0..n).map(|i| 0.01 * i as f64).collect();
+            let mut signals = vec![noisy(&ramp, 0.003, seed)];
+            signals.push(signals[0].iter().map(|v| (v / 0.002).round() * 0.002).collect());
+            let mut gaps = signals[0].clone();
+            for v in gaps.iter_mut().step_by(7) {
+                *v = f64::NAN;
+            }
+            signals.push(gaps);
+            for s in &signals {
+                let (a, b) = (jitter_level(s), by_definition(s));
+                assert!(
+                    a.to_bits() == b.to_bits() || (a.is_nan() && b.is_nan()),
+                    "n {n}: {a} vs {b}"
+                );
+            }
+        }
     }
 
     /// `jitter_level` equals `noise_level` on white noise; on clean triangle cycles and on a
