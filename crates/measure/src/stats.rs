@@ -235,6 +235,11 @@ pub fn median(values: &[f64]) -> f64 {
         .filter(|x| x.is_finite())
         .map(|&x| total_key(x))
         .collect();
+    median_of_keys(&mut k)
+}
+
+/// [`median`] of numbers given as their [`total_key`]s (NaN for none); reorders `k`.
+pub(crate) fn median_of_keys(k: &mut [u64]) -> f64 {
     if k.is_empty() {
         return f64::NAN;
     }
