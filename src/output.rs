@@ -145,9 +145,8 @@ impl StagedDir {
         let (parent, name) = split(&self.target)?;
         // Files inside were written with [`write_staged`] (no fsync each): flush them all
         // before the folder becomes visible.
-        sync_tree(&self.staging).map_err(|e| {
-            anyhow::anyhow!("cannot flush {} to disk: {e}", self.staging.display())
-        })?;
+        sync_tree(&self.staging)
+            .map_err(|e| anyhow::anyhow!("cannot flush {} to disk: {e}", self.staging.display()))?;
         let aside = parent.join(format!(".{name}.old-{}", std::process::id()));
         let had_old = self.target.symlink_metadata().is_ok();
         if had_old {

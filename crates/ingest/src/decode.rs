@@ -516,7 +516,8 @@ mod tests {
         assert_eq!(detect(&long(latin1)), Encoding::Latin1);
         let cp1252: &[u8] = b"Moment \x80 \x96 N\xB7m\r\n";
         assert_eq!(detect(&long(cp1252)), Encoding::Windows1252);
-        let (gbk, _, _) = encoding_rs::GBK.encode("时间 (s),位移 (mm),力 (kN),试样编号,拉伸试验 测试 结果\n");
+        let (gbk, _, _) =
+            encoding_rs::GBK.encode("时间 (s),位移 (mm),力 (kN),试样编号,拉伸试验 测试 结果\n");
         assert_eq!(detect_assess(&gbk), detect_assess(&long(&gbk)));
         assert_eq!(detect(&long(&gbk)), Encoding::Legacy(encoding_rs::GBK));
         let tail = [rows.as_bytes(), b"Pr\xFCfer: M\xFCller\r\n"].concat();

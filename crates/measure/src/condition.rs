@@ -339,7 +339,10 @@ pub fn jitter_level(signal: &[f64]) -> f64 {
         return jitter_level_of(signal);
     }
     let same = |a: &[f64]| {
-        a.len() == signal.len() && a.iter().zip(signal).all(|(x, y)| x.to_bits() == y.to_bits())
+        a.len() == signal.len()
+            && a.iter()
+                .zip(signal)
+                .all(|(x, y)| x.to_bits() == y.to_bits())
     };
     let hit = MEMO.with_borrow(|m| m.iter().find(|(v, _)| same(v)).map(|e| e.1));
     if let Some(sigma) = hit {
@@ -1130,7 +1133,10 @@ mod tests {
                 }
             }
             let (a, b) = (mad_sigma_of_second_differences(&d), by_definition(&d));
-            assert!(a.to_bits() == b.to_bits() || (a.is_nan() && b.is_nan()), "n {n}: {a} {b}");
+            assert!(
+                a.to_bits() == b.to_bits() || (a.is_nan() && b.is_nan()),
+                "n {n}: {a} {b}"
+            );
         }
         let huge = [f64::MAX, f64::MAX, 1.0, f64::MAX];
         assert!(mad_sigma_of_second_differences(&huge).is_nan() && by_definition(&huge).is_nan());
@@ -1146,7 +1152,11 @@ mod tests {
     fn jitter_level_is_its_definition_bit_for_bit() {
         fn by_definition(signal: &[f64]) -> f64 {
             let trimmed = |v: &[f64]| {
-                let mut a: Vec<f64> = v.iter().map(|x| x.abs()).filter(|x| x.is_finite()).collect();
+                let mut a: Vec<f64> = v
+                    .iter()
+                    .map(|x| x.abs())
+                    .filter(|x| x.is_finite())
+                    .collect();
                 a.sort_by(f64::total_cmp);
                 let keep = ((a.len() as f64) * (1.0 - JITTER_TRIM)).floor() as usize;
                 if keep == 0 {
@@ -1169,10 +1179,22 @@ mod tests {
             }
             sigma
         }
-        for (seed, n) in [(1u64, 5usize), (2, 19), (3, 20), (4, 79), (5, 600), (6, 20_000)] {
+        for (seed, n) in [
+            (1u64, 5usize),
+            (2, 19),
+            (3, 20),
+            (4, 79),
+            (5, 600),
+            (6, 20_000),
+        ] {
             let ramp: Vec<f64> = (0..n).map(|i| 0.01 * i as f64).collect();
             let mut signals = vec![noisy(&ramp, 0.003, seed)];
-            signals.push(signals[0].iter().map(|v| (v / 0.002).round() * 0.002).collect());
+            signals.push(
+                signals[0]
+                    .iter()
+                    .map(|v| (v / 0.002).round() * 0.002)
+                    .collect(),
+            );
             let mut gaps = signals[0].clone();
             for v in gaps.iter_mut().step_by(7) {
                 *v = f64::NAN;
@@ -1199,7 +1221,10 @@ mod tests {
         // One sample's last bit: its own σ, which is its definition's.
         let mut nudged = quiet.clone();
         nudged[1000] = f64::from_bits(nudged[1000].to_bits() ^ 1);
-        assert_eq!(jitter_level(&nudged).to_bits(), by_definition(&nudged).to_bits());
+        assert_eq!(
+            jitter_level(&nudged).to_bits(),
+            by_definition(&nudged).to_bits()
+        );
     }
 
     /// `jitter_level` equals `noise_level` on white noise; on clean triangle cycles and on a

@@ -636,6 +636,16 @@ pub(crate) mod tests {
         assert!(linear_fit(&[1.0, 2.0, 3.0], &[1.0, 3.0]).is_err());
     }
 
+    /// A xorshift generator: the same numbers on every run.
+    fn xorshift(mut state: u64) -> impl FnMut() -> u64 {
+        move || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            state
+        }
+    }
+
     /// The selection median equals the sorted-middle median on random samples of odd and even
     /// length, with ties, signed zeros and non-finite values mixed in.
     #[test]
@@ -653,13 +663,7 @@ pub(crate) mod tests {
                 0.5 * (v[m - 1] + v[m])
             }
         }
-        let mut state = 0x2545_f491_4f6c_dd1du64;
-        let mut next = move || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            state
-        };
+        let mut next = xorshift(0x2545_f491_4f6c_dd1d);
         for len in 1..200usize {
             let v: Vec<f64> = (0..len)
                 .map(|_| match next() % 13 {
@@ -685,13 +689,7 @@ pub(crate) mod tests {
     /// side of the small-slice cut-over; the keys round-trip and order like `total_cmp`.
     #[test]
     fn radix_sort_equals_the_total_order_sort() {
-        let mut state = 0x9e37_79b9_7f4a_7c15u64;
-        let mut next = move || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            state
-        };
+        let mut next = xorshift(0x9e37_79b9_7f4a_7c15);
         for (case, len) in [0usize, 1, 2, 7, 511, 512, 513, 2000, 20_000]
             .into_iter()
             .cycle()
