@@ -77,35 +77,45 @@ mod tests {
         std::fs::read_dir(dir).unwrap().count()
     }
 
+    type Writer = fn(&Path, &[u8]) -> std::io::Result<()>;
+
+    /// Both writers: with and without the `fsync`s.
+    const WRITERS: [Writer; 2] = [write_atomic, write_atomic_unsynced];
+
     #[test]
     fn replaces_the_target_and_leaves_no_temporary() {
-        let dir = tempfile::tempdir().unwrap();
-        let p = dir.path().join("out.json");
-        write_atomic(&p, b"first").unwrap();
-        write_atomic(&p, b"second").unwrap();
-        assert_eq!(std::fs::read(&p).unwrap(), b"second");
-        assert_eq!(entries(dir.path()), 1, "only out.json");
-        #[cfg(unix)]
-        {
-            use std::os::unix::fs::PermissionsExt;
-            let mode = std::fs::metadata(&p).unwrap().permissions().mode();
-            assert_eq!(mode & 0o777, 0o644);
+        for write in WRITERS {
+            let dir = tempfile::tempdir().unwrap();
+            let p = dir.path().join("out.json");
+            write(&p, b"first").unwrap();
+            write(&p, b"second").unwrap();
+            assert_eq!(std::fs::read(&p).unwrap(), b"second");
+            assert_eq!(entries(dir.path()), 1, "only out.json");
+            #[cfg(unix)]
+            {
+                use std::os::unix::fs::PermissionsExt;
+                let mode = std::fs::metadata(&p).unwrap().permissions().mode();
+                assert_eq!(mode & 0o777, 0o644);
+            }
         }
     }
 
     #[test]
     fn a_failed_write_keeps_the_old_target_and_leaves_nothing_behind() {
-        let dir = tempfile::tempdir().unwrap();
-        // The target is a non-empty directory: the rename fails after the temporary was written.
-        let target = dir.path().join("taken");
-        std::fs::create_dir(&target).unwrap();
-        std::fs::write(target.join("keep"), b"old").unwrap();
-        assert!(write_atomic(&target, b"new").is_err());
-        assert_eq!(entries(dir.path()), 1, "only the folder that was there");
-        assert_eq!(std::fs::read(target.join("keep")).unwrap(), b"old");
-        // A missing folder is an error, not created.
-        let e = write_atomic(&dir.path().join("missing/out.csv"), b"x").unwrap_err();
-        assert_eq!(e.kind(), std::io::ErrorKind::NotFound);
-        assert!(!dir.path().join("missing").exists());
+        for write in WRITERS {
+            let dir = tempfile::tempdir().unwrap();
+            // The target is a non-empty directory: the rename fails after the temporary was
+            // written.
+            let target = dir.path().join("taken");
+            std::fs::create_dir(&target).unwrap();
+            std::fs::write(target.join("keep"), b"old").unwrap();
+            assert!(write(&target, b"new").is_err());
+            assert_eq!(entries(dir.path()), 1, "only the folder that was there");
+            assert_eq!(std::fs::read(target.join("keep")).unwrap(), b"old");
+            // A missing folder is an error, not created.
+            let e = write(&dir.path().join("missing/out.csv"), b"x").unwrap_err();
+            assert_eq!(e.kind(), std::io::ErrorKind::NotFound);
+            assert!(!dir.path().join("missing").exists());
+        }
     }
 }
