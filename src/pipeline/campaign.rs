@@ -6,7 +6,7 @@
 use super::config::Campaign;
 use super::evaluate::TestOutcome;
 use super::report::PiecewiseRow;
-use crate::output::{sha256_hex, to_json_bytes, write_atomic};
+use crate::output::{sha256_hex, to_json_bytes, write_staged};
 use crate::VERSION;
 use anyhow::{Context, Result};
 use cablab_core::TestKind;
@@ -279,7 +279,7 @@ pub fn write_campaign_outputs(
         written.push(("index.html".into(), html.into_bytes()));
     }
     for (name, bytes) in &written {
-        write_atomic(&out_dir.join(name), bytes).with_context(|| format!("cannot write {name}"))?;
+        write_staged(&out_dir.join(name), bytes).with_context(|| format!("cannot write {name}"))?;
     }
     // Remove folders of tests no longer in the campaign (only folders cablab made).
     if let Ok(rd) = std::fs::read_dir(out_dir.join("tests")) {
@@ -345,7 +345,7 @@ pub fn write_campaign_outputs(
                 .iter()
                 .any(|o| o.why.iter().any(|w| w == super::evaluate::DIAGNOSIS_OFF)),
     };
-    write_atomic(&out_dir.join("manifest.json"), &to_json_bytes(&manifest)?)
+    write_staged(&out_dir.join("manifest.json"), &to_json_bytes(&manifest)?)
         .context("cannot write manifest.json")?;
     Ok(())
 }

@@ -14,7 +14,7 @@
 
 use super::config::{Campaign, PlannedTest};
 use super::evaluate::{evaluate, StageObserver, TestOutcome, STAGES};
-use crate::output::{sha256_hex, to_json_bytes, write_atomic, StagedDir};
+use crate::output::{sha256_hex, to_json_bytes, write_staged, StagedDir};
 use crate::VERSION;
 use anyhow::{anyhow, Context, Result};
 use indicatif::{MultiProgress, ProgressBar, ProgressDrawTarget, ProgressStyle};
@@ -351,7 +351,7 @@ fn one_test(
     let (mut outcome, files) = evaluate(c, t, &bytes, &input_sha, &key, diagnosis, obs);
     drop(bytes);
     for (name, b) in &files {
-        if let Err(e) = write_atomic(&test_dir.join(name), b) {
+        if let Err(e) = write_staged(&test_dir.join(name), b) {
             outcome
                 .error
                 .get_or_insert(format!("report: cannot write {name}: {e}"));
@@ -360,13 +360,13 @@ fn one_test(
     }
     match to_json_bytes(&outcome) {
         Ok(b) => {
-            if let Err(e) = write_atomic(&test_dir.join("outcome.json"), &b) {
+            if let Err(e) = write_staged(&test_dir.join("outcome.json"), &b) {
                 outcome
                     .error
                     .get_or_insert(format!("report: cannot write outcome.json: {e}"));
             } else {
                 let stamp = sha256_hex(format!("{key}{}", build_id()).as_bytes());
-                let _ = write_atomic(&test_dir.join(CACHE_STAMP), stamp.as_bytes());
+                let _ = write_staged(&test_dir.join(CACHE_STAMP), stamp.as_bytes());
             }
         }
         Err(e) => {

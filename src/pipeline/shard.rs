@@ -22,7 +22,7 @@
 use super::config::{Campaign, PlannedTest};
 use super::evaluate::TestOutcome;
 use super::runner::{self, copy_test_files, RunOptions, RunReport};
-use crate::output::{sha256_hex, to_json_bytes, write_atomic, StagedDir};
+use crate::output::{sha256_hex, to_json_bytes, write_staged, StagedDir};
 use crate::VERSION;
 use anyhow::{anyhow, bail, Context, Result};
 use serde::{Deserialize, Serialize};
@@ -143,7 +143,7 @@ pub fn run_shard(c: &Campaign, o: &RunOptions, shard: Shard) -> Result<RunReport
     let (outcomes, cached_n) =
         runner::evaluate_tests(c, &tests, stage.path(), &[target.clone(), base], o)?;
     let record = ShardRecord::new(c, shard, runner::diagnosis_on(c, o), outcomes.clone());
-    write_atomic(&stage.path().join(RECORD), &to_json_bytes(&record)?)
+    write_staged(&stage.path().join(RECORD), &to_json_bytes(&record)?)
         .context("cannot write the shard record")?;
     stage.commit()?;
     Ok(RunReport::new(target, outcomes, cached_n, start))
