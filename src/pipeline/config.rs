@@ -73,6 +73,13 @@ pub struct SpecimenType {
     /// state it): the moduli are then null, with why.
     #[serde(default)]
     pub diameter_mm: Option<f64>,
+    /// Width b of a flat (rectangular) section in millimetres, with `thickness_mm`; instead of
+    /// `diameter_mm`. The moduli then use A = b h, I = b h³/12 and Saint-Venant's J_t.
+    #[serde(default)]
+    pub width_mm: Option<f64>,
+    /// Thickness h of a flat section in millimetres (in the plane of bending), with `width_mm`.
+    #[serde(default)]
+    pub thickness_mm: Option<f64>,
     /// Free text.
     #[serde(default)]
     pub note: String,
@@ -353,6 +360,10 @@ pub struct PlannedTest {
     pub specimen: String,
     /// Section diameter, m; `None` when neither the pipeline nor (later) the file states it.
     pub diameter_m: Option<f64>,
+    /// A flat section width × thickness, m, from the specimen type (`width_mm`,
+    /// `thickness_mm`); absent from the cache key when not set.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub flat_section: Option<cablab_core::RectangularSection>,
     /// Test kind.
     pub kind: TestKind,
     /// Free length or span, m (None: from the file's metadata).
@@ -756,8 +767,29 @@ fn validate(file: PipelineFile, path: &Path, bytes: Vec<u8>, root: PathBuf) -> R
                 &lines.at(&ctx, "specimen", si, "diameter_mm"),
             )?;
         }
+        for (key, v) in [("width_mm", s.width_mm), ("thickness_mm", s.thickness_mm)] {
+            if let Some(v) = v {
+                in_range(v, DIAMETER_MM, "mm", &lines.at(&ctx, "specimen", si, key))?;
+            }
+        }
+        let flat = match (s.width_mm, s.thickness_mm, s.diameter_mm) {
+            (Some(_), Some(_), Some(_)) => bail!(
+                "{}: give either diameter_mm or width_mm and thickness_mm (one section), not both",
+                lines.at(&ctx, "specimen", si, "width_mm")
+            ),
+            (Some(_), None, _) | (None, Some(_), _) => bail!(
+                "{}: a flat section needs both width_mm and thickness_mm",
+                lines.at(
+                    &ctx,
+                    "specimen",
+                    si,
+                    if s.width_mm.is_some() { "width_mm" } else { "thickness_mm" }
+                )
+            ),
+            (w, h, _) => crate::bridge::flat_given(w, h),
+        };
         if diam
-            .insert(s.label.clone(), s.diameter_mm.map(|d| d * 1e-3))
+            .insert(s.label.clone(), (s.diameter_mm.map(|d| d * 1e-3), flat))
             .is_some()
         {
             bail!(
@@ -854,7 +886,7 @@ fn validate(file: PipelineFile, path: &Path, bytes: Vec<u8>, root: PathBuf) -> R
                 lines.at(&ctx, "input", gi, "kind")
             );
         }
-        let diameter_m = *diam.get(&g.specimen).ok_or_else(|| {
+        let (diameter_m, flat_section) = *diam.get(&g.specimen).ok_or_else(|| {
             anyhow!(
                 "{}: specimen {:?} is not declared in a [[specimen]] table (declared: {:?})",
                 lines.at(&ctx, "input", gi, "specimen"),
@@ -954,6 +986,7 @@ fn validate(file: PipelineFile, path: &Path, bytes: Vec<u8>, root: PathBuf) -> R
                 path: p,
                 specimen: g.specimen.clone(),
                 diameter_m,
+                flat_section,
                 kind,
                 free_length_m: ov.length_mm.or(g.length_mm).map(|l| l * 1e-3),
                 format: ov.format.clone().or_else(|| g.format.clone()),

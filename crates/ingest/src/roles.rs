@@ -761,7 +761,79 @@ fn area_m2(key: &str, value: &str) -> Option<f64> {
 /// width (`Specimen thickness` and `Specimen width`, `Dicke`/`Breite`, `Épaisseur`/`Largeur`,
 /// with length units). `None` when neither is there.
 pub(crate) fn area_from_metadata(meta: &[(String, String)]) -> Option<f64> {
-    stated_area(meta).or_else(|| {
+    stated_area(meta).or_else(|| flat_section_from_metadata(meta).map(|(s, _)| s.area()))
+}
+
+/// A flat specimen's width × thickness from the metadata, m, and where it came from:
+/// `Specimen thickness` and `Specimen width` (`Dicke`/`Breite`, `Épaisseur`/`Largeur`, ... with
+/// length units), else the Numisheet material id of sdata/NIST files (`#;NumisheetID`, e.g.
+/// `…R03T1.409W17.91-S`: thickness 1.409 mm, width 17.91 mm). `None` unless both are there.
+pub(crate) fn flat_section_from_metadata(
+    meta: &[(String, String)],
+) -> Option<(cablab_core::RectangularSection, String)> {
+    stated_flat_section(meta).or_else(|| numisheet_flat_section(meta))
+}
+
+/// `T<thickness>W<width>` (mm) inside a `NumisheetID` value.
+fn numisheet_flat_section(
+    meta: &[(String, String)],
+) -> Option<(cablab_core::RectangularSection, String)> {
+    let (k, v) = meta
+        .iter()
+        .find(|(k, _)| norm_key(k) == "numisheetid")?;
+    let num = |s: &str| -> Option<(f64, usize)> {
+        let n = s
+            .char_indices()
+            .take_while(|(_, c)| c.is_ascii_digit() || *c == '.')
+            .last()
+            .map(|(i, c)| i + c.len_utf8())?;
+        s[..n].parse::<f64>().ok().filter(|x| *x > 0.0).map(|x| (x, n))
+    };
+    v.match_indices('T').find_map(|(i, _)| {
+        let (t, n) = num(&v[i + 1..])?;
+        let rest = v[i + 1 + n..].strip_prefix('W')?;
+        let (w, _) = num(rest)?;
+        Some((
+            cablab_core::RectangularSection {
+                width_m: w * 1e-3,
+                thickness_m: t * 1e-3,
+            },
+            format!("'{k}: {v}' (Numisheet id: T = thickness, W = width, mm)"),
+        ))
+    })
+}
+
+/// The sdata/NIST geometry code `#;Geometry;A36R19W18` (reduced parallel length A, fillet
+/// radius R, nominal width W, mm): the parallel length in m, with the note that says so.
+fn sdata_parallel_length(meta: &[(String, String)]) -> Option<(f64, String)> {
+    let (k, v) = meta.iter().find(|(k, _)| norm_key(k) == "geometry")?;
+    let code = v.trim();
+    let mut parts = Vec::new();
+    let mut rest = code;
+    for letter in ['A', 'R', 'W'] {
+        rest = rest.strip_prefix(letter)?;
+        let n = rest
+            .find(|c: char| !(c.is_ascii_digit() || c == '.'))
+            .unwrap_or(rest.len());
+        parts.push(rest[..n].parse::<f64>().ok().filter(|x| *x > 0.0)?);
+        rest = &rest[n..];
+    }
+    rest.is_empty().then(|| {
+        (
+            parts[0] * 1e-3,
+            format!(
+                "specimen length {} mm: the reduced parallel length A of the geometry code '{k}: {v}' (A = parallel length, R = fillet radius, W = width, mm)",
+                parts[0]
+            ),
+        )
+    })
+}
+
+/// `Specimen thickness` and `Specimen width` (see [`flat_section_from_metadata`]).
+fn stated_flat_section(
+    meta: &[(String, String)],
+) -> Option<(cablab_core::RectangularSection, String)> {
+    {
         let find = |keys: &[&str]| {
             meta.iter().find_map(|(k, v)| {
                 let nk = norm_key(k);
@@ -792,8 +864,14 @@ pub(crate) fn area_from_metadata(meta: &[(String, String)]) -> Option<f64> {
             "ancho",
             "larghezza",
         ])?;
-        Some(t * w)
-    })
+        Some((
+            cablab_core::RectangularSection {
+                width_m: w,
+                thickness_m: t,
+            },
+            "the metadata's thickness and width".to_string(),
+        ))
+    }
 }
 
 /// A cross-section area stated with an area unit (see [`area_from_metadata`]).
@@ -948,6 +1026,12 @@ pub(crate) fn specimen_from_metadata(
                 }
                 break;
             }
+        }
+    }
+    if sp.free_length_m.is_none() {
+        if let Some((l, note)) = sdata_parallel_length(meta) {
+            sp.free_length_m = Some(l);
+            notes.push(note);
         }
     }
     (sp, notes)
