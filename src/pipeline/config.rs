@@ -1234,6 +1234,29 @@ compliance = 2e-7
         assert!(c.tests.iter().all(|t| t.diameter_m.is_none()));
     }
 
+    /// A flat section is width_mm and thickness_mm together, in SI on the planned tests; one of
+    /// them alone, or with a diameter, is an error that names the line.
+    #[test]
+    fn a_flat_section_is_width_and_thickness_together() {
+        let d = tempfile::tempdir().unwrap();
+        write(d.path(), "raw_data/b.csv", "x");
+        write(d.path(), "raw_data/a.csv", "x");
+        let flat = GOOD.replace("diameter_mm = 2.8\n", "width_mm = 11.86\nthickness_mm = 2.937\n");
+        let c = load(&write(d.path(), "pipelines/t.toml", &flat)).unwrap();
+        let f = c.tests[0].flat_section.unwrap();
+        assert!((f.width_m - 11.86e-3).abs() < 1e-15 && (f.thickness_m - 2.937e-3).abs() < 1e-15);
+        assert!(c.tests[0].diameter_m.is_none());
+        let one = GOOD.replace("diameter_mm = 2.8\n", "width_mm = 11.86\n");
+        let e = load_err(d.path(), &one);
+        assert!(e.contains("t.toml:6: [specimen] width_mm: a flat section needs both"), "{e}");
+        let both = GOOD.replace("diameter_mm = 2.8\n", "diameter_mm = 2.8\nwidth_mm = 3\nthickness_mm = 1\n");
+        let e = load_err(d.path(), &both);
+        assert!(e.contains("give either diameter_mm or width_mm and thickness_mm"), "{e}");
+        let bad = GOOD.replace("diameter_mm = 2.8\n", "width_mm = 11.86\nthickness_mm = 0\n");
+        let e = load_err(d.path(), &bad);
+        assert!(e.contains("[specimen] thickness_mm = 0: outside the plausible range"), "{e}");
+    }
+
     #[test]
     fn unknown_key_is_named_with_its_line() {
         let d = tempfile::tempdir().unwrap();
