@@ -547,6 +547,9 @@ fn stages(
         "diagnosis": diagnosis,
         "model_error": out.model_error,
     });
+    if let Some(f) = &out.flat_section {
+        result["geometry"]["flat_section"] = serde_json::json!(f);
+    }
     if !out.needs.is_empty() {
         result["needs"] = serde_json::json!(out.needs);
         result["machine_stiffness"] = serde_json::json!(out.machine_stiffness);
