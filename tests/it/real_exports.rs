@@ -434,3 +434,29 @@ fn a_campaign_over_real_exports_uses_the_specimen_mounted_channel() {
     assert!(within(by("uiuc"), 7.5e6, 0.05), "{:e}", by("uiuc"));
     assert!(within(by("mdb1pct"), 1.37e6, 0.04), "{:e}", by("mdb1pct"));
 }
+
+/// The MTS 793 BTW three-point layout (fixture written for cablab: PLA beam b = 11.86 mm,
+/// h = 2.937 mm, span 40.28 mm, E = 2.05 GPa, linear to 40 N then softening; compression
+/// negative): the single-space names split into three channels, and with the flat section
+/// (EI) = E b h³/12 = 5.13·10⁻² N m² and E = 2.05 GPa within 2 %.
+#[test]
+fn mts_btw_three_point_beam_with_a_flat_section() {
+    let f = data("cablab__mts793_btw_three_point.dat");
+    let a = json(&[
+        "analyze",
+        &f,
+        "--kind",
+        "three-point",
+        "--length-mm",
+        "40.28",
+        "--width-mm",
+        "11.86",
+        "--thickness-mm",
+        "2.937",
+    ]);
+    assert_eq!(a["control_channel"]["name"], "Ch 1 Displacement");
+    let i = 11.86e-3 * 2.937e-3f64.powi(3) / 12.0;
+    assert!(within(stiffness(&a), 2.05e9 * i, 0.02), "{:e}", stiffness(&a));
+    let e = a["modulus_pa"].as_f64().unwrap();
+    assert!(within(e, 2.05e9, 0.02), "{e:e}");
+}
