@@ -628,13 +628,24 @@ pub fn check_roles(
                     }
                 )),
                 Mount::Machine if !compliance_given => notes.push(format!(
-                    "the stiffness comes from the machine travel {}{}: it includes the compliance of the load train (grips, frame), so (EA) is a lower bound; use a specimen-mounted extensometer or give --compliance",
+                    "the stiffness comes from the machine travel {}{}: it includes the compliance of the load train (grips, frame), so (EA) is a lower bound; {}",
                     show(&rec.channels[i]),
                     match (evidence, control_given) {
                         (Some(e), true) => format!(" ({e}; chosen with --control)"),
                         (Some(e), false) => format!(" ({e})"),
                         (None, true) => " (chosen with --control)".into(),
                         (None, false) => String::new(),
+                    },
+                    // Name the file's own specimen-mounted channel when it has one.
+                    match (0..rec.channels.len())
+                        .find(|&k| k != i && rec.mount(k) == Mount::Specimen)
+                    {
+                        Some(k) => format!(
+                            "the file's specimen-mounted {} gives the specimen's own: pass --control '{}' (or give --compliance)",
+                            show(&rec.channels[k]),
+                            rec.channels[k].name
+                        ),
+                        None => "use a specimen-mounted extensometer or give --compliance".into(),
                     }
                 )),
                 _ => {}

@@ -460,3 +460,29 @@ fn mts_btw_three_point_beam_with_a_flat_section() {
     let e = a["modulus_pa"].as_f64().unwrap();
     assert!(within(e, 2.05e9, 0.02), "{e:e}");
 }
+
+/// A crosshead beside a length called strain (MTS TestSuite's `_Strain1` in mm, the
+/// extensometer's elongation): the reader keeps the crosshead as the control (as the shared
+/// manifest's technician does), and the machine-travel flag names the specimen-mounted channel
+/// and the flag that uses it; with it, (EA) is the bar's own.
+#[test]
+fn a_machine_travel_flag_names_the_files_extensometer() {
+    let (ea, l0) = (2.0e6, 0.05);
+    let mut s = String::from("Time (s),Crosshead (mm),Load (N),Strain1 (mm)\n");
+    for k in 0..=200 {
+        let eps = 2e-3 * k as f64 / 200.0;
+        let f = ea * eps + 0.5 * ((k * 7919 % 13) as f64 - 6.0);
+        s += &format!("{},{},{f},{}\n", 0.1 * k as f64, 3.0 * eps * l0 * 1e3, eps * l0 * 1e3);
+    }
+    let (_d, p) = temp_file("xhead.csv", &s);
+    let a = json(&["analyze", &p, "--kind", "tension", "--length-mm", "50"]);
+    assert_eq!(a["control_channel"]["name"], "Crosshead");
+    let w = warnings(&a);
+    assert!(
+        w.iter().any(|w| w.contains("machine travel 'Crosshead'")
+            && w.contains("specimen-mounted 'Strain1' (mm) gives the specimen's own: pass --control 'Strain1'")),
+        "{w:?}"
+    );
+    let b = json(&["analyze", &p, "--kind", "tension", "--length-mm", "50", "--control", "Strain1"]);
+    assert!(within(stiffness(&b), ea, 0.005), "{:e}", stiffness(&b));
+}
