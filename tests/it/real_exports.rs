@@ -185,9 +185,24 @@ fn sdata_numisheet_units_from_metadata_and_dic_strain() {
         let unl = a["cycles"][0]["unloading_stiffness"].as_f64().unwrap();
         assert!(unl < ea, "unloading {unl:e} vs {ea:e}");
     }
-    // No length at all: a strain control needs none for (EA).
+    // No flags at all: the parallel length 36 mm from `#;Geometry;A36R19W18` and the section
+    // 1.409 × 17.91 mm (A = 25.235 mm²) from `#;NumisheetID …T1.409W17.91…`, each with a note
+    // that says where it came from; E in the reference's 186–206 GPa.
     let a = analyze(name, &[]);
     assert!(within(stiffness(&a), 4.95e6, 0.05));
+    let e = a["modulus_pa"].as_f64().unwrap();
+    assert!((186e9..=206e9).contains(&e), "E {e:e}");
+    assert!(within(stiffness(&a) / e, 1.409e-3 * 17.91e-3, 1e-9));
+    let w = warnings(&a);
+    assert!(
+        w.iter().any(|w| w.contains("36 mm: the reduced parallel length A of the geometry code 'Geometry: A36R19W18'")),
+        "{w:?}"
+    );
+    assert!(
+        w.iter().any(|w| w.contains("cross-section 25.2352 mm²")
+            && w.contains("NumisheetID: C00FeDP980_Numisheet2020R03T1.409W17.91-S")),
+        "{w:?}"
+    );
 }
 
 #[test]
@@ -433,6 +448,23 @@ fn a_campaign_over_real_exports_uses_the_specimen_mounted_channel() {
     };
     assert!(within(by("uiuc"), 7.5e6, 0.05), "{:e}", by("uiuc"));
     assert!(within(by("mdb1pct"), 1.37e6, 0.04), "{:e}", by("mdb1pct"));
+    // The testXpert file states its cross-section (6.3812 mm²), not a diameter: nothing is
+    // missing (no "diameter_mm" in `needs`), and E = (EA)/A with the stated area.
+    let t = s["tests"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|t| t["id"].as_str().unwrap().contains("mdb1pct"))
+        .unwrap();
+    assert!(t.get("needs").is_none(), "{t}");
+    let e = t["modulus_pa"].as_f64().unwrap();
+    assert!(within(e, by("mdb1pct") / 6.3812e-6, 1e-9), "{e:e}");
+    // Folder mode's own listing says where the section came from instead of "diameter ?".
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("section cross-section 6.3812 mm² (the file's metadata)"),
+        "{err}"
+    );
 }
 
 /// The MTS 793 BTW three-point layout (fixture written for cablab: PLA beam b = 11.86 mm,

@@ -1262,6 +1262,39 @@ mod tests {
         assert!(ev[1].what.starts_with("the file name"), "{ev:?}");
     }
 
+    /// sdata/NIST geometry: `Geometry: A36R19W18` is the parallel length 36 mm (only when no
+    /// other length is stated) and `NumisheetID …T1.409W17.91…` the flat section.
+    #[test]
+    fn sdata_geometry_code_and_numisheet_id() {
+        let meta = |kv: &[(&str, &str)]| -> Vec<(String, String)> {
+            kv.iter()
+                .map(|(k, v)| (k.to_string(), v.to_string()))
+                .collect()
+        };
+        let m = meta(&[
+            ("Geometry", "A36R19W18"),
+            ("NumisheetID", "C00FeDP980_Numisheet2020R03T1.409W17.91-S"),
+        ]);
+        let (sp, notes) = specimen_from_metadata(&m);
+        assert!((sp.free_length_m.unwrap() - 0.036).abs() < 1e-15);
+        assert!(notes[0].contains("'Geometry: A36R19W18'"), "{notes:?}");
+        let (f, from) = flat_section_from_metadata(&m).unwrap();
+        assert!((f.thickness_m - 1.409e-3).abs() < 1e-15 && (f.width_m - 17.91e-3).abs() < 1e-15);
+        assert!(from.contains("NumisheetID"), "{from}");
+        assert!((area_from_metadata(&m).unwrap() - 1.409e-3 * 17.91e-3).abs() < 1e-15);
+        // A stated gauge length wins over the code; codes that are not A…R…W… are not read.
+        let (sp, _) = specimen_from_metadata(&meta(&[
+            ("Gauge length", "25 mm"),
+            ("Geometry", "A36R19W18"),
+        ]));
+        assert!((sp.free_length_m.unwrap() - 0.025).abs() < 1e-15);
+        for code in ["A36R19", "A36R19W18X", "dogbone", "A-1R2W3"] {
+            let (sp, _) = specimen_from_metadata(&meta(&[("Geometry", code)]));
+            assert!(sp.free_length_m.is_none(), "{code}");
+        }
+        assert!(flat_section_from_metadata(&meta(&[("NumisheetID", "DP980_R03-S")])).is_none());
+    }
+
     #[test]
     fn cross_section_stated_or_thickness_times_width() {
         let kv = |v: &[(&str, &str)]| -> Vec<(String, String)> {
