@@ -134,7 +134,11 @@ pub fn geometry_noted(
         if diameter_m.is_some() {
             bail!("{file}: give either a diameter or a flat section (width × thickness), not both");
         }
-        if !(f.width_m.is_finite() && f.width_m > 0.0 && f.thickness_m.is_finite() && f.thickness_m > 0.0) {
+        if !(f.width_m.is_finite()
+            && f.width_m > 0.0
+            && f.thickness_m.is_finite()
+            && f.thickness_m > 0.0)
+        {
             bail!(
                 "{file}: the flat section's width and thickness must be positive, got {} × {} m",
                 f.width_m,
@@ -329,7 +333,13 @@ pub fn read_test(
     )?;
     warnings.extend(notes);
     let mut curve = curve(&rec)?;
-    warnings.extend(sectional_control(&rec, kind, &geom, flat.as_ref(), &mut curve)?);
+    warnings.extend(sectional_control(
+        &rec,
+        kind,
+        &geom,
+        flat.as_ref(),
+        &mut curve,
+    )?);
     Ok(ReadTest {
         rec,
         geom,

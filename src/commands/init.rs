@@ -451,7 +451,10 @@ pub fn survey(paths: &[PathBuf], d: &InferArgs) -> Result<Survey, CliError> {
 /// `bridge::geometry_noted`): a flat b × h for any kind but tension, where the stated
 /// cross-section area (else b h) is used. `None` when there is none (or only an area, which
 /// gives no I or J).
-fn stated_section(rec: &cablab_ingest::TestRecord, kind: Option<TestKind>) -> Option<Sourced<String>> {
+fn stated_section(
+    rec: &cablab_ingest::TestRecord,
+    kind: Option<TestKind>,
+) -> Option<Sourced<String>> {
     match (kind, rec.cross_section_m2, &rec.flat_section) {
         (Some(TestKind::Tension), Some(a), _) => Some(Sourced {
             value: format!("cross-section {} mm²", round_mm(a * 1e6)),

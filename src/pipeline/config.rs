@@ -783,7 +783,11 @@ fn validate(file: PipelineFile, path: &Path, bytes: Vec<u8>, root: PathBuf) -> R
                     &ctx,
                     "specimen",
                     si,
-                    if s.width_mm.is_some() { "width_mm" } else { "thickness_mm" }
+                    if s.width_mm.is_some() {
+                        "width_mm"
+                    } else {
+                        "thickness_mm"
+                    }
                 )
             ),
             (w, h, _) => crate::bridge::flat_given(w, h),
@@ -1241,20 +1245,38 @@ compliance = 2e-7
         let d = tempfile::tempdir().unwrap();
         write(d.path(), "raw_data/b.csv", "x");
         write(d.path(), "raw_data/a.csv", "x");
-        let flat = GOOD.replace("diameter_mm = 2.8\n", "width_mm = 11.86\nthickness_mm = 2.937\n");
+        let flat = GOOD.replace(
+            "diameter_mm = 2.8\n",
+            "width_mm = 11.86\nthickness_mm = 2.937\n",
+        );
         let c = load(&write(d.path(), "pipelines/t.toml", &flat)).unwrap();
         let f = c.tests[0].flat_section.unwrap();
         assert!((f.width_m - 11.86e-3).abs() < 1e-15 && (f.thickness_m - 2.937e-3).abs() < 1e-15);
         assert!(c.tests[0].diameter_m.is_none());
         let one = GOOD.replace("diameter_mm = 2.8\n", "width_mm = 11.86\n");
         let e = load_err(d.path(), &one);
-        assert!(e.contains("t.toml:6: [specimen] width_mm: a flat section needs both"), "{e}");
-        let both = GOOD.replace("diameter_mm = 2.8\n", "diameter_mm = 2.8\nwidth_mm = 3\nthickness_mm = 1\n");
+        assert!(
+            e.contains("t.toml:6: [specimen] width_mm: a flat section needs both"),
+            "{e}"
+        );
+        let both = GOOD.replace(
+            "diameter_mm = 2.8\n",
+            "diameter_mm = 2.8\nwidth_mm = 3\nthickness_mm = 1\n",
+        );
         let e = load_err(d.path(), &both);
-        assert!(e.contains("give either diameter_mm or width_mm and thickness_mm"), "{e}");
-        let bad = GOOD.replace("diameter_mm = 2.8\n", "width_mm = 11.86\nthickness_mm = 0\n");
+        assert!(
+            e.contains("give either diameter_mm or width_mm and thickness_mm"),
+            "{e}"
+        );
+        let bad = GOOD.replace(
+            "diameter_mm = 2.8\n",
+            "width_mm = 11.86\nthickness_mm = 0\n",
+        );
         let e = load_err(d.path(), &bad);
-        assert!(e.contains("[specimen] thickness_mm = 0: outside the plausible range"), "{e}");
+        assert!(
+            e.contains("[specimen] thickness_mm = 0: outside the plausible range"),
+            "{e}"
+        );
     }
 
     #[test]

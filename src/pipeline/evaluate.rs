@@ -406,8 +406,11 @@ fn stages(
             t.flat_section,
         )?;
         // Only the section's notes: the length's are the reader's business here.
-        out.warnings
-            .extend(notes.into_iter().filter(|n| n.starts_with("the moduli use the flat")));
+        out.warnings.extend(
+            notes
+                .into_iter()
+                .filter(|n| n.starts_with("the moduli use the flat")),
+        );
         (g, f)
     } else {
         let g = cablab_measure::Geometry {
@@ -419,7 +422,10 @@ fn stages(
             },
         };
         let f = (curvature_control && g.diameter_m.is_none())
-            .then(|| t.flat_section.or(rec.flat_section.as_ref().map(|(f, _)| *f)))
+            .then(|| {
+                t.flat_section
+                    .or(rec.flat_section.as_ref().map(|(f, _)| *f))
+            })
             .flatten();
         (g, f)
     };

@@ -195,7 +195,9 @@ fn sdata_numisheet_units_from_metadata_and_dic_strain() {
     assert!(within(stiffness(&a) / e, 1.409e-3 * 17.91e-3, 1e-9));
     let w = warnings(&a);
     assert!(
-        w.iter().any(|w| w.contains("36 mm: the reduced parallel length A of the geometry code 'Geometry: A36R19W18'")),
+        w.iter().any(|w| w.contains(
+            "36 mm: the reduced parallel length A of the geometry code 'Geometry: A36R19W18'"
+        )),
         "{w:?}"
     );
     assert!(
@@ -488,7 +490,11 @@ fn mts_btw_three_point_beam_with_a_flat_section() {
     ]);
     assert_eq!(a["control_channel"]["name"], "Ch 1 Displacement");
     let i = 11.86e-3 * 2.937e-3f64.powi(3) / 12.0;
-    assert!(within(stiffness(&a), 2.05e9 * i, 0.02), "{:e}", stiffness(&a));
+    assert!(
+        within(stiffness(&a), 2.05e9 * i, 0.02),
+        "{:e}",
+        stiffness(&a)
+    );
     let e = a["modulus_pa"].as_f64().unwrap();
     assert!(within(e, 2.05e9, 0.02), "{e:e}");
 }
@@ -504,7 +510,12 @@ fn a_machine_travel_flag_names_the_files_extensometer() {
     for k in 0..=200 {
         let eps = 2e-3 * k as f64 / 200.0;
         let f = ea * eps + 0.5 * ((k * 7919 % 13) as f64 - 6.0);
-        s += &format!("{},{},{f},{}\n", 0.1 * k as f64, 3.0 * eps * l0 * 1e3, eps * l0 * 1e3);
+        s += &format!(
+            "{},{},{f},{}\n",
+            0.1 * k as f64,
+            3.0 * eps * l0 * 1e3,
+            eps * l0 * 1e3
+        );
     }
     let (_d, p) = temp_file("xhead.csv", &s);
     let a = json(&["analyze", &p, "--kind", "tension", "--length-mm", "50"]);
@@ -515,6 +526,15 @@ fn a_machine_travel_flag_names_the_files_extensometer() {
             && w.contains("specimen-mounted 'Strain1' (mm) gives the specimen's own: pass --control 'Strain1'")),
         "{w:?}"
     );
-    let b = json(&["analyze", &p, "--kind", "tension", "--length-mm", "50", "--control", "Strain1"]);
+    let b = json(&[
+        "analyze",
+        &p,
+        "--kind",
+        "tension",
+        "--length-mm",
+        "50",
+        "--control",
+        "Strain1",
+    ]);
     assert!(within(stiffness(&b), ea, 0.005), "{:e}", stiffness(&b));
 }

@@ -65,7 +65,14 @@ fn beam_log(header: &str) -> String {
 #[test]
 fn a_flat_beam_in_three_point_bending_gets_e_from_b_h_cubed_over_12() {
     let (_d, p) = temp_file("beam.csv", &beam_log(""));
-    let base = ["analyze", &p, "--kind", "three-point", "--length-mm", "40.28"];
+    let base = [
+        "analyze",
+        &p,
+        "--kind",
+        "three-point",
+        "--length-mm",
+        "40.28",
+    ];
     let mut args = base.to_vec();
     args.extend(["--width-mm", "11.86", "--thickness-mm", "2.937"]);
     let a = json(&args);
@@ -77,13 +84,21 @@ fn a_flat_beam_in_three_point_bending_gets_e_from_b_h_cubed_over_12() {
     assert!((e - ei / i).abs() <= 1e-9 * e, "E = EI/I exactly");
     let w = warnings(&a);
     assert!(
-        w.iter().any(|w| w.contains("flat section 11.8600 × 2.9370 mm")
-            && w.contains("I = b h³/12 = 25.0")
-            && w.contains("bending about the width")),
+        w.iter()
+            .any(|w| w.contains("flat section 11.8600 × 2.9370 mm")
+                && w.contains("I = b h³/12 = 25.0")
+                && w.contains("bending about the width")),
         "{w:?}"
     );
     for bad in [
-        &["--width-mm", "11.86", "--thickness-mm", "2.937", "--diameter-mm", "3"][..],
+        &[
+            "--width-mm",
+            "11.86",
+            "--thickness-mm",
+            "2.937",
+            "--diameter-mm",
+            "3",
+        ][..],
         &["--width-mm", "11.86"][..],
     ] {
         let out = cablab().args(base).args(bad).output().unwrap();
@@ -113,8 +128,18 @@ fn a_flat_strip_in_torsion_uses_saint_venants_torsion_constant() {
     };
     let (_d, p) = temp_file("strip.csv", &body(""));
     let a = json(&[
-        "analyze", &p, "--kind", "torsion", "--length-mm", "100", "--nu", "0.3",
-        "--width-mm", "10", "--thickness-mm", "2",
+        "analyze",
+        &p,
+        "--kind",
+        "torsion",
+        "--length-mm",
+        "100",
+        "--nu",
+        "0.3",
+        "--width-mm",
+        "10",
+        "--thickness-mm",
+        "2",
     ]);
     let got = a["modulus_pa"].as_f64().unwrap();
     assert!(within(got, e, 0.005), "E {got:e}");
@@ -132,7 +157,16 @@ fn a_flat_strip_in_torsion_uses_saint_venants_torsion_constant() {
         "strip_meta.csv",
         &body("Specimen thickness: 2 mm\nSpecimen width: 10 mm\n"),
     );
-    let m = json(&["analyze", &p2, "--kind", "torsion", "--length-mm", "100", "--nu", "0.3"]);
+    let m = json(&[
+        "analyze",
+        &p2,
+        "--kind",
+        "torsion",
+        "--length-mm",
+        "100",
+        "--nu",
+        "0.3",
+    ]);
     let got = m["modulus_pa"].as_f64().unwrap();
     assert!(within(got, e, 0.005), "E from metadata {got:e}");
     assert!(
@@ -178,10 +212,9 @@ enabled = false
         .output()
         .unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let s: Value = serde_json::from_slice(
-        &std::fs::read(d.path().join("reports/flat/summary.json")).unwrap(),
-    )
-    .unwrap();
+    let s: Value =
+        serde_json::from_slice(&std::fs::read(d.path().join("reports/flat/summary.json")).unwrap())
+            .unwrap();
     let t = &s["tests"][0];
     let e = t["modulus_pa"].as_f64().unwrap();
     assert!(within(e, E_PLA, 0.005), "E {e:e}");

@@ -422,7 +422,13 @@ mod tests {
         };
         assert!((s.area() - 9.0e-6).abs() < 1e-18);
         assert!((s.second_moment() - 6.0e-3 * 1.5e-3f64.powi(3) / 12.0).abs() < 1e-24);
-        for (ratio, k1) in [(1.0, 0.1406), (2.0, 0.229), (4.0, 0.281), (10.0, 0.312), (1e4, 1.0 / 3.0)] {
+        for (ratio, k1) in [
+            (1.0, 0.1406),
+            (2.0, 0.229),
+            (4.0, 0.281),
+            (10.0, 0.312),
+            (1e4, 1.0 / 3.0),
+        ] {
             let c = 1e-3;
             for (b, h) in [(ratio * c, c), (c, ratio * c)] {
                 let r = RectangularSection {
@@ -430,7 +436,10 @@ mod tests {
                     thickness_m: h,
                 };
                 let got = r.torsion_constant() / (ratio * c * c.powi(3));
-                assert!((got / k1 - 1.0).abs() < 2e-3, "a/c = {ratio}: k1 = {got}, table {k1}");
+                assert!(
+                    (got / k1 - 1.0).abs() < 2e-3,
+                    "a/c = {ratio}: k1 = {got}, table {k1}"
+                );
             }
         }
         // τ_max/(G K₃ c) = k₁/k₂ of the same table: 0.1406/0.208 = 0.675 (square), → 1 (strip).
@@ -451,13 +460,21 @@ mod tests {
         };
         assert!(sq.torsion_constant() < 0.85 * (2.0 / 12.0));
         // Moduli: the chapter's stiffnesses on a 6 × 1.5 mm strip, ν = 0.5.
-        let e_t = s.modulus_from_stiffness(TestKind::Tension, 9.0e5, 0.5).unwrap();
+        let e_t = s
+            .modulus_from_stiffness(TestKind::Tension, 9.0e5, 0.5)
+            .unwrap();
         assert!((e_t - 1.0e11).abs() < 1.0);
-        let e_b = s.modulus_from_stiffness(TestKind::ThreePoint, 1.6875e-1, 0.5).unwrap();
+        let e_b = s
+            .modulus_from_stiffness(TestKind::ThreePoint, 1.6875e-1, 0.5)
+            .unwrap();
         assert!((e_b / 1.0e11 - 1.0).abs() < 1e-12, "{e_b}");
         let j = s.torsion_constant();
-        let e_tor = s.modulus_from_stiffness(TestKind::Torsion, 1.0e9 * j, 0.3).unwrap();
+        let e_tor = s
+            .modulus_from_stiffness(TestKind::Torsion, 1.0e9 * j, 0.3)
+            .unwrap();
         assert!((e_tor / 2.6e9 - 1.0).abs() < 1e-12);
-        assert!(s.modulus_from_stiffness(TestKind::Unknown, 1.0, 0.5).is_none());
+        assert!(s
+            .modulus_from_stiffness(TestKind::Unknown, 1.0, 0.5)
+            .is_none());
     }
 }

@@ -778,16 +778,18 @@ pub(crate) fn flat_section_from_metadata(
 fn numisheet_flat_section(
     meta: &[(String, String)],
 ) -> Option<(cablab_core::RectangularSection, String)> {
-    let (k, v) = meta
-        .iter()
-        .find(|(k, _)| norm_key(k) == "numisheetid")?;
+    let (k, v) = meta.iter().find(|(k, _)| norm_key(k) == "numisheetid")?;
     let num = |s: &str| -> Option<(f64, usize)> {
         let n = s
             .char_indices()
             .take_while(|(_, c)| c.is_ascii_digit() || *c == '.')
             .last()
             .map(|(i, c)| i + c.len_utf8())?;
-        s[..n].parse::<f64>().ok().filter(|x| *x > 0.0).map(|x| (x, n))
+        s[..n]
+            .parse::<f64>()
+            .ok()
+            .filter(|x| *x > 0.0)
+            .map(|x| (x, n))
     };
     v.match_indices('T').find_map(|(i, _)| {
         let (t, n) = num(&v[i + 1..])?;

@@ -1424,9 +1424,16 @@ mod tests {
             ["Ch 1 Displacement", "Ch 1 Force", "Time"]
         );
         assert_eq!(
-            mts_channel_groups(&w("Running Time Ch 1 Axial Displacement Ch 2 Axial Force"), 3)
-                .unwrap(),
-            ["Running Time", "Ch 1 Axial Displacement", "Ch 2 Axial Force"]
+            mts_channel_groups(
+                &w("Running Time Ch 1 Axial Displacement Ch 2 Axial Force"),
+                3
+            )
+            .unwrap(),
+            [
+                "Running Time",
+                "Ch 1 Axial Displacement",
+                "Ch 2 Axial Force"
+            ]
         );
         assert_eq!(
             mts_channel_groups(&w("Ch 1 Force Time Count"), 3).unwrap(),
@@ -1436,5 +1443,4 @@ mod tests {
         assert!(mts_channel_groups(&w("Zeit Kraft Weg"), 3).is_none());
         assert!(mts_channel_groups(&w("Ch 1 Force Time"), 4).is_none());
     }
-
 }

@@ -872,7 +872,12 @@ pub fn analyze(
             ),
         )),
         (None, Some(d)) => Some((
-            modulus_from_stiffness(kind, d, stiffness.as_ref().map_or(0.0, |s| s.value), opts.nu),
+            modulus_from_stiffness(
+                kind,
+                d,
+                stiffness.as_ref().map_or(0.0, |s| s.value),
+                opts.nu,
+            ),
             format!("a diameter of {:.3} mm", d * 1e3),
         )),
         (None, None) => None,

@@ -260,7 +260,11 @@ fn mts793_btw_names_with_single_spaces() {
         .collect();
     assert_eq!(
         names,
-        [("Ch 1 Displacement", "mm"), ("Ch 1 Force", "kN"), ("Time", "Sec")]
+        [
+            ("Ch 1 Displacement", "mm"),
+            ("Ch 1 Force", "kN"),
+            ("Time", "Sec")
+        ]
     );
     assert_eq!(r.data.height(), 241);
     assert_eq!(role_name(&r, Role::Control), Some("Ch 1 Displacement"));
