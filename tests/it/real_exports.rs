@@ -8,7 +8,7 @@
 use crate::common::cablab;
 use serde_json::Value;
 
-fn json(args: &[&str]) -> Value {
+pub(crate) fn json(args: &[&str]) -> Value {
     let out = cablab().args(args).arg("--json").output().unwrap();
     assert!(
         out.status.success(),
@@ -56,11 +56,11 @@ fn owned(v: &[(&str, &str, &str)]) -> Vec<(String, String, String)> {
         .collect()
 }
 
-fn stiffness(v: &Value) -> f64 {
+pub(crate) fn stiffness(v: &Value) -> f64 {
     v["stiffness"]["value"].as_f64().unwrap()
 }
 
-fn warnings(v: &Value) -> Vec<String> {
+pub(crate) fn warnings(v: &Value) -> Vec<String> {
     v["warnings"]
         .as_array()
         .unwrap()
@@ -69,7 +69,7 @@ fn warnings(v: &Value) -> Vec<String> {
         .collect()
 }
 
-fn within(x: f64, target: f64, rel: f64) -> bool {
+pub(crate) fn within(x: f64, target: f64, rel: f64) -> bool {
     (x / target - 1.0).abs() <= rel
 }
 
@@ -322,7 +322,7 @@ fn testxpert_french_course_standard() {
 }
 
 /// Writes `text` to a temporary file called `name`; returns the folder (kept alive) and path.
-fn temp_file(name: &str, text: &str) -> (tempfile::TempDir, String) {
+pub(crate) fn temp_file(name: &str, text: &str) -> (tempfile::TempDir, String) {
     let d = tempfile::tempdir().unwrap();
     let p = d.path().join(name);
     std::fs::write(&p, text).unwrap();
@@ -330,12 +330,11 @@ fn temp_file(name: &str, text: &str) -> (tempfile::TempDir, String) {
     (d, s)
 }
 
-/// A linear bar: (EA) = 2·10⁶ N; the crosshead moves 3× the specimen (a soft load train);
-/// the extensometer's strain is written in %. EA = dF/dε, whatever the length given.
-#[test]
-fn a_strain_in_percent_is_the_sectional_strain() {
-    let ea = 2.0e6;
-    let mut s = String::from("Time (s),Crosshead (mm),Load (N),Strain 1 (%)\n");
+/// A linear bar of stiffness `ea` over l₀ = 50 mm, ε from 0 to 0.2 % in 201 rows at 10 Hz:
+/// `Time (s)`, `Crosshead (mm)` moving 3× the specimen (a soft load train), `Load (N)` with a
+/// ±3 N deterministic ripple, and a fourth column `name` holding `fourth(ε)`.
+fn bar_log(name: &str, ea: f64, fourth: impl Fn(f64) -> f64) -> String {
+    let mut s = format!("Time (s),Crosshead (mm),Load (N),{name}\n");
     for k in 0..=200 {
         let eps = 2e-3 * k as f64 / 200.0;
         let f = ea * eps + 0.5 * ((k * 7919 % 13) as f64 - 6.0);
@@ -343,9 +342,18 @@ fn a_strain_in_percent_is_the_sectional_strain() {
             "{},{},{f},{}\n",
             0.1 * k as f64,
             3.0 * eps * 50.0,
-            eps * 100.0
+            fourth(eps)
         );
     }
+    s
+}
+
+/// A linear bar: (EA) = 2·10⁶ N; the crosshead moves 3× the specimen (a soft load train);
+/// the extensometer's strain is written in %. EA = dF/dε, whatever the length given.
+#[test]
+fn a_strain_in_percent_is_the_sectional_strain() {
+    let ea = 2.0e6;
+    let s = bar_log("Strain 1 (%)", ea, |eps| eps * 100.0);
     let (_d, p) = temp_file("bar.csv", &s);
     for len in ["50", "80"] {
         let a = json(&["analyze", &p, "--kind", "tension", "--length-mm", len]);
@@ -506,17 +514,7 @@ fn mts_btw_three_point_beam_with_a_flat_section() {
 #[test]
 fn a_machine_travel_flag_names_the_files_extensometer() {
     let (ea, l0) = (2.0e6, 0.05);
-    let mut s = String::from("Time (s),Crosshead (mm),Load (N),Strain1 (mm)\n");
-    for k in 0..=200 {
-        let eps = 2e-3 * k as f64 / 200.0;
-        let f = ea * eps + 0.5 * ((k * 7919 % 13) as f64 - 6.0);
-        s += &format!(
-            "{},{},{f},{}\n",
-            0.1 * k as f64,
-            3.0 * eps * l0 * 1e3,
-            eps * l0 * 1e3
-        );
-    }
+    let s = bar_log("Strain1 (mm)", ea, |eps| eps * l0 * 1e3);
     let (_d, p) = temp_file("xhead.csv", &s);
     let a = json(&["analyze", &p, "--kind", "tension", "--length-mm", "50"]);
     assert_eq!(a["control_channel"]["name"], "Crosshead");

@@ -3,40 +3,8 @@
 //! checked on generated linear logs whose modulus is known.
 
 use crate::common::cablab;
+use crate::real_exports::{json, stiffness, temp_file, warnings, within};
 use serde_json::Value;
-
-fn within(v: f64, want: f64, rel: f64) -> bool {
-    (v / want - 1.0).abs() <= rel
-}
-
-/// Writes `text` to `name` in a fresh folder; returns the folder (kept alive) and the path.
-fn temp_file(name: &str, text: &str) -> (tempfile::TempDir, String) {
-    let d = tempfile::tempdir().unwrap();
-    let p = d.path().join(name);
-    std::fs::write(&p, text).unwrap();
-    let s = p.display().to_string();
-    (d, s)
-}
-
-fn json(args: &[&str]) -> Value {
-    let out = cablab().args(args).arg("--json").output().unwrap();
-    assert!(
-        out.status.success(),
-        "{args:?}: {}{}",
-        String::from_utf8_lossy(&out.stdout),
-        String::from_utf8_lossy(&out.stderr)
-    );
-    serde_json::from_slice(&out.stdout).unwrap()
-}
-
-fn warnings(v: &Value) -> Vec<String> {
-    v["warnings"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|w| w.as_str().unwrap().to_string())
-        .collect()
-}
 
 /// Beam of the MTS three-point layout in EXPECTED.md: PLA, b = 11.86 mm, h = 2.937 mm, span
 /// 40.28 mm, E = 2.05 GPa: I = b h³/12 = 25.04 mm⁴, F = 48 E I w / L³ (eq. (3)), linear with a
@@ -77,7 +45,7 @@ fn a_flat_beam_in_three_point_bending_gets_e_from_b_h_cubed_over_12() {
     args.extend(["--width-mm", "11.86", "--thickness-mm", "2.937"]);
     let a = json(&args);
     let i = B * H.powi(3) / 12.0;
-    let ei = a["stiffness"]["value"].as_f64().unwrap();
+    let ei = stiffness(&a);
     assert!(within(ei, E_PLA * i, 0.005), "EI {ei:e}");
     let e = a["modulus_pa"].as_f64().unwrap();
     assert!(within(e, E_PLA, 0.005), "E {e:e}");
@@ -127,20 +95,17 @@ fn a_flat_strip_in_torsion_uses_saint_venants_torsion_constant() {
         s
     };
     let (_d, p) = temp_file("strip.csv", &body(""));
-    let a = json(&[
+    let base = [
         "analyze",
-        &p,
         "--kind",
         "torsion",
         "--length-mm",
         "100",
         "--nu",
         "0.3",
-        "--width-mm",
-        "10",
-        "--thickness-mm",
-        "2",
-    ]);
+    ];
+    let flags = ["--width-mm", "10", "--thickness-mm", "2"];
+    let a = json(&[&base[..], &[p.as_str()], &flags[..]].concat());
     let got = a["modulus_pa"].as_f64().unwrap();
     assert!(within(got, e, 0.005), "E {got:e}");
     let polar = b * h * (b * b + h * h) / 12.0;
@@ -157,16 +122,7 @@ fn a_flat_strip_in_torsion_uses_saint_venants_torsion_constant() {
         "strip_meta.csv",
         &body("Specimen thickness: 2 mm\nSpecimen width: 10 mm\n"),
     );
-    let m = json(&[
-        "analyze",
-        &p2,
-        "--kind",
-        "torsion",
-        "--length-mm",
-        "100",
-        "--nu",
-        "0.3",
-    ]);
+    let m = json(&[&base[..], &[p2.as_str()]].concat());
     let got = m["modulus_pa"].as_f64().unwrap();
     assert!(within(got, e, 0.005), "E from metadata {got:e}");
     assert!(

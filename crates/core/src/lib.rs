@@ -225,47 +225,43 @@ impl RectangularSection {
     pub fn second_moment(&self) -> f64 {
         self.width_m * self.thickness_m.powi(3) / 12.0
     }
-    /// Saint-Venant torsion constant, m⁴: with a the longer and c the shorter side,
-    /// J_t = a c³ [1/3 − (64/π⁵)(c/a) Σ_{n = 1, 3, 5, …} tanh(nπa/(2c))/n⁵]
-    /// (series summed until its terms fall below 10⁻¹⁶ of the sum; J_t → a c³/3 for a thin
-    /// strip, 0.1406 a⁴ for a square).
-    pub fn torsion_constant(&self) -> f64 {
-        let (a, c) = if self.width_m >= self.thickness_m {
+    /// The longer side a and the shorter side c, m.
+    fn sides(&self) -> (f64, f64) {
+        if self.width_m >= self.thickness_m {
             (self.width_m, self.thickness_m)
         } else {
             (self.thickness_m, self.width_m)
-        };
+        }
+    }
+    /// Σ_{n = 1, 3, 5, …} term(n, nπa/(2c)) over the odd n of Saint-Venant's series, summed
+    /// until a term falls to 10⁻¹⁶ of the sum (or to zero).
+    fn odd_series(&self, term: impl Fn(f64, f64) -> f64) -> f64 {
+        let (a, c) = self.sides();
         let mut sum = 0.0;
         let mut n = 1.0_f64;
         loop {
-            let term = (n * std::f64::consts::PI * a / (2.0 * c)).tanh() / n.powi(5);
-            sum += term;
-            if term < 1e-16 * sum {
-                break;
+            let t = term(n, n * std::f64::consts::PI * a / (2.0 * c));
+            sum += t;
+            if t <= 1e-16 * sum {
+                return sum;
             }
             n += 2.0;
         }
+    }
+    /// Saint-Venant torsion constant, m⁴: with a the longer and c the shorter side,
+    /// J_t = a c³ [1/3 − (64/π⁵)(c/a) Σ_{n = 1, 3, 5, …} tanh(nπa/(2c))/n⁵]
+    /// (J_t → a c³/3 for a thin strip, 0.1406 a⁴ for a square).
+    pub fn torsion_constant(&self) -> f64 {
+        let (a, c) = self.sides();
+        let sum = self.odd_series(|n, x| x.tanh() / n.powi(5));
         a * c.powi(3) * (1.0 / 3.0 - 64.0 / std::f64::consts::PI.powi(5) * (c / a) * sum)
     }
     /// Largest surface shear strain per unit twist rate, γ_max/K₃, m: at the middle of the
     /// longer side, c [1 − (8/π²) Σ_{n = 1, 3, 5, …} 1/(n² cosh(nπa/(2c)))] (Saint-Venant:
     /// c for a thin strip, 0.675 c for a square), the torsion analogue of d/2.
     pub fn max_shear_strain_per_twist(&self) -> f64 {
-        let (a, c) = if self.width_m >= self.thickness_m {
-            (self.width_m, self.thickness_m)
-        } else {
-            (self.thickness_m, self.width_m)
-        };
-        let mut sum = 0.0;
-        let mut n = 1.0_f64;
-        loop {
-            let term = 1.0 / (n * n * (n * std::f64::consts::PI * a / (2.0 * c)).cosh());
-            sum += term;
-            if term <= 1e-16 * sum {
-                break;
-            }
-            n += 2.0;
-        }
+        let (_, c) = self.sides();
+        let sum = self.odd_series(|n, x| 1.0 / (n * n * x.cosh()));
         c * (1.0 - 8.0 / std::f64::consts::PI.powi(2) * sum)
     }
     /// Young's modulus from the stiffness fitted in a test of `kind`, with Poisson ratio `nu`:
