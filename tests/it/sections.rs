@@ -188,3 +188,38 @@ enabled = false
     assert!(within(f["width_m"].as_f64().unwrap(), B, 1e-12), "{f}");
     assert!(within(f["thickness_m"].as_f64().unwrap(), H, 1e-12), "{f}");
 }
+
+/// A torsional extensometer's surface shear strain on a thin strip (50 × 1 mm): Saint-Venant's
+/// largest shear strain is γ = c θ / l₀ with c the thickness (the series term is 10⁻³⁴ here),
+/// so the flat section turns γ into the twist θ = γ l₀ / c and (GJ) = T l₀ / θ.
+#[test]
+fn a_shear_strain_on_a_thin_strip_becomes_the_twist() {
+    let (gj, l0, c) = (0.5, 0.08, 1e-3);
+    let mut s = String::from("Time (s),Shear Strain (deg),Torque (N·m)\n");
+    for n in 0..=200 {
+        let theta = 0.5 * n as f64 / 200.0; // rad
+        let t = gj * theta / l0 + 1e-4 * ((n * 7919 % 11) as f64 - 5.0);
+        s += &format!("{},{},{t}\n", n as f64, (c * theta / l0).to_degrees());
+    }
+    let (_d, p) = temp_file("thin.csv", &s);
+    let a = json(&[
+        "analyze",
+        &p,
+        "--kind",
+        "torsion",
+        "--length-mm",
+        "80",
+        "--width-mm",
+        "50",
+        "--thickness-mm",
+        "1",
+    ]);
+    assert!(within(stiffness(&a), gj, 0.005), "{:e}", stiffness(&a));
+    assert!(
+        warnings(&a)
+            .iter()
+            .any(|w| w.contains("largest surface shear strain of the flat section")),
+        "{:?}",
+        warnings(&a)
+    );
+}
