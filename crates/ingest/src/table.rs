@@ -515,8 +515,17 @@ impl<'a> Engine<'a> {
                 // more spaces, else by where the data row's cells sit under the header.
                 let head = &self.text[p.start..p.end];
                 let data = &self.text[data_span.0..data_span.1];
-                if let Some(grouped) = mts_channel_groups(&names, ncells) {
-                    names = grouped;
+                // Runs of spaces tell the columns when there are any; MTS BTW's single
+                // spaces are grouped by `Ch <n>` before any alignment with the data row.
+                let runs = head
+                    .trim_ascii()
+                    .windows(2)
+                    .any(|w| w.iter().all(|&b| b == b' ' || b == b'\t'));
+                let grouped = (!runs)
+                    .then(|| mts_channel_groups(&names, ncells))
+                    .flatten();
+                if let Some(g) = grouped {
+                    names = g;
                 } else if let Some(aligned) = align_header(head, data, ncells) {
                     names = aligned;
                 }
