@@ -5,7 +5,7 @@
 //! Does not read files (see `cablab_ingest`) and does no physics (see `cablab_measure`).
 
 use anyhow::{anyhow, bail, Result};
-use cablab_core::{Role, TestKind};
+use cablab_core::{RectangularSection, Role, TestKind};
 use cablab_ingest::{ReadOptions, TestRecord};
 
 /// One test's curve: the complete rows (time, control and response all numbers), SI.
@@ -57,15 +57,17 @@ pub fn curve(rec: &TestRecord) -> Result<Curve> {
 }
 
 /// Geometry from the caller (SI: m, settled where flags and pipelines are parsed), else from the
-/// record's metadata. The length is required; the diameter is optional (moduli need it). See
-/// [`geometry_noted`] for what else the file can settle and the notes that say so.
+/// record's metadata, and the flat section b × h the moduli use when there is one. The length is
+/// required; the section is optional (moduli need it). See [`geometry_noted`] for what else the
+/// file can settle and the notes that say so.
 pub fn geometry(
     rec: &TestRecord,
     kind: TestKind,
     length_m: Option<f64>,
     diameter_m: Option<f64>,
-) -> Result<cablab_measure::Geometry> {
-    geometry_noted(rec, kind, length_m, diameter_m).map(|(g, _)| g)
+    flat: Option<RectangularSection>,
+) -> Result<(cablab_measure::Geometry, Option<RectangularSection>)> {
+    geometry_noted(rec, kind, length_m, diameter_m, flat).map(|(g, f, _)| (g, f))
 }
 
 /// Whether the record's control is a dimensionless strain (mm/mm, %, µm/m, ...).
@@ -79,17 +81,27 @@ fn strain_control(rec: &TestRecord) -> bool {
 /// - a free length (or gauge length) from the file's metadata;
 /// - for tension with a strain control and no length anywhere: l₀ = 1 m, which only carries the
 ///   strain (elongation = ε l₀, and (EA) = dF/dε does not depend on l₀);
-/// - for tension with no diameter: the cross-section area of the file's metadata (testXpert
-///   `Cross-section 6.3812 mm²`, else thickness × width) as the equivalent round diameter
-///   d = √(4A/π), so that
-///   E = (EA)/A uses the stated area. Tension only: a flat section's (GJ) or (EI) is not a round
-///   one's, so torsion and bending get no diameter from an area.
+/// - the section, first match wins: a diameter given; a flat b × h given (`flat`); the file's
+///   diameter; for torsion and bending the file's flat b × h (testXpert `Specimen thickness` and
+///   `Specimen width`, the sdata Numisheet id `T1.409W17.91`; see [`flat_section_note`]); for
+///   tension the file's cross-section area (testXpert `Cross-section 6.3812 mm²`, else
+///   thickness × width) as the equivalent round diameter d = √(4A/π), so that E = (EA)/A uses
+///   the stated area (a stated area is the measured S₀ of ISO 6892-1, preferred to b h).
+///
+/// A diameter and a flat section both given is an error (one section, one modulus). Does not
+/// take a flat section's (GJ) or (EI) from an equivalent diameter: they come from I = b h³/12
+/// and Saint-Venant's J_t (`cablab_core::RectangularSection`).
 pub fn geometry_noted(
     rec: &TestRecord,
     kind: TestKind,
     length_m: Option<f64>,
     diameter_m: Option<f64>,
-) -> Result<(cablab_measure::Geometry, Vec<String>)> {
+    flat: Option<RectangularSection>,
+) -> Result<(
+    cablab_measure::Geometry,
+    Option<RectangularSection>,
+    Vec<String>,
+)> {
     let file = &rec.provenance.path;
     let mut notes = Vec::new();
     let what = if kind == TestKind::ThreePoint {
@@ -118,28 +130,88 @@ pub fn geometry_noted(
             "{file}: the {what} is missing: the file's metadata does not give it; pass --length-mm"
         ),
     };
+    if let Some(f) = &flat {
+        if diameter_m.is_some() {
+            bail!("{file}: give either a diameter or a flat section (width × thickness), not both");
+        }
+        if !(f.width_m.is_finite()
+            && f.width_m > 0.0
+            && f.thickness_m.is_finite()
+            && f.thickness_m > 0.0)
+        {
+            bail!(
+                "{file}: the flat section's width and thickness must be positive, got {} × {} m",
+                f.width_m,
+                f.thickness_m
+            );
+        }
+        notes.push(flat_section_note(kind, f, "given"));
+        let g = cablab_measure::Geometry {
+            free_length_m,
+            diameter_m: None,
+        };
+        return Ok((g, flat, notes));
+    }
+    let mut flat_out = None;
     let diameter_m = match (diameter_m, rec.specimen.diameter_m, rec.cross_section_m2) {
         (Some(d), _, _) if d.is_finite() && d > 0.0 => Some(d),
         (Some(d), _, _) => bail!("{file}: the diameter must be positive, got {d} m"),
         (None, Some(d), _) => Some(d),
         (None, None, Some(a)) if kind == TestKind::Tension => {
             let d = (4.0 * a / std::f64::consts::PI).sqrt();
+            // Where the area came from when it is the metadata's b × h (no stated area).
+            let from = match &rec.flat_section {
+                Some((f, from)) if (f.area() - a).abs() <= 1e-9 * a && from.starts_with('\'') => {
+                    format!(", b × h from {from}")
+                }
+                _ => String::new(),
+            };
             notes.push(format!(
-                "the modulus uses the cross-section {:.4} mm² from the file's metadata (as the equivalent round diameter {:.4} mm; tension only)",
+                "the modulus uses the cross-section {:.4} mm² from the file's metadata{from} (as the equivalent round diameter {:.4} mm; tension only)",
                 a * 1e6,
                 d * 1e3
             ));
             Some(d)
         }
-        (None, None, _) => None,
+        (None, None, _) => {
+            if let Some((f, from)) = &rec.flat_section {
+                notes.push(flat_section_note(kind, f, &format!("from {from}")));
+                flat_out = Some(*f);
+            }
+            None
+        }
     };
     Ok((
         cablab_measure::Geometry {
             free_length_m,
             diameter_m,
         },
+        flat_out,
         notes,
     ))
+}
+
+/// The note that says which flat section b × h the moduli use, where it came from (`from`:
+/// "given", "from the metadata's thickness and width", ...) and which section quantity the
+/// kind's modulus divides by.
+pub fn flat_section_note(kind: TestKind, f: &RectangularSection, from: &str) -> String {
+    let q = match kind {
+        TestKind::Tension => format!("A = b h = {:.4} mm²", f.area() * 1e6),
+        TestKind::Torsion => format!(
+            "Saint-Venant's torsion constant of the rectangle J_t = {:.4} mm⁴ (not the polar moment)",
+            f.torsion_constant() * 1e12
+        ),
+        TestKind::ThreePoint | TestKind::PureBending => format!(
+            "I = b h³/12 = {:.4} mm⁴ (bending about the width: the thickness lies in the plane of bending)",
+            f.second_moment() * 1e12
+        ),
+        TestKind::Unknown => "no section quantity for an unknown kind".into(),
+    };
+    format!(
+        "the moduli use the flat section {:.4} × {:.4} mm (width × thickness, {from}): {q}",
+        f.width_m * 1e3,
+        f.thickness_m * 1e3
+    )
 }
 
 /// The control in the kind's machine variable, where the file gives a strain:
@@ -156,6 +228,7 @@ pub fn sectional_control(
     rec: &TestRecord,
     kind: TestKind,
     geom: &cablab_measure::Geometry,
+    flat: Option<&RectangularSection>,
     curve: &mut Curve,
 ) -> Result<Option<String>> {
     use cablab_ingest::units::Dimension as D;
@@ -187,6 +260,19 @@ pub fn sectional_control(
             )))
         }
         (Some(D::Ratio | D::Angle), TestKind::Torsion) if shear => {
+            if let (None, Some(f)) = (geom.diameter_m, flat) {
+                let c_g = f.max_shear_strain_per_twist();
+                let k = geom.free_length_m / c_g;
+                for x in &mut curve.control {
+                    *x *= k;
+                }
+                return Ok(Some(format!(
+                    "the control {show} is the largest surface shear strain of the flat section, γ = c_γ θ / l₀ (Saint-Venant, middle of the longer side; c_γ = {:.4} mm for {:.4} × {:.4} mm): taken as the twist θ = γ l₀ / c_γ",
+                    c_g * 1e3,
+                    f.width_m * 1e3,
+                    f.thickness_m * 1e3
+                )));
+            }
             let Some(d) = geom.diameter_m else {
                 bail!(
                     "{file}: the control {show} is a surface shear strain γ = r θ / l₀, not a twist angle; the twist θ = 2 γ l₀ / d needs the diameter: pass --diameter-mm (or name the twist angle with --control)"
@@ -233,16 +319,57 @@ pub fn read_test(
     t: &crate::cli::TestArgs,
     roles: Option<RoleCheck>,
     warnings: &mut Vec<String>,
-) -> Result<(TestRecord, cablab_measure::Geometry, Curve)> {
+) -> Result<ReadTest> {
     let kind = TestKind::from(t.kind);
     let opts = read_options(&t.reader, Some(kind))?;
     let mut rec = cablab_ingest::read_path(path, &opts)?;
     check(&mut rec, kind, t.force_kind, roles, warnings)?;
-    let (geom, notes) = geometry_noted(&rec, kind, mm(t.length_mm), mm(t.diameter_mm))?;
+    let (geom, flat, notes) = geometry_noted(
+        &rec,
+        kind,
+        mm(t.length_mm),
+        mm(t.diameter_mm),
+        flat_given(t.width_mm, t.thickness_mm),
+    )?;
     warnings.extend(notes);
     let mut curve = curve(&rec)?;
-    warnings.extend(sectional_control(&rec, kind, &geom, &mut curve)?);
-    Ok((rec, geom, curve))
+    warnings.extend(sectional_control(
+        &rec,
+        kind,
+        &geom,
+        flat.as_ref(),
+        &mut curve,
+    )?);
+    Ok(ReadTest {
+        rec,
+        geom,
+        flat,
+        curve,
+    })
+}
+
+/// A test read by [`read_test`]: the record, its geometry, the flat section b × h the moduli use
+/// (when there is one: `AnalyzeOptions::flat_section`) and its complete rows.
+pub struct ReadTest {
+    /// The record as read.
+    pub rec: TestRecord,
+    /// Free length and round diameter.
+    pub geom: cablab_measure::Geometry,
+    /// The flat section, when the moduli use one.
+    pub flat: Option<RectangularSection>,
+    /// The complete rows, control in the kind's machine variable.
+    pub curve: Curve,
+}
+
+/// A flat section from a width and a thickness in mm (flags, pipeline keys); both or none.
+pub fn flat_given(width_mm: Option<f64>, thickness_mm: Option<f64>) -> Option<RectangularSection> {
+    match (width_mm, thickness_mm) {
+        (Some(b), Some(h)) => Some(RectangularSection {
+            width_m: b * 1e-3,
+            thickness_m: h * 1e-3,
+        }),
+        _ => None,
+    }
 }
 
 /// Which channel-role checks [`check`] runs ([`check_roles`]).
@@ -511,13 +638,24 @@ pub fn check_roles(
                     }
                 )),
                 Mount::Machine if !compliance_given => notes.push(format!(
-                    "the stiffness comes from the machine travel {}{}: it includes the compliance of the load train (grips, frame), so (EA) is a lower bound; use a specimen-mounted extensometer or give --compliance",
+                    "the stiffness comes from the machine travel {}{}: it includes the compliance of the load train (grips, frame), so (EA) is a lower bound; {}",
                     show(&rec.channels[i]),
                     match (evidence, control_given) {
                         (Some(e), true) => format!(" ({e}; chosen with --control)"),
                         (Some(e), false) => format!(" ({e})"),
                         (None, true) => " (chosen with --control)".into(),
                         (None, false) => String::new(),
+                    },
+                    // Name the file's own specimen-mounted channel when it has one.
+                    match (0..rec.channels.len())
+                        .find(|&k| k != i && rec.mount(k) == Mount::Specimen)
+                    {
+                        Some(k) => format!(
+                            "the file's specimen-mounted {} gives the specimen's own: pass --control '{}' (or give --compliance)",
+                            show(&rec.channels[k]),
+                            rec.channels[k].name
+                        ),
+                        None => "use a specimen-mounted extensometer or give --compliance".into(),
                     }
                 )),
                 _ => {}

@@ -257,6 +257,29 @@ pub struct TestArgs {
     /// Specimen diameter in mm, for the moduli (default: from each file's metadata).
     #[arg(long, value_name = "MM", allow_negative_numbers = true, value_parser = positive_mm)]
     pub diameter_mm: Option<f64>,
+    /// Width b in mm of a flat (rectangular) section, with --thickness-mm: the moduli then use
+    /// A = b h, I = b h³/12 (bending about the width) and Saint-Venant's J_t (default: from
+    /// each file's metadata).
+    #[arg(
+        long,
+        value_name = "MM",
+        allow_negative_numbers = true,
+        value_parser = positive_mm,
+        requires = "thickness_mm",
+        conflicts_with = "diameter_mm"
+    )]
+    pub width_mm: Option<f64>,
+    /// Thickness h in mm of a flat section (the dimension in the plane of bending), with
+    /// --width-mm.
+    #[arg(
+        long,
+        value_name = "MM",
+        allow_negative_numbers = true,
+        value_parser = positive_mm,
+        requires = "width_mm",
+        conflicts_with = "diameter_mm"
+    )]
+    pub thickness_mm: Option<f64>,
     /// Take a file as --kind even where its own evidence (kind words in its metadata or name,
     /// the units of its control and response) says otherwise; the contradiction is then kept
     /// as a warning.

@@ -21,7 +21,12 @@ pub fn analyze_file(
         control_given: a.test.reader.control.is_some(),
         compliance_given: a.compliance.is_some(),
     };
-    let (rec, geom, curve) = crate::bridge::read_test(&a.file, &a.test, Some(roles), warnings)
+    let crate::bridge::ReadTest {
+        rec,
+        geom,
+        flat,
+        curve,
+    } = crate::bridge::read_test(&a.file, &a.test, Some(roles), warnings)
         .map_err(CliError::input)?;
     let kind = TestKind::from(a.test.kind);
     let yield_method: cablab_measure::YieldMethod = a
@@ -32,6 +37,7 @@ pub fn analyze_file(
         nu: a.nu,
         compliance_m_per_n: a.compliance,
         yield_method,
+        flat_section: flat,
         ..Default::default()
     };
     if let Some(w) = &a.fit_window {

@@ -16,7 +16,11 @@ pub fn diag_test(path: &std::path::Path, a: &DiagnoseArgs) -> Result<DiagTest, C
     for w in &warnings {
         eprintln!("cablab: warning: {w}");
     }
-    let (rec, geom, curve) = read.map_err(CliError::input)?;
+    // The diagnosis compares curves in sectional variables and reports no modulus: a flat
+    // section (`flat`) changes nothing here.
+    let crate::bridge::ReadTest {
+        rec, geom, curve, ..
+    } = read.map_err(CliError::input)?;
     let kind = TestKind::from(a.test.kind);
     let (t, _) = crate::bridge::diag_test(kind, &geom, &curve, rec.specimen.label.clone(), None)
         .map_err(|e| CliError::input(anyhow::anyhow!("{}: {e:#}", path.display())))?;

@@ -45,6 +45,9 @@ pub struct Found {
     pub length_mm: Option<Sourced<f64>>,
     /// Section diameter, mm.
     pub diameter_mm: Option<Sourced<f64>>,
+    /// Where there is no diameter: a section of another shape the file states and the kind's
+    /// modulus can use (a flat b × h; in tension also a cross-section area), in words.
+    pub section: Option<Sourced<String>>,
     /// Specimen label (metadata specimen name, else the file stem).
     pub label: String,
     /// Specimen type: folder name and diameter.
@@ -71,7 +74,7 @@ impl Found {
                 },
             );
         }
-        if self.diameter_mm.is_none() {
+        if self.diameter_mm.is_none() && self.section.is_none() {
             g.push("diameter_mm");
         }
         g
@@ -420,14 +423,21 @@ pub fn survey(paths: &[PathBuf], d: &InferArgs) -> Result<Survey, CliError> {
                 .map(|n| n.to_string_lossy().to_string())
                 .unwrap_or_default()
         });
-        let specimen_type = diameter_mm
-            .as_ref()
-            .map(|dm| format!("{} {} mm", folder_name(&path), dm.value));
+        let section = diameter_mm
+            .is_none()
+            .then(|| stated_section(&rec, kind.as_ref().map(|k| k.value)))
+            .flatten();
+        let specimen_type = match (&diameter_mm, &section) {
+            (Some(dm), _) => Some(format!("{} {} mm", folder_name(&path), dm.value)),
+            (None, Some(sec)) => Some(format!("{} {}", folder_name(&path), sec.value)),
+            (None, None) => None,
+        };
         s.found.push(Found {
             path,
             kind,
             length_mm,
             diameter_mm,
+            section,
             label,
             specimen_type,
             format: rec.provenance.format.as_str().to_string(),
@@ -435,6 +445,31 @@ pub fn survey(paths: &[PathBuf], d: &InferArgs) -> Result<Survey, CliError> {
         });
     }
     Ok(s)
+}
+
+/// A non-round section the file's metadata states and a `kind` test's modulus can use (see
+/// `bridge::geometry_noted`): a flat b × h for any kind but tension, where the stated
+/// cross-section area (else b h) is used. `None` when there is none (or only an area, which
+/// gives no I or J).
+fn stated_section(
+    rec: &cablab_ingest::TestRecord,
+    kind: Option<TestKind>,
+) -> Option<Sourced<String>> {
+    match (kind, rec.cross_section_m2, &rec.flat_section) {
+        (Some(TestKind::Tension), Some(a), _) => Some(Sourced {
+            value: format!("cross-section {} mm²", round_mm(a * 1e6)),
+            from: "the file's metadata".into(),
+        }),
+        (_, _, Some((f, from))) => Some(Sourced {
+            value: format!(
+                "{} × {} mm",
+                round_mm(f.width_m * 1e3),
+                round_mm(f.thickness_m * 1e3)
+            ),
+            from: from.clone(),
+        }),
+        _ => None,
+    }
 }
 
 /// Millimetres to 6 significant digits (metres × 1e3 is not exact in binary: 0.05 m → 50.00000000000001).
@@ -456,12 +491,11 @@ pub fn describe(s: &Survey) -> String {
         let len = f.length_mm.as_ref().map_or("length ?".to_string(), |l| {
             format!("length {} mm ({})", l.value, l.from)
         });
-        let dia = f
-            .diameter_mm
-            .as_ref()
-            .map_or("diameter ?".to_string(), |x| {
-                format!("diameter {} mm ({})", x.value, x.from)
-            });
+        let dia = match (&f.diameter_mm, &f.section) {
+            (Some(x), _) => format!("diameter {} mm ({})", x.value, x.from),
+            (None, Some(x)) => format!("section {} ({})", x.value, x.from),
+            (None, None) => "diameter ?".to_string(),
+        };
         let _ = writeln!(
             t,
             "  {}: {kind}; {len}; {dia}; specimen '{}'",
@@ -657,8 +691,28 @@ pub fn render(s: &Survey, name: &str, root: Option<&str>, command: &str, gaps: G
             q(ty)
         );
     }
-    // A file whose diameter is not in its metadata is its own specimen type, to be filled in.
+    // A file with a non-round section of its own: the moduli use the file's section.
+    let mut flat_types: BTreeMap<String, &Sourced<String>> = BTreeMap::new();
     for f in s.found.iter().filter(|f| f.diameter_mm.is_none()) {
+        if let (Some(ty), Some(sec)) = (&f.specimen_type, &f.section) {
+            flat_types.entry(ty.clone()).or_insert(sec);
+        }
+    }
+    for (ty, sec) in &flat_types {
+        let _ = writeln!(
+            t,
+            "\n[[specimen]]\nlabel = {}\n# section {} ({}): the moduli use the file's own, no diameter_mm",
+            q(ty),
+            sec.value,
+            sec.from
+        );
+    }
+    // A file whose diameter is not in its metadata is its own specimen type, to be filled in.
+    for f in s
+        .found
+        .iter()
+        .filter(|f| f.diameter_mm.is_none() && f.section.is_none())
+    {
         let _ = match gaps {
             Gaps::FillIn => writeln!(
                 t,

@@ -38,7 +38,14 @@ pub fn run(a: InspectArgs) -> CmdResult {
         rec.cross_section_m2.map_or(String::new(), |a| format!(
             "   cross-section {:.4} mm²",
             a * 1e6
-        )),
+        )) + &rec
+            .flat_section
+            .as_ref()
+            .map_or(String::new(), |(f, _)| format!(
+                "   flat {:.4} × {:.4} mm (width × thickness)",
+                f.width_m * 1e3,
+                f.thickness_m * 1e3
+            )),
     );
     if rec.blocks.len() > 1 {
         if rec.joined_blocks.len() > 1 {

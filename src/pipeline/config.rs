@@ -73,6 +73,13 @@ pub struct SpecimenType {
     /// state it): the moduli are then null, with why.
     #[serde(default)]
     pub diameter_mm: Option<f64>,
+    /// Width b of a flat (rectangular) section in millimetres, with `thickness_mm`; instead of
+    /// `diameter_mm`. The moduli then use A = b h, I = b h³/12 and Saint-Venant's J_t.
+    #[serde(default)]
+    pub width_mm: Option<f64>,
+    /// Thickness h of a flat section in millimetres (in the plane of bending), with `width_mm`.
+    #[serde(default)]
+    pub thickness_mm: Option<f64>,
     /// Free text.
     #[serde(default)]
     pub note: String,
@@ -353,6 +360,10 @@ pub struct PlannedTest {
     pub specimen: String,
     /// Section diameter, m; `None` when neither the pipeline nor (later) the file states it.
     pub diameter_m: Option<f64>,
+    /// A flat section width × thickness, m, from the specimen type (`width_mm`,
+    /// `thickness_mm`); absent from the cache key when not set.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub flat_section: Option<cablab_core::RectangularSection>,
     /// Test kind.
     pub kind: TestKind,
     /// Free length or span, m (None: from the file's metadata).
@@ -756,8 +767,33 @@ fn validate(file: PipelineFile, path: &Path, bytes: Vec<u8>, root: PathBuf) -> R
                 &lines.at(&ctx, "specimen", si, "diameter_mm"),
             )?;
         }
+        for (key, v) in [("width_mm", s.width_mm), ("thickness_mm", s.thickness_mm)] {
+            if let Some(v) = v {
+                in_range(v, DIAMETER_MM, "mm", &lines.at(&ctx, "specimen", si, key))?;
+            }
+        }
+        let flat = match (s.width_mm, s.thickness_mm, s.diameter_mm) {
+            (Some(_), Some(_), Some(_)) => bail!(
+                "{}: give either diameter_mm or width_mm and thickness_mm (one section), not both",
+                lines.at(&ctx, "specimen", si, "width_mm")
+            ),
+            (Some(_), None, _) | (None, Some(_), _) => bail!(
+                "{}: a flat section needs both width_mm and thickness_mm",
+                lines.at(
+                    &ctx,
+                    "specimen",
+                    si,
+                    if s.width_mm.is_some() {
+                        "width_mm"
+                    } else {
+                        "thickness_mm"
+                    }
+                )
+            ),
+            (w, h, _) => crate::bridge::flat_given(w, h),
+        };
         if diam
-            .insert(s.label.clone(), s.diameter_mm.map(|d| d * 1e-3))
+            .insert(s.label.clone(), (s.diameter_mm.map(|d| d * 1e-3), flat))
             .is_some()
         {
             bail!(
@@ -854,7 +890,7 @@ fn validate(file: PipelineFile, path: &Path, bytes: Vec<u8>, root: PathBuf) -> R
                 lines.at(&ctx, "input", gi, "kind")
             );
         }
-        let diameter_m = *diam.get(&g.specimen).ok_or_else(|| {
+        let (diameter_m, flat_section) = *diam.get(&g.specimen).ok_or_else(|| {
             anyhow!(
                 "{}: specimen {:?} is not declared in a [[specimen]] table (declared: {:?})",
                 lines.at(&ctx, "input", gi, "specimen"),
@@ -954,6 +990,7 @@ fn validate(file: PipelineFile, path: &Path, bytes: Vec<u8>, root: PathBuf) -> R
                 path: p,
                 specimen: g.specimen.clone(),
                 diameter_m,
+                flat_section,
                 kind,
                 free_length_m: ov.length_mm.or(g.length_mm).map(|l| l * 1e-3),
                 format: ov.format.clone().or_else(|| g.format.clone()),
@@ -1199,6 +1236,47 @@ compliance = 2e-7
         let text = GOOD.replace("diameter_mm = 2.8\n", "");
         let c = load(&write(d.path(), "pipelines/t.toml", &text)).unwrap();
         assert!(c.tests.iter().all(|t| t.diameter_m.is_none()));
+    }
+
+    /// A flat section is width_mm and thickness_mm together, in SI on the planned tests; one of
+    /// them alone, or with a diameter, is an error that names the line.
+    #[test]
+    fn a_flat_section_is_width_and_thickness_together() {
+        let d = tempfile::tempdir().unwrap();
+        write(d.path(), "raw_data/b.csv", "x");
+        write(d.path(), "raw_data/a.csv", "x");
+        let flat = GOOD.replace(
+            "diameter_mm = 2.8\n",
+            "width_mm = 11.86\nthickness_mm = 2.937\n",
+        );
+        let c = load(&write(d.path(), "pipelines/t.toml", &flat)).unwrap();
+        let f = c.tests[0].flat_section.unwrap();
+        assert!((f.width_m - 11.86e-3).abs() < 1e-15 && (f.thickness_m - 2.937e-3).abs() < 1e-15);
+        assert!(c.tests[0].diameter_m.is_none());
+        let one = GOOD.replace("diameter_mm = 2.8\n", "width_mm = 11.86\n");
+        let e = load_err(d.path(), &one);
+        assert!(
+            e.contains("t.toml:6: [specimen] width_mm: a flat section needs both"),
+            "{e}"
+        );
+        let both = GOOD.replace(
+            "diameter_mm = 2.8\n",
+            "diameter_mm = 2.8\nwidth_mm = 3\nthickness_mm = 1\n",
+        );
+        let e = load_err(d.path(), &both);
+        assert!(
+            e.contains("give either diameter_mm or width_mm and thickness_mm"),
+            "{e}"
+        );
+        let bad = GOOD.replace(
+            "diameter_mm = 2.8\n",
+            "width_mm = 11.86\nthickness_mm = 0\n",
+        );
+        let e = load_err(d.path(), &bad);
+        assert!(
+            e.contains("[specimen] thickness_mm = 0: outside the plausible range"),
+            "{e}"
+        );
     }
 
     #[test]

@@ -31,6 +31,10 @@ pub struct TestOutcome {
     pub specimen: String,
     /// Diameter, m; null when neither the pipeline nor the file states it.
     pub diameter_m: Option<f64>,
+    /// A flat section width × thickness (m) the moduli use, from the pipeline or the file;
+    /// absent for a round section.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub flat_section: Option<cablab_core::RectangularSection>,
     /// Kind.
     pub kind: TestKind,
     /// Content hash of everything this result depends on.
@@ -235,6 +239,7 @@ impl TestOutcome {
             slug: slug(&t.id),
             specimen: t.specimen.clone(),
             diameter_m: t.diameter_m,
+            flat_section: t.flat_section,
             kind: t.kind,
             cache_key: cache_key.to_string(),
             input_sha256: input_sha256.to_string(),
@@ -392,31 +397,63 @@ fn stages(
             == Some(cablab_ingest::units::Dimension::Curvature);
     let length_known = t.free_length_m.is_some() || rec.specimen.free_length_m.is_some();
     let machine_level = !length_known && !curvature_control;
-    let geom = if length_known {
-        crate::bridge::geometry(&rec, t.kind, t.free_length_m, t.diameter_m)?
+    let (geom, flat) = if length_known {
+        let (g, f, notes) = crate::bridge::geometry_noted(
+            &rec,
+            t.kind,
+            t.free_length_m,
+            t.diameter_m,
+            t.flat_section,
+        )?;
+        // Only the section's notes: the length's are the reader's business here.
+        out.warnings.extend(
+            notes
+                .into_iter()
+                .filter(|n| n.starts_with("the moduli use the flat")),
+        );
+        (g, f)
     } else {
-        cablab_measure::Geometry {
+        let g = cablab_measure::Geometry {
             free_length_m: 1.0,
             diameter_m: if curvature_control {
                 t.diameter_m.or(rec.specimen.diameter_m)
             } else {
                 None
             },
-        }
+        };
+        let f = (curvature_control && g.diameter_m.is_none())
+            .then(|| {
+                t.flat_section
+                    .or(rec.flat_section.as_ref().map(|(f, _)| *f))
+            })
+            .flatten();
+        (g, f)
     };
     out.diameter_m = t.diameter_m.or(rec.specimen.diameter_m);
+    out.flat_section = flat;
     out.free_length_m = length_known.then_some(geom.free_length_m);
     if machine_level {
         out.needs
             .push(format!("length_mm ({})", length_word(t.kind)));
     }
-    if out.diameter_m.is_none() {
+    // A stated section of any shape unlocks the moduli: a diameter, a flat b × h (pipeline or
+    // file) or, in tension, a cross-section area (issue 12: the area alone must not still ask
+    // for the diameter).
+    let section_known = out.diameter_m.is_some()
+        || t.flat_section.is_some()
+        || rec.flat_section.is_some()
+        || (t.kind == TestKind::Tension && rec.cross_section_m2.is_some());
+    if !section_known {
         out.needs.push("diameter_mm".into());
     }
     let mut curve = crate::bridge::curve(&rec)?;
     // A strain control (extensometer strain, torsional shear strain) in the kind's variable.
     out.warnings.extend(crate::bridge::sectional_control(
-        &rec, t.kind, &geom, &mut curve,
+        &rec,
+        t.kind,
+        &geom,
+        flat.as_ref(),
+        &mut curve,
     )?);
     if curvature_control && length_known {
         for c in &mut curve.control {
@@ -439,6 +476,7 @@ fn stages(
         fit_window: window.map(|(a, b, _)| (a, b)),
         fit_window_unit: window.map(|w| w.2).unwrap_or_default(),
         compliance_m_per_n: t.settings.compliance,
+        flat_section: flat,
         yield_method: match &t.settings.yield_method {
             Some(m) => m
                 .parse()
@@ -515,6 +553,9 @@ fn stages(
         "diagnosis": diagnosis,
         "model_error": out.model_error,
     });
+    if let Some(f) = &out.flat_section {
+        result["geometry"]["flat_section"] = serde_json::json!(f);
+    }
     if !out.needs.is_empty() {
         result["needs"] = serde_json::json!(out.needs);
         result["machine_stiffness"] = serde_json::json!(out.machine_stiffness);

@@ -371,6 +371,7 @@ mod tests {
                 path: PathBuf::from(id),
                 specimen: "s".into(),
                 diameter_m: Some(1e-3),
+                flat_section: None,
                 kind: cablab_core::TestKind::Tension,
                 free_length_m: Some(0.01),
                 format: None,

@@ -10,5 +10,6 @@ mod family;
 mod folder_mode;
 mod real_exports;
 mod real_shapes;
+mod sections;
 mod shards;
 mod trust;

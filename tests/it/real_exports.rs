@@ -8,7 +8,7 @@
 use crate::common::cablab;
 use serde_json::Value;
 
-fn json(args: &[&str]) -> Value {
+pub(crate) fn json(args: &[&str]) -> Value {
     let out = cablab().args(args).arg("--json").output().unwrap();
     assert!(
         out.status.success(),
@@ -56,11 +56,11 @@ fn owned(v: &[(&str, &str, &str)]) -> Vec<(String, String, String)> {
         .collect()
 }
 
-fn stiffness(v: &Value) -> f64 {
+pub(crate) fn stiffness(v: &Value) -> f64 {
     v["stiffness"]["value"].as_f64().unwrap()
 }
 
-fn warnings(v: &Value) -> Vec<String> {
+pub(crate) fn warnings(v: &Value) -> Vec<String> {
     v["warnings"]
         .as_array()
         .unwrap()
@@ -69,7 +69,7 @@ fn warnings(v: &Value) -> Vec<String> {
         .collect()
 }
 
-fn within(x: f64, target: f64, rel: f64) -> bool {
+pub(crate) fn within(x: f64, target: f64, rel: f64) -> bool {
     (x / target - 1.0).abs() <= rel
 }
 
@@ -185,9 +185,26 @@ fn sdata_numisheet_units_from_metadata_and_dic_strain() {
         let unl = a["cycles"][0]["unloading_stiffness"].as_f64().unwrap();
         assert!(unl < ea, "unloading {unl:e} vs {ea:e}");
     }
-    // No length at all: a strain control needs none for (EA).
+    // No flags at all: the parallel length 36 mm from `#;Geometry;A36R19W18` and the section
+    // 1.409 × 17.91 mm (A = 25.235 mm²) from `#;NumisheetID …T1.409W17.91…`, each with a note
+    // that says where it came from; E in the reference's 186–206 GPa.
     let a = analyze(name, &[]);
     assert!(within(stiffness(&a), 4.95e6, 0.05));
+    let e = a["modulus_pa"].as_f64().unwrap();
+    assert!((186e9..=206e9).contains(&e), "E {e:e}");
+    assert!(within(stiffness(&a) / e, 1.409e-3 * 17.91e-3, 1e-9));
+    let w = warnings(&a);
+    assert!(
+        w.iter().any(|w| w.contains(
+            "36 mm: the reduced parallel length A of the geometry code 'Geometry: A36R19W18'"
+        )),
+        "{w:?}"
+    );
+    assert!(
+        w.iter().any(|w| w.contains("cross-section 25.2352 mm²")
+            && w.contains("NumisheetID: C00FeDP980_Numisheet2020R03T1.409W17.91-S")),
+        "{w:?}"
+    );
 }
 
 #[test]
@@ -305,7 +322,7 @@ fn testxpert_french_course_standard() {
 }
 
 /// Writes `text` to a temporary file called `name`; returns the folder (kept alive) and path.
-fn temp_file(name: &str, text: &str) -> (tempfile::TempDir, String) {
+pub(crate) fn temp_file(name: &str, text: &str) -> (tempfile::TempDir, String) {
     let d = tempfile::tempdir().unwrap();
     let p = d.path().join(name);
     std::fs::write(&p, text).unwrap();
@@ -313,12 +330,11 @@ fn temp_file(name: &str, text: &str) -> (tempfile::TempDir, String) {
     (d, s)
 }
 
-/// A linear bar: (EA) = 2·10⁶ N; the crosshead moves 3× the specimen (a soft load train);
-/// the extensometer's strain is written in %. EA = dF/dε, whatever the length given.
-#[test]
-fn a_strain_in_percent_is_the_sectional_strain() {
-    let ea = 2.0e6;
-    let mut s = String::from("Time (s),Crosshead (mm),Load (N),Strain 1 (%)\n");
+/// A linear bar of stiffness `ea` over l₀ = 50 mm, ε from 0 to 0.2 % in 201 rows at 10 Hz:
+/// `Time (s)`, `Crosshead (mm)` moving 3× the specimen (a soft load train), `Load (N)` with a
+/// ±3 N deterministic ripple, and a fourth column `name` holding `fourth(ε)`.
+fn bar_log(name: &str, ea: f64, fourth: impl Fn(f64) -> f64) -> String {
+    let mut s = format!("Time (s),Crosshead (mm),Load (N),{name}\n");
     for k in 0..=200 {
         let eps = 2e-3 * k as f64 / 200.0;
         let f = ea * eps + 0.5 * ((k * 7919 % 13) as f64 - 6.0);
@@ -326,9 +342,18 @@ fn a_strain_in_percent_is_the_sectional_strain() {
             "{},{},{f},{}\n",
             0.1 * k as f64,
             3.0 * eps * 50.0,
-            eps * 100.0
+            fourth(eps)
         );
     }
+    s
+}
+
+/// A linear bar: (EA) = 2·10⁶ N; the crosshead moves 3× the specimen (a soft load train);
+/// the extensometer's strain is written in %. EA = dF/dε, whatever the length given.
+#[test]
+fn a_strain_in_percent_is_the_sectional_strain() {
+    let ea = 2.0e6;
+    let s = bar_log("Strain 1 (%)", ea, |eps| eps * 100.0);
     let (_d, p) = temp_file("bar.csv", &s);
     for len in ["50", "80"] {
         let a = json(&["analyze", &p, "--kind", "tension", "--length-mm", len]);
@@ -433,4 +458,81 @@ fn a_campaign_over_real_exports_uses_the_specimen_mounted_channel() {
     };
     assert!(within(by("uiuc"), 7.5e6, 0.05), "{:e}", by("uiuc"));
     assert!(within(by("mdb1pct"), 1.37e6, 0.04), "{:e}", by("mdb1pct"));
+    // The testXpert file states its cross-section (6.3812 mm²), not a diameter: nothing is
+    // missing (no "diameter_mm" in `needs`), and E = (EA)/A with the stated area.
+    let t = s["tests"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|t| t["id"].as_str().unwrap().contains("mdb1pct"))
+        .unwrap();
+    assert!(t.get("needs").is_none(), "{t}");
+    let e = t["modulus_pa"].as_f64().unwrap();
+    assert!(within(e, by("mdb1pct") / 6.3812e-6, 1e-9), "{e:e}");
+    // Folder mode's own listing says where the section came from instead of "diameter ?".
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("section cross-section 6.3812 mm² (the file's metadata)"),
+        "{err}"
+    );
+}
+
+/// The MTS 793 BTW three-point layout (fixture written for cablab: PLA beam b = 11.86 mm,
+/// h = 2.937 mm, span 40.28 mm, E = 2.05 GPa, linear to 40 N then softening; compression
+/// negative): the single-space names split into three channels, and with the flat section
+/// (EI) = E b h³/12 = 5.13·10⁻² N m² and E = 2.05 GPa within 2 %.
+#[test]
+fn mts_btw_three_point_beam_with_a_flat_section() {
+    let f = data("cablab__mts793_btw_three_point.dat");
+    let a = json(&[
+        "analyze",
+        &f,
+        "--kind",
+        "three-point",
+        "--length-mm",
+        "40.28",
+        "--width-mm",
+        "11.86",
+        "--thickness-mm",
+        "2.937",
+    ]);
+    assert_eq!(a["control_channel"]["name"], "Ch 1 Displacement");
+    let i = 11.86e-3 * 2.937e-3f64.powi(3) / 12.0;
+    assert!(
+        within(stiffness(&a), 2.05e9 * i, 0.02),
+        "{:e}",
+        stiffness(&a)
+    );
+    let e = a["modulus_pa"].as_f64().unwrap();
+    assert!(within(e, 2.05e9, 0.02), "{e:e}");
+}
+
+/// A crosshead beside a length called strain (MTS TestSuite's `_Strain1` in mm, the
+/// extensometer's elongation): the reader keeps the crosshead as the control (as the shared
+/// manifest's technician does), and the machine-travel flag names the specimen-mounted channel
+/// and the flag that uses it; with it, (EA) is the bar's own.
+#[test]
+fn a_machine_travel_flag_names_the_files_extensometer() {
+    let (ea, l0) = (2.0e6, 0.05);
+    let s = bar_log("Strain1 (mm)", ea, |eps| eps * l0 * 1e3);
+    let (_d, p) = temp_file("xhead.csv", &s);
+    let a = json(&["analyze", &p, "--kind", "tension", "--length-mm", "50"]);
+    assert_eq!(a["control_channel"]["name"], "Crosshead");
+    let w = warnings(&a);
+    assert!(
+        w.iter().any(|w| w.contains("machine travel 'Crosshead'")
+            && w.contains("specimen-mounted 'Strain1' (mm) gives the specimen's own: pass --control 'Strain1'")),
+        "{w:?}"
+    );
+    let b = json(&[
+        "analyze",
+        &p,
+        "--kind",
+        "tension",
+        "--length-mm",
+        "50",
+        "--control",
+        "Strain1",
+    ]);
+    assert!(within(stiffness(&b), ea, 0.005), "{:e}", stiffness(&b));
 }

@@ -198,6 +198,84 @@ impl CircularSection {
     }
 }
 
+/// Rectangular section properties for an isotropic, flat specimen of width b and thickness h
+/// (sheet, strip, printed beam): the section stated as b × h rather than as a diameter.
+///
+/// Bending is about the axis along the width (the thickness lies in the plane of bending, as
+/// for a strip bent flat): I = b h³/12. Torsion uses Saint-Venant's torsion constant of the
+/// rectangle ([`RectangularSection::torsion_constant`]), not the polar moment b h (b² + h²)/12,
+/// which overstates it (by 2.3× for a square, without bound for a thin strip).
+///
+/// Does not know about warping restraint at the clamps (short, wide strips twist stiffer than
+/// Saint-Venant's J_t says) nor about anisotropy (rolled sheet, printed layers).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct RectangularSection {
+    /// Width b, m.
+    pub width_m: f64,
+    /// Thickness h, m (the dimension in the plane of bending).
+    pub thickness_m: f64,
+}
+
+impl RectangularSection {
+    /// Area A = b h, m².
+    pub fn area(&self) -> f64 {
+        self.width_m * self.thickness_m
+    }
+    /// Second moment of area about the axis along the width, I = b h³/12, m⁴.
+    pub fn second_moment(&self) -> f64 {
+        self.width_m * self.thickness_m.powi(3) / 12.0
+    }
+    /// The longer side a and the shorter side c, m.
+    fn sides(&self) -> (f64, f64) {
+        if self.width_m >= self.thickness_m {
+            (self.width_m, self.thickness_m)
+        } else {
+            (self.thickness_m, self.width_m)
+        }
+    }
+    /// Σ_{n = 1, 3, 5, …} term(n, nπa/(2c)) over the odd n of Saint-Venant's series, summed
+    /// until a term falls to 10⁻¹⁶ of the sum (or to zero).
+    fn odd_series(&self, term: impl Fn(f64, f64) -> f64) -> f64 {
+        let (a, c) = self.sides();
+        let mut sum = 0.0;
+        let mut n = 1.0_f64;
+        loop {
+            let t = term(n, n * std::f64::consts::PI * a / (2.0 * c));
+            sum += t;
+            if t <= 1e-16 * sum {
+                return sum;
+            }
+            n += 2.0;
+        }
+    }
+    /// Saint-Venant torsion constant, m⁴: with a the longer and c the shorter side,
+    /// J_t = a c³ [1/3 − (64/π⁵)(c/a) Σ_{n = 1, 3, 5, …} tanh(nπa/(2c))/n⁵]
+    /// (J_t → a c³/3 for a thin strip, 0.1406 a⁴ for a square).
+    pub fn torsion_constant(&self) -> f64 {
+        let (a, c) = self.sides();
+        let sum = self.odd_series(|n, x| x.tanh() / n.powi(5));
+        a * c.powi(3) * (1.0 / 3.0 - 64.0 / std::f64::consts::PI.powi(5) * (c / a) * sum)
+    }
+    /// Largest surface shear strain per unit twist rate, γ_max/K₃, m: at the middle of the
+    /// longer side, c [1 − (8/π²) Σ_{n = 1, 3, 5, …} 1/(n² cosh(nπa/(2c)))] (Saint-Venant:
+    /// c for a thin strip, 0.675 c for a square), the torsion analogue of d/2.
+    pub fn max_shear_strain_per_twist(&self) -> f64 {
+        let (_, c) = self.sides();
+        let sum = self.odd_series(|n, x| 1.0 / (n * n * x.cosh()));
+        c * (1.0 - 8.0 / std::f64::consts::PI.powi(2) * sum)
+    }
+    /// Young's modulus from the stiffness fitted in a test of `kind`, with Poisson ratio `nu`:
+    /// E_T = (EA)/(b h), E_tor = 2(1+ν)(GJ)/J_t, E_B = (EI)/(b h³/12).
+    pub fn modulus_from_stiffness(&self, kind: TestKind, stiffness: f64, nu: f64) -> Option<f64> {
+        match kind {
+            TestKind::Tension => Some(stiffness / self.area()),
+            TestKind::Torsion => Some(2.0 * (1.0 + nu) * stiffness / self.torsion_constant()),
+            TestKind::ThreePoint | TestKind::PureBending => Some(stiffness / self.second_moment()),
+            TestKind::Unknown => None,
+        }
+    }
+}
+
 /// The effect vocabulary of the gap diagnosis. These names appear in every output.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -327,5 +405,72 @@ mod tests {
         assert!((e_t / 12_900e6 - 1.0).abs() < 0.01, "E_T = {e_t}");
         assert!((e_tor / 1003.7e6 - 1.0).abs() < 0.01, "E_tor = {e_tor}");
         assert!((e_b / 454.4e6 - 1.0).abs() < 0.01, "E_B = {e_b}");
+    }
+
+    /// Rectangle: A = b h, I = b h³/12, and Saint-Venant's J_t = k₁ a c³ against the tabulated
+    /// k₁ (Timoshenko & Goodier, Theory of Elasticity, § 109: a/c = 1 → 0.1406, 2 → 0.229,
+    /// 4 → 0.281, 10 → 0.312, ∞ → 1/3), in either orientation.
+    #[test]
+    fn rectangle_area_second_moment_and_saint_venant_torsion_constant() {
+        let s = RectangularSection {
+            width_m: 6.0e-3,
+            thickness_m: 1.5e-3,
+        };
+        assert!((s.area() - 9.0e-6).abs() < 1e-18);
+        assert!((s.second_moment() - 6.0e-3 * 1.5e-3f64.powi(3) / 12.0).abs() < 1e-24);
+        for (ratio, k1) in [
+            (1.0, 0.1406),
+            (2.0, 0.229),
+            (4.0, 0.281),
+            (10.0, 0.312),
+            (1e4, 1.0 / 3.0),
+        ] {
+            let c = 1e-3;
+            for (b, h) in [(ratio * c, c), (c, ratio * c)] {
+                let r = RectangularSection {
+                    width_m: b,
+                    thickness_m: h,
+                };
+                let got = r.torsion_constant() / (ratio * c * c.powi(3));
+                assert!(
+                    (got / k1 - 1.0).abs() < 2e-3,
+                    "a/c = {ratio}: k1 = {got}, table {k1}"
+                );
+            }
+        }
+        // τ_max/(G K₃ c) = k₁/k₂ of the same table: 0.1406/0.208 = 0.675 (square), → 1 (strip).
+        let sq_unit = RectangularSection {
+            width_m: 2e-3,
+            thickness_m: 2e-3,
+        };
+        assert!((sq_unit.max_shear_strain_per_twist() / 2e-3 - 0.675).abs() < 2e-3);
+        let strip = RectangularSection {
+            width_m: 1.0,
+            thickness_m: 1e-3,
+        };
+        assert!((strip.max_shear_strain_per_twist() / 1e-3 - 1.0).abs() < 1e-9);
+        // Not the polar moment b h (b² + h²)/12: for a square that is 0.1667 a⁴, 19 % too high.
+        let sq = RectangularSection {
+            width_m: 1.0,
+            thickness_m: 1.0,
+        };
+        assert!(sq.torsion_constant() < 0.85 * (2.0 / 12.0));
+        // Moduli: the chapter's stiffnesses on a 6 × 1.5 mm strip, ν = 0.5.
+        let e_t = s
+            .modulus_from_stiffness(TestKind::Tension, 9.0e5, 0.5)
+            .unwrap();
+        assert!((e_t - 1.0e11).abs() < 1.0);
+        let e_b = s
+            .modulus_from_stiffness(TestKind::ThreePoint, 1.6875e-1, 0.5)
+            .unwrap();
+        assert!((e_b / 1.0e11 - 1.0).abs() < 1e-12, "{e_b}");
+        let j = s.torsion_constant();
+        let e_tor = s
+            .modulus_from_stiffness(TestKind::Torsion, 1.0e9 * j, 0.3)
+            .unwrap();
+        assert!((e_tor / 2.6e9 - 1.0).abs() < 1e-12);
+        assert!(s
+            .modulus_from_stiffness(TestKind::Unknown, 1.0, 0.5)
+            .is_none());
     }
 }

@@ -105,6 +105,9 @@ pub struct TestRecord {
     /// The specimen's cross-section area from the metadata, m² (testXpert `Cross-section`,
     /// else thickness × width): a flat specimen's area, which no diameter describes.
     pub cross_section_m2: Option<f64>,
+    /// A flat specimen's width × thickness from the metadata (testXpert `Specimen width` and
+    /// `Specimen thickness`, the sdata/Numisheet `T<h>W<b>` id), m, and where it came from.
+    pub flat_section: Option<(cablab_core::RectangularSection, String)>,
     /// Channels of the main block, in file order.
     pub channels: Vec<Channel>,
     /// One Float64 column per channel, SI; null for empty cells, `nan` and sentinels.
@@ -818,12 +821,14 @@ pub(crate) fn build(
     let labels = std::mem::take(&mut block.labels);
     let data = to_frame(&names, columns, labels, &source)?;
     let cross_section_m2 = crate::roles::area_from_metadata(&raw.metadata);
+    let flat_section = crate::roles::flat_section_from_metadata(&raw.metadata);
     Ok(TestRecord {
         kind,
         kind_reason,
         kind_evidence,
         specimen,
         cross_section_m2,
+        flat_section,
         channels,
         data,
         metadata: raw.metadata,

@@ -761,7 +761,81 @@ fn area_m2(key: &str, value: &str) -> Option<f64> {
 /// width (`Specimen thickness` and `Specimen width`, `Dicke`/`Breite`, `Épaisseur`/`Largeur`,
 /// with length units). `None` when neither is there.
 pub(crate) fn area_from_metadata(meta: &[(String, String)]) -> Option<f64> {
-    stated_area(meta).or_else(|| {
+    stated_area(meta).or_else(|| flat_section_from_metadata(meta).map(|(s, _)| s.area()))
+}
+
+/// A flat specimen's width × thickness from the metadata, m, and where it came from:
+/// `Specimen thickness` and `Specimen width` (`Dicke`/`Breite`, `Épaisseur`/`Largeur`, ... with
+/// length units), else the Numisheet material id of sdata/NIST files (`#;NumisheetID`, e.g.
+/// `…R03T1.409W17.91-S`: thickness 1.409 mm, width 17.91 mm). `None` unless both are there.
+pub(crate) fn flat_section_from_metadata(
+    meta: &[(String, String)],
+) -> Option<(cablab_core::RectangularSection, String)> {
+    stated_flat_section(meta).or_else(|| numisheet_flat_section(meta))
+}
+
+/// `T<thickness>W<width>` (mm) inside a `NumisheetID` value.
+fn numisheet_flat_section(
+    meta: &[(String, String)],
+) -> Option<(cablab_core::RectangularSection, String)> {
+    let (k, v) = meta.iter().find(|(k, _)| norm_key(k) == "numisheetid")?;
+    let num = |s: &str| -> Option<(f64, usize)> {
+        let n = s
+            .char_indices()
+            .take_while(|(_, c)| c.is_ascii_digit() || *c == '.')
+            .last()
+            .map(|(i, c)| i + c.len_utf8())?;
+        s[..n]
+            .parse::<f64>()
+            .ok()
+            .filter(|x| *x > 0.0)
+            .map(|x| (x, n))
+    };
+    v.match_indices('T').find_map(|(i, _)| {
+        let (t, n) = num(&v[i + 1..])?;
+        let rest = v[i + 1 + n..].strip_prefix('W')?;
+        let (w, _) = num(rest)?;
+        Some((
+            cablab_core::RectangularSection {
+                width_m: w * 1e-3,
+                thickness_m: t * 1e-3,
+            },
+            format!("'{k}: {v}' (Numisheet id: T = thickness, W = width, mm)"),
+        ))
+    })
+}
+
+/// The sdata/NIST geometry code `#;Geometry;A36R19W18` (reduced parallel length A, fillet
+/// radius R, nominal width W, mm): the parallel length in m, with the note that says so.
+fn sdata_parallel_length(meta: &[(String, String)]) -> Option<(f64, String)> {
+    let (k, v) = meta.iter().find(|(k, _)| norm_key(k) == "geometry")?;
+    let code = v.trim();
+    let mut parts = Vec::new();
+    let mut rest = code;
+    for letter in ['A', 'R', 'W'] {
+        rest = rest.strip_prefix(letter)?;
+        let n = rest
+            .find(|c: char| !(c.is_ascii_digit() || c == '.'))
+            .unwrap_or(rest.len());
+        parts.push(rest[..n].parse::<f64>().ok().filter(|x| *x > 0.0)?);
+        rest = &rest[n..];
+    }
+    rest.is_empty().then(|| {
+        (
+            parts[0] * 1e-3,
+            format!(
+                "specimen length {} mm: the reduced parallel length A of the geometry code '{k}: {v}' (A = parallel length, R = fillet radius, W = width, mm)",
+                parts[0]
+            ),
+        )
+    })
+}
+
+/// `Specimen thickness` and `Specimen width` (see [`flat_section_from_metadata`]).
+fn stated_flat_section(
+    meta: &[(String, String)],
+) -> Option<(cablab_core::RectangularSection, String)> {
+    {
         let find = |keys: &[&str]| {
             meta.iter().find_map(|(k, v)| {
                 let nk = norm_key(k);
@@ -792,8 +866,14 @@ pub(crate) fn area_from_metadata(meta: &[(String, String)]) -> Option<f64> {
             "ancho",
             "larghezza",
         ])?;
-        Some(t * w)
-    })
+        Some((
+            cablab_core::RectangularSection {
+                width_m: w,
+                thickness_m: t,
+            },
+            "the metadata's thickness and width".to_string(),
+        ))
+    }
 }
 
 /// A cross-section area stated with an area unit (see [`area_from_metadata`]).
@@ -948,6 +1028,12 @@ pub(crate) fn specimen_from_metadata(
                 }
                 break;
             }
+        }
+    }
+    if sp.free_length_m.is_none() {
+        if let Some((l, note)) = sdata_parallel_length(meta) {
+            sp.free_length_m = Some(l);
+            notes.push(note);
         }
     }
     (sp, notes)
@@ -1176,6 +1262,39 @@ mod tests {
         assert_eq!(ev[0].kinds, vec![TestKind::Tension]);
         assert_eq!(ev[1].kinds, vec![TestKind::ThreePoint]);
         assert!(ev[1].what.starts_with("the file name"), "{ev:?}");
+    }
+
+    /// sdata/NIST geometry: `Geometry: A36R19W18` is the parallel length 36 mm (only when no
+    /// other length is stated) and `NumisheetID …T1.409W17.91…` the flat section.
+    #[test]
+    fn sdata_geometry_code_and_numisheet_id() {
+        let meta = |kv: &[(&str, &str)]| -> Vec<(String, String)> {
+            kv.iter()
+                .map(|(k, v)| (k.to_string(), v.to_string()))
+                .collect()
+        };
+        let m = meta(&[
+            ("Geometry", "A36R19W18"),
+            ("NumisheetID", "C00FeDP980_Numisheet2020R03T1.409W17.91-S"),
+        ]);
+        let (sp, notes) = specimen_from_metadata(&m);
+        assert!((sp.free_length_m.unwrap() - 0.036).abs() < 1e-15);
+        assert!(notes[0].contains("'Geometry: A36R19W18'"), "{notes:?}");
+        let (f, from) = flat_section_from_metadata(&m).unwrap();
+        assert!((f.thickness_m - 1.409e-3).abs() < 1e-15 && (f.width_m - 17.91e-3).abs() < 1e-15);
+        assert!(from.contains("NumisheetID"), "{from}");
+        assert!((area_from_metadata(&m).unwrap() - 1.409e-3 * 17.91e-3).abs() < 1e-15);
+        // A stated gauge length wins over the code; codes that are not A…R…W… are not read.
+        let (sp, _) = specimen_from_metadata(&meta(&[
+            ("Gauge length", "25 mm"),
+            ("Geometry", "A36R19W18"),
+        ]));
+        assert!((sp.free_length_m.unwrap() - 0.025).abs() < 1e-15);
+        for code in ["A36R19", "A36R19W18X", "dogbone", "A-1R2W3"] {
+            let (sp, _) = specimen_from_metadata(&meta(&[("Geometry", code)]));
+            assert!(sp.free_length_m.is_none(), "{code}");
+        }
+        assert!(flat_section_from_metadata(&meta(&[("NumisheetID", "DP980_R03-S")])).is_none());
     }
 
     #[test]

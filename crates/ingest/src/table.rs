@@ -515,7 +515,18 @@ impl<'a> Engine<'a> {
                 // more spaces, else by where the data row's cells sit under the header.
                 let head = &self.text[p.start..p.end];
                 let data = &self.text[data_span.0..data_span.1];
-                if let Some(aligned) = align_header(head, data, ncells) {
+                // Runs of spaces tell the columns when there are any; MTS BTW's single
+                // spaces are grouped by `Ch <n>` before any alignment with the data row.
+                let runs = head
+                    .trim_ascii()
+                    .windows(2)
+                    .any(|w| w.iter().all(|&b| b == b' ' || b == b'\t'));
+                let grouped = (!runs)
+                    .then(|| mts_channel_groups(&names, ncells))
+                    .flatten();
+                if let Some(g) = grouped {
+                    names = g;
+                } else if let Some(aligned) = align_header(head, data, ncells) {
                     names = aligned;
                 }
             }
@@ -1061,6 +1072,43 @@ impl Engine<'_> {
     }
 }
 
+/// MTS 793 (BTW) names separated by single spaces, `Ch 1 Displacement Ch 1 Force Time`: each
+/// `Ch <n>` starts a channel name that runs to the next `Ch <n>`; words before the first form
+/// one column, and the last group gives up its trailing words one per column until the count
+/// is `n` (the data and units rows say how many columns there are), so the example reads as
+/// `Ch 1 Displacement`, `Ch 1 Force`, `Time`. `None` when the words hold no `Ch <n>` or
+/// cannot make `n` names of which each `Ch` group keeps at least one word after `Ch <n>`.
+fn mts_channel_groups(words: &[String], n: usize) -> Option<Vec<String>> {
+    let w: Vec<&str> = words
+        .iter()
+        .map(|s| s.trim())
+        .filter(|s| !s.is_empty())
+        .collect();
+    let starts: Vec<usize> = (0..w.len().saturating_sub(1))
+        .filter(|&i| w[i] == "Ch" && w[i + 1].parse::<u32>().is_ok())
+        .collect();
+    let first = *starts.first()?;
+    let mut out = Vec::with_capacity(n);
+    if first > 0 {
+        out.push(w[..first].join(" "));
+    }
+    for (j, &s) in starts.iter().enumerate() {
+        let end = starts.get(j + 1).copied().unwrap_or(w.len());
+        out.push(w[s..end].join(" "));
+    }
+    // The free columns after the last group: one word each, taken from its end.
+    let free = n.checked_sub(out.len())?;
+    let last_start = *starts.last()?;
+    if w.len() < last_start + 3 + free {
+        return None;
+    }
+    let split = w.len() - free;
+    out.pop();
+    out.push(w[last_start..split].join(" "));
+    out.extend(w[split..].iter().map(|s| s.to_string()));
+    (out.len() == n).then_some(out)
+}
+
 /// Splits a space-separated header line into `n` names that may hold single spaces: by runs of
 /// two or more spaces/tabs when that gives `n` cells, else by aligning each word with the cell
 /// of `data` (the first data row) it sits over or nearest to. `None` when neither fits.
@@ -1374,5 +1422,34 @@ mod tests {
         assert_eq!(b.rows, 2);
         assert_eq!(b.line_of_row(0), 2);
         assert_eq!(b.line_of_row(1), 4);
+    }
+
+    /// MTS 793 BTW names with single spaces, grouped by `Ch <n>` and the column count.
+    #[test]
+    fn mts_btw_names_are_grouped_by_channel() {
+        let w = |t: &str| t.split(' ').map(String::from).collect::<Vec<_>>();
+        assert_eq!(
+            mts_channel_groups(&w("Ch 1 Displacement Ch 1 Force Time"), 3).unwrap(),
+            ["Ch 1 Displacement", "Ch 1 Force", "Time"]
+        );
+        assert_eq!(
+            mts_channel_groups(
+                &w("Running Time Ch 1 Axial Displacement Ch 2 Axial Force"),
+                3
+            )
+            .unwrap(),
+            [
+                "Running Time",
+                "Ch 1 Axial Displacement",
+                "Ch 2 Axial Force"
+            ]
+        );
+        assert_eq!(
+            mts_channel_groups(&w("Ch 1 Force Time Count"), 3).unwrap(),
+            ["Ch 1 Force", "Time", "Count"]
+        );
+        // No Ch groups, or too few words for the count: not this layout.
+        assert!(mts_channel_groups(&w("Zeit Kraft Weg"), 3).is_none());
+        assert!(mts_channel_groups(&w("Ch 1 Force Time"), 4).is_none());
     }
 }

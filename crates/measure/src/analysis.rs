@@ -89,6 +89,10 @@ pub struct AnalyzeOptions {
     pub small_deflection_tolerance: f64,
     /// How the yield point is found ([`YieldMethod::Auto`] by default).
     pub yield_method: YieldMethod,
+    /// A flat specimen's section b × h (sheet, strip, printed beam): when set, the moduli use
+    /// its A, I and Saint-Venant J_t and the default offset its outer fibre, in place of the
+    /// round section of `Geometry::diameter_m` (None by default).
+    pub flat_section: Option<cablab_core::RectangularSection>,
 }
 
 /// What the numbers of a user-set fit window are.
@@ -138,9 +142,39 @@ pub const DEFAULT_OFFSET_STRAIN: f64 = 0.002;
 ///
 /// Errors (with why) when the kind needs the diameter and it is not known.
 pub fn default_yield_offset(kind: TestKind, geom: &Geometry) -> Result<(f64, String), String> {
+    default_yield_offset_in(kind, geom, None)
+}
+
+/// [`default_yield_offset`] on a flat section b × h when `flat` is set: the outer fibre h/2 of
+/// bending takes the place of d/2 (κ = 0.004/h, w = 0.002 l₀²/(6 h)), and in torsion the
+/// largest surface shear strain per twist rate ([`cablab_core::RectangularSection::max_shear_strain_per_twist`],
+/// c_γ) that of d/2 (K₃ = √3 · 0.002/c_γ).
+pub fn default_yield_offset_in(
+    kind: TestKind,
+    geom: &Geometry,
+    flat: Option<&cablab_core::RectangularSection>,
+) -> Result<(f64, String), String> {
     let e = DEFAULT_OFFSET_STRAIN;
     if kind == TestKind::Tension {
         return Ok((e, "default: 0.2 % axial strain (ISO 6892-1 Rp0.2)".into()));
+    }
+    if let Some(s) = flat {
+        let h = s.thickness_m;
+        return match kind {
+            TestKind::PureBending => Ok((
+                2.0 * e / h,
+                "default: 0.2 % surface strain of the flat section, curvature 2·0.002/h (ISO 6892-1 Rp0.2 analogue)".into(),
+            )),
+            TestKind::ThreePoint => Ok((
+                e * geom.free_length_m.powi(2) / (6.0 * h),
+                "default: 0.2 % small-deflection peak surface strain of the flat section, deflection 0.002·l0²/(6 h) (ISO 6892-1 Rp0.2 analogue)".into(),
+            )),
+            TestKind::Torsion => Ok((
+                3f64.sqrt() * e / s.max_shear_strain_per_twist(),
+                "default: largest surface shear strain of the flat section √3·0.2 % (von Mises equivalent of 0.2 % plastic strain; Saint-Venant, middle of the longer side) (ISO 6892-1 Rp0.2 analogue)".into(),
+            )),
+            _ => Err("no default offset for an unknown kind".into()),
+        };
     }
     let Some(d) = geom.diameter_m.filter(|d| *d > 0.0) else {
         return Err(format!(
@@ -211,6 +245,7 @@ impl Default for AnalyzeOptions {
             zero_offsets: true,
             small_deflection_tolerance: 0.01,
             yield_method: YieldMethod::default(),
+            flat_section: None,
         }
     }
 }
@@ -826,15 +861,34 @@ pub fn analyze(
         warnings.extend(s.warnings.iter().map(|w| format!("stiffness: {w}")));
     }
 
-    let modulus_pa = match (&stiffness, geom.diameter_m) {
-        (Some(s), Some(d)) => {
-            let m = modulus_from_stiffness(kind, d, s.value, opts.nu);
+    // The section of the moduli: a stated flat b × h before the round diameter.
+    let section = match (opts.flat_section, geom.diameter_m) {
+        (Some(f), _) => Some((
+            f.modulus_from_stiffness(kind, stiffness.as_ref().map_or(0.0, |s| s.value), opts.nu),
+            format!(
+                "a flat section of {:.3} × {:.3} mm (width × thickness)",
+                f.width_m * 1e3,
+                f.thickness_m * 1e3
+            ),
+        )),
+        (None, Some(d)) => Some((
+            modulus_from_stiffness(
+                kind,
+                d,
+                stiffness.as_ref().map_or(0.0, |s| s.value),
+                opts.nu,
+            ),
+            format!("a diameter of {:.3} mm", d * 1e3),
+        )),
+        (None, None) => None,
+    };
+    let modulus_pa = match (&stiffness, section) {
+        (Some(_), Some((m, what))) => {
             if let Some(e) =
                 m.filter(|e| !(PLAUSIBLE_MODULUS_PA.0..=PLAUSIBLE_MODULUS_PA.1).contains(e))
             {
                 warnings.push(format!(
-                    "modulus_pa: {e:.3e} Pa for a diameter of {:.3} mm lies outside {:.0e}–{:.0e} Pa, the range of solids from soft elastomers to diamond: check the kind, the channels (control and response swapped?), their units and the diameter",
-                    d * 1e3,
+                    "modulus_pa: {e:.3e} Pa for {what} lies outside {:.0e}–{:.0e} Pa, the range of solids from soft elastomers to diamond: check the kind, the channels (control and response swapped?), their units and the section",
                     PLAUSIBLE_MODULUS_PA.0,
                     PLAUSIBLE_MODULUS_PA.1
                 ));
@@ -848,7 +902,8 @@ pub fn analyze(
         (_, None) => {
             why.insert(
                 "modulus_pa".into(),
-                "the diameter is not known (give --diameter-mm)".into(),
+                "the diameter is not known (give --diameter-mm, or --width-mm and --thickness-mm for a flat section)"
+                    .into(),
             );
             None
         }
@@ -991,7 +1046,11 @@ pub fn analyze(
     // The offset method replaces the bend (whatever the class: the user asked for it).
     let offset = match opts.yield_method {
         YieldMethod::Offset(v) => Some(Ok((v, "given".to_string()))),
-        YieldMethod::OffsetDefault => Some(default_yield_offset(kind, geom)),
+        YieldMethod::OffsetDefault => Some(default_yield_offset_in(
+            kind,
+            geom,
+            opts.flat_section.as_ref(),
+        )),
         _ => None,
     };
     let yield_point = match (offset, &elastic) {
@@ -1611,4 +1670,31 @@ fn break_is_abrupt(rm: &[f64], j: usize) -> bool {
     let top = rm[..j].iter().fold(f64::NEG_INFINITY, |m, &v| m.max(v));
     let last_high = (0..j).rev().find(|&i| rm[i] >= 0.9 * top).unwrap_or(0);
     j - last_high <= (rm.len() / 50).max(5)
+}
+
+#[cfg(test)]
+mod flat_section_tests {
+    use super::*;
+    use cablab_core::RectangularSection;
+
+    /// The default offset on a flat b × h section: outer fibre h/2 in bending (κ = 0.004/h,
+    /// w = 0.002 l₀²/(6h)), Saint-Venant's largest shear strain in torsion (thin strip: γ = K₃ h).
+    #[test]
+    fn default_offset_uses_the_flat_sections_outer_fibre() {
+        let g = Geometry {
+            free_length_m: 0.04,
+            diameter_m: None,
+        };
+        let strip = RectangularSection {
+            width_m: 1.0,
+            thickness_m: 2e-3,
+        };
+        let off = |k| default_yield_offset_in(k, &g, Some(&strip)).unwrap().0;
+        assert!((off(TestKind::PureBending) - 2.0).abs() < 1e-12);
+        assert!((off(TestKind::ThreePoint) - 0.002 * 0.04f64.powi(2) / (6.0 * 2e-3)).abs() < 1e-15);
+        assert!((off(TestKind::Torsion) / (3f64.sqrt() * 0.002 / 2e-3) - 1.0).abs() < 1e-9);
+        assert!((off(TestKind::Tension) - 0.002).abs() < 1e-15);
+        // Without a section or a diameter, bending has no default.
+        assert!(default_yield_offset_in(TestKind::PureBending, &g, None).is_err());
+    }
 }

@@ -242,6 +242,39 @@ fn catman_ascii_sample() {
         .any(|(k, v)| k == "dt" && v == "0,05 0,05 0,05"));
 }
 
+/// MTS 793 BTW layout (written for cablab, EXPECTED.md "seen but not committed"): names
+/// separated by single spaces (`Ch 1 Displacement Ch 1 Force Time`), units `mm kN Sec`, CRLF,
+/// compression negative. Three channels with their units, not seven words.
+#[test]
+fn mts793_btw_names_with_single_spaces() {
+    let r = read_path(
+        &data("cablab__mts793_btw_three_point.dat"),
+        &ReadOptions::default(),
+    )
+    .unwrap();
+    assert_eq!(r.provenance.format, Format::Mts793Dat);
+    let names: Vec<(&str, &str)> = r
+        .channels
+        .iter()
+        .map(|c| (c.name.as_str(), c.unit.as_str()))
+        .collect();
+    assert_eq!(
+        names,
+        [
+            ("Ch 1 Displacement", "mm"),
+            ("Ch 1 Force", "kN"),
+            ("Time", "Sec")
+        ]
+    );
+    assert_eq!(r.data.height(), 241);
+    assert_eq!(role_name(&r, Role::Control), Some("Ch 1 Displacement"));
+    assert_eq!(role_name(&r, Role::Response), Some("Ch 1 Force"));
+    assert_eq!(role_name(&r, Role::Time), Some("Time"));
+    // Last row: -2.4 mm, -0.066814956 kN (SI: m, N).
+    assert!(rel(val(&r, "Ch 1 Displacement", 241), -2.4e-3));
+    assert!(rel(val(&r, "Ch 1 Force", 241), -66.814956));
+}
+
 fn utf16(s: &str, le: bool, bom: bool) -> Vec<u8> {
     let mut v = Vec::new();
     if bom {
