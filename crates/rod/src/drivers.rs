@@ -195,6 +195,11 @@ enum Driver<'a> {
         /// Secant stiffness of the last step (response per specimen control), the compliance
         /// iteration's first guess.
         stiffness: f64,
+        /// The last committed step: its configuration change and its specimen control
+        /// increment (0: none usable), the secant predictor of the next step.
+        predictor: Predictor,
+        /// The configuration at the start of the step being solved (restored on failure).
+        saved: Vec<Vector3<f64>>,
     },
 }
 
@@ -222,6 +227,8 @@ impl<'a> Driver<'a> {
                     specimen: 0.0,
                     response: 0.0,
                     stiffness: ei / l,
+                    predictor: Predictor::default(),
+                    saved: Vec::new(),
                 })
             }
             TestKind::ThreePoint => {
@@ -256,6 +263,8 @@ impl<'a> Driver<'a> {
                     specimen: 0.0,
                     response: 0.0,
                     stiffness: 48.0 * ei / (l * l * l),
+                    predictor: Predictor::default(),
+                    saved: Vec::new(),
                 })
             }
             other => Err(RodError::UnsupportedKind(other)),
@@ -295,6 +304,8 @@ impl<'a> Driver<'a> {
                 specimen,
                 response,
                 stiffness,
+                predictor,
+                saved,
             } => {
                 let from = *current;
                 let total = target - from;
@@ -308,7 +319,7 @@ impl<'a> Driver<'a> {
                     let remaining = target - c;
                     let last = remaining.abs() <= h.abs() + tiny;
                     let next = if last { target } else { c + h };
-                    let saved = rod.q.clone();
+                    saved.clone_from(&rod.q);
                     let frac = if total != 0.0 {
                         (next - c) / total
                     } else {
@@ -324,6 +335,9 @@ impl<'a> Driver<'a> {
                             (*compliance, *specimen, *response, *stiffness),
                         )
                     } else {
+                        if rod.options.predictor {
+                            predictor.predict(&mut rod.q, next - *specimen);
+                        }
                         Self::apply_control(rod, *kind, next);
                         rod.solve(dt * frac, step).map(|it| (it, next))
                     };
@@ -338,6 +352,7 @@ impl<'a> Driver<'a> {
                                     *stiffness = k;
                                 }
                             }
+                            predictor.record(saved, &rod.q, w - *specimen);
                             *specimen = w;
                             *response = r;
                             c = next;
@@ -346,7 +361,7 @@ impl<'a> Driver<'a> {
                             }
                         }
                         Err(e) => {
-                            rod.q = saved;
+                            rod.q.clone_from(saved);
                             Self::apply_control(rod, *kind, *specimen);
                             cuts += 1;
                             if cuts > max_cuts || total == 0.0 {
@@ -422,6 +437,58 @@ impl<'a> Driver<'a> {
             curve
                 .span_moment_nm
                 .push(rod.stress.iter().map(|s| s[2]).collect());
+        }
+    }
+}
+
+/// Predictor of the next step's configuration from the last two committed steps (changes
+/// `dq`, `dq_prev` of the configuration over specimen control increments `dw`, `dw_prev`):
+/// quadratic extrapolation in the control (linear when only one step is usable), used only when
+/// the coming increment `dw_next` goes in the same direction as the last ones and is at most
+/// 1.5 times the last (no prediction across a reversal, where the response turns). Newton then
+/// starts near the new equilibrium; where it converges to is unchanged.
+#[derive(Debug, Default)]
+struct Predictor {
+    dq: Vec<Vector3<f64>>,
+    dw: f64,
+    dq_prev: Vec<Vector3<f64>>,
+    dw_prev: f64,
+}
+
+impl Predictor {
+    /// Record a committed step from `before` to `after` over the specimen control increment `dw`.
+    fn record(&mut self, before: &[Vector3<f64>], after: &[Vector3<f64>], dw: f64) {
+        std::mem::swap(&mut self.dq, &mut self.dq_prev);
+        self.dw_prev = self.dw;
+        self.dq.clear();
+        self.dq.extend(after.iter().zip(before).map(|(a, b)| a - b));
+        self.dw = dw;
+    }
+
+    /// Move `q` (the committed configuration) to the predicted one for the increment `dw_next`.
+    fn predict(&self, q: &mut [Vector3<f64>], dw_next: f64) {
+        let r = dw_next / self.dw;
+        if self.dq.len() != q.len() || !(r > 0.0 && r <= 1.5) {
+            return;
+        }
+        // Newton form through w_n − dw_prev − dw, w_n − dw, w_n: first divided differences
+        // dq/dw and dq_prev/dw_prev, second their difference over dw + dw_prev.
+        let rp = self.dw_prev / self.dw;
+        let quad = self.dq_prev.len() == q.len() && rp > 0.0 && (0.25..=4.0).contains(&rp);
+        // q(w_n + x) = q_n + x·s₁ + x (x + dw)·s₂ with s₁ = dq/dw,
+        // s₂ = (dq/dw − dq_prev/dw_prev)/(dw + dw_prev).
+        let x = dw_next;
+        let c2 = if quad {
+            x * (x + self.dw) / (self.dw + self.dw_prev)
+        } else {
+            0.0
+        };
+        for (i, qi) in q.iter_mut().enumerate() {
+            let s1 = self.dq[i] / self.dw;
+            *qi += s1 * x;
+            if quad {
+                *qi += (s1 - self.dq_prev[i] / self.dw_prev) * c2;
+            }
         }
     }
 }

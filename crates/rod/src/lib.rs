@@ -73,3 +73,4 @@ pub enum RodError {
     #[error("cannot simulate a test of kind '{0}'")]
     UnsupportedKind(cablab_core::TestKind),
 }
+
