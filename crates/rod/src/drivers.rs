@@ -333,6 +333,7 @@ impl<'a> Driver<'a> {
                             dt * frac,
                             step,
                             (*compliance, *specimen, *response, *stiffness),
+                            rod.options.predictor.then_some(&*predictor),
                         )
                     } else {
                         if rod.options.predictor {
@@ -379,7 +380,8 @@ impl<'a> Driver<'a> {
 
     /// One step of the machine's control by `du` with compliance `C` in series: find the
     /// specimen's control w with w + C·R(w) = u ([`Series`], secant slopes: every trial
-    /// re-solves the rod from the committed state, so history-dependent laws see one step).
+    /// re-solves the rod from the committed state, so history-dependent laws see one step; the
+    /// first trial's Newton iteration starts from `predictor`'s configuration, if given).
     /// Returns the Newton iterations and w.
     fn solve_compliant(
         rod: &mut PlanarRod<'_>,
@@ -388,11 +390,17 @@ impl<'a> Driver<'a> {
         dt: f64,
         step: usize,
         (c, w0, r0, k0): (f64, f64, f64, f64),
+        mut predictor: Option<&Predictor>,
     ) -> Result<(usize, f64), RodError> {
         let u = w0 + c * r0 + du;
         let tol = (1e-8 * (u.abs() + du.abs())).max(f64::MIN_POSITIVE);
         let mut total = 0;
         let solved = Series { a: 1.0, c }.solve(u, du, (w0, r0, k0), tol, |w| {
+            // The first trial starts from the predicted configuration, later ones from the
+            // previous trial's equilibrium (closer still).
+            if let Some(p) = predictor.take() {
+                p.predict(&mut rod.q, w - w0);
+            }
             Self::apply_control(rod, kind, w);
             total += rod.solve(dt, step)?;
             Ok((Self::response(rod, kind), None))
