@@ -313,6 +313,12 @@ impl<'a> Driver<'a> {
                 let mut h = total / n_sub as f64;
                 let mut c = from;
                 let mut cuts = 0;
+                // The predictor is a shortcut: not with support friction (a predicted slip of the
+                // stick spring, as stiff as the contact penalty, sends Newton through a return
+                // mapping the committed start never sees; it failed to converge on coarse rods),
+                // and a step that fails from it is first retried from the committed configuration.
+                let frictionless = rod.supports.iter().all(|s| s.mu == 0.0);
+                let mut predicted = rod.options.predictor && frictionless;
                 let max_cuts = rod.options.max_bisections;
                 let tiny = 1e-12 * total.abs().max(*max_substep);
                 loop {
@@ -333,10 +339,10 @@ impl<'a> Driver<'a> {
                             dt * frac,
                             step,
                             (*compliance, *specimen, *response, *stiffness),
-                            rod.options.predictor.then_some(&*predictor),
+                            predicted.then_some(&*predictor),
                         )
                     } else {
-                        if rod.options.predictor {
+                        if predicted {
                             predictor.predict(&mut rod.q, next - *specimen);
                         }
                         Self::apply_control(rod, *kind, next);
@@ -364,6 +370,10 @@ impl<'a> Driver<'a> {
                         Err(e) => {
                             rod.q.clone_from(saved);
                             Self::apply_control(rod, *kind, *specimen);
+                            if predicted {
+                                predicted = false;
+                                continue;
+                            }
                             cuts += 1;
                             if cuts > max_cuts || total == 0.0 {
                                 return Err(e);

@@ -411,7 +411,10 @@ fn three_point_contact_opens_on_unloading_with_plastic_curvature() {
 /// gives the same forces with and without it to 10⁻⁸ of the peak force, on a rigid machine and
 /// with a machine compliance in series (half the specimen's elastic compliance l³/48EI), in at
 /// most 90 % of the Newton iterations (rigid: 272 against 342, compliant: 627 against 711;
-/// purely elastic stretches save most, ~30 %).
+/// purely elastic stretches save most, ~30 %). With support friction it is not used (it failed to
+/// converge on a 10-element rod there): the forces are bit for bit those without it.
+/// (Unloading this elastoplastic rod over supports with μ = 0.3 fails to converge on 10 and 20
+/// elements with or without the predictor: a limit of the friction model on coarse rods.)
 #[test]
 fn step_predictor_keeps_the_equilibrium_and_saves_iterations() {
     let ep = law(
@@ -446,6 +449,14 @@ fn step_predictor_keeps_the_equilibrium_and_saves_iterations() {
             plain.newton_iterations
         );
     }
+    let mut setup = TestSetup::new(TestKind::ThreePoint, span);
+    setup.elements = 40;
+    setup.support_friction = 0.3;
+    let path = [0.0, 0.006, 0.0, 0.004];
+    let with = simulate_path(&setup, ep.as_ref(), &path, Some(0.0003)).unwrap();
+    setup.solver.predictor = false;
+    let without = simulate_path(&setup, ep.as_ref(), &path, Some(0.0003)).unwrap();
+    assert_eq!(with.response, without.response);
 }
 
 /// Support friction: loading force above and unloading force below the frictionless curve.
