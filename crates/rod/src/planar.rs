@@ -53,7 +53,7 @@ pub struct SolverOptions {
     pub max_bisections: usize,
     /// Whether a driven test (pure bending, three-point) starts each step's Newton iteration from
     /// the extrapolation of its last two committed steps (fewer iterations, same equilibrium to
-    /// the tolerance) rather than from the committed configuration.
+    /// the tolerance) rather than from the committed configuration; never with support friction.
     pub predictor: bool,
 }
 
