@@ -27,7 +27,9 @@
 //! Every kind honours [`TestSetup::machine_compliance`]: the control is the machine's reading,
 //! solved for the specimen's own deformation by the one series solver of [`crate::series`]
 //! (with the law's tangent for the uniform states, with the secant of the rod's response for the
-//! rod).
+//! rod) — except three-point with a point punch, where the compliance is a spring in series with
+//! the punch's penalty spring and the machine's reading drives the punch directly (exact: two
+//! linear springs in series on one node).
 //!
 //! Does not: read files, choose laws or parameters (the caller builds the law).
 
