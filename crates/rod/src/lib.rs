@@ -73,4 +73,3 @@ pub enum RodError {
     #[error("cannot simulate a test of kind '{0}'")]
     UnsupportedKind(cablab_core::TestKind),
 }
-
