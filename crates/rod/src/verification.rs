@@ -23,6 +23,16 @@ fn law(kind: TestKind, name: &str, params: &[(&str, f64)]) -> Box<dyn Law> {
     cablab_laws::build(kind, name, &map).expect("law builds")
 }
 
+/// The chapter's cable in three-point bending, elastoplastic with isotropic hardening
+/// (EI = 1.37·10⁻³ N m², HI = 10⁻⁴ N m²) and yield moment `m_y`.
+fn chapter_cable(m_y: f64) -> Box<dyn Law> {
+    law(
+        TestKind::ThreePoint,
+        "elastoplastic",
+        &[("EI", 1.37e-3), ("M_y", m_y), ("HI", 1e-4)],
+    )
+}
+
 /// SPEC cantilever table (α = PL²/EI → w/L, u/L, tip rotation) at 100 elements, to 1e-3 relative.
 #[test]
 fn cantilever_table_at_100_elements() {
@@ -368,11 +378,7 @@ fn fig9_bowden_three_point_loads_and_unloads_on_one_path() {
 /// at the residual deflection.
 #[test]
 fn three_point_contact_opens_on_unloading_with_plastic_curvature() {
-    let ep = law(
-        TestKind::ThreePoint,
-        "elastoplastic",
-        &[("EI", 1.37e-3), ("M_y", 4e-3), ("HI", 1e-4)],
-    );
+    let ep = chapter_cable(4e-3);
     let mut setup = TestSetup::new(TestKind::ThreePoint, 0.056);
     setup.elements = 60;
     let c = simulate_path(&setup, ep.as_ref(), &[0.0, 0.006, 0.0, 0.006], Some(0.0001)).unwrap();
@@ -417,11 +423,7 @@ fn three_point_contact_opens_on_unloading_with_plastic_curvature() {
 /// elements with or without the predictor: a limit of the friction model on coarse rods.)
 #[test]
 fn step_predictor_keeps_the_equilibrium_and_saves_iterations() {
-    let ep = law(
-        TestKind::ThreePoint,
-        "elastoplastic",
-        &[("EI", 1.37e-3), ("M_y", 1.2e-2), ("HI", 1e-4)],
-    );
+    let ep = chapter_cable(1.2e-2);
     let span: f64 = 0.056;
     for compliance in [0.0, 0.5 * span.powi(3) / (48.0 * 1.37e-3)] {
         let mut setup = TestSetup::new(TestKind::ThreePoint, span);
@@ -441,7 +443,10 @@ fn step_predictor_keeps_the_equilibrium_and_saves_iterations() {
             );
         }
         assert_eq!(fast.punch_contact, plain.punch_contact);
-        assert!(plain.punch_contact.iter().any(|c| !c), "contact never opened");
+        assert!(
+            plain.punch_contact.iter().any(|c| !c),
+            "contact never opened"
+        );
         assert!(
             (fast.newton_iterations as f64) <= 0.9 * plain.newton_iterations as f64,
             "C = {compliance}: {} iterations with the predictor, {} without",
@@ -476,15 +481,13 @@ fn coarse_rod_error_is_a_fraction_of_the_noise() {
         .collect();
     let t: Vec<f64> = (1..=samples).map(|i| i as f64 * 0.1).collect();
     for m_y in [4e-3, 1.2e-2, 3e-2] {
-        let ep = law(
-            TestKind::ThreePoint,
-            "elastoplastic",
-            &[("EI", 1.37e-3), ("M_y", m_y), ("HI", 1e-4)],
-        );
+        let ep = chapter_cable(m_y);
         let run = |elements: usize| {
             let mut setup = TestSetup::new(TestKind::ThreePoint, 0.056);
             setup.elements = elements;
-            simulate_history(&setup, ep.as_ref(), &c, &t).unwrap().response
+            simulate_history(&setup, ep.as_ref(), &c, &t)
+                .unwrap()
+                .response
         };
         let fine = run(160);
         let f_max = fine.iter().fold(0.0f64, |m, f| m.max(f.abs()));
@@ -498,9 +501,17 @@ fn coarse_rod_error_is_a_fraction_of_the_noise() {
                 / f_max
         };
         let coarse = run(10);
-        assert!(rms(&coarse, 1.0) < 4e-3, "M_y {m_y}: 10 elements rms {}", rms(&coarse, 1.0));
+        assert!(
+            rms(&coarse, 1.0) < 4e-3,
+            "M_y {m_y}: 10 elements rms {}",
+            rms(&coarse, 1.0)
+        );
         let full = run(40);
-        assert!(rms(&full, 1.0) < 2e-4, "M_y {m_y}: 40 elements rms {}", rms(&full, 1.0));
+        assert!(
+            rms(&full, 1.0) < 2e-4,
+            "M_y {m_y}: 40 elements rms {}",
+            rms(&full, 1.0)
+        );
         if m_y == 3e-2 {
             // Elastic throughout: the coarse rod is a stiffer copy.
             let k = coarse.iter().zip(&fine).map(|(a, b)| a * b).sum::<f64>()
@@ -602,11 +613,7 @@ fn three_point_relaxes_during_a_hold() {
 /// lifts off on the plastic unloading.
 #[test]
 fn chapter_rig_with_round_tools_and_friction() {
-    let ep = law(
-        TestKind::ThreePoint,
-        "elastoplastic",
-        &[("EI", 1.37e-3), ("M_y", 4e-3), ("HI", 1e-4)],
-    );
+    let ep = chapter_cable(4e-3);
     let mut setup = TestSetup::new(TestKind::ThreePoint, 0.056);
     setup.punch_radius_m = 5e-3;
     setup.support_radius_m = 5e-3;
