@@ -51,6 +51,10 @@ pub struct SolverOptions {
     pub tolerance: f64,
     /// How often a failing step may be halved before the solve gives up.
     pub max_bisections: usize,
+    /// Whether a driven test (pure bending, three-point) starts each step's Newton iteration from
+    /// the extrapolation of its last two committed steps (fewer iterations, same equilibrium to
+    /// the tolerance) rather than from the committed configuration; never with support friction.
+    pub predictor: bool,
 }
 
 impl Default for SolverOptions {
@@ -59,6 +63,7 @@ impl Default for SolverOptions {
             max_iterations: 30,
             tolerance: 1e-9,
             max_bisections: 12,
+            predictor: true,
         }
     }
 }
