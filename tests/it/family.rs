@@ -250,6 +250,10 @@ fn family_figures() {
     let mut abs_err: std::collections::BTreeMap<String, Vec<f64>> = Default::default();
     let mut yield_err = Vec::new();
     let mut confusion: std::collections::BTreeMap<(String, String), usize> = Default::default();
+    // Per truth class: (cases, rate effect judged, faster strokes stiffer in both directions),
+    // whatever the class the analysis gave (the evidence is used only for `other`).
+    let mut rate_evidence: std::collections::BTreeMap<&str, (usize, usize, usize)> =
+        Default::default();
     let mut by_kind: std::collections::BTreeMap<TestKind, (usize, usize, usize, usize)> =
         Default::default();
     for seed in 0..n {
@@ -264,6 +268,12 @@ fn family_figures() {
                     .or_default() += 1;
                 if a.break_point.is_some() {
                     breaks.push(seed);
+                }
+                let e = rate_evidence.entry(t.class).or_default();
+                e.0 += 1;
+                if let Some(r) = a.rate_effect.as_ref().filter(|r| r.trends.len() == 2) {
+                    e.1 += 1;
+                    e.2 += r.rate_dependent as usize;
                 }
                 let k = by_kind.entry(a.kind).or_default();
                 k.0 += 1;
@@ -345,6 +355,9 @@ fn family_figures() {
             / yield_err.len().max(1) as f64
     );
     println!("  class confusion (truth -> measured): {confusion:?}");
+    println!(
+        "  rate evidence by truth class (cases, both directions judged, faster strokes stiffer in both): {rate_evidence:?}"
+    );
     println!(
         "  per kind (cases, |error| <= 1 %, CI holds the truth, CI meets its band): {by_kind:?}"
     );

@@ -464,6 +464,9 @@ pub struct Analysis {
     pub segments: Vec<Segment>,
     /// Response change in every hold after the initial rest (relaxation: rate dependence).
     pub holds: Vec<HoldRelaxation>,
+    /// Stiffness near reversals against the strokes' rates (rate dependence without holds),
+    /// when at least two strokes after the first loading can be compared.
+    pub rate_effect: Option<crate::rate::RateEffect>,
     /// The largest response and its control.
     pub max_response: MaxResponse,
     /// Where the specimen broke, when it did.
@@ -1147,7 +1150,38 @@ pub fn analyze(
             trending.len()
         ));
     }
-    let behaviour = if rate_dependent && behaviour != Behaviour::Broken {
+    // Without holds (or with holds that do not show it): the stiffness near reversals against
+    // the stroke's rate (`crate::rate`), for a test the rate-independent classes cannot
+    // explain (loops that do not close without a yield: friction, viscosity or drift).
+    let rate_effect = crate::rate::rate_effect(
+        &segments,
+        time_s,
+        &cm,
+        &rm,
+        serial.0.phi,
+        (serial.1, serial.2),
+    );
+    let by_rate = !rate_dependent
+        && behaviour == Behaviour::Other
+        && rate_effect.as_ref().is_some_and(|e| e.rate_dependent);
+    if let (true, Some(e)) = (by_rate, &rate_effect) {
+        let show = |t: &crate::rate::RateTrend| {
+            format!(
+                "{} strokes {:.3e} at rate {:.3e} vs {:.3e} at {:.3e} ({:.1} standard errors)",
+                if t.rising { "rising" } else { "falling" },
+                t.slopes[0],
+                t.rates[0],
+                t.slopes[1],
+                t.rates[1],
+                t.z
+            )
+        };
+        warnings.push(format!(
+            "the response depends on the rate: near their reversals the faster strokes are stiffer ({}; response per machine control): the material is rate dependent (viscous); rate-independent results are approximate",
+            e.trends.iter().map(show).collect::<Vec<_>>().join("; ")
+        ));
+    }
+    let behaviour = if (rate_dependent || by_rate) && behaviour != Behaviour::Broken {
         Behaviour::RateDependent
     } else {
         behaviour
@@ -1178,6 +1212,7 @@ pub fn analyze(
         noise,
         segments,
         holds,
+        rate_effect,
         max_response,
         break_point,
         excluded_samples: excluded,
