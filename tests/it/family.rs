@@ -256,6 +256,7 @@ fn family_figures() {
         Default::default();
     let mut by_kind: std::collections::BTreeMap<TestKind, (usize, usize, usize, usize)> =
         Default::default();
+    let mut rate_missed = Vec::new();
     for seed in 0..n {
         match measure(seed) {
             Err(e) => {
@@ -269,9 +270,12 @@ fn family_figures() {
                 if a.break_point.is_some() {
                     breaks.push(seed);
                 }
+                if t.class == "rate_dependent" && a.behaviour.as_str() != "rate_dependent" {
+                    rate_missed.push(seed);
+                }
                 let e = rate_evidence.entry(t.class).or_default();
                 e.0 += 1;
-                if let Some(r) = a.rate_effect.as_ref().filter(|r| r.trends.len() == 2) {
+                if let Some(r) = a.rate_effect.as_ref().filter(|r| r.drift.is_some()) {
                     e.1 += 1;
                     e.2 += r.rate_dependent as usize;
                 }
@@ -356,7 +360,7 @@ fn family_figures() {
     );
     println!("  class confusion (truth -> measured): {confusion:?}");
     println!(
-        "  rate evidence by truth class (cases, both directions judged, faster strokes stiffer in both): {rate_evidence:?}"
+        "  rate evidence by truth class (cases, judged, rate dependent by the strokes): {rate_evidence:?}; rate-dependent cases missed: {rate_missed:?}"
     );
     println!(
         "  per kind (cases, |error| <= 1 %, CI holds the truth, CI meets its band): {by_kind:?}"
@@ -591,6 +595,9 @@ fn family_debug_seeds() {
                     s.and_then(|s| s.first_unloading.as_ref()),
                     a.holds.iter().map(|h| (h.significant, h.relaxes, h.response_change)).collect::<Vec<_>>()
                 );
+                if let Some(r) = &a.rate_effect {
+                    println!("  rate effect: band {:?}, strokes (rising, rate, slope, se) {:?}, drift {:?}, rate dependent {}", r.band, r.strokes.iter().map(|s| (s.rising, s.rate, s.slope, s.slope_se)).collect::<Vec<_>>(), r.drift, r.rate_dependent);
+                }
             }
             Err(e) => println!("seed {seed}: {e}"),
         }
