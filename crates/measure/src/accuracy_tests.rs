@@ -1104,3 +1104,99 @@ fn bad_input_errors() {
     .to_string();
     assert_eq!(msg, "non-finite value in response at sample 7");
 }
+
+/// Machine control along `legs` (target, rate in m/s) sampled every `dt` s from 0, and the
+/// response of a stateful `law(control, dt)`.
+fn drive_timed(
+    legs: &[(f64, f64)],
+    dt: f64,
+    mut law: impl FnMut(f64, f64) -> f64,
+) -> (Vec<f64>, Vec<f64>) {
+    let (mut c, mut r) = (vec![0.0], vec![law(0.0, 0.0)]);
+    for &(to, rate) in legs {
+        let from = *c.last().unwrap();
+        let n = ((to - from).abs() / (rate * dt)).round().max(1.0) as usize;
+        for i in 1..=n {
+            let v = from + (to - from) * i as f64 / n as f64;
+            c.push(v);
+            r.push(law(v, dt));
+        }
+    }
+    (c, r)
+}
+
+/// Rate dependence without holds (issue 12.4, `crate::rate`): one-sided tension cycles to
+/// 10⁻⁴ m (ε = 10⁻³ on l₀ = 0.1 m) at 1, 4, 0.25 and 2 × 5·10⁻⁵ m/s, 0.3 % noise, no dwell.
+/// A standard linear solid (k_e = 10⁶ N/m, Maxwell branch k_v = 0.5 k_e, τ = 1 s) is
+/// `rate_dependent`; the same elastic spring with a sensor drift of 1 N/s (10 % of the peak
+/// force over the test) is not, and the drift fitted to the strokes' slopes is that drift
+/// within 25 %; a friction (Jenkins) element, stick stiffness 10⁶ N/m slipping at 20 N in
+/// parallel with 5·10⁵ N/m (rate-independent hysteresis), is not.
+#[test]
+fn rate_dependence_without_holds() {
+    let geom = Geometry {
+        free_length_m: 0.1,
+        diameter_m: None,
+    };
+    let (amp, base, dt) = (1e-4, 5e-5, 0.01);
+    let legs: Vec<(f64, f64)> = [1.0, 4.0, 0.25, 2.0]
+        .iter()
+        .flat_map(|m| [(amp, base * m), (0.0, base * m)])
+        .collect();
+    let ke = 1e6;
+    let run = |c: &[f64], r: &[f64], seed: u64| {
+        let (cn, rn) = noisy(c, r, 0.003, seed);
+        let t: Vec<f64> = (0..cn.len()).map(|i| i as f64 * dt).collect();
+        analyze(
+            TestKind::Tension,
+            &geom,
+            Some(&t),
+            &cn,
+            &rn,
+            &AnalyzeOptions::default(),
+        )
+        .unwrap()
+    };
+    // Standard linear solid: σ_v(t + dt) = σ_v e^(−dt/τ) + k_v τ ċ (1 − e^(−dt/τ)).
+    let (kv, tau) = (0.5 * ke, 1.0);
+    let (mut sv, mut prev) = (0.0, 0.0);
+    let (c, r) = drive_timed(&legs, dt, |x, h| {
+        if h > 0.0 {
+            let e = (-h / tau).exp();
+            sv = sv * e + kv * tau * (x - prev) / h * (1.0 - e);
+        }
+        prev = x;
+        ke * x + sv
+    });
+    let a = run(&c, &r, 12_400);
+    let e = a.rate_effect.as_ref().expect("strokes compared");
+    assert!(e.rate_dependent, "{e:?}");
+    assert_eq!(a.behaviour, Behaviour::RateDependent, "{:?}", a.warnings);
+    assert!(a.warnings.iter().any(|w| w.contains("depends on the rate")));
+
+    // Elastic with a drift of 1 N/s: the rate-independent model with drift explains it.
+    let mut t = -dt;
+    let (c, r) = drive_timed(&legs, dt, |x, _| {
+        t += dt;
+        ke * x + 1.0 * t
+    });
+    let a = run(&c, &r, 12_401);
+    let e = a.rate_effect.as_ref().expect("strokes compared");
+    assert!(!e.rate_dependent, "{e:?}");
+    let d = e.drift.expect("drift fitted").drift;
+    assert!((d - 1.0).abs() < 0.25, "fitted drift {d} N/s");
+    assert_ne!(a.behaviour, Behaviour::RateDependent);
+
+    // Jenkins friction: rate-independent loops.
+    let (k1, k2, fs) = (1e6, 5e5, 20.0);
+    let (mut f, mut prev) = (0.0f64, 0.0);
+    let (c, r) = drive_timed(&legs, dt, |x, _| {
+        f = (f + k1 * (x - prev)).clamp(-fs, fs);
+        prev = x;
+        k2 * x + f
+    });
+    let a = run(&c, &r, 12_402);
+    let e = a.rate_effect.as_ref().expect("strokes compared");
+    assert!(!e.rate_dependent, "{e:?}");
+    assert_ne!(a.behaviour, Behaviour::RateDependent);
+}

@@ -30,7 +30,9 @@
 //! * anything else (loops without a bend: friction, viscosity, drift) → `other`;
 //! * holds whose response relaxes (falls after a loading ramp, recovers after an unloading
 //!   one; at least two such holds, or the only hold, and no hold trending the other way) →
-//!   `rate_dependent`, over any of the above ([`HoldRelaxation`]);
+//!   `rate_dependent`, over any of the above ([`HoldRelaxation`]); without such holds, strokes
+//!   at different rates whose stiffness near their reversals differs beyond what a drifting
+//!   sensor explains ([`crate::rate`]) → `rate_dependent` over `other` and `elastoplastic`;
 //! * an abrupt break (the response falls from 90 % of its maximum below [`BREAK_DROP`] of it
 //!   within 5 samples or 2 % of the record, and stays there) → `broken`, whatever came before
 //!   it (the yield point and stiffness are still reported).
@@ -39,8 +41,8 @@
 //! ([`crate::condition::serial_noise`] of response − k · control), so serially correlated
 //! noise (a logger's filter, AR(1), decimated exports) neither narrows the stiffness interval
 //! ([`crate::stats::linear_fit_ar1`], exact for the window's samples) nor moves the window,
-//! fakes a hold's relaxation or a break. Does not classify rate dependence from rate changes
-//! alone (a test without a hold of ≥ 20 samples shows none).
+//! fakes a hold's relaxation or a break. Does not classify rate dependence from a test run at
+//! one rate without a hold of ≥ 20 samples (nothing in it shows one).
 //!
 //! A bend counts only where the slope falls by at least [`BEND_MIN_DROP`] and stays down to the
 //! end of the envelope: a few per cent of seating softening or an extensometer slip, which a
@@ -227,10 +229,13 @@ pub enum Behaviour {
     Elastoplastic,
     /// The response depends on the loading rate: it relaxes toward zero at held control
     /// after a loading ramp and recovers after an unloading one (viscoelastic or viscoplastic;
-    /// see [`HoldRelaxation::relaxes`]). Takes precedence over the rate-independent classes.
+    /// see [`HoldRelaxation::relaxes`]; takes precedence over the rate-independent classes),
+    /// or, without such holds, strokes at different rates differ in stiffness near their
+    /// reversals beyond what a drift explains while the loops do not close ([`crate::rate`];
+    /// overrides `other` and `elastoplastic`).
     RateDependent,
-    /// None of the above (friction loops, drift, rate dependence without a hold to show it, or
-    /// not enough data).
+    /// None of the above (friction loops, drift, rate dependence shown neither by a hold nor
+    /// by strokes at different rates, or not enough data).
     Other,
     /// The specimen broke abruptly ([`Analysis::break_point`] says where; a gradual fall keeps
     /// its class and the warning); the class before the break is not judged.
@@ -1151,8 +1156,9 @@ pub fn analyze(
         ));
     }
     // Without holds (or with holds that do not show it): the stiffness near reversals against
-    // the stroke's rate (`crate::rate`), for a test the rate-independent classes cannot
-    // explain (loops that do not close without a yield: friction, viscosity or drift).
+    // the stroke's rate (`crate::rate`), for a test whose loops do not close (`other`:
+    // friction, viscosity or drift; `elastoplastic`: a viscous first loading bends and its
+    // unloading ends at a positive control, as plasticity's does).
     let rate_effect = crate::rate::rate_effect(
         &segments,
         time_s,
@@ -1162,7 +1168,7 @@ pub fn analyze(
         (serial.1, serial.2),
     );
     let by_rate = !rate_dependent
-        && behaviour == Behaviour::Other
+        && matches!(behaviour, Behaviour::Other | Behaviour::Elastoplastic)
         && rate_effect.as_ref().is_some_and(|e| e.rate_dependent);
     if let (true, Some(e)) = (by_rate, &rate_effect) {
         let show = |t: &crate::rate::RateTrend| {
@@ -1177,8 +1183,13 @@ pub fn analyze(
             )
         };
         warnings.push(format!(
-            "the response depends on the rate: near their reversals the faster strokes are stiffer ({}; response per machine control): the material is rate dependent (viscous); rate-independent results are approximate",
-            e.trends.iter().map(show).collect::<Vec<_>>().join("; ")
+            "the response depends on the rate: near their reversals strokes at different rates differ in stiffness beyond what a drift explains ({}; response per machine control): the material is rate dependent (viscous); rate-independent results are approximate{}",
+            e.trends.iter().map(show).collect::<Vec<_>>().join("; "),
+            if yield_point.is_some() {
+                ", and the yield point may be the viscous softening of the first loading"
+            } else {
+                ""
+            }
         ));
     }
     let behaviour = if (rate_dependent || by_rate) && behaviour != Behaviour::Broken {
