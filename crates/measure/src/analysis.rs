@@ -1159,10 +1159,18 @@ pub fn analyze(
     // the stroke's rate (`crate::rate`), for a test whose loops do not close (`other`:
     // friction, viscosity or drift; `elastoplastic`: a viscous first loading bends and its
     // unloading ends at a positive control, as plasticity's does).
+    // Three-point: in the elastica-corrected deflection, in which an elastic rod is linear at
+    // any deflection (strokes reversing at different deflections would otherwise differ by
+    // geometry alone).
+    let rate_x: Vec<f64> = if three {
+        xs.iter().map(|&w| to_fit_x(w).unwrap_or(w)).collect()
+    } else {
+        cm.clone()
+    };
     let rate_effect = crate::rate::rate_effect(
         &segments,
         time_s,
-        &cm,
+        &rate_x,
         &rm,
         serial.0.phi,
         (serial.1, serial.2),

@@ -37,9 +37,9 @@ pub const BAND: [f64; 2] = [0.05, 0.65];
 /// Strokes shorter than this fraction of the longest stroke's travel are not compared.
 pub const MIN_TRAVEL: f64 = 0.2;
 /// Fewest samples in a stroke's band.
-pub const MIN_BAND_SAMPLES: usize = 6;
+pub const MIN_BAND_SAMPLES: usize = 4;
 /// The fastest and slowest compared strokes' rates must differ by this factor.
-pub const MIN_RATE_RATIO: f64 = 1.5;
+pub const MIN_RATE_RATIO: f64 = 1.25;
 /// Smallest relative slope difference counted (a few per cent of seating or of a quantised
 /// control are statistically significant on a quiet load cell, and no material rate effect).
 pub const MIN_REL_CHANGE: f64 = 0.03;
@@ -125,7 +125,8 @@ fn strokes(segments: &[Segment], c: &[f64]) -> Vec<(usize, usize, bool)> {
 }
 
 /// Compares the strokes' slopes near their reversals (module doc). `c`, `r`: control and
-/// response (any common orientation); `time_s`: the clock, or None (rates per sample);
+/// response (any common orientation; a control in which the rate-independent specimen is
+/// linear where geometry is not, as the three-point elastica-corrected deflection); `time_s`: the clock, or None (rates per sample);
 /// `phi`, `prior`: the record's AR(1) noise as for the stiffness interval. None when fewer
 /// than two strokes can be compared.
 pub fn rate_effect(
@@ -209,9 +210,21 @@ pub fn rate_effect(
         hi >= MIN_RATE_RATIO * lo
     };
     // The largest relative slope difference between strokes of one direction.
-    let change = trends
+    let change = [true, false]
         .iter()
-        .map(|t| (t.slopes[0] - t.slopes[1]).abs() / (0.5 * (t.slopes[0].abs() + t.slopes[1].abs())))
+        .map(|&dir| {
+            let (lo, hi) = fitted
+                .iter()
+                .filter(|s| s.rising == dir)
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), s| {
+                    (lo.min(s.slope), hi.max(s.slope))
+                });
+            if hi > lo {
+                (hi - lo) / (0.5 * (hi.abs() + lo.abs()))
+            } else {
+                0.0
+            }
+        })
         .fold(0.0f64, f64::max);
     let rate_dependent = spread
         && change >= MIN_REL_CHANGE
