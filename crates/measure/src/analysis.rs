@@ -885,6 +885,10 @@ pub fn analyze(
         control_resolution: crate::condition::resolution(&c),
         zero_sectional: toe_ref.map_or(0.0, |t| t.1),
         toe_end_control: toe_ref.map_or(f64::NEG_INFINITY, |t| t.0 / per_control),
+        serial: crate::condition::SerialNoise {
+            sigma: serial.1,
+            ..serial.0
+        },
     });
 
     // First loading against first unloading (issue 12.6): both are the elastic stiffness of
