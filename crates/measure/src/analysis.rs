@@ -279,8 +279,9 @@ pub struct Stiffness {
     /// disagreement with the first unloading), also in the analysis' `warnings`.
     pub warnings: Vec<String>,
     /// The first unloading's initial stiffness with its interval, the cross-check of the
-    /// first-loading value (null when there is no unloading, and for three-point, whose
-    /// unloading is not elastica-corrected).
+    /// first-loading value (null when there is no unloading; three-point: in the
+    /// elastica-corrected deflection, from where the unloading is within the small-deflection
+    /// limit).
     pub first_unloading: Option<UnloadingCheck>,
 }
 
@@ -894,8 +895,28 @@ pub fn analyze(
     // First loading against first unloading (issue 12.6): both are the elastic stiffness of
     // an elastic or elastoplastic specimen; intervals that do not overlap mean the first
     // loading was not (a toe or seating not separated from the window, slack, damage).
-    if let (Some(s), false) = (stiffness.as_mut(), three) {
-        let check = first_unloading_fit(&segments, &xs, &rm, serial.0.phi, (serial.1, serial.2));
+    // Three-point: the unloading in the elastica-corrected deflection, and only its part
+    // within the small-deflection limit, as the loading side's automatic window (above it
+    // the sliding-support idealisation, below zero force the punch has lost contact).
+    // The sectional control in which a rate-independent elastic specimen is linear (for
+    // three-point, the elastica-corrected deflection).
+    let fit_xs: Vec<f64> = xs.iter().map(|&v| to_fit_x(v).unwrap_or(v)).collect();
+    if let Some(s) = stiffness.as_mut() {
+        let top = match &elastica {
+            Some(tab) => {
+                let limit = tab.small_deflection_limit(opts.small_deflection_tolerance) * l0;
+                to_fit_x(limit).unwrap_or(limit)
+            }
+            None => f64::INFINITY,
+        };
+        let check = first_unloading_fit(
+            &segments,
+            &fit_xs,
+            top,
+            &rm,
+            serial.0.phi,
+            (serial.1, serial.2),
+        );
         if let Some(f) = check {
             let (lo, hi) = (f.slope_ci95[0] * factor, f.slope_ci95[1] * factor);
             let agrees = lo <= s.ci95[1] && s.ci95[0] <= hi;
@@ -1163,18 +1184,12 @@ pub fn analyze(
     // the stroke's rate (`crate::rate`), for a test whose loops do not close (`other`:
     // friction, viscosity or drift; `elastoplastic`: a viscous first loading bends and its
     // unloading ends at a positive control, as plasticity's does).
-    // Three-point: in the elastica-corrected deflection, in which an elastic rod is linear at
-    // any deflection (strokes reversing at different deflections would otherwise differ by
-    // geometry alone).
-    let rate_x: Vec<f64> = if three {
-        xs.iter().map(|&w| to_fit_x(w).unwrap_or(w)).collect()
-    } else {
-        cm.clone()
-    };
+    // In `fit_xs` (three-point: strokes reversing at different deflections would otherwise
+    // differ by geometry alone).
     let rate_effect = crate::rate::rate_effect(
         &segments,
         time_s,
-        &rate_x,
+        &fit_xs,
         &rm,
         serial.0.phi,
         (serial.1, serial.2),
@@ -1195,8 +1210,9 @@ pub fn analyze(
             )
         };
         warnings.push(format!(
-            "the response depends on the rate: near their reversals strokes at different rates differ in stiffness beyond what a drift explains ({}; response per machine control): the material is rate dependent (viscous); rate-independent results are approximate{}",
+            "the response depends on the rate: near their reversals strokes at different rates differ in stiffness beyond what a drift explains ({}; slopes in response per sectional control, {}): the material is rate dependent (viscous); rate-independent results are approximate{}",
             e.trends.iter().map(show).collect::<Vec<_>>().join("; "),
+            sectional_unit(kind),
             if yield_point.is_some() {
                 ", and the yield point may be the viscous softening of the first loading"
             } else {
@@ -1246,11 +1262,13 @@ pub fn analyze(
 }
 
 /// The initial straight part of cycle 1's first unloading run (sectional `x`, response `y`,
-/// while the response is still positive; [`crate::elastic::initial_window`]) fitted with the
-/// AR(1) interval of the record's noise (`phi`, `prior` σ and its degrees of freedom).
+/// from where `x` is at most `top` on and while the response is still positive;
+/// [`crate::elastic::initial_window`]) fitted with the AR(1) interval of the record's noise
+/// (`phi`, `prior` σ and its degrees of freedom).
 fn first_unloading_fit(
     segments: &[Segment],
     x: &[f64],
+    top: f64,
     y: &[f64],
     phi: f64,
     prior: (f64, f64),
@@ -1259,6 +1277,7 @@ fn first_unloading_fit(
         .iter()
         .find(|s| s.cycle == 1 && s.branch == Branch::Unloading)?;
     let (a, b) = (s.start.saturating_sub(1), s.end);
+    let a = (a..b).find(|&i| x[i] <= top)?;
     let pos_end = (a..b).find(|&i| y[i] <= 0.0).unwrap_or(b);
     let (p, q) = crate::elastic::initial_window(&x[a..pos_end], &y[a..pos_end], phi)?;
     let pos: Vec<usize> = (a + p..a + q).collect();

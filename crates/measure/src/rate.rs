@@ -3,7 +3,7 @@
 //!
 //! A stroke is a monotone run of the control between turning points (holds and the split at
 //! zero crossings joined), after the first loading (the virgin curve has no twin). On each
-//! stroke the response is fitted against the machine control over the same band of distance
+//! stroke the response is fitted against the control over the same band of distance
 //! from the stroke's start, u = |c − c_start| ∈ [[`BAND`]₀·S, [`BAND`]₁·S], S the shortest
 //! travel among the strokes compared (strokes shorter than [`MIN_TRAVEL`] of the longest are
 //! left out). Rate-independent hysteresis (Masing: elastoplastic reversals, friction) depends
@@ -11,7 +11,7 @@
 //! stroke of one direction the same slope there, whatever its rate and amplitude; a viscous
 //! one (a Maxwell branch k_v with time τ: σ_v → k_v τ ċ) is stiffer the faster it is driven.
 //!
-//! Criterion: the strokes' slopes m_i (response per machine control over the band, standard
+//! Criterion: the strokes' slopes m_i (response per control over the band, standard
 //! errors se_i under the record's AR(1) noise, [`crate::stats::linear_fit_ar1`]) are fitted
 //! with the rate-independent model that allows a drifting sensor, m_i = k_dir + s_i·D/ċ_i
 //! (one slope per direction, s_i = +1 rising and −1 falling, ċ_i the stroke's rate over the
@@ -55,9 +55,9 @@ pub struct Stroke {
     pub end: usize,
     /// Whether the (oriented) control rises.
     pub rising: bool,
-    /// Control rate over the band, machine units per s (per sample without a clock).
+    /// Control rate over the band, control units per s (per sample without a clock).
     pub rate: f64,
-    /// d(response)/d(machine control) over the band.
+    /// d(response)/d(control) over the band.
     pub slope: f64,
     /// Its standard error (AR(1) noise).
     pub slope_se: f64,
@@ -70,7 +70,7 @@ pub struct RateTrend {
     pub rising: bool,
     /// Rate of the fastest and the slowest stroke.
     pub rates: [f64; 2],
-    /// Their slopes (response per machine control).
+    /// Their slopes (response per control).
     pub slopes: [f64; 2],
     /// (fast − slow slope) / its standard error.
     pub z: f64,
@@ -91,7 +91,7 @@ pub struct DriftFit {
 /// The strokes compared and the verdict (see the module doc).
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct RateEffect {
-    /// Band of distance from the strokes' start, machine control units.
+    /// Band of distance from the strokes' start, control units.
     pub band: [f64; 2],
     /// The strokes compared.
     pub strokes: Vec<Stroke>,
