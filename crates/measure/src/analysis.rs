@@ -280,8 +280,8 @@ pub struct Stiffness {
     pub warnings: Vec<String>,
     /// The first unloading's initial stiffness with its interval, the cross-check of the
     /// first-loading value (null when there is no unloading; three-point: in the
-    /// elastica-corrected deflection, from where the unloading is within the small-deflection
-    /// limit).
+    /// elastica-corrected deflection, null when the unloading starts beyond the geometry limit
+    /// where that correction is trusted).
     pub first_unloading: Option<UnloadingCheck>,
 }
 
@@ -895,18 +895,19 @@ pub fn analyze(
     // First loading against first unloading (issue 12.6): both are the elastic stiffness of
     // an elastic or elastoplastic specimen; intervals that do not overlap mean the first
     // loading was not (a toe or seating not separated from the window, slack, damage).
-    // Three-point: the unloading in the elastica-corrected deflection, and only its part
-    // within the small-deflection limit, as the loading side's automatic window (above it
-    // the sliding-support idealisation, below zero force the punch has lost contact).
+    // Three-point: the unloading in the elastica-corrected deflection (in which an elastic
+    // rod is linear, as the loading side's window), from its peak while the punch still
+    // pushes, and only when the peak lies within the geometry limit where that correction is
+    // trusted (w/l₀ ≈ 0.1, [`THREE_POINT_GEOMETRY_LIMIT`]). The part of a longer unloading
+    // that returns into the small-deflection range is no elastic unloading: on the demo's
+    // Bowden cables bent to 15 mm it is the frictional tail before contact is lost, 6× softer
+    // than the loading.
     // The sectional control in which a rate-independent elastic specimen is linear (for
     // three-point, the elastica-corrected deflection).
     let fit_xs: Vec<f64> = xs.iter().map(|&v| to_fit_x(v).unwrap_or(v)).collect();
     if let Some(s) = stiffness.as_mut() {
         let top = match &elastica {
-            Some(tab) => {
-                let limit = tab.small_deflection_limit(opts.small_deflection_tolerance) * l0;
-                to_fit_x(limit).unwrap_or(limit)
-            }
+            Some(_) => to_fit_x(geometry_limit * l0).unwrap_or(f64::INFINITY),
             None => f64::INFINITY,
         };
         let check = first_unloading_fit(
@@ -1262,7 +1263,7 @@ pub fn analyze(
 }
 
 /// The initial straight part of cycle 1's first unloading run (sectional `x`, response `y`,
-/// from where `x` is at most `top` on and while the response is still positive;
+/// while the response is still positive; none when the run starts above `top`;
 /// [`crate::elastic::initial_window`]) fitted with the AR(1) interval of the record's noise
 /// (`phi`, `prior` σ and its degrees of freedom).
 fn first_unloading_fit(
@@ -1277,7 +1278,9 @@ fn first_unloading_fit(
         .iter()
         .find(|s| s.cycle == 1 && s.branch == Branch::Unloading)?;
     let (a, b) = (s.start.saturating_sub(1), s.end);
-    let a = (a..b).find(|&i| x[i] <= top)?;
+    if !(x[a] <= top) {
+        return None;
+    }
     let pos_end = (a..b).find(|&i| y[i] <= 0.0).unwrap_or(b);
     let (p, q) = crate::elastic::initial_window(&x[a..pos_end], &y[a..pos_end], phi)?;
     let pos: Vec<usize> = (a + p..a + q).collect();
