@@ -338,7 +338,8 @@ fn tension_preload_cycles_on_a_quantised_encoder() {
 }
 
 /// Bowden cable in pure bending (chapter Table 2): (EI)_B,1 = 1.40, (EI)_B,2 = 0.19 N m²,
-/// K_B,t = 0.18 1/m, l₀ = 320 mm, cycles to 60°. K_t within 10%, class piecewise, no yield.
+/// K_B,t = 0.18 1/m, l₀ = 320 mm, cycles to 60°. K_t within 10%, class piecewise, no yield;
+/// the first unloading measures (EI)_B,2 within 5 % and raises no first-loading warning.
 #[test]
 fn bowden_piecewise_threshold() {
     let (ei1, ei2, kt, l0) = (1.40, 0.19, 0.18, 0.32);
@@ -376,6 +377,15 @@ fn bowden_piecewise_threshold() {
             assert!(rel_err(p.stiffness_1, ei1) < 0.05, "{p:?}");
             assert!(rel_err(p.stiffness_2, ei2) < 0.02, "{p:?}");
             assert!(rel_err(a.stiffness.as_ref().unwrap().value, ei1) < 0.05);
+            // The first unloading from 60° starts on the second slope: no flaw of the first
+            // loading is reported.
+            let u = a.stiffness.as_ref().unwrap().first_unloading.as_ref().unwrap();
+            assert!(rel_err(u.value, ei2) < 0.05 && !u.agrees, "{u:?}");
+            assert!(
+                !a.warnings.iter().any(|w| w.contains("first unloading")),
+                "{:?}",
+                a.warnings
+            );
         }
     }
 }

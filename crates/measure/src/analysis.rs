@@ -279,7 +279,9 @@ pub struct Stiffness {
     /// disagreement with the first unloading), also in the analysis' `warnings`.
     pub warnings: Vec<String>,
     /// The first unloading's initial stiffness with its interval, the cross-check of the
-    /// first-loading value (null when there is no unloading; three-point: in the
+    /// first-loading value (a piecewise linear elastic specimen unloaded from beyond its
+    /// threshold disagrees by design, without a warning: it unloads on its second slope; null
+    /// when there is no unloading; three-point: in the
     /// elastica-corrected deflection, null when the unloading starts beyond the geometry limit
     /// where that correction is trusted).
     pub first_unloading: Option<UnloadingCheck>,
@@ -1112,6 +1114,20 @@ pub fn analyze(
         }),
         _ => None,
     };
+    // A reversible bilinear specimen unloaded from beyond its threshold starts its unloading
+    // on the second slope: the first-unloading check then measures stiffness_2, not a flaw
+    // of the first loading, and its warning is withdrawn when the unloading lies nearer
+    // stiffness_2 than stiffness_1 (the check stays in the JSON, `agrees` false).
+    if let (Some(p), Some(s)) = (&piecewise, stiffness.as_mut()) {
+        let second = s.first_unloading.as_ref().is_some_and(|u| {
+            !u.agrees && (u.value - p.stiffness_2).abs() < (u.value - p.stiffness_1).abs()
+        });
+        if second {
+            let is_check = |w: &String| w.contains("and the first unloading's");
+            s.warnings.retain(|w| !is_check(w));
+            warnings.retain(|w| !is_check(w));
+        }
+    }
     let toe = elastic.as_ref().and_then(|e| {
         e.toe.map(|t| Toe {
             end_control: sign * from_fit_x(t.knee_x),
