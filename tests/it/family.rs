@@ -215,7 +215,11 @@ fn rate_dependent_class_over_the_family() {
             .filter(|&s| {
                 let c = family_case(s);
                 let rows = c.truth.dwell_s * c.spec.sample_rate_hz / c.truth.decimate.max(1) as f64;
-                let held = if dwell { rows >= 20.0 } else { c.truth.dwell_s == 0.0 };
+                let held = if dwell {
+                    rows >= 20.0
+                } else {
+                    c.truth.dwell_s == 0.0
+                };
                 held && (c.truth.class == "rate_dependent") == visco
             })
             .take(n)

@@ -379,7 +379,13 @@ fn bowden_piecewise_threshold() {
             assert!(rel_err(a.stiffness.as_ref().unwrap().value, ei1) < 0.05);
             // The first unloading from 60° starts on the second slope: no flaw of the first
             // loading is reported.
-            let u = a.stiffness.as_ref().unwrap().first_unloading.as_ref().unwrap();
+            let u = a
+                .stiffness
+                .as_ref()
+                .unwrap()
+                .first_unloading
+                .as_ref()
+                .unwrap();
             assert!(rel_err(u.value, ei2) < 0.05 && !u.agrees, "{u:?}");
             assert!(
                 !a.warnings.iter().any(|w| w.contains("first unloading")),

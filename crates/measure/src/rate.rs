@@ -125,10 +125,11 @@ fn strokes(segments: &[Segment], c: &[f64]) -> Vec<(usize, usize, bool)> {
 }
 
 /// Compares the strokes' slopes near their reversals (module doc). `c`, `r`: control and
-/// response (any common orientation; a control in which the rate-independent specimen is
-/// linear where geometry is not, as the three-point elastica-corrected deflection); `time_s`: the clock, or None (rates per sample);
-/// `phi`, `prior`: the record's AR(1) noise as for the stiffness interval. None when fewer
-/// than two strokes can be compared.
+/// response (any common orientation; where geometry is nonlinear, a control in which a
+/// rate-independent elastic specimen is linear, as the three-point elastica-corrected
+/// deflection); `time_s`: the clock, or None (rates per sample); `phi`, `prior`: the record's
+/// AR(1) noise as for the stiffness interval. None when fewer than two strokes can be
+/// compared.
 pub fn rate_effect(
     segments: &[Segment],
     time_s: Option<&[f64]>,
@@ -138,9 +139,8 @@ pub fn rate_effect(
     prior: (f64, f64),
 ) -> Option<RateEffect> {
     let all = strokes(segments, c);
-    let travel = |s: &(usize, usize, bool)| {
-        (s.0..s.1).fold(0.0f64, |m, i| m.max((c[i] - c[s.0]).abs()))
-    };
+    let travel =
+        |s: &(usize, usize, bool)| (s.0..s.1).fold(0.0f64, |m, i| m.max((c[i] - c[s.0]).abs()));
     let longest = all.iter().map(travel).fold(0.0f64, f64::max);
     let kept: Vec<(usize, usize, bool)> = all
         .into_iter()
@@ -198,7 +198,11 @@ pub fn rate_effect(
                 rising: dir,
                 rates: [fast.rate, slow.rate],
                 slopes: [fast.slope, slow.slope],
-                z: if se > 0.0 { d / se } else { f64::INFINITY * d.signum() },
+                z: if se > 0.0 {
+                    d / se
+                } else {
+                    f64::INFINITY * d.signum()
+                },
             })
         })
         .collect();
