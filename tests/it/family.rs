@@ -611,6 +611,13 @@ fn family_debug_seeds() {
                     s.and_then(|s| s.first_unloading.as_ref()),
                     a.holds.iter().map(|h| (h.significant, h.relaxes, h.response_change)).collect::<Vec<_>>()
                 );
+                println!(
+                    "  cycles (coincide, residual significant, why): {:?}",
+                    a.cycles
+                        .iter()
+                        .map(|c| (c.coincide, c.residual_significant, c.why.clone()))
+                        .collect::<Vec<_>>()
+                );
                 if let Some(r) = &a.rate_effect {
                     println!("  rate effect: band {:?}, strokes (rising, rate, slope, se) {:?}, drift {:?}, rate dependent {}", r.band, r.strokes.iter().map(|s| (s.rising, s.rate, s.slope, s.slope_se)).collect::<Vec<_>>(), r.drift, r.rate_dependent);
                 }
