@@ -30,7 +30,9 @@
 //! * anything else (loops without a bend: friction, viscosity, drift) → `other`;
 //! * holds whose response relaxes (falls after a loading ramp, recovers after an unloading
 //!   one; at least two such holds, or the only hold, and no hold trending the other way) →
-//!   `rate_dependent`, over any of the above ([`HoldRelaxation`]);
+//!   `rate_dependent`, over any of the above ([`HoldRelaxation`]); without such holds, strokes
+//!   at different rates whose stiffness near their reversals differs beyond what a drifting
+//!   sensor explains ([`crate::rate`]) → `rate_dependent` over `other` and `elastoplastic`;
 //! * an abrupt break (the response falls from 90 % of its maximum below [`BREAK_DROP`] of it
 //!   within 5 samples or 2 % of the record, and stays there) → `broken`, whatever came before
 //!   it (the yield point and stiffness are still reported).
@@ -39,8 +41,8 @@
 //! ([`crate::condition::serial_noise`] of response − k · control), so serially correlated
 //! noise (a logger's filter, AR(1), decimated exports) neither narrows the stiffness interval
 //! ([`crate::stats::linear_fit_ar1`], exact for the window's samples) nor moves the window,
-//! fakes a hold's relaxation or a break. Does not classify rate dependence from rate changes
-//! alone (a test without a hold of ≥ 20 samples shows none).
+//! fakes a hold's relaxation or a break. Does not classify rate dependence from a test run at
+//! one rate without a hold of ≥ 20 samples (nothing in it shows one).
 //!
 //! A bend counts only where the slope falls by at least [`BEND_MIN_DROP`] and stays down to the
 //! end of the envelope: a few per cent of seating softening or an extensometer slip, which a
@@ -262,10 +264,13 @@ pub enum Behaviour {
     Elastoplastic,
     /// The response depends on the loading rate: it relaxes toward zero at held control
     /// after a loading ramp and recovers after an unloading one (viscoelastic or viscoplastic;
-    /// see [`HoldRelaxation::relaxes`]). Takes precedence over the rate-independent classes.
+    /// see [`HoldRelaxation::relaxes`]; takes precedence over the rate-independent classes),
+    /// or, without such holds, strokes at different rates differ in stiffness near their
+    /// reversals beyond what a drift explains while the loops do not close ([`crate::rate`];
+    /// overrides `other` and `elastoplastic`).
     RateDependent,
-    /// None of the above (friction loops, drift, rate dependence without a hold to show it, or
-    /// not enough data).
+    /// None of the above (friction loops, drift, rate dependence shown neither by a hold nor
+    /// by strokes at different rates, or not enough data).
     Other,
     /// The specimen broke abruptly ([`Analysis::break_point`] says where; a gradual fall keeps
     /// its class and the warning); the class before the break is not judged.
@@ -309,8 +314,11 @@ pub struct Stiffness {
     /// disagreement with the first unloading), also in the analysis' `warnings`.
     pub warnings: Vec<String>,
     /// The first unloading's initial stiffness with its interval, the cross-check of the
-    /// first-loading value (null when there is no unloading, and for three-point, whose
-    /// unloading is not elastica-corrected).
+    /// first-loading value (a piecewise linear elastic specimen unloaded from beyond its
+    /// threshold disagrees by design, without a warning: it unloads on its second slope; null
+    /// when there is no unloading; three-point: in the
+    /// elastica-corrected deflection, null when the unloading starts beyond the geometry limit
+    /// where that correction is trusted).
     pub first_unloading: Option<UnloadingCheck>,
 }
 
@@ -499,6 +507,9 @@ pub struct Analysis {
     pub segments: Vec<Segment>,
     /// Response change in every hold after the initial rest (relaxation: rate dependence).
     pub holds: Vec<HoldRelaxation>,
+    /// Stiffness near reversals against the strokes' rates (rate dependence without holds),
+    /// when at least two strokes after the first loading can be compared.
+    pub rate_effect: Option<crate::rate::RateEffect>,
     /// The largest response and its control.
     pub max_response: MaxResponse,
     /// Where the specimen broke, when it did.
@@ -932,13 +943,38 @@ pub fn analyze(
         control_resolution: crate::condition::resolution(&c),
         zero_sectional: toe_ref.map_or(0.0, |t| t.1),
         toe_end_control: toe_ref.map_or(f64::NEG_INFINITY, |t| t.0 / per_control),
+        serial: crate::condition::SerialNoise {
+            sigma: serial.1,
+            ..serial.0
+        },
     });
 
     // First loading against first unloading (issue 12.6): both are the elastic stiffness of
     // an elastic or elastoplastic specimen; intervals that do not overlap mean the first
     // loading was not (a toe or seating not separated from the window, slack, damage).
-    if let (Some(s), false) = (stiffness.as_mut(), three) {
-        let check = first_unloading_fit(&segments, &xs, &rm, serial.0.phi, (serial.1, serial.2));
+    // Three-point: the unloading in the elastica-corrected deflection (in which an elastic
+    // rod is linear, as the loading side's window), from its peak while the punch still
+    // pushes, and only when the peak lies within the geometry limit where that correction is
+    // trusted (w/l₀ ≈ 0.1, [`THREE_POINT_GEOMETRY_LIMIT`]). The part of a longer unloading
+    // that returns into the small-deflection range is no elastic unloading: on the demo's
+    // Bowden cables bent to 15 mm it is the frictional tail before contact is lost, 6× softer
+    // than the loading.
+    // The sectional control in which a rate-independent elastic specimen is linear (for
+    // three-point, the elastica-corrected deflection).
+    let fit_xs: Vec<f64> = xs.iter().map(|&v| to_fit_x(v).unwrap_or(v)).collect();
+    if let Some(s) = stiffness.as_mut() {
+        let top = match &elastica {
+            Some(_) => to_fit_x(geometry_limit * l0).unwrap_or(f64::INFINITY),
+            None => f64::INFINITY,
+        };
+        let check = first_unloading_fit(
+            &segments,
+            &fit_xs,
+            top,
+            &rm,
+            serial.0.phi,
+            (serial.1, serial.2),
+        );
         if let Some(f) = check {
             let (lo, hi) = (f.slope_ci95[0] * factor, f.slope_ci95[1] * factor);
             let agrees = lo <= s.ci95[1] && s.ci95[0] <= hi;
@@ -1137,6 +1173,20 @@ pub fn analyze(
         }),
         _ => None,
     };
+    // A reversible bilinear specimen unloaded from beyond its threshold starts its unloading
+    // on the second slope: the first-unloading check then measures stiffness_2, not a flaw
+    // of the first loading, and its warning is withdrawn when the unloading lies nearer
+    // stiffness_2 than stiffness_1 (the check stays in the JSON, `agrees` false).
+    if let (Some(p), Some(s)) = (&piecewise, stiffness.as_mut()) {
+        let second = s.first_unloading.as_ref().is_some_and(|u| {
+            !u.agrees && (u.value - p.stiffness_2).abs() < (u.value - p.stiffness_1).abs()
+        });
+        if second {
+            let is_check = |w: &String| w.contains("and the first unloading's");
+            s.warnings.retain(|w| !is_check(w));
+            warnings.retain(|w| !is_check(w));
+        }
+    }
     let toe = elastic.as_ref().and_then(|e| {
         e.toe.map(|t| Toe {
             end_control: sign * from_fit_x(t.knee_x),
@@ -1206,7 +1256,47 @@ pub fn analyze(
             trending.len()
         ));
     }
-    let behaviour = if rate_dependent && behaviour != Behaviour::Broken {
+    // Without holds (or with holds that do not show it): the stiffness near reversals against
+    // the stroke's rate (`crate::rate`), for a test whose loops do not close (`other`:
+    // friction, viscosity or drift; `elastoplastic`: a viscous first loading bends and its
+    // unloading ends at a positive control, as plasticity's does).
+    // In `fit_xs` (three-point: strokes reversing at different deflections would otherwise
+    // differ by geometry alone).
+    let rate_effect = crate::rate::rate_effect(
+        &segments,
+        time_s,
+        &fit_xs,
+        &rm,
+        serial.0.phi,
+        (serial.1, serial.2),
+    );
+    let by_rate = !rate_dependent
+        && matches!(behaviour, Behaviour::Other | Behaviour::Elastoplastic)
+        && rate_effect.as_ref().is_some_and(|e| e.rate_dependent);
+    if let (true, Some(e)) = (by_rate, &rate_effect) {
+        let show = |t: &crate::rate::RateTrend| {
+            format!(
+                "{} strokes {:.3e} at rate {:.3e} vs {:.3e} at {:.3e} ({:.1} standard errors)",
+                if t.rising { "rising" } else { "falling" },
+                t.slopes[0],
+                t.rates[0],
+                t.slopes[1],
+                t.rates[1],
+                t.z
+            )
+        };
+        warnings.push(format!(
+            "the response depends on the rate: near their reversals strokes at different rates differ in stiffness beyond what a drift explains ({}; slopes in response per sectional control, {}): the material is rate dependent (viscous); rate-independent results are approximate{}",
+            e.trends.iter().map(show).collect::<Vec<_>>().join("; "),
+            sectional_unit(kind),
+            if yield_point.is_some() {
+                ", and the yield point may be the viscous softening of the first loading"
+            } else {
+                ""
+            }
+        ));
+    }
+    let behaviour = if (rate_dependent || by_rate) && behaviour != Behaviour::Broken {
         Behaviour::RateDependent
     } else {
         behaviour
@@ -1237,6 +1327,7 @@ pub fn analyze(
         noise,
         segments,
         holds,
+        rate_effect,
         max_response,
         break_point,
         excluded_samples: excluded,
@@ -1247,11 +1338,13 @@ pub fn analyze(
 }
 
 /// The initial straight part of cycle 1's first unloading run (sectional `x`, response `y`,
-/// while the response is still positive; [`crate::elastic::initial_window`]) fitted with the
-/// AR(1) interval of the record's noise (`phi`, `prior` σ and its degrees of freedom).
+/// while the response is still positive; none when the run starts above `top`;
+/// [`crate::elastic::initial_window`]) fitted with the AR(1) interval of the record's noise
+/// (`phi`, `prior` σ and its degrees of freedom).
 fn first_unloading_fit(
     segments: &[Segment],
     x: &[f64],
+    top: f64,
     y: &[f64],
     phi: f64,
     prior: (f64, f64),
@@ -1260,6 +1353,9 @@ fn first_unloading_fit(
         .iter()
         .find(|s| s.cycle == 1 && s.branch == Branch::Unloading)?;
     let (a, b) = (s.start.saturating_sub(1), s.end);
+    if !(x[a] <= top) {
+        return None;
+    }
     let pos_end = (a..b).find(|&i| y[i] <= 0.0).unwrap_or(b);
     let (p, q) = crate::elastic::initial_window(&x[a..pos_end], &y[a..pos_end], phi)?;
     let pos: Vec<usize> = (a + p..a + q).collect();

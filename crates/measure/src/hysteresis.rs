@@ -95,6 +95,11 @@ pub struct CycleInputs<'a> {
     /// Machine control where the toe ends (−∞ without a toe): the first cycle's loading is
     /// compared with its unloading only beyond it (the slack travel has no unloading twin).
     pub toe_end_control: f64,
+    /// The record's response noise as AR(1) ([`crate::condition::serial_noise`] of
+    /// response − k · control): with φ > 0 the branches' mean responses, and so the gap
+    /// between them, scatter by the long-run factor more than white noise of their
+    /// sample-to-sample scatter says, and the zero crossing by the marginal σ.
+    pub serial: crate::condition::SerialNoise,
 }
 
 fn collect(segs: &[Segment], cycle: usize, branch: Branch) -> Vec<usize> {
@@ -203,6 +208,13 @@ pub fn cycles(inp: &CycleInputs) -> Vec<CycleResult> {
                 }
             }
             let sigma = residual_noise(ux, uy);
+            // Correlated noise moves the zero crossing by its marginal σ, which the
+            // sample-to-sample scatter underestimates.
+            let sigma_cross = if inp.serial.phi > 0.0 {
+                sigma.max(inp.serial.sigma)
+            } else {
+                sigma
+            };
             // Residual: where the response reaches zero (three-point: leaves the noise band).
             // Located by a straight line through the unloading samples near zero response,
             // from where the response falls below hi = max(4zσ, 0.2·peak) to where it leaves
@@ -238,7 +250,8 @@ pub fn cycles(inp: &CycleInputs) -> Vec<CycleResult> {
                     let slope = fit.map(|f| f.slope.abs()).unwrap_or(0.0);
                     if slope > 0.0 {
                         let sx = noise_level(ux);
-                        let tol = z * std::f64::consts::SQRT_2 * (sigma / slope + sx) + q_sect;
+                        let tol =
+                            z * std::f64::consts::SQRT_2 * (sigma_cross / slope + sx) + q_sect;
                         r.residual_significant = Some((xr - inp.zero_sectional).abs() > tol);
                     }
                     if inp.three_point {
@@ -256,7 +269,7 @@ pub fn cycles(inp: &CycleInputs) -> Vec<CycleResult> {
                         let sx = noise_level(ux);
                         let slope = fit.map(|f| f.slope.abs()).unwrap_or(0.0);
                         if slope > 0.0 {
-                            let tol = z * std::f64::consts::SQRT_2 * (sigma / slope + sx)
+                            let tol = z * std::f64::consts::SQRT_2 * (sigma_cross / slope + sx)
                                 + z * se
                                 + q_sect;
                             r.residual_significant = Some((xr - inp.zero_sectional).abs() > tol);
@@ -294,7 +307,14 @@ pub fn cycles(inp: &CycleInputs) -> Vec<CycleResult> {
                     let s_l = residual_noise(&lx, &ly);
                     let s_u = residual_noise(&inp.control[ua..ub], &inp.response[ua..ub]);
                     let x = hi - lo;
-                    let sd = x * (s_l * s_l / n_l as f64 + s_u * s_u / n_u as f64).sqrt();
+                    let mut sd = x * (s_l * s_l / n_l as f64 + s_u * s_u / n_u as f64).sqrt();
+                    if inp.serial.phi > 0.0 {
+                        // AR(1): the variance of a mean over n samples is σ² min(F/n, 1), F
+                        // the long-run factor.
+                        let (s2, f) = (inp.serial.sigma.powi(2), inp.serial.long_run_factor());
+                        let m = |n: usize| s2 * (f / n as f64).min(1.0);
+                        sd = sd.max(x * (m(n_l) + m(n_u)).sqrt());
+                    }
                     // Response span over the common range: a shift of one branch by the
                     // control's resolution changes the gap by up to q·ΔF (module doc).
                     let (f_lo, f_hi) = lp

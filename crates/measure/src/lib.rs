@@ -20,6 +20,7 @@ pub mod condition;
 pub mod elastic;
 pub mod elastica;
 pub mod hysteresis;
+pub mod rate;
 pub mod sectional;
 pub mod stats;
 pub mod table;
