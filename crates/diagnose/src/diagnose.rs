@@ -416,6 +416,24 @@ pub fn diagnose(
     let mut steps = vec![];
     let mut verdict_effect = verdict_effect;
     let mut equivalent_sets = vec![];
+    let search = |from: &Scored| {
+        set_search(
+            ctx, tests, &base, &scored, from, &train, &held, &noise, opts, scale,
+        )
+    };
+    // A candidate that replaces the baseline's law (piecewise elasticity) can fit worse than the
+    // baseline on its own while a second effect is in the data (a Maxwell branch the
+    // elastoplastic law half-mimics with its yield): excluded as a failed fit, it never starts a
+    // search. When the search from the best single effect still leaves a gap well above the
+    // floor, or no single effect is an explanation (`unexplained`), a search starts from each
+    // such candidate as well.
+    let law_replacing = |s: &&Scored| {
+        s.effect != verdict_effect
+            && s.model.law != base.model.law
+            && fit_failure(&base, s).is_some()
+    };
+    let mut found: Option<SetFound> = None;
+    let mut unexplained = unexplained;
     if let Some(first) = scored.iter().find(|s| s.effect == verdict_effect) {
         set.push(verdict_effect);
         steps.push(Rung {
@@ -427,69 +445,68 @@ pub fn diagnose(
         });
         let g1 = (first.rss_noise / first.n_held.max(1) as f64).sqrt();
         if g1 > NOISE_FLOOR_FIT {
-            let search = |from: &Scored| {
-                set_search(
-                    ctx, tests, &base, &scored, from, &train, &held, &noise, opts, scale,
-                )
-            };
-            let mut found = search(first);
-            // A candidate that replaces the baseline's law (piecewise elasticity) can fit worse
-            // than the baseline on its own while a second effect is in the data (a Maxwell
-            // branch the elastoplastic law half-mimics with its yield): excluded as a failed
-            // fit, it never starts a search. When the search from the best single effect still
-            // leaves a gap well above the floor, search from each such candidate as well and
-            // keep the set the information criterion prefers beyond its tolerance.
-            if gap_over_noise(&found.last) >= UNEXPLAINED_GAP {
-                for alt_first in scored.iter().filter(|s| {
-                    s.effect != verdict_effect
-                        && s.model.law != base.model.law
-                        && fit_failure(&base, s).is_some()
-                }) {
-                    let alt = search(alt_first);
-                    if alt.set.len() > 1 && prefers(&alt.last, &found.last) {
-                        found = alt;
+            let mut f = search(first);
+            // Kept when the information criterion prefers it beyond its tolerance.
+            if gap_over_noise(&f.last) >= UNEXPLAINED_GAP {
+                for alt in scored.iter().filter(law_replacing).map(search) {
+                    if alt.set.len() > 1 && prefers(&alt.last, &f.last) {
+                        f = alt;
                     }
                 }
             }
-            let SetFound {
-                set: found_set,
-                steps: found_steps,
-                last,
-                alternatives,
-                ..
-            } = found;
-            set = found_set;
-            steps = found_steps;
-            gap_after = abs_rms(&last.held_resid);
-            if set.len() > 1 {
-                equivalent_sets = alternatives
-                    .iter()
-                    .filter(|(out, _)| set.contains(out))
-                    .map(|(out, alt)| {
-                        let mut effects: Vec<Effect> = set.clone();
-                        effects.retain(|e| e != out);
-                        effects.push(alt.effect);
-                        EquivalentSet {
-                            effects,
-                            swapped: [*out, alt.effect],
-                            gap_after_rel: abs_rms(&alt.held_resid) / scale,
-                            experiment: separating_experiment(*out, alt.effect),
-                        }
-                    })
-                    .collect();
-            }
-            // The member that explains most on its own first.
-            set.sort_by(|a, b| {
-                let g = |e: &Effect| {
-                    effects
-                        .iter()
-                        .find(|s| s.effect == *e)
-                        .map_or(f64::INFINITY, |s| s.gap_after)
-                };
-                g(a).total_cmp(&g(b))
-            });
-            verdict_effect = set.first().copied().unwrap_or(verdict_effect);
+            found = Some(f);
         }
+    } else if unexplained.is_some() {
+        // Replaces `unexplained` only when the set closes the gap below that threshold.
+        for alt in scored.iter().filter(law_replacing).map(search) {
+            let better = found.as_ref().is_none_or(|f| prefers(&alt.last, &f.last));
+            if alt.set.len() > 1 && gap_over_noise(&alt.last) < UNEXPLAINED_GAP && better {
+                found = Some(alt);
+            }
+        }
+        if found.is_some() {
+            unexplained = None;
+        }
+    }
+    if let Some(found) = found {
+        let SetFound {
+            set: found_set,
+            steps: found_steps,
+            last,
+            alternatives,
+            ..
+        } = found;
+        set = found_set;
+        steps = found_steps;
+        gap_after = abs_rms(&last.held_resid);
+        if set.len() > 1 {
+            equivalent_sets = alternatives
+                .iter()
+                .filter(|(out, _)| set.contains(out))
+                .map(|(out, alt)| {
+                    let mut effects: Vec<Effect> = set.clone();
+                    effects.retain(|e| e != out);
+                    effects.push(alt.effect);
+                    EquivalentSet {
+                        effects,
+                        swapped: [*out, alt.effect],
+                        gap_after_rel: abs_rms(&alt.held_resid) / scale,
+                        experiment: separating_experiment(*out, alt.effect),
+                    }
+                })
+                .collect();
+        }
+        // The member that explains most on its own first.
+        set.sort_by(|a, b| {
+            let g = |e: &Effect| {
+                effects
+                    .iter()
+                    .find(|s| s.effect == *e)
+                    .map_or(f64::INFINITY, |s| s.gap_after)
+            };
+            g(a).total_cmp(&g(b))
+        });
+        verdict_effect = set.first().copied().unwrap_or(verdict_effect);
     }
     let remainder = remainder_words(&set, gap_after, noise_rms);
     let ladder = if opts.ladder {
@@ -591,9 +608,7 @@ fn set_search(
     opts: &DiagnoseOptions,
     scale: f64,
 ) -> SetFound {
-    let rms = |s: &Scored| {
-        (s.held_resid.iter().flatten().map(|v| v * v).sum::<f64>() / s.n_held.max(1) as f64).sqrt()
-    };
+    let rms = Scored::held_rms;
     let prior = vec![Rung {
         step: "add",
         effect: first.effect,
@@ -626,14 +641,22 @@ fn set_search(
             set.retain(|e| *e != r.effect);
         }
     }
-    for &e in set.clone().iter().filter(|e| !last.model.has(**e)) {
+    // Shed, not refitted: the gap is the model's either way.
+    let shed: Vec<Effect> = set
+        .iter()
+        .copied()
+        .filter(|e| !last.model.has(*e))
+        .collect();
+    let g = rms(&last) / scale;
+    for e in shed {
         set.retain(|m| *m != e);
+        let model = last.model.label();
         steps.push(Rung {
             step: "drop",
             effect: e,
-            model: last.model.label(),
-            gap_before_rel: rms(&last) / scale,
-            gap_after_rel: rms(&last) / scale,
+            model,
+            gap_before_rel: g,
+            gap_after_rel: g,
         });
     }
     if set.len() > 1 {
@@ -685,9 +708,7 @@ fn waterfall(
     opts: &DiagnoseOptions,
     scale: f64,
 ) -> Vec<Rung> {
-    let rms = |s: &Scored| {
-        (s.held_resid.iter().flatten().map(|v| v * v).sum::<f64>() / s.n_held.max(1) as f64).sqrt()
-    };
+    let rms = Scored::held_rms;
     let alone = |e: Effect| singles.iter().find(|s| s.effect == e);
     let mut order = set.to_vec();
     order.sort_by(|a, b| {
