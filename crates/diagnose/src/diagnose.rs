@@ -167,6 +167,10 @@ pub struct Verdict {
     /// `[effect]` when one effect fits to the noise floor ([`NOISE_FLOOR_FIT`]) or nothing
     /// joins it; otherwise the simplest set found from it by forward selection (up to three effects, each
     /// step scored on held-out data by the same rules) and backward elimination, `effect` first.
+    /// A candidate that replaces the baseline's law and fits worse than it alone (piecewise
+    /// elasticity beside a relaxation) starts a search as well when the best single effect
+    /// leaves ≥ [`UNEXPLAINED_GAP`] or none is an explanation; such a set replaces
+    /// `unexplained` only when it brings the gap below that threshold.
     pub effects: Vec<Effect>,
     /// "How far" over the set: the held-out gap after each step from the baseline (the first
     /// step adds `effect`; `drop` steps remove an effect the set does not need).
