@@ -155,6 +155,23 @@ pub fn generate_set_at(
     layout: Layout,
     sample_rate_hz: f64,
 ) -> Result<BlindCase, String> {
+    generate_with_slip(kind, truths, noise_rel, seed, layout, sample_rate_hz, None)
+}
+
+/// [`generate_set_at`] with the friction truth's Iwan elements given: `slip` = (number of
+/// Jenkins elements n_f, slip-density exponent χ_f), where the blind cases use the registry's
+/// default (10 elements, χ = 0). Few elements (1–3 slip levels) give Masing loops with sharp
+/// kinks that a smooth 10-element backbone only approximates; χ < 0 puts the slip early. The
+/// rest is drawn exactly as [`generate_set_at`] draws it.
+pub fn generate_with_slip(
+    kind: TestKind,
+    truths: &[Effect],
+    noise_rel: f64,
+    seed: u64,
+    layout: Layout,
+    sample_rate_hz: f64,
+    slip: Option<(usize, f64)>,
+) -> Result<BlindCase, String> {
     let nom = nominal(kind).ok_or("unknown kind")?;
     let truth = truths.first().copied().unwrap_or(Effect::None);
     let has = |e: Effect| truths.contains(&e);
@@ -230,7 +247,12 @@ pub fn generate_set_at(
                     vec![
                         (format!("{}_f", nom.stiff.0), s * draw(0.25, 0.4)),
                         (f_name.into(), y * draw(0.15, 0.25)),
-                    ],
+                    ]
+                    .into_iter()
+                    .chain(slip.into_iter().flat_map(|(n, chi)| {
+                        [("n_f".to_string(), n as f64), ("chi_f".to_string(), chi)]
+                    }))
+                    .collect(),
                 ))
             }
             Effect::MachineCompliance => {
@@ -502,6 +524,29 @@ mod tests {
     /// A set of one draws exactly the single case (the historic matrix is unchanged), and every
     /// uniform-kind pair builds a case the registry accepts, with two lengths when compliance is
     /// one of the pair.
+    /// The friction family's generator: the registry's default Iwan elements (10, χ = 0) give
+    /// the blind case's response bit for bit; two slip levels, or early slip, change it.
+    #[test]
+    fn friction_slip_levels_default_to_the_blind_cases() {
+        let f = [Effect::FrictionHysteresis];
+        let gen = |slip| {
+            let c = generate_with_slip(TestKind::Torsion, &f, 0.0, 2, Layout::TestXpert, 5.0, slip);
+            c.unwrap().tests[0].response.clone()
+        };
+        let blind = generate_set_at(TestKind::Torsion, &f, 0.0, 2, Layout::TestXpert, 5.0);
+        let blind = blind.unwrap().tests[0].response.clone();
+        assert_eq!(gen(Some((10, 0.0))), blind);
+        let peak = blind.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        let apart = |a: &[f64], b: &[f64]| {
+            a.iter()
+                .zip(b)
+                .fold(0.0f64, |m, (x, y)| m.max((x - y).abs()))
+        };
+        let two = gen(Some((2, 0.0)));
+        assert!(apart(&two, &blind) > 1e-3 * peak);
+        assert!(apart(&gen(Some((2, -0.5))), &two) > 1e-3 * peak);
+    }
+
     #[test]
     fn pair_cases_build_and_single_sets_match_single_cases() {
         let one = generate_case_at(

@@ -21,7 +21,7 @@ use std::process::ExitCode;
 
 /// Replace each test by what the readers get back from its written file (conditioned and
 /// segmented as every measured test is: [`crate::bridge::diag_test`]).
-fn through_readers(case: &mut BlindCase) -> Result<(), String> {
+pub fn through_readers(case: &mut BlindCase) -> Result<(), String> {
     for (i, (name, bytes)) in case.files.iter().enumerate() {
         let rec = cablab_ingest::read_bytes(bytes, name, &Default::default())
             .map_err(|e| format!("{}: {e}", case.name))?;

@@ -47,7 +47,9 @@ use crate::error::DiagError;
 use crate::ladder::{climb, exchange, ladder, refit};
 use crate::locate::span_of_baseline;
 use crate::model::{DiagTest, ModelSpec};
-use crate::select::{choose, compare, elastic_limit, fit_failure, score, Scored};
+use crate::select::{
+    choose, compare, elastic_limit, fit_failure, ic, ic_tolerance, n_eff_of, score, Scored,
+};
 use cablab_core::{Effect, TestKind};
 use serde::Serialize;
 
@@ -165,6 +167,10 @@ pub struct Verdict {
     /// `[effect]` when one effect fits to the noise floor ([`NOISE_FLOOR_FIT`]) or nothing
     /// joins it; otherwise the simplest set found from it by forward selection (up to three effects, each
     /// step scored on held-out data by the same rules) and backward elimination, `effect` first.
+    /// A candidate that replaces the baseline's law and fits worse than it alone (piecewise
+    /// elasticity beside a relaxation) starts a search as well when the best single effect
+    /// leaves ≥ [`UNEXPLAINED_GAP`] or none is an explanation; such a set replaces
+    /// `unexplained` only when it brings the gap below that threshold.
     pub effects: Vec<Effect>,
     /// "How far" over the set: the held-out gap after each step from the baseline (the first
     /// step adds `effect`; `drop` steps remove an effect the set does not need).
@@ -414,6 +420,24 @@ pub fn diagnose(
     let mut steps = vec![];
     let mut verdict_effect = verdict_effect;
     let mut equivalent_sets = vec![];
+    let search = |from: &Scored| {
+        set_search(
+            ctx, tests, &base, &scored, from, &train, &held, &noise, opts, scale,
+        )
+    };
+    // A candidate that replaces the baseline's law (piecewise elasticity) can fit worse than the
+    // baseline on its own while a second effect is in the data (a Maxwell branch the
+    // elastoplastic law half-mimics with its yield): excluded as a failed fit, it never starts a
+    // search. When the search from the best single effect still leaves a gap well above the
+    // floor, or no single effect is an explanation (`unexplained`), a search starts from each
+    // such candidate as well.
+    let law_replacing = |s: &&Scored| {
+        s.effect != verdict_effect
+            && s.model.law != base.model.law
+            && fit_failure(&base, s).is_some()
+    };
+    let mut found: Option<SetFound> = None;
+    let mut unexplained = unexplained;
     if let Some(first) = scored.iter().find(|s| s.effect == verdict_effect) {
         set.push(verdict_effect);
         steps.push(Rung {
@@ -425,87 +449,68 @@ pub fn diagnose(
         });
         let g1 = (first.rss_noise / first.n_held.max(1) as f64).sqrt();
         if g1 > NOISE_FLOOR_FIT {
-            let start = crate::select::Scored {
-                effect: Effect::None,
-                ..first.clone()
-            };
-            let (all, last, alternatives) = climb(
-                ctx,
-                tests,
-                start,
-                steps.clone(),
-                2,
-                opts.candidates.as_deref(),
-                &train,
-                &held,
-                &noise,
-                opts,
-                scale,
-            );
-            set.clear();
-            for r in &all {
-                if r.step == "add" {
-                    set.push(r.effect);
-                } else {
-                    set.retain(|e| *e != r.effect);
+            let mut f = search(first);
+            // Kept when the information criterion prefers it beyond its tolerance.
+            if gap_over_noise(&f.last) >= UNEXPLAINED_GAP {
+                for alt in scored.iter().filter(law_replacing).map(search) {
+                    if alt.set.len() > 1 && prefers(&alt.last, &f.last) {
+                        f = alt;
+                    }
                 }
             }
-            let mut last = last;
-            let mut alternatives = alternatives;
-            steps = all;
-            if set.len() > 1 {
-                // Judge each member again now that the others are in (`exchange`).
-                let ex = exchange(
-                    ctx,
-                    tests,
-                    &base.model,
-                    &set,
-                    last,
-                    opts.candidates.as_deref(),
-                    &train,
-                    &held,
-                    &noise,
-                    opts,
-                );
-                set = ex.members;
-                last = ex.model;
-                alternatives = ex.equivalent;
-                if ex.swapped.is_some() {
-                    steps = waterfall(
-                        ctx, tests, &base, &scored, &set, &last, &train, &held, &noise, opts, scale,
-                    );
-                }
-            }
-            gap_after = abs_rms(&last.held_resid);
-            if set.len() > 1 {
-                equivalent_sets = alternatives
-                    .iter()
-                    .filter(|(out, _)| set.contains(out))
-                    .map(|(out, alt)| {
-                        let mut effects: Vec<Effect> = set.clone();
-                        effects.retain(|e| e != out);
-                        effects.push(alt.effect);
-                        EquivalentSet {
-                            effects,
-                            swapped: [*out, alt.effect],
-                            gap_after_rel: abs_rms(&alt.held_resid) / scale,
-                            experiment: separating_experiment(*out, alt.effect),
-                        }
-                    })
-                    .collect();
-            }
-            // The member that explains most on its own first.
-            set.sort_by(|a, b| {
-                let g = |e: &Effect| {
-                    effects
-                        .iter()
-                        .find(|s| s.effect == *e)
-                        .map_or(f64::INFINITY, |s| s.gap_after)
-                };
-                g(a).total_cmp(&g(b))
-            });
-            verdict_effect = set.first().copied().unwrap_or(verdict_effect);
+            found = Some(f);
         }
+    } else if unexplained.is_some() {
+        // Replaces `unexplained` only when the set closes the gap below that threshold.
+        for alt in scored.iter().filter(law_replacing).map(search) {
+            let better = found.as_ref().is_none_or(|f| prefers(&alt.last, &f.last));
+            if alt.set.len() > 1 && gap_over_noise(&alt.last) < UNEXPLAINED_GAP && better {
+                found = Some(alt);
+            }
+        }
+        if found.is_some() {
+            unexplained = None;
+        }
+    }
+    if let Some(found) = found {
+        let SetFound {
+            set: found_set,
+            steps: found_steps,
+            last,
+            alternatives,
+            ..
+        } = found;
+        set = found_set;
+        steps = found_steps;
+        gap_after = abs_rms(&last.held_resid);
+        if set.len() > 1 {
+            equivalent_sets = alternatives
+                .iter()
+                .filter(|(out, _)| set.contains(out))
+                .map(|(out, alt)| {
+                    let mut effects: Vec<Effect> = set.clone();
+                    effects.retain(|e| e != out);
+                    effects.push(alt.effect);
+                    EquivalentSet {
+                        effects,
+                        swapped: [*out, alt.effect],
+                        gap_after_rel: abs_rms(&alt.held_resid) / scale,
+                        experiment: separating_experiment(*out, alt.effect),
+                    }
+                })
+                .collect();
+        }
+        // The member that explains most on its own first.
+        set.sort_by(|a, b| {
+            let g = |e: &Effect| {
+                effects
+                    .iter()
+                    .find(|s| s.effect == *e)
+                    .map_or(f64::INFINITY, |s| s.gap_after)
+            };
+            g(a).total_cmp(&g(b))
+        });
+        verdict_effect = set.first().copied().unwrap_or(verdict_effect);
     }
     let remainder = remainder_words(&set, gap_after, noise_rms);
     let ladder = if opts.ladder {
@@ -563,6 +568,132 @@ pub fn diagnose(
     })
 }
 
+/// A model's held-out gap in noise units (RMS of the residual over the noise floor).
+fn gap_over_noise(s: &Scored) -> f64 {
+    (s.rss_noise / s.n_held.max(1) as f64).sqrt()
+}
+
+/// `a` is preferred to `b` by the information criterion beyond its tolerance (the rule of
+/// [`choose`], n_eff read from the better-fitting of the two).
+fn prefers(a: &Scored, b: &Scored) -> bool {
+    let best = if a.rss_noise <= b.rss_noise { a } else { b };
+    let n_eff = n_eff_of(best);
+    ic(a, n_eff, a.n_held) + ic_tolerance(n_eff) < ic(b, n_eff, b.n_held)
+}
+
+/// What [`set_search`] found.
+struct SetFound {
+    /// The members, in the order they were added.
+    set: Vec<Effect>,
+    /// "How far": the rungs from the baseline.
+    steps: Vec<Rung>,
+    /// The set's fitted model.
+    last: Scored,
+    /// Sets one swap away that explain the held-out data as well (member out, other model).
+    alternatives: Vec<(Effect, Scored)>,
+}
+
+/// The set search from the single effect `first` (scored on the baseline `base`): forward
+/// selection of up to two more effects with backward elimination ([`climb`]), then, for two or
+/// more members, sequential replacement ([`exchange`]). A member whose effect the final model no
+/// longer has is dropped from the set with a `drop` rung: piecewise elasticity replaces the
+/// baseline's law and sheds the hardening rules of its yield (a stiffness degradation found
+/// first is not in a piecewise-linear model, whatever the rungs say).
+#[allow(clippy::too_many_arguments)]
+fn set_search(
+    ctx: Context,
+    tests: &[DiagTest],
+    base: &Scored,
+    singles: &[Scored],
+    first: &Scored,
+    train: &[Vec<usize>],
+    held: &[Vec<usize>],
+    noise: &[f64],
+    opts: &DiagnoseOptions,
+    scale: f64,
+) -> SetFound {
+    let rms = Scored::held_rms;
+    let prior = vec![Rung {
+        step: "add",
+        effect: first.effect,
+        model: first.model.label(),
+        gap_before_rel: rms(base) / scale,
+        gap_after_rel: rms(first) / scale,
+    }];
+    let start = Scored {
+        effect: Effect::None,
+        ..first.clone()
+    };
+    let (mut steps, mut last, mut alternatives) = climb(
+        ctx,
+        tests,
+        start,
+        prior,
+        2,
+        opts.candidates.as_deref(),
+        train,
+        held,
+        noise,
+        opts,
+        scale,
+    );
+    let mut set: Vec<Effect> = Vec::new();
+    for r in &steps {
+        if r.step == "add" {
+            set.push(r.effect);
+        } else {
+            set.retain(|e| *e != r.effect);
+        }
+    }
+    // Shed, not refitted: the gap is the model's either way.
+    let shed: Vec<Effect> = set
+        .iter()
+        .copied()
+        .filter(|e| !last.model.has(*e))
+        .collect();
+    let g = rms(&last) / scale;
+    for e in shed {
+        set.retain(|m| *m != e);
+        let model = last.model.label();
+        steps.push(Rung {
+            step: "drop",
+            effect: e,
+            model,
+            gap_before_rel: g,
+            gap_after_rel: g,
+        });
+    }
+    if set.len() > 1 {
+        // Judge each member again now that the others are in (`exchange`).
+        let ex = exchange(
+            ctx,
+            tests,
+            &base.model,
+            &set,
+            last,
+            opts.candidates.as_deref(),
+            train,
+            held,
+            noise,
+            opts,
+        );
+        set = ex.members;
+        last = ex.model;
+        alternatives = ex.equivalent;
+        if ex.swapped.is_some() {
+            steps = waterfall(
+                ctx, tests, base, singles, &set, &last, train, held, noise, opts, scale,
+            );
+        }
+    }
+    SetFound {
+        set,
+        steps,
+        last,
+        alternatives,
+    }
+}
+
 /// "How far" over a set the exchange changed: from the baseline, its members added one at a
 /// time, the one that closes most on its own first (`singles`: every candidate scored alone on
 /// the baseline), each step's model fitted (warm-started from the previous one) unless it is a
@@ -581,9 +712,7 @@ fn waterfall(
     opts: &DiagnoseOptions,
     scale: f64,
 ) -> Vec<Rung> {
-    let rms = |s: &Scored| {
-        (s.held_resid.iter().flatten().map(|v| v * v).sum::<f64>() / s.n_held.max(1) as f64).sqrt()
-    };
+    let rms = Scored::held_rms;
     let alone = |e: Effect| singles.iter().find(|s| s.effect == e);
     let mut order = set.to_vec();
     order.sort_by(|a, b| {

@@ -94,9 +94,7 @@ pub(crate) fn climb(
     let mut cur = start;
     let mut rungs = prior;
     let mut alternatives: Vec<(Effect, Scored)> = Vec::new();
-    let rms_abs = |s: &Scored| {
-        (s.held_resid.iter().flatten().map(|v| v * v).sum::<f64>() / s.n_held.max(1) as f64).sqrt()
-    };
+    let rms_abs = Scored::held_rms;
     for _ in 0..max_add {
         let g = (cur.rss_noise / cur.n_held as f64).sqrt();
         if g <= NOISE_FLOOR_FIT {

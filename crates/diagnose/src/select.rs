@@ -111,6 +111,14 @@ pub(crate) struct Scored {
     pub(crate) n_held: usize,
 }
 
+impl Scored {
+    /// RMS of the held-out residual, response units.
+    pub(crate) fn held_rms(&self) -> f64 {
+        let ss: f64 = self.held_resid.iter().flatten().map(|v| v * v).sum();
+        (ss / self.n_held.max(1) as f64).sqrt()
+    }
+}
+
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn score(
     ctx: Context,
