@@ -5,7 +5,8 @@
 //! residuals are (simulated − measured) response on the samples the fit may see, weighted per test
 //! by 1/σ (the test's noise floor), so a joint fit over tests of different size and unit is a
 //! proper χ². Bounds are handled by the change of variables of [`crate::params`]; the Jacobian is
-//! by forward differences, one parameter per rayon task. Uncertainties come from the Gauss–Newton
+//! by forward differences, one parameter per rayon task, or between those by Broyden's secant
+//! update after a step that went as predicted ([`FitOptions::secant`]). Uncertainties come from the Gauss–Newton
 //! covariance s²(JᵀJ)⁻¹ at the optimum (physical parameters), inflated by (1+ρ₁)/(1−ρ₁) for the
 //! lag-1 autocorrelation ρ₁ of the residuals.
 //! What it does not do: decide which model to fit (see `diagnose`) or simulate anything itself.
@@ -17,6 +18,7 @@ use nalgebra::{storage::Owned, DMatrix, DVector, Dyn};
 use rayon::prelude::*;
 use serde::Serialize;
 use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
+use std::sync::Mutex;
 
 /// A forward model: parameters in, one simulated response history per test out.
 pub trait Forward: Sync {
@@ -63,6 +65,13 @@ pub struct FitOptions {
     pub tol: f64,
     /// Forward-difference step in the unbounded coordinates.
     pub fd_step: f64,
+    /// Most secant (Broyden rank-1) Jacobian updates in a row between finite-difference
+    /// Jacobians of a descent or polish (0: every Jacobian by finite differences). A secant
+    /// update costs no simulation; it is used only after a step accepted at its first trial
+    /// whose cost fell by at least [`SECANT_RATIO`] of what the previous Jacobian predicted, so
+    /// a poor step always brings a fresh Jacobian. The uncertainties always come from a fresh
+    /// finite-difference Jacobian at the optimum.
+    pub secant: usize,
     /// Most samples per branch of the history the starts descend on (a branch-preserving
     /// decimation, see [`crate::calibration`]); 0: every sample. The end is scored, polished and
     /// given its uncertainties on every fitted sample.
@@ -79,6 +88,7 @@ impl Default for FitOptions {
             patience: 60,
             tol: 1e-9,
             fd_step: 1e-6,
+            secant: SECANT_UPDATES,
             per_branch: 64,
             polish_jacobians: POLISH_JACOBIANS,
         }
@@ -247,6 +257,56 @@ struct Problem<'a> {
     /// Jacobians computed so far.
     jacobians: AtomicUsize,
     stop: Stop,
+    /// Most secant updates in a row ([`FitOptions::secant`]).
+    secant: usize,
+    /// The last Jacobian handed out (for the secant update).
+    last: Mutex<Option<LastJacobian>>,
+    /// Residual evaluations (trial steps) since the last Jacobian.
+    trials: AtomicUsize,
+}
+
+/// A Jacobian handed to Levenberg–Marquardt, the point it belongs to, and how many secant
+/// updates in a row produced it.
+struct LastJacobian {
+    j: DMatrix<f64>,
+    z: DVector<f64>,
+    r: DVector<f64>,
+    secant: usize,
+}
+
+/// Most secant updates in a row by default ([`FitOptions::secant`]).
+pub const SECANT_UPDATES: usize = 4;
+
+/// A secant update follows only a step whose cost fell by at least this share of the decrease
+/// the previous Jacobian's linear model predicted (‖r₀‖² − ‖r₀ + J Δz‖²); below it the model is
+/// poor and the next Jacobian is by finite differences.
+pub const SECANT_RATIO: f64 = 0.25;
+
+/// Broyden's rank-1 ("good") update of the Jacobian `j` of the residuals at `z0` (residuals
+/// `r0`) to the point `z` with residuals `r`: J + (Δr − J Δz) Δzᵀ / (Δzᵀ Δz), the least change
+/// of J (Frobenius norm) that reproduces the observed change Δr along Δz. `None` when the step
+/// is empty or the cost fell by less than [`SECANT_RATIO`] of the decrease J predicted.
+fn secant_update(
+    j: &DMatrix<f64>,
+    z0: &DVector<f64>,
+    r0: &DVector<f64>,
+    z: &DVector<f64>,
+    r: &DVector<f64>,
+) -> Option<DMatrix<f64>> {
+    let dz = z - z0;
+    let dz2 = dz.norm_squared();
+    if !(dz2 > 0.0) {
+        return None;
+    }
+    let jdz = j * &dz;
+    let c0 = r0.norm_squared();
+    let predicted = c0 - (r0 + &jdz).norm_squared();
+    let actual = c0 - r.norm_squared();
+    if !(predicted > 0.0 && actual >= SECANT_RATIO * predicted) {
+        return None;
+    }
+    let u = (r - r0 - jdz) / dz2;
+    Some(j + u * dz.transpose())
 }
 
 /// When a descent stops before its patience runs out.
@@ -282,6 +342,21 @@ impl Problem<'_> {
             .map(|(s, &zi)| s.from_unbounded(zi))
             .collect()
     }
+    /// The Jacobian at the current point by forward differences, one parameter per rayon task
+    /// (columns in parameter order).
+    fn finite_differences(&self) -> DMatrix<f64> {
+        let k = self.z.len();
+        let cols: Vec<DVector<f64>> = (0..k)
+            .into_par_iter()
+            .map(|j| {
+                let mut z = self.z.clone();
+                let h = self.fd_step * (1.0 + self.z[j].abs());
+                z[j] += h;
+                (self.eval(&z) - &self.r) / h
+            })
+            .collect();
+        DMatrix::from_columns(&cols)
+    }
     fn eval(&self, z: &DVector<f64>) -> DVector<f64> {
         residuals(self.fwd, self.data, &self.phys(z))
             .unwrap_or_else(|| DVector::from_element(self.data.n(), INFEASIBLE))
@@ -295,6 +370,7 @@ impl LeastSquaresProblem<f64, Dyn, Dyn> for Problem<'_> {
 
     fn set_params(&mut self, z: &DVector<f64>) {
         self.z.copy_from(z);
+        self.trials.fetch_add(1, Ordering::Relaxed);
         self.r = self.eval(z);
     }
     fn params(&self) -> DVector<f64> {
@@ -316,17 +392,25 @@ impl LeastSquaresProblem<f64, Dyn, Dyn> for Problem<'_> {
         {
             return None;
         }
-        let k = self.z.len();
-        let cols: Vec<DVector<f64>> = (0..k)
-            .into_par_iter()
-            .map(|j| {
-                let mut z = self.z.clone();
-                let h = self.fd_step * (1.0 + self.z[j].abs());
-                z[j] += h;
-                (self.eval(&z) - &self.r) / h
-            })
-            .collect();
-        Some(DMatrix::from_columns(&cols))
+        let trials = self.trials.swap(0, Ordering::Relaxed);
+        let mut last = self.last.lock().unwrap_or_else(|e| e.into_inner());
+        // A secant update after a step accepted at its first trial that went as the last
+        // Jacobian predicted; a finite-difference Jacobian otherwise.
+        let secant = last
+            .as_ref()
+            .filter(|l| l.secant < self.secant && trials == 1)
+            .and_then(|l| {
+                let j = secant_update(&l.j, &l.z, &l.r, &self.z, &self.r)?;
+                Some((j, l.secant + 1))
+            });
+        let (j, updates) = secant.unwrap_or_else(|| (self.finite_differences(), 0));
+        *last = Some(LastJacobian {
+            j: j.clone(),
+            z: self.z.clone(),
+            r: self.r.clone(),
+            secant: updates,
+        });
+        Some(j)
     }
 }
 
@@ -363,6 +447,11 @@ pub const GIVE_UP_FACTOR: f64 = 10.0;
 /// elements: giving up on cost alone lost better minima in the blind check).
 pub const GIVE_UP_STALL: f64 = 0.1;
 
+/// A descent on a coarse problem stops once an accepted step lowers the cost (χ² in noise units,
+/// on the decimation) by less than this: the last steps of a converging descent move the
+/// parameters far less than the polish on every sample does.
+pub const DESCENT_CONVERGED: f64 = 0.01;
+
 /// Levenberg–Marquardt patience of the polish on every fitted sample after a descent on a
 /// coarse problem (at most `POLISH_ITERATIONS · (k + 1)` residual evaluations, k parameters):
 /// the decimated optimum is already within a fraction of a noise unit of the full one, and a few
@@ -397,6 +486,16 @@ pub fn fit_coarse(
     // The first start (warm or data-informed) and the last (a nested start, when warm) descend
     // in full; every other gives up once, after GIVE_UP_AFTER Jacobians, it still sits far
     // above their better end. All are still descents on the coarse problem when given.
+    // On a coarse problem a descent stops once a step gains less than DESCENT_CONVERGED: the
+    // polish on every sample refines the best end.
+    let descent = if coarse.is_some() {
+        Stop {
+            converged_below: DESCENT_CONVERGED,
+            ..Stop::NEVER
+        }
+    } else {
+        Stop::NEVER
+    };
     let informed: Vec<usize> = if coarse.is_some() && starts.len() > 2 {
         vec![0, starts.len() - 1]
     } else {
@@ -404,13 +503,13 @@ pub fn fit_coarse(
     };
     let first: Vec<((Vec<f64>, f64, usize), f64)> = informed
         .par_iter()
-        .map(|&i| descend(cf, cd, &starts[i], iterations, Stop::NEVER, opts))
+        .map(|&i| descend(cf, cd, &starts[i], iterations, descent, opts))
         .collect();
     let best_informed = first.iter().map(|d| d.0 .1).fold(f64::INFINITY, f64::min);
     let give_up = Stop {
         give_up_above: GIVE_UP_FACTOR * best_informed + COST_TIE,
         give_up_after: GIVE_UP_AFTER,
-        ..Stop::NEVER
+        ..descent
     };
     let others: Vec<((Vec<f64>, f64, usize), f64)> = (0..starts.len())
         .into_par_iter()
@@ -507,6 +606,9 @@ fn descend(
         last_cost: AtomicU64::new(f64::INFINITY.to_bits()),
         jacobians: AtomicUsize::new(0),
         stop,
+        secant: opts.secant,
+        last: Mutex::new(None),
+        trials: AtomicUsize::new(0),
     };
     prob.set_params(&z0);
     let cost0 = prob.r.norm_squared();
