@@ -383,22 +383,23 @@ impl LeastSquaresProblem<f64, Dyn, Dyn> for Problem<'_> {
         let cost = self.r.norm_squared();
         let before = f64::from_bits(self.last_cost.swap(cost.to_bits(), Ordering::Relaxed));
         let done = self.jacobians.fetch_add(1, Ordering::Relaxed);
+        let trials = self.trials.swap(0, Ordering::Relaxed);
+        let mut last = self.last.lock().unwrap_or_else(|e| e.into_inner());
         let stalled_far = done >= self.stop.give_up_after
             && cost > self.stop.give_up_above
             && before - cost < GIVE_UP_STALL * cost;
-        if before - cost < self.stop.converged_below
-            || stalled_far
-            || done >= self.stop.max_jacobians
-        {
+        let stalled = before - cost < self.stop.converged_below || stalled_far;
+        // A step from a secant Jacobian that gained little says more about that Jacobian than
+        // about the problem: the descent goes on from a finite-difference one.
+        let from_secant = last.as_ref().is_some_and(|l| l.secant > 0);
+        if (stalled && !from_secant) || done >= self.stop.max_jacobians {
             return None;
         }
-        let trials = self.trials.swap(0, Ordering::Relaxed);
-        let mut last = self.last.lock().unwrap_or_else(|e| e.into_inner());
         // A secant update after a step accepted at its first trial that went as the last
         // Jacobian predicted; a finite-difference Jacobian otherwise.
         let secant = last
             .as_ref()
-            .filter(|l| l.secant < self.secant && trials == 1)
+            .filter(|l| l.secant < self.secant && trials == 1 && !stalled)
             .and_then(|l| {
                 let j = secant_update(&l.j, &l.z, &l.r, &self.z, &self.r)?;
                 Some((j, l.secant + 1))
