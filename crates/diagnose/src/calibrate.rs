@@ -502,20 +502,20 @@ pub fn fit_coarse(
     } else {
         (0..starts.len()).collect()
     };
-    let first: Vec<((Vec<f64>, f64, usize), f64)> = informed
+    let first: Vec<(Run, f64)> = informed
         .par_iter()
-        .map(|&i| descend(cf, cd, &starts[i], iterations, descent, opts))
+        .map(|&i| descend(cf, cd, &starts[i], None, iterations, descent, opts))
         .collect();
-    let best_informed = first.iter().map(|d| d.0 .1).fold(f64::INFINITY, f64::min);
+    let best_informed = first.iter().map(|d| d.0.cost).fold(f64::INFINITY, f64::min);
     let give_up = Stop {
         give_up_above: GIVE_UP_FACTOR * best_informed + COST_TIE,
         give_up_after: GIVE_UP_AFTER,
         ..descent
     };
-    let others: Vec<((Vec<f64>, f64, usize), f64)> = (0..starts.len())
+    let others: Vec<(Run, f64)> = (0..starts.len())
         .into_par_iter()
         .filter(|i| !informed.contains(i))
-        .map(|i| descend(cf, cd, &starts[i], iterations, give_up, opts))
+        .map(|i| descend(cf, cd, &starts[i], None, iterations, give_up, opts))
         .collect();
     let mut descents = Vec::with_capacity(starts.len());
     let (mut a, mut b) = (first.into_iter(), others.into_iter());
@@ -526,44 +526,58 @@ pub fn fit_coarse(
             b.next()
         });
     }
-    let mut runs: Vec<(Vec<f64>, f64, usize)> = descents.iter().map(|d| d.0.clone()).collect();
+    let mut runs: Vec<Run> = descents.iter().map(|d| d.0.clone()).collect();
     if coarse.is_some() {
         // Every end, then every start, on all the fitted samples: a descent on the decimation
         // may end a little off the full problem's optimum, and a nested start (the special
         // case's optimum) must stay a floor the fit cannot end above. Those far above the best
         // end on the decimation are not scored (they cannot be the best on every sample).
-        let best_coarse = runs.iter().map(|r| r.1).fold(f64::INFINITY, f64::min);
+        let best_coarse = runs.iter().map(|r| r.cost).fold(f64::INFINITY, f64::min);
         let worth = |c: f64| c <= PRUNE_FACTOR * best_coarse + COST_TIE;
-        runs.extend(
-            starts
-                .iter()
-                .zip(&descents)
-                .map(|(p, d)| (p.clone(), d.1, 0)),
-        );
+        runs.extend(starts.iter().zip(&descents).map(|(p, d)| Run {
+            params: p.clone(),
+            cost: d.1,
+            evaluations: 0,
+            residuals: None,
+        }));
         runs = runs
             .into_par_iter()
-            .map(|(p, coarse_cost, ev)| {
-                if !worth(coarse_cost) {
-                    return (p, f64::INFINITY, ev);
+            .map(|run| {
+                if !worth(run.cost) {
+                    return Run {
+                        cost: f64::INFINITY,
+                        residuals: None,
+                        ..run
+                    };
                 }
-                let cost = residuals(fwd, data, &p).map_or(f64::INFINITY, |r| r.norm_squared());
-                (p, cost, ev + 1)
+                let r = residuals(fwd, data, &run.params);
+                Run {
+                    cost: r.as_ref().map_or(f64::INFINITY, |r| r.norm_squared()),
+                    evaluations: run.evaluations + 1,
+                    residuals: r,
+                    ..run
+                }
             })
             .collect();
     }
-    let mut evaluations = runs.iter().map(|r| r.2).sum();
-    let lowest = runs.iter().map(|r| r.1).fold(f64::INFINITY, f64::min);
+    let mut evaluations = runs.iter().map(|r| r.evaluations).sum();
+    let lowest = runs.iter().map(|r| r.cost).fold(f64::INFINITY, f64::min);
     let best = runs
-        .iter()
-        .find(|r| r.1 <= lowest + COST_TIE.min(1e-3 * lowest))
-        .cloned()
-        .unwrap_or_else(|| (specs.iter().map(|s| s.initial).collect(), f64::INFINITY, 0));
-    let (mut params, mut cost) = (best.0, best.1);
+        .into_iter()
+        .find(|r| r.cost <= lowest + COST_TIE.min(1e-3 * lowest))
+        .unwrap_or_else(|| Run {
+            params: specs.iter().map(|s| s.initial).collect(),
+            cost: f64::INFINITY,
+            evaluations: 0,
+            residuals: None,
+        });
+    let (mut params, mut cost, mut r) = (best.params, best.cost, best.residuals);
     if coarse.is_some() && cost.is_finite() {
-        let (p, c, ev) = descend(
+        let polished = descend(
             fwd,
             data,
             &params,
+            r.clone(),
             POLISH_ITERATIONS,
             Stop {
                 converged_below: POLISH_CONVERGED,
@@ -573,26 +587,40 @@ pub fn fit_coarse(
             opts,
         )
         .0;
-        evaluations += ev;
-        if c < cost {
-            (params, cost) = (p, c);
+        evaluations += polished.evaluations;
+        if polished.cost < cost {
+            (params, cost, r) = (polished.params, polished.cost, polished.residuals);
         }
     }
-    finish(fwd, data, params, cost, starts.len(), evaluations)
+    finish(fwd, data, params, r, cost, starts.len(), evaluations)
 }
 
-/// One Levenberg–Marquardt descent from physical parameters `p0` with a patience of
-/// `iterations` (at most `iterations · (k + 1)` residual evaluations, k parameters) or until
-/// `stop` says so: the end (physical), its cost and the residual evaluations spent; and the cost
-/// at `p0`.
+/// The end of a descent, or a point scored on every fitted sample.
+#[derive(Clone)]
+struct Run {
+    /// Physical parameters.
+    params: Vec<f64>,
+    /// Cost there (χ² in noise units; infinite where not scored or infeasible).
+    cost: f64,
+    /// Residual evaluations spent on it.
+    evaluations: usize,
+    /// The weighted residuals there, when computed on the problem the caller scores on.
+    residuals: Option<DVector<f64>>,
+}
+
+/// One Levenberg–Marquardt descent from physical parameters `p0` (residuals `r0` there when
+/// already known) with a patience of `iterations` (at most `iterations · (k + 1)` residual
+/// evaluations, k parameters) or until `stop` says so: the end (physical), its cost, the residual
+/// evaluations spent and the residuals there; and the cost at `p0`.
 fn descend(
     fwd: &dyn Forward,
     data: &FitData,
     p0: &[f64],
+    r0: Option<DVector<f64>>,
     iterations: usize,
     stop: Stop,
     opts: &FitOptions,
-) -> ((Vec<f64>, f64, usize), f64) {
+) -> (Run, f64) {
     let specs = fwd.specs();
     let z0 = DVector::from_iterator(
         specs.len(),
@@ -611,7 +639,13 @@ fn descend(
         last: Mutex::new(None),
         trials: AtomicUsize::new(0),
     };
-    prob.set_params(&z0);
+    match r0 {
+        Some(r) => {
+            prob.r = r;
+            prob.trials.fetch_add(1, Ordering::Relaxed);
+        }
+        None => prob.set_params(&z0),
+    }
     let cost0 = prob.r.norm_squared();
     let lm = LevenbergMarquardt::new()
         .with_tol(opts.tol)
@@ -622,10 +656,14 @@ fn descend(
         let (p, r) = lm.minimize(prob);
         (p, Some(r))
     };
-    let p = prob.phys(&prob.z);
     let cost = prob.r.norm_squared();
     (
-        (p, cost, report.map_or(1, |r| r.number_of_evaluations)),
+        Run {
+            params: prob.phys(&prob.z),
+            cost,
+            evaluations: report.map_or(1, |r| r.number_of_evaluations),
+            residuals: Some(prob.r),
+        },
         cost0,
     )
 }
@@ -635,6 +673,7 @@ fn finish(
     fwd: &dyn Forward,
     data: &FitData,
     params: Vec<f64>,
+    r0: Option<DVector<f64>>,
     cost: f64,
     starts: usize,
     evaluations: usize,
@@ -642,7 +681,7 @@ fn finish(
     let specs = fwd.specs();
     let n = data.n();
     let k = specs.len();
-    let r0 = residuals(fwd, data, &params);
+    let r0 = r0.or_else(|| residuals(fwd, data, &params));
     // Residual autocorrelation per test (pairs never straddle two tests).
     let rho1 = match &r0 {
         Some(r) => {
