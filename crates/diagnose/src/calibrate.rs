@@ -5,10 +5,11 @@
 //! residuals are (simulated − measured) response on the samples the fit may see, weighted per test
 //! by 1/σ (the test's noise floor), so a joint fit over tests of different size and unit is a
 //! proper χ². Bounds are handled by the change of variables of [`crate::params`]; the Jacobian is
-//! by forward differences, one parameter per rayon task, or between those by Broyden's secant
-//! update after a step that went as predicted ([`FitOptions::secant`]). Uncertainties come from the Gauss–Newton
-//! covariance s²(JᵀJ)⁻¹ at the optimum (physical parameters), inflated by (1+ρ₁)/(1−ρ₁) for the
-//! lag-1 autocorrelation ρ₁ of the residuals.
+//! by forward differences, one parameter per rayon task, or (in the polish by default) between
+//! those by Broyden's secant update after a step that went as predicted
+//! ([`FitOptions::polish_secant`]). Uncertainties come from the Gauss–Newton covariance
+//! s²(JᵀJ)⁻¹ at the optimum (physical parameters, a fresh finite-difference Jacobian), inflated
+//! by (1+ρ₁)/(1−ρ₁) for the lag-1 autocorrelation ρ₁ of the residuals.
 //! What it does not do: decide which model to fit (see `diagnose`) or simulate anything itself.
 
 use crate::params::ParamSpec;
@@ -66,12 +67,17 @@ pub struct FitOptions {
     /// Forward-difference step in the unbounded coordinates.
     pub fd_step: f64,
     /// Most secant (Broyden rank-1) Jacobian updates in a row between finite-difference
-    /// Jacobians of a descent or polish (0: every Jacobian by finite differences). A secant
-    /// update costs no simulation; it is used only after a step accepted at its first trial
-    /// whose cost fell by at least [`SECANT_RATIO`] of what the previous Jacobian predicted, so
-    /// a poor step always brings a fresh Jacobian. The uncertainties always come from a fresh
-    /// finite-difference Jacobian at the optimum.
+    /// Jacobians of the descents from the starts (0, the default: every Jacobian by finite
+    /// differences). A secant update costs no simulation; it is used only after a step
+    /// accepted at its first trial whose cost fell by at least [`SECANT_RATIO`] of what the
+    /// previous Jacobian predicted, so a poor step always brings a fresh Jacobian. Off by
+    /// default in the descents: their paths then differ, and in the blind check's pairs some
+    /// ended in a worse basin (two right verdicts lost, one fit 6× the noise floor).
     pub secant: usize,
+    /// The same in the polish on every fitted sample (default [`SECANT_UPDATES`]): it starts
+    /// near the optimum, where the residuals are close to linear. The uncertainties always
+    /// come from a fresh finite-difference Jacobian at the optimum.
+    pub polish_secant: usize,
     /// Most samples per branch of the history the starts descend on (a branch-preserving
     /// decimation, see [`crate::calibration`]); 0: every sample. The end is scored, polished and
     /// given its uncertainties on every fitted sample.
@@ -88,7 +94,8 @@ impl Default for FitOptions {
             patience: 60,
             tol: 1e-9,
             fd_step: 1e-6,
-            secant: SECANT_UPDATES,
+            secant: 0,
+            polish_secant: SECANT_UPDATES,
             per_branch: 64,
             polish_jacobians: POLISH_JACOBIANS,
         }
@@ -504,7 +511,18 @@ pub fn fit_coarse(
     };
     let first: Vec<(Run, f64)> = informed
         .par_iter()
-        .map(|&i| descend(cf, cd, &starts[i], None, iterations, descent, opts))
+        .map(|&i| {
+            descend(
+                cf,
+                cd,
+                &starts[i],
+                None,
+                iterations,
+                descent,
+                opts.secant,
+                opts,
+            )
+        })
         .collect();
     let best_informed = first.iter().map(|d| d.0.cost).fold(f64::INFINITY, f64::min);
     let give_up = Stop {
@@ -515,7 +533,18 @@ pub fn fit_coarse(
     let others: Vec<(Run, f64)> = (0..starts.len())
         .into_par_iter()
         .filter(|i| !informed.contains(i))
-        .map(|i| descend(cf, cd, &starts[i], None, iterations, give_up, opts))
+        .map(|i| {
+            descend(
+                cf,
+                cd,
+                &starts[i],
+                None,
+                iterations,
+                give_up,
+                opts.secant,
+                opts,
+            )
+        })
         .collect();
     let mut descents = Vec::with_capacity(starts.len());
     let (mut a, mut b) = (first.into_iter(), others.into_iter());
@@ -584,6 +613,7 @@ pub fn fit_coarse(
                 max_jacobians: opts.polish_jacobians,
                 ..Stop::NEVER
             },
+            opts.polish_secant,
             opts,
         )
         .0;
@@ -611,7 +641,9 @@ struct Run {
 /// One Levenberg–Marquardt descent from physical parameters `p0` (residuals `r0` there when
 /// already known) with a patience of `iterations` (at most `iterations · (k + 1)` residual
 /// evaluations, k parameters) or until `stop` says so: the end (physical), its cost, the residual
-/// evaluations spent and the residuals there; and the cost at `p0`.
+/// evaluations spent and the residuals there; and the cost at `p0`. At most `secant` secant
+/// Jacobian updates in a row ([`FitOptions::secant`]).
+#[allow(clippy::too_many_arguments)]
 fn descend(
     fwd: &dyn Forward,
     data: &FitData,
@@ -619,6 +651,7 @@ fn descend(
     r0: Option<DVector<f64>>,
     iterations: usize,
     stop: Stop,
+    secant: usize,
     opts: &FitOptions,
 ) -> (Run, f64) {
     let specs = fwd.specs();
@@ -635,7 +668,7 @@ fn descend(
         last_cost: AtomicU64::new(f64::INFINITY.to_bits()),
         jacobians: AtomicUsize::new(0),
         stop,
-        secant: opts.secant,
+        secant,
         last: Mutex::new(None),
         trials: AtomicUsize::new(0),
     };
@@ -1029,6 +1062,7 @@ mod tests {
             let c = Counted(&m, AtomicUsize::new(0));
             let opts = FitOptions {
                 secant,
+                polish_secant: secant,
                 ..FitOptions::default()
             };
             let f = fit(

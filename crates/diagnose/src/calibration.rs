@@ -737,6 +737,7 @@ mod tests {
                 noise: Some(vec![0.05]),
                 fit: FitOptions {
                     secant,
+                    polish_secant: secant,
                     ..FitOptions::default()
                 },
                 ..CalibrateOptions::default()
