@@ -509,20 +509,21 @@ pub fn fit_coarse(
     } else {
         (0..starts.len()).collect()
     };
+    let from_start = |i: usize, stop: Stop| {
+        descend(
+            cf,
+            cd,
+            &starts[i],
+            None,
+            iterations,
+            stop,
+            opts.secant,
+            opts,
+        )
+    };
     let first: Vec<(Run, f64)> = informed
         .par_iter()
-        .map(|&i| {
-            descend(
-                cf,
-                cd,
-                &starts[i],
-                None,
-                iterations,
-                descent,
-                opts.secant,
-                opts,
-            )
-        })
+        .map(|&i| from_start(i, descent))
         .collect();
     let best_informed = first.iter().map(|d| d.0.cost).fold(f64::INFINITY, f64::min);
     let give_up = Stop {
@@ -533,18 +534,7 @@ pub fn fit_coarse(
     let others: Vec<(Run, f64)> = (0..starts.len())
         .into_par_iter()
         .filter(|i| !informed.contains(i))
-        .map(|i| {
-            descend(
-                cf,
-                cd,
-                &starts[i],
-                None,
-                iterations,
-                give_up,
-                opts.secant,
-                opts,
-            )
-        })
+        .map(|i| from_start(i, give_up))
         .collect();
     let mut descents = Vec::with_capacity(starts.len());
     let (mut a, mut b) = (first.into_iter(), others.into_iter());
