@@ -302,7 +302,7 @@ fn secant_update(
 ) -> Option<DMatrix<f64>> {
     let dz = z - z0;
     let dz2 = dz.norm_squared();
-    if !(dz2 > 0.0) {
+    if dz2.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
         return None;
     }
     let jdz = j * &dz;
