@@ -264,7 +264,7 @@ struct Problem<'a> {
     /// Jacobians computed so far.
     jacobians: AtomicUsize,
     stop: Stop,
-    /// Most secant updates in a row ([`FitOptions::secant`]).
+    /// Most secant updates in a row ([`FitOptions::secant`], [`FitOptions::polish_secant`]).
     secant: usize,
     /// The last Jacobian handed out (for the secant update).
     last: Mutex<Option<LastJacobian>>,
@@ -281,7 +281,7 @@ struct LastJacobian {
     secant: usize,
 }
 
-/// Most secant updates in a row by default ([`FitOptions::secant`]).
+/// Most secant updates in a row in the polish by default ([`FitOptions::polish_secant`]).
 pub const SECANT_UPDATES: usize = 4;
 
 /// A secant update follows only a step whose cost fell by at least this share of the decrease
