@@ -704,4 +704,70 @@ mod tests {
             "{coarse:?} {full:?}"
         );
     }
+
+    #[test]
+    fn secant_jacobians_reach_the_finite_difference_optimum_within_its_uncertainty() {
+        // Each law of the registry but the piecewise ones, in tension past yield (the triangle
+        // history scaled to ±0.05 mm, a hold and a reversal), its example parameters as the truth, pseudo-noise of
+        // 0.05 N: fitted with finite-difference Jacobians only and with secant updates between
+        // them, the parameters agree within the finite-difference fit's standard error and the
+        // costs within a tie.
+        let ctx = Context::project();
+        for law in [
+            "elastoplastic",
+            "kinematic_hardening",
+            "stiffness_degradation",
+            "viscoelasticity",
+            "friction_hysteresis",
+        ] {
+            let mut t = triangle();
+            t.labels.clear();
+            // ±0.05 mm over 32 mm: about twice the yield strain either way.
+            t.control.iter_mut().for_each(|c| *c *= 0.05);
+            let model = ModelSpec::law(law);
+            let one = [t.clone()];
+            let fwd = ModelForward::new(&one, &model, ctx.catalog, ctx.rod).unwrap();
+            let example =
+                cablab_laws::example_params(TestKind::Tension, law, 7.96e4, 54.0).unwrap();
+            let truth: Vec<f64> = fwd
+                .specs()
+                .iter()
+                .map(|s| example.get(&s.name).copied().unwrap_or(s.initial))
+                .collect();
+            t.response = fwd.simulate_all(&truth).unwrap().remove(0);
+            for (i, r) in t.response.iter_mut().enumerate() {
+                *r += 0.05 * ((i * 7919 % 13) as f64 - 6.0) / 6.0;
+            }
+            let tests = [t];
+            let opts = |secant| CalibrateOptions {
+                noise: Some(vec![0.05]),
+                fit: FitOptions {
+                    secant,
+                    polish_secant: secant,
+                    ..FitOptions::default()
+                },
+                ..CalibrateOptions::default()
+            };
+            let fd = calibrate(ctx, &tests, &model, &opts(0)).unwrap();
+            let sec = calibrate(ctx, &tests, &model, &opts(calibrate::SECANT_UPDATES)).unwrap();
+            assert!(
+                (fd.chi2 - sec.chi2).abs() <= calibrate::COST_TIE.max(1e-3 * fd.chi2),
+                "{law}: chi2 {} (finite differences) vs {} (secant)",
+                fd.chi2,
+                sec.chi2
+            );
+            for (j, s) in fd.specs.iter().enumerate() {
+                if let Some(se) = fd.std[j] {
+                    let (a, b) = (fd.values[j], sec.values[j]);
+                    assert!(
+                        (a - b).abs() <= se,
+                        "{law}: {} = {a} ± {se} (finite differences) vs {b} (secant)",
+                        s.name
+                    );
+                }
+            }
+            // The data determine some parameters, so the comparison is not empty.
+            assert!(fd.std.iter().flatten().count() >= 2, "{law}: {:?}", fd.std);
+        }
+    }
 }
