@@ -394,7 +394,7 @@ pub fn check(
     roles: Option<RoleCheck>,
     warnings: &mut Vec<String>,
 ) -> Result<()> {
-    warnings.extend(rec.warnings.iter().map(|w| w.to_string()));
+    warnings.extend(rec.warnings.iter().map(|w| w.located()));
     warnings.extend(check_kind(rec, kind, force_kind)?);
     if let Some(r) = roles {
         let notes = check_roles(rec, kind, r.control_given, r.compliance_given)?;

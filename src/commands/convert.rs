@@ -23,7 +23,7 @@ pub fn run(a: ConvertArgs) -> CmdResult {
     let opts = crate::bridge::read_options(&a.reader, kind).map_err(CliError::input)?;
     let rec = cablab_ingest::read_path(&a.file, &opts).map_err(CliError::input)?;
     for w in &rec.warnings {
-        eprintln!("cablab: warning: {w}");
+        eprintln!("cablab: warning: {}", w.located());
     }
     if ext == "parquet" {
         rec.write_parquet(&a.output).map_err(CliError::failed)?;

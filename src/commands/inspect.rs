@@ -12,7 +12,7 @@ pub fn run(a: InspectArgs) -> CmdResult {
     opts.lenient = true;
     let rec = cablab_ingest::read_path(&a.file, &opts).map_err(CliError::input)?;
     for w in &rec.warnings {
-        eprintln!("cablab: warning: {w}");
+        eprintln!("cablab: warning: {}", w.located());
     }
     let report = rec.inspect();
     if a.json {

@@ -162,15 +162,27 @@ pub struct Diagnostic {
     pub message: String,
 }
 
-impl fmt::Display for Diagnostic {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "{}", self.file)?;
-        if let Some(l) = self.line {
-            write!(f, ":{l}")?;
-            if let Some(c) = self.column {
-                write!(f, ":{c}")?;
-            }
+impl Diagnostic {
+    /// `file:line:column`, as far as known.
+    fn place(&self) -> String {
+        match (self.line, self.column) {
+            (Some(l), Some(c)) => format!("{}:{l}:{c}", self.file),
+            (Some(l), None) => format!("{}:{l}", self.file),
+            _ => self.file.clone(),
         }
-        write!(f, ": warning: {}", self.message)
+    }
+
+    /// `file:line:column: message`, without the word "warning": for lists and lines that already
+    /// say they hold warnings (`warnings` in JSON, `cablab: warning: …` on the terminal), so the
+    /// word is not printed twice.
+    pub fn located(&self) -> String {
+        format!("{}: {}", self.place(), self.message)
+    }
+}
+
+impl fmt::Display for Diagnostic {
+    /// `file:line:column: warning: message`, as a compiler prints it.
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}: warning: {}", self.place(), self.message)
     }
 }

@@ -81,6 +81,8 @@ fn non_monotonic_and_repeated_time_warn_with_line_and_column() {
     );
     assert_eq!((w.line, w.column), (Some(4), Some(2)));
     assert!(w.to_string().starts_with("bad.csv:4:2: warning:"), "{w}");
+    // In a list of warnings the word is not repeated: `cablab: warning: bad.csv:4:2: …`.
+    assert_eq!(w.located(), format!("bad.csv:4:2: {}", w.message));
 }
 
 #[test]
