@@ -50,6 +50,9 @@ pub(crate) struct RawTable {
     pub blocks: Vec<RawBlock>,
     pub metadata: Vec<(String, String)>,
     pub warnings: Vec<Diagnostic>,
+    /// What the reader did that is worth saying but casts no doubt on a number (a footer
+    /// skipped, ...): `TestRecord::notes`.
+    pub notes: Vec<Diagnostic>,
     /// Detected separator (None for XML).
     pub separator: Option<Separator>,
     /// Decimal mark.
@@ -980,7 +983,7 @@ impl<'a> Engine<'a> {
                 .collect();
             if let Some(first) = after.first() {
                 let t = String::from_utf8_lossy(&self.text[first.start..first.end]);
-                self.out.warnings.push(Diagnostic {
+                self.out.notes.push(Diagnostic {
                     file: self.source.to_string(),
                     line: Some(first.line_no),
                     column: None,

@@ -205,13 +205,15 @@ fn instron_metadata_nan_cells_and_inspect() {
             "kind",
             "blocks_found",
             "blocks_joined",
-            "warnings"
+            "warnings",
+            "notes"
         ]
     );
     assert_eq!(json["blocks_found"], 1);
     assert_eq!(json["blocks_joined"], serde_json::json!([1]));
     // Every reader warning is in the JSON, as the record carries it.
     assert_eq!(json["warnings"].as_array().unwrap().len(), r.warnings.len());
+    assert_eq!(json["notes"].as_array().unwrap().len(), r.notes.len());
     assert_eq!(json["metadata"]["Gauge length"], "25 mm");
     assert_eq!(json["kind"], "tension");
     let ch = json["channels"][0].as_object().unwrap();
