@@ -555,3 +555,36 @@ fn a_machine_travel_flag_names_the_files_extensometer() {
     ]);
     assert!(within(stiffness(&b), ea, 0.005), "{:e}", stiffness(&b));
 }
+
+/// The Bluehill flexure layout (fixture written for cablab from E = 30 GPa, b × h = 12 × 4 mm,
+/// span 100 mm: (EI) = E b h³/12 = 1.92 N m², k = 48 (EI)/l³ = 92.16 N/mm, 10 N preload, ±0.04 N
+/// ripple): with only the kind given, span, section and label come from the `Specimen properties
+/// : …` lines, and they are notes, not warnings.
+#[test]
+fn bluehill_flexure_span_and_section_from_group_keys() {
+    let f = data("cablab__bluehill_flexure_three_point.csv");
+    let i = json(&["inspect", f.as_str()]);
+    assert_eq!(i["kind"], "three_point");
+    let a = json(&["analyze", f.as_str(), "--kind", "three-point"]);
+    let ei = stiffness(&a);
+    assert!(within(ei, 1.92, 0.01), "EI {ei:e}");
+    let e = a["modulus_pa"].as_f64().unwrap();
+    assert!(within(e, 30e9, 0.01), "E {e:e}");
+    assert!((e - ei / (12e-3 * 4e-3f64.powi(3) / 12.0)).abs() <= 1e-9 * e);
+    let n = notes(&a);
+    assert!(
+        n.iter().any(|n| n.contains("support span 100.0000 mm")),
+        "{n:?}"
+    );
+    assert!(
+        n.iter()
+            .any(|n| n.contains("flat section 12.0000 × 4.0000 mm")),
+        "{n:?}"
+    );
+    let w = warnings(&a);
+    assert!(
+        !w.iter()
+            .any(|w| w.contains("span") || w.contains("flat section")),
+        "{w:?}"
+    );
+}

@@ -491,6 +491,10 @@ pub(crate) fn kind_from_text(texts: &[&str]) -> Option<(TestKind, String)> {
                 "tres puntos",
                 "tre punti",
                 "flexion 3 points",
+                // Bluehill's flexure methods (`Flexure stress`, `Flexure strain (Extension)`);
+                // a four-point flexure file also names four points and stays unknown.
+                "flexure",
+                "flexural",
             ],
         ),
         (
@@ -710,12 +714,30 @@ pub(crate) fn kind_evidence(
     out
 }
 
+///
+/// Bluehill writes result and property keys as `Group : Name` (`Specimen properties : Support
+/// span`, `Strain : Tensile strain (Extension) gauge length`): the name is the part after the
+/// last ` : `. A bracket at the end is the unit and is cut (`Breite [mm]`, `Gage Length
+/// (Extensometer)`); a bracket with words after it qualifies the words before it and is dropped
+/// (`tensile strain gauge length`).
 fn norm_key(k: &str) -> String {
     let k = k.to_lowercase();
-    let k = match k.find(['[', '(']) {
-        Some(p) => k[..p].to_string(),
+    let mut k = match k.rfind(" : ") {
+        Some(p) => k[p + 3..].to_string(),
         None => k,
     };
+    while let Some(p) = k.find(['[', '(']) {
+        let after = k[p..].find([']', ')']).map(|c| p + c + 1);
+        match after {
+            Some(a) if !k[a..].trim().trim_end_matches(':').trim().is_empty() => {
+                k = format!("{} {}", k[..p].trim_end(), k[a..].trim_start());
+            }
+            _ => {
+                k.truncate(p);
+                break;
+            }
+        }
+    }
     k.trim().trim_end_matches(':').trim().to_string()
 }
 
@@ -961,9 +983,14 @@ pub(crate) fn specimen_from_metadata(
     ];
     let find = |keys: &[&str]| -> Option<(String, String)> {
         for k in keys {
+            // A key of two or more words may also end the name (Bluehill's `Tensile strain
+            // gauge length`).
             let matches = |key: &str| {
                 let nk = norm_key(key);
-                nk == *k || nk.starts_with(&format!("{k} ")) || nk.starts_with(&format!("{k},"))
+                nk == *k
+                    || nk.starts_with(&format!("{k} "))
+                    || nk.starts_with(&format!("{k},"))
+                    || (k.contains(' ') && nk.ends_with(&format!(" {k}")))
             };
             if let Some((key, v)) = meta
                 .iter()
@@ -1042,6 +1069,45 @@ pub(crate) fn specimen_from_metadata(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Bluehill's `Group : Name` keys: the name after the last ` : `; a bracket at the end is the
+    /// unit, one with words after it is dropped; the specimen's gauge length from a key that
+    /// ends with it, its span and label from `Specimen properties : …`.
+    #[test]
+    fn bluehill_group_keys() {
+        assert_eq!(
+            norm_key("Specimen properties : Support span"),
+            "support span"
+        );
+        assert_eq!(
+            norm_key("Strain : Tensile strain (Extension) gauge length"),
+            "tensile strain gauge length"
+        );
+        assert_eq!(norm_key("Gage Length (Extensometer)"), "gage length");
+        assert_eq!(norm_key("Breite [mm]:"), "breite");
+        let meta = |kv: &[(&str, &str)]| -> Vec<(String, String)> {
+            kv.iter()
+                .map(|(k, v)| (k.to_string(), v.to_string()))
+                .collect()
+        };
+        let (sp, notes) = specimen_from_metadata(&meta(&[
+            (
+                "Strain : Tensile strain (Extension) gauge length",
+                "100.00000 mm",
+            ),
+            ("Specimen properties : Specimen label", "S-3"),
+        ]));
+        assert_eq!(sp.free_length_m, Some(0.1));
+        assert_eq!(sp.label.as_deref(), Some("S-3"));
+        assert!(notes.is_empty(), "{notes:?}");
+        // Before: "Specimen properties : Support span" matched the label key "specimen".
+        let (sp, _) = specimen_from_metadata(&meta(&[
+            ("Specimen properties : Support span", "125.00000 mm"),
+            ("Specimen properties : Specimen label", "1A"),
+        ]));
+        assert_eq!(sp.label.as_deref(), Some("1A"));
+        assert_eq!(sp.free_length_m, Some(0.125));
+    }
 
     fn facts(cols: &[(&str, &str)]) -> Vec<ChannelFacts> {
         cols.iter()

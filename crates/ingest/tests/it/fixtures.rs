@@ -588,3 +588,72 @@ fn catman_hot_tensile_maytec_is_the_control() {
         .unwrap();
     assert_eq!(r.mount(k), cablab_ingest::Mount::Machine);
 }
+
+/// Bluehill flexure export written for cablab in the layout of the real one seen (results and
+/// specimen properties as `Group : Name,"value",unit` lines, CRLF, quoted values): the support
+/// span, the flat section and the label come from the `Specimen properties : …` lines, the kind
+/// from the method's word "flexure". Before, the span's line was taken as the label ("specimen
+/// …"), and span, thickness and width were missed.
+#[test]
+fn bluehill_flexure_group_keys_give_span_section_label_and_kind() {
+    let r = read_path(
+        &data("cablab__bluehill_flexure_three_point.csv"),
+        &ReadOptions::default(),
+    )
+    .unwrap();
+    assert_eq!(r.provenance.format, Format::BluehillCsv);
+    assert_eq!(r.kind, TestKind::ThreePoint, "{}", r.kind_reason);
+    assert_eq!(r.specimen.label.as_deref(), Some("F-07"));
+    assert!(rel(r.specimen.free_length_m.unwrap(), 0.1));
+    let (f, _) = r.flat_section.as_ref().unwrap();
+    assert!(rel(f.width_m, 12e-3) && rel(f.thickness_m, 4e-3), "{f:?}");
+    assert_eq!(r.data.height(), 401);
+    assert_eq!(role_name(&r, Role::Control), Some("Extension"));
+    assert_eq!(role_name(&r, Role::Response), Some("Load"));
+    assert!(rel(val(&r, "Extension", 401), 1.4e-3));
+    assert!(rel(val(&r, "Load", 1), 10.0));
+    // The span is provenance: a note, not a warning.
+    assert!(r.warnings.is_empty(), "{:?}", r.warnings);
+}
+
+/// Bluehill export with Chinese names in GBK (the layout of a real cyclic-compression export
+/// seen: `时间,位移,载荷,压缩应变 (位移),压缩应力,循环计数` over `(s),(mm),(N),(%),(MPa),`, CRLF,
+/// a trailing empty unit cell), written for cablab: 3 cycles 0 → 1 mm → 0 at 20 N/mm. The names
+/// decode exactly; "(位移)" ("(displacement)") inside a name is no unit: the units row says %.
+#[test]
+fn bluehill_chinese_names_in_gbk() {
+    let r = read_path(
+        &data("cablab__bluehill_gbk_cyclic_compression.csv"),
+        &ReadOptions::default(),
+    )
+    .unwrap();
+    assert_eq!(r.provenance.encoding, "gbk");
+    assert_eq!(r.provenance.format, Format::BluehillCsv);
+    let names: Vec<(&str, &str)> = r
+        .channels
+        .iter()
+        .map(|c| (c.name.as_str(), c.unit.as_str()))
+        .collect();
+    assert_eq!(
+        names,
+        [
+            ("时间", "s"),
+            ("位移", "mm"),
+            ("载荷", "N"),
+            ("压缩应变 (位移)", "%"),
+            ("压缩应力", "MPa"),
+            ("循环计数", "")
+        ]
+    );
+    assert_eq!(role_name(&r, Role::Time), Some("时间"));
+    assert_eq!(role_name(&r, Role::Control), Some("位移"));
+    assert_eq!(role_name(&r, Role::Response), Some("载荷"));
+    // Compression is no cablab kind: unknown, not guessed.
+    assert_eq!(r.kind, TestKind::Unknown);
+    assert_eq!(r.data.height(), 601);
+    assert!(rel(val(&r, "位移", 101), 1e-3));
+    assert!(rel(val(&r, "压缩应变 (位移)", 101), 0.1));
+    // Stress = load / 100 mm², written to 5 decimals of MPa.
+    let (sigma, f) = (val(&r, "压缩应力", 101), val(&r, "载荷", 101));
+    assert!((sigma - 1e4 * f).abs() <= 10.0, "{sigma} Pa against {f} N");
+}
