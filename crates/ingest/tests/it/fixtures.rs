@@ -25,6 +25,19 @@ fn val(r: &TestRecord, col: &str, row: usize) -> f64 {
         .unwrap_or_else(|| panic!("no column {col}"))[row - 1]
 }
 
+/// A fixture of `tests/data/` read with the default options.
+fn fixture(name: &str) -> TestRecord {
+    read_path(&data(name), &ReadOptions::default()).unwrap()
+}
+
+/// (name, unit as written) of every channel.
+fn names_units(r: &TestRecord) -> Vec<(&str, &str)> {
+    r.channels
+        .iter()
+        .map(|c| (c.name.as_str(), c.unit.as_str()))
+        .collect()
+}
+
 fn role_name(r: &TestRecord, role: Role) -> Option<&str> {
     r.channels
         .iter()
@@ -249,19 +262,10 @@ fn catman_ascii_sample() {
 /// compression negative. Three channels with their units, not seven words.
 #[test]
 fn mts793_btw_names_with_single_spaces() {
-    let r = read_path(
-        &data("cablab__mts793_btw_three_point.dat"),
-        &ReadOptions::default(),
-    )
-    .unwrap();
+    let r = fixture("cablab__mts793_btw_three_point.dat");
     assert_eq!(r.provenance.format, Format::Mts793Dat);
-    let names: Vec<(&str, &str)> = r
-        .channels
-        .iter()
-        .map(|c| (c.name.as_str(), c.unit.as_str()))
-        .collect();
     assert_eq!(
-        names,
+        names_units(&r),
         [
             ("Ch 1 Displacement", "mm"),
             ("Ch 1 Force", "kN"),
@@ -596,11 +600,7 @@ fn catman_hot_tensile_maytec_is_the_control() {
 /// …"), and span, thickness and width were missed.
 #[test]
 fn bluehill_flexure_group_keys_give_span_section_label_and_kind() {
-    let r = read_path(
-        &data("cablab__bluehill_flexure_three_point.csv"),
-        &ReadOptions::default(),
-    )
-    .unwrap();
+    let r = fixture("cablab__bluehill_flexure_three_point.csv");
     assert_eq!(r.provenance.format, Format::BluehillCsv);
     assert_eq!(r.kind, TestKind::ThreePoint, "{}", r.kind_reason);
     assert_eq!(r.specimen.label.as_deref(), Some("F-07"));
@@ -622,20 +622,11 @@ fn bluehill_flexure_group_keys_give_span_section_label_and_kind() {
 /// decode exactly; "(位移)" ("(displacement)") inside a name is no unit: the units row says %.
 #[test]
 fn bluehill_chinese_names_in_gbk() {
-    let r = read_path(
-        &data("cablab__bluehill_gbk_cyclic_compression.csv"),
-        &ReadOptions::default(),
-    )
-    .unwrap();
+    let r = fixture("cablab__bluehill_gbk_cyclic_compression.csv");
     assert_eq!(r.provenance.encoding, "gbk");
     assert_eq!(r.provenance.format, Format::BluehillCsv);
-    let names: Vec<(&str, &str)> = r
-        .channels
-        .iter()
-        .map(|c| (c.name.as_str(), c.unit.as_str()))
-        .collect();
     assert_eq!(
-        names,
+        names_units(&r),
         [
             ("时间", "s"),
             ("位移", "mm"),
