@@ -648,3 +648,63 @@ fn bluehill_chinese_names_in_gbk() {
     let (sigma, f) = (val(&r, "压缩应力", 101), val(&r, "载荷", 101));
     assert!((sigma - 1e4 * f).abs() <= 10.0, "{sigma} Pa against {f} N");
 }
+
+/// Mecmesin Emperor export (blokeley/forcelib, MIT): 10 samples side by side, 4 columns each
+/// (`Force,Distance,Time,Event` over `N,mm,min`), a `Sample 1,,,,Sample 2,…` title row and a blank
+/// line above the data; samples 9 and 10 end 40 rows early. Each sample is a block titled by its
+/// cell; the longest (the first of the ties) is read; time in minutes becomes seconds. Before,
+/// the file was refused ("numeric rows from line 5 on have no names row directly above them").
+#[test]
+fn mecmesin_emperor_samples_side_by_side_are_blocks() {
+    let r = fixture("forcelib__mecmesin_emperor_10_samples.csv");
+    assert_eq!(r.blocks.len(), 10);
+    let rows: Vec<usize> = r.blocks.iter().map(|b| b.rows).collect();
+    assert_eq!(
+        rows,
+        [4160, 4160, 4160, 4160, 4160, 4160, 4160, 4160, 4120, 4120]
+    );
+    assert_eq!(r.blocks[8].title.as_deref(), Some("Sample 9"));
+    assert_eq!(r.main_block, 1);
+    assert_eq!(
+        names_units(&r),
+        [
+            ("Force", "N"),
+            ("Distance", "mm"),
+            ("Time", "min"),
+            ("Event", "")
+        ]
+    );
+    assert_eq!(role_name(&r, Role::Time), Some("Time"));
+    assert_eq!(role_name(&r, Role::Control), Some("Distance"));
+    assert_eq!(role_name(&r, Role::Response), Some("Force"));
+    assert!(rel(val(&r, "Force", 1), 0.1202));
+    assert!(rel(val(&r, "Force", 4160), 0.03));
+    assert!(rel(val(&r, "Distance", 4160), 0.05));
+    // 0.06932 min = 4.1592 s.
+    assert!(rel(val(&r, "Time", 4160), 0.06932 * 60.0));
+    let max = r
+        .column_values("Force")
+        .unwrap()
+        .into_iter()
+        .fold(f64::MIN, f64::max);
+    assert!(rel(max, 7.1847));
+    // The choice is a note, not a warning; `--block 9` reads sample 9 to its own end.
+    assert!(r.warnings.is_empty(), "{:?}", r.warnings);
+    assert!(
+        r.notes.iter().any(|n| n.message.contains("10 data blocks")),
+        "{:?}",
+        r.notes
+    );
+    let nine = read_path(
+        &data("forcelib__mecmesin_emperor_10_samples.csv"),
+        &ReadOptions {
+            block: Some(9),
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    assert_eq!(nine.data.height(), 4120);
+    assert!(rel(val(&nine, "Force", 1), 0.3005));
+    assert!(rel(val(&nine, "Distance", 4120), 50.0025e-3));
+    assert!(rel(val(&nine, "Time", 4120), 0.06865 * 60.0));
+}
