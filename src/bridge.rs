@@ -399,6 +399,13 @@ pub fn check(
         .extend(rec.warnings.iter().map(|w| w.located()));
     said.notes.extend(rec.notes.iter().map(|w| w.located()));
     said.warnings.extend(check_kind(rec, kind, force_kind)?);
+    if kind == TestKind::Tension {
+        if let Some(e) = rec.compression_evidence() {
+            said.warnings.push(format!(
+                "{e} says compression: analysed as tension as declared, but a compression test's stiffness (seating, buckling, strand splay in a cable) is not the tension stiffness (EA)"
+            ));
+        }
+    }
     if let Some(r) = roles {
         let r = check_roles(rec, kind, r.control_given, r.compliance_given)?;
         said.append(r);

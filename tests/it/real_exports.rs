@@ -588,3 +588,28 @@ fn bluehill_flexure_span_and_section_from_group_keys() {
         "{w:?}"
     );
 }
+
+/// A file whose own names say compression (the GBK Bluehill fixture: `压缩应变 (位移)`,
+/// compressive strain) analysed as tension: the stiffness is the file's slope, 20 N/mm × 10 mm =
+/// 200 N, with a warning that it is not a tension stiffness; a tension export gets no such
+/// warning.
+#[test]
+fn a_compression_file_analysed_as_tension_is_warned() {
+    let a = analyze(
+        "cablab__bluehill_gbk_cyclic_compression.csv",
+        &["--length-mm", "10"],
+    );
+    assert!(within(stiffness(&a), 200.0, 0.01), "{:e}", stiffness(&a));
+    let w = warnings(&a);
+    assert!(
+        w.iter()
+            .any(|w| w.contains("the column '压缩应变 (位移)' says compression")),
+        "{w:?}"
+    );
+    let t = analyze("tensileanalyzer__uiuc_tension_steel1045_1.csv", &[]);
+    assert!(
+        !warnings(&t).iter().any(|w| w.contains("compression")),
+        "{:?}",
+        warnings(&t)
+    );
+}

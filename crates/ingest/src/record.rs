@@ -892,7 +892,40 @@ fn to_frame(
     })
 }
 
+/// Words that say a test loads its specimen in compression (a word of their own, or, for the
+/// Chinese 压缩, anywhere in a name).
+const COMPRESSION_WORDS: &[&str] = &[
+    "compression",
+    "compressive",
+    "druckversuch",
+    "stauchung",
+    "compresión",
+    "compressione",
+];
+
 impl TestRecord {
+    /// Where the file says its test is a compression test (a metadata key or value, a channel
+    /// name: `压缩应变 (位移)`, `Compressive stress`, `Druckversuch`), as one phrase, or None.
+    /// cablab has no compression kind: the caller warns when such a file is analysed as tension.
+    ///
+    /// Does not read signs: compression is negative in some exports and positive in others.
+    pub fn compression_evidence(&self) -> Option<String> {
+        let says = |t: &str| {
+            let l = t.to_lowercase();
+            l.contains("压缩")
+                || COMPRESSION_WORDS
+                    .iter()
+                    .any(|w| crate::roles::has_word(&l, w))
+        };
+        if let Some(c) = self.channels.iter().find(|c| says(&c.name)) {
+            return Some(format!("the column '{}'", c.name));
+        }
+        self.metadata
+            .iter()
+            .find(|(k, v)| says(k) || says(v))
+            .map(|(k, v)| format!("the metadata '{}: {}'", k.trim(), v.trim()))
+    }
+
     /// The evidence of this file that excludes `kind`, as one sentence, or None when nothing
     /// contradicts it. Kind words that contradict each other (an axial-torsional test's
     /// "tension" and "torsion") are not evidence and are left out; channel dimensions always

@@ -607,7 +607,7 @@ const KIND_WORDS: &[(&str, &[TestKind])] = &[
 /// up to four letters must also end there. So "tension_100N" and "Torsionsversuch" match
 /// "tension" and "torsion", "Dreipunktbiegeversuch" matches "dreipunkt", "Zug" matches "zug",
 /// but "Zugabe" does not match "zug" and "extension" does not match "tension".
-fn has_word(text: &str, w: &str) -> bool {
+pub(crate) fn has_word(text: &str, w: &str) -> bool {
     let mut start = 0;
     while let Some(p) = text[start..].find(w) {
         let a = start + p;
