@@ -613,3 +613,25 @@ fn a_compression_file_analysed_as_tension_is_warned() {
         warnings(&t)
     );
 }
+
+/// The Polish Bluehill layout (no-break-space thousands, decimal comma, Windows-1250): the
+/// stiffness over the whole 0..2500 N range is 5000 N/mm × 6 mm = 3.0·10⁴ N and E = EA / (π 4²/4
+/// mm²) = 2.387 GPa (the diameter from `Średnica`); the file says compression (`ściskające`).
+#[test]
+fn polish_bluehill_thousands_and_diameter() {
+    let a = analyze(
+        "cablab__bluehill_polish_cp1250_compression.csv",
+        &["--length-mm", "6"],
+    );
+    assert!(within(stiffness(&a), 3.0e4, 0.002), "{:e}", stiffness(&a));
+    let e = a["modulus_pa"].as_f64().unwrap();
+    assert!(
+        within(e, 3.0e4 / (std::f64::consts::PI * 4e-6), 0.002),
+        "{e:e}"
+    );
+    assert!(
+        warnings(&a).iter().any(|w| w.contains("says compression")),
+        "{:?}",
+        warnings(&a)
+    );
+}

@@ -901,6 +901,10 @@ const COMPRESSION_WORDS: &[&str] = &[
     "stauchung",
     "compresión",
     "compressione",
+    // Polish: ściskanie, przy ściskaniu, naprężenie ściskające (prefixes: a word of more than
+    // four letters matches at the start of a longer one).
+    "ściskani",
+    "ściskając",
 ];
 
 impl TestRecord {

@@ -886,6 +886,7 @@ fn stated_flat_section(
             "largeur éprouvette",
             "largeur",
             "ancho",
+            "anchura",
             "larghezza",
         ])?;
         Some((
@@ -908,6 +909,7 @@ fn stated_area(meta: &[(String, String)]) -> Option<f64> {
         "querschnitt",
         "anfangsquerschnitt",
         "area",
+        "área",
         "original area",
         "s0",
     ];
@@ -938,6 +940,7 @@ pub(crate) fn specimen_from_metadata(
         "probenkennung",
         "sample id",
         "sample",
+        "etykietka próbki",
         "probeta",
         "provino",
         "muestra",
@@ -951,6 +954,7 @@ pub(crate) fn specimen_from_metadata(
         "durchmesser",
         "diámetro",
         "diametro",
+        "średnica",
         "d0",
     ];
     let len_keys: [&[&str]; 3] = [
@@ -1107,6 +1111,15 @@ mod tests {
         ]));
         assert_eq!(sp.label.as_deref(), Some("1A"));
         assert_eq!(sp.free_length_m, Some(0.125));
+        // Spanish Bluehill: `Propiedades de la probeta : Anchura / Espesor / Área`.
+        let es = meta(&[
+            ("Propiedades de la probeta : Anchura", "10.00000 mm"),
+            ("Propiedades de la probeta : Espesor", "1.00000 mm"),
+            ("Propiedades de la probeta : Área", "10.00000 mm^2"),
+        ]);
+        let (f, _) = flat_section_from_metadata(&es).unwrap();
+        assert_eq!((f.width_m, f.thickness_m), (0.01, 0.001));
+        assert!((stated_area(&es).unwrap() - 1e-5).abs() < 1e-15);
     }
 
     fn facts(cols: &[(&str, &str)]) -> Vec<ChannelFacts> {

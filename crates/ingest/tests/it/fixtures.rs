@@ -708,3 +708,31 @@ fn mecmesin_emperor_samples_side_by_side_are_blocks() {
     assert!(rel(val(&nine, "Distance", 4120), 50.0025e-3));
     assert!(rel(val(&nine, "Time", 4120), 0.06865 * 60.0));
 }
+
+/// Bluehill in Polish (the layout of a real export seen: Windows-1250, `;`, decimal comma, every
+/// value quoted, **a no-break space grouping the thousands** `"1 000,34863"`), written for
+/// cablab: 600 rows, 2 s a row, load 5000 N/mm × 0..0.5 mm. Loads and times of 1000 and more
+/// are numbers (before, they were read as missing, with a warning: the largest load 999.7 N
+/// instead of 2240.7 N in the real file); the diameter and the label come from `Właściwości
+/// próbki : Średnica` / `Etykietka próbki`.
+#[test]
+fn bluehill_polish_no_break_space_thousands() {
+    let r = fixture("cablab__bluehill_polish_cp1250_compression.csv");
+    assert_eq!(r.provenance.encoding, "windows-1250");
+    assert_eq!(r.data.height(), 600);
+    assert!(
+        !r.warnings
+            .iter()
+            .any(|w| w.message.contains("text where a number")),
+        "{:?}",
+        r.warnings
+    );
+    assert!(rel(val(&r, "Godzina", 600), 1198.0));
+    let f = r.column_values("obciążenie").unwrap();
+    assert!(f.iter().all(|v| v.is_finite()));
+    assert!((f[599] - 2500.0).abs() < 0.25, "{}", f[599]);
+    assert!(rel(val(&r, "Przemieszczenie", 600), 0.5e-3));
+    assert_eq!(r.specimen.diameter_m, Some(4e-3));
+    assert_eq!(r.specimen.label.as_deref(), Some("PL-1"));
+    assert!(r.compression_evidence().is_some());
+}
