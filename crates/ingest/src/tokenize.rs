@@ -287,6 +287,11 @@ pub fn parse_cell(raw: &[u8], dec: u8) -> Cell {
 /// separator replaced by `thou`, so that [`parse_cell`] checks the groups of three like any
 /// thousands separator. `None` when no such separator stands between two digits.
 fn space_grouped(s: &[u8], thou: u8) -> Option<Vec<u8>> {
+    // Most cells that reach here are text: no allocation unless a space or a U+00A0/U+202F lead
+    // byte is there at all.
+    if !s.iter().any(|&b| b == b' ' || b == 0xC2 || b == 0xE2) {
+        return None;
+    }
     let digit_at = |i: usize| s.get(i).is_some_and(|b| b.is_ascii_digit());
     let mut out = Vec::with_capacity(s.len());
     let mut i = 0;
