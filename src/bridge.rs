@@ -310,20 +310,21 @@ fn mm(v: Option<f64>) -> Option<f64> {
 
 /// One test file named on the command line (`analyze`, `diagnose`), handed over to the physics:
 /// read with `t`'s reader flags, [`check`]ed, its geometry from `t`'s flags (mm → m here) or
-/// the file's metadata ([`geometry`]) and its complete rows ([`curve`]). Warnings are pushed to
-/// `warnings` as they arise, so those gathered before a failure can be shown with the error.
+/// the file's metadata ([`geometry`]) and its complete rows ([`curve`]). Warnings and notes are
+/// pushed to `said` as they arise, so those gathered before a failure can be shown with the
+/// error.
 ///
 /// Does not condition, segment or analyse the curve.
 pub fn read_test(
     path: &std::path::Path,
     t: &crate::cli::TestArgs,
     roles: Option<RoleCheck>,
-    warnings: &mut Vec<String>,
+    said: &mut Remarks,
 ) -> Result<ReadTest> {
     let kind = TestKind::from(t.kind);
     let opts = read_options(&t.reader, Some(kind))?;
     let mut rec = cablab_ingest::read_path(path, &opts)?;
-    check(&mut rec, kind, t.force_kind, roles, warnings)?;
+    check(&mut rec, kind, t.force_kind, roles, said)?;
     let (geom, flat, notes) = geometry_noted(
         &rec,
         kind,
@@ -331,9 +332,9 @@ pub fn read_test(
         mm(t.diameter_mm),
         flat_given(t.width_mm, t.thickness_mm),
     )?;
-    warnings.extend(notes);
+    said.notes.extend(notes);
     let mut curve = curve(&rec)?;
-    warnings.extend(sectional_control(
+    said.notes.extend(sectional_control(
         &rec,
         kind,
         &geom,
@@ -385,22 +386,53 @@ pub struct RoleCheck {
 /// are taken over, the declared kind is checked against the file's own evidence
 /// ([`check_kind`]) and, with `roles`, the channel roles are checked and a tension control
 /// possibly moved to the extensometer ([`check_roles`]). Every command that reads a test of a
-/// declared kind (`analyze`, `diagnose`, `run`) goes through here. Warnings are pushed to
-/// `warnings` as they arise.
+/// declared kind (`analyze`, `diagnose`, `run`) goes through here. Warnings and notes (the
+/// reader's notes included) are pushed to `said` as they arise.
 pub fn check(
     rec: &mut TestRecord,
     kind: TestKind,
     force_kind: bool,
     roles: Option<RoleCheck>,
-    warnings: &mut Vec<String>,
+    said: &mut Remarks,
 ) -> Result<()> {
-    warnings.extend(rec.warnings.iter().map(|w| w.located()));
-    warnings.extend(check_kind(rec, kind, force_kind)?);
+    said.warnings
+        .extend(rec.warnings.iter().map(|w| w.located()));
+    said.notes.extend(rec.notes.iter().map(|w| w.located()));
+    said.warnings.extend(check_kind(rec, kind, force_kind)?);
+    if kind == TestKind::Tension {
+        if let Some(e) = rec.compression_evidence() {
+            said.warnings.push(format!(
+                "{e} says compression: analysed as tension as declared, but a compression test's stiffness (seating, buckling, strand splay in a cable) is not the tension stiffness (EA)"
+            ));
+        }
+    }
     if let Some(r) = roles {
-        let notes = check_roles(rec, kind, r.control_given, r.compliance_given)?;
-        warnings.extend(notes);
+        let r = check_roles(rec, kind, r.control_given, r.compliance_given)?;
+        said.append(r);
     }
     Ok(())
+}
+
+/// What the steps before the physics say next to the results, in two lists: `warnings`, the
+/// statements that a number may be wrong (a unit assumed, a machine travel as the control, a
+/// kind forced against the file), and `notes`, provenance that casts no doubt on a number (the
+/// length from the metadata, the section used, the specimen-mounted control, the block read).
+///
+/// Does not decide what the analysis says: `cablab_measure::Analysis` keeps its own two lists.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Remarks {
+    /// Statements that a number may be wrong.
+    pub warnings: Vec<String>,
+    /// Where a number came from; no doubt on it.
+    pub notes: Vec<String>,
+}
+
+impl Remarks {
+    /// Appends `other`'s warnings and notes after this one's.
+    pub fn append(&mut self, mut other: Remarks) {
+        self.warnings.append(&mut other.warnings);
+        self.notes.append(&mut other.notes);
+    }
 }
 
 /// Reader options from the command line's reader flags.
@@ -544,7 +576,8 @@ pub fn control_mount(rec: &TestRecord, i: usize) -> (cablab_ingest::Mount, Optio
 /// as such; a machine travel (by its name, or by the file name, or because the file has a
 /// specimen-mounted channel beside it) is flagged unless a machine compliance is removed.
 /// `control_given` (the control was chosen with `--control`) is said in the flag.
-/// Returns the notes to print next to the results.
+/// Returns what to print next to the results: the specimen-mounted control as a note, the
+/// machine travel as a warning ((EA) is then a lower bound).
 ///
 /// Does not choose the control: the reader does (`cablab_ingest`), for `inspect` and `analyze`
 /// alike.
@@ -553,10 +586,10 @@ pub fn check_roles(
     kind: TestKind,
     control_given: bool,
     compliance_given: bool,
-) -> Result<Vec<String>> {
+) -> Result<Remarks> {
     use cablab_ingest::units::Dimension as D;
     let file = rec.provenance.path.clone();
-    let mut notes = Vec::new();
+    let mut said = Remarks::default();
     let ci = rec.channel_index(Role::Control);
     let ri = rec.channel_index(Role::Response);
     if let Some(i) = ci {
@@ -625,7 +658,7 @@ pub fn check_roles(
                 .map(|k| show(&rec.channels[k]))
                 .collect();
             match mount {
-                Mount::Specimen => notes.push(format!(
+                Mount::Specimen => said.notes.push(format!(
                     "the stiffness comes from the specimen-mounted {} (ISO 6892-1 / ISO 527){}",
                     show(&rec.channels[i]),
                     if machine.is_empty() {
@@ -637,7 +670,7 @@ pub fn check_roles(
                         )
                     }
                 )),
-                Mount::Machine if !compliance_given => notes.push(format!(
+                Mount::Machine if !compliance_given => said.warnings.push(format!(
                     "the stiffness comes from the machine travel {}{}: it includes the compliance of the load train (grips, frame), so (EA) is a lower bound; {}",
                     show(&rec.channels[i]),
                     match (evidence, control_given) {
@@ -662,7 +695,7 @@ pub fn check_roles(
             }
         }
     }
-    Ok(notes)
+    Ok(said)
 }
 
 #[cfg(test)]
@@ -686,9 +719,10 @@ mod tests {
             b"Time (s),Crosshead (mm),Force (N)\n0,0,0\n0.1,0.01,2\n0.1,0.02,4\n0.3,0.03,6\n";
         let rec = read(bytes, "t.csv", TestKind::Tension);
         let run = |roles: Option<RoleCheck>| {
-            let mut w = Vec::new();
-            check(&mut rec.clone(), TestKind::Tension, false, roles, &mut w).unwrap();
-            w
+            let mut said = Remarks::default();
+            check(&mut rec.clone(), TestKind::Tension, false, roles, &mut said).unwrap();
+            assert!(said.notes.is_empty(), "{said:?}");
+            said.warnings
         };
         let reader_only = run(None);
         assert_eq!(reader_only.len(), 1, "{reader_only:?}");
@@ -713,12 +747,51 @@ mod tests {
     fn a_contradicted_kind_is_refused_unless_forced() {
         let bytes = b"Time (s),Angle (deg),Torque (N m)\n0,0,0\n1,1,0.1\n2,2,0.2\n3,3,0.3\n";
         let mut rec = read(bytes, "t.csv", TestKind::Tension);
-        let mut w = Vec::new();
-        let e = check(&mut rec, TestKind::Tension, false, None, &mut w).unwrap_err();
+        let mut said = Remarks::default();
+        let e = check(&mut rec, TestKind::Tension, false, None, &mut said).unwrap_err();
         assert!(e.to_string().contains("contradicts the file"), "{e}");
-        assert!(w.is_empty(), "{w:?}");
-        check(&mut rec, TestKind::Tension, true, None, &mut w).unwrap();
+        assert!(said.warnings.is_empty(), "{said:?}");
+        check(&mut rec, TestKind::Tension, true, None, &mut said).unwrap();
+        let w = &said.warnings;
         assert_eq!(w.len(), 1, "{w:?}");
         assert!(w[0].contains("forced"), "{w:?}");
+    }
+
+    /// A tension log with an extensometer beside the crosshead: the specimen-mounted control is
+    /// a note (provenance), not a warning; the same file on the crosshead (named with
+    /// `--control`) is a warning; the reader's note on the first-row specimen column goes to
+    /// the notes too.
+    #[test]
+    fn provenance_is_a_note_and_a_machine_travel_a_warning() {
+        let bytes = b"Time (s),Crosshead (mm),Extensometer (mm),Force (N),Gauge length (mm)\n0,0,0,0,50\n1,0.01,0.001,2,\n2,0.02,0.002,4,\n3,0.03,0.003,6,\n";
+        let rec = read(bytes, "t.csv", TestKind::Tension);
+        let mut said = Remarks::default();
+        let roles = Some(RoleCheck {
+            control_given: false,
+            compliance_given: false,
+        });
+        check(&mut rec.clone(), TestKind::Tension, false, roles, &mut said).unwrap();
+        assert!(said.warnings.is_empty(), "{said:?}");
+        assert_eq!(said.notes.len(), 2, "{said:?}");
+        assert!(said.notes[0].contains("first data row only"), "{said:?}");
+        assert!(
+            said.notes[1].contains("specimen-mounted 'Extensometer' (mm)"),
+            "{said:?}"
+        );
+        let opts = ReadOptions {
+            kind: Some(TestKind::Tension),
+            control: Some("Crosshead".into()),
+            ..Default::default()
+        };
+        let mut rec = cablab_ingest::read_bytes(bytes, "t.csv", &opts).unwrap();
+        let mut said = Remarks::default();
+        let roles = Some(RoleCheck {
+            control_given: true,
+            compliance_given: false,
+        });
+        check(&mut rec, TestKind::Tension, false, roles, &mut said).unwrap();
+        assert_eq!(said.warnings.len(), 1, "{said:?}");
+        assert!(said.warnings[0].contains("lower bound"), "{said:?}");
+        assert_eq!(said.notes.len(), 1, "{said:?}");
     }
 }

@@ -73,9 +73,15 @@ pub fn analysis_text(file: &str, an: &Analysis) -> String {
     }
     for c in &an.cycles {
         let f = |v: Option<f64>| v.map_or("-".to_string(), |x| format!("{x:.4e}"));
+        // A negative loop area is never a dissipated energy: said next to the number.
+        let sign_note = match (c.loop_area, c.loop_area_resolved) {
+            (Some(a), Some(false)) if a < 0.0 => " (negative, within resolution: 0)",
+            (Some(a), _) if a < 0.0 => " (negative: not a dissipated energy, see warning)",
+            _ => "",
+        };
         let _ = writeln!(
             s,
-            "  cycle {:>2}    loop area {} J, residual {}, unloading stiffness {}",
+            "  cycle {:>2}    loop area {} J{sign_note}, residual {}, unloading stiffness {}",
             c.index,
             f(c.loop_area),
             f(c.residual),
@@ -84,6 +90,9 @@ pub fn analysis_text(file: &str, an: &Analysis) -> String {
     }
     for w in &an.warnings {
         let _ = writeln!(s, "  warning: {w}");
+    }
+    for n in &an.notes {
+        let _ = writeln!(s, "  note: {n}");
     }
     s
 }

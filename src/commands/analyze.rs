@@ -3,19 +3,22 @@
 //!
 //! Every warning raised on the way (the reader's, the kind and channel-role checks', the
 //! analysis') is printed and, with `--json`, in `warnings` — whether the command succeeds or
-//! fails: on failure `--json` prints `{file, error, warnings}` and the command exits 2.
+//! fails: on failure `--json` prints `{file, error, warnings, notes}` and the command exits 2.
+//! Notes (provenance: the block read, where the length came from, the section used, which
+//! channel is the control) are kept apart, in `notes` and on lines that say `note:`, so that
+//! `warnings` holds only statements that a number may be wrong.
 
 use super::{print_json, CliError, CmdResult};
 use crate::cli::AnalyzeArgs;
 use cablab_core::TestKind;
 use std::process::ExitCode;
 
-/// Read, check, bridge and analyse one file. The warnings gathered before a failure are pushed
-/// to `warnings` so the caller can show them with the error; on success they are also at the
-/// head of the analysis' own `warnings`.
+/// Read, check, bridge and analyse one file. The warnings and notes gathered before a failure
+/// are pushed to `said` so the caller can show them with the error; on success they are also at
+/// the head of the analysis' own `warnings` and `notes`.
 pub fn analyze_file(
     a: &AnalyzeArgs,
-    warnings: &mut Vec<String>,
+    said: &mut crate::bridge::Remarks,
 ) -> Result<(cablab_ingest::TestRecord, cablab_measure::Analysis), CliError> {
     let roles = crate::bridge::RoleCheck {
         control_given: a.test.reader.control.is_some(),
@@ -26,8 +29,7 @@ pub fn analyze_file(
         geom,
         flat,
         curve,
-    } = crate::bridge::read_test(&a.file, &a.test, Some(roles), warnings)
-        .map_err(CliError::input)?;
+    } = crate::bridge::read_test(&a.file, &a.test, Some(roles), said).map_err(CliError::input)?;
     let kind = TestKind::from(a.test.kind);
     let yield_method: cablab_measure::YieldMethod = a
         .yield_method
@@ -55,16 +57,19 @@ pub fn analyze_file(
         &ao,
     )
     .map_err(|e| CliError::input(anyhow::anyhow!("{}: {e}", a.file.display())))?;
-    let mut all = warnings.clone();
+    let mut all = said.warnings.clone();
     all.append(&mut an.warnings);
     an.warnings = all;
+    let mut all = said.notes.clone();
+    all.append(&mut an.notes);
+    an.notes = all;
     Ok((rec, an))
 }
 
 /// Run `cablab analyze`.
 pub fn run(a: AnalyzeArgs) -> CmdResult {
-    let mut warnings = Vec::new();
-    let (rec, an) = match analyze_file(&a, &mut warnings) {
+    let mut said = crate::bridge::Remarks::default();
+    let (rec, an) = match analyze_file(&a, &mut said) {
         Ok(v) => v,
         Err(e) => {
             if a.json {
@@ -73,15 +78,20 @@ pub fn run(a: AnalyzeArgs) -> CmdResult {
                     file: String,
                     error: String,
                     warnings: &'a [String],
+                    notes: &'a [String],
                 }
                 print_json(&Failed {
                     file: a.file.display().to_string(),
                     error: format!("{e:#}"),
-                    warnings: &warnings,
+                    warnings: &said.warnings,
+                    notes: &said.notes,
                 })?;
             } else {
-                for w in &warnings {
+                for w in &said.warnings {
                     eprintln!("cablab: warning: {w}");
+                }
+                for n in &said.notes {
+                    eprintln!("cablab: note: {n}");
                 }
             }
             return Err(e);
@@ -119,7 +129,7 @@ pub fn run(a: AnalyzeArgs) -> CmdResult {
         })
         .map(|_| ExitCode::SUCCESS);
     }
-    // The warnings are in the text, next to the numbers.
+    // The warnings and notes are in the text, next to the numbers.
     print!("{}", crate::text::analysis_text(&rec.provenance.path, &an));
     Ok(ExitCode::SUCCESS)
 }

@@ -25,6 +25,9 @@ pub fn run(a: ConvertArgs) -> CmdResult {
     for w in &rec.warnings {
         eprintln!("cablab: warning: {}", w.located());
     }
+    for n in &rec.notes {
+        eprintln!("cablab: note: {}", n.located());
+    }
     if ext == "parquet" {
         rec.write_parquet(&a.output).map_err(CliError::failed)?;
     } else {

@@ -10,11 +10,14 @@ use std::process::ExitCode;
 
 /// Read one file into a diagnosis test (segments from the characterisation's segmenter).
 pub fn diag_test(path: &std::path::Path, a: &DiagnoseArgs) -> Result<DiagTest, CliError> {
-    let mut warnings = Vec::new();
-    let read = crate::bridge::read_test(path, &a.test, None, &mut warnings);
-    // The reader's and the kind check's warnings, also when the file is refused.
-    for w in &warnings {
+    let mut said = crate::bridge::Remarks::default();
+    let read = crate::bridge::read_test(path, &a.test, None, &mut said);
+    // The reader's and the kind check's warnings and notes, also when the file is refused.
+    for w in &said.warnings {
         eprintln!("cablab: warning: {w}");
+    }
+    for n in &said.notes {
+        eprintln!("cablab: note: {n}");
     }
     // The diagnosis compares curves in sectional variables and reports no modulus: a flat
     // section (`flat`) changes nothing here.

@@ -14,6 +14,9 @@ pub fn run(a: InspectArgs) -> CmdResult {
     for w in &rec.warnings {
         eprintln!("cablab: warning: {}", w.located());
     }
+    for n in &rec.notes {
+        eprintln!("cablab: note: {}", n.located());
+    }
     let report = rec.inspect();
     if a.json {
         return print_json(&report).map(|_| ExitCode::SUCCESS);

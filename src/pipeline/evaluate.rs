@@ -75,8 +75,13 @@ pub struct TestOutcome {
     pub diagnosis_words: Option<String>,
     /// Why a stage was skipped (`diagnose: disabled for this kind`).
     pub why: Vec<String>,
-    /// Warnings from the reader and the characterisation.
+    /// Warnings from the reader and the characterisation: statements that a number may be
+    /// wrong.
     pub warnings: Vec<String>,
+    /// Notes from the reader and the characterisation: provenance (the block read, the length
+    /// and section used, the specimen-mounted control, the part analysed), no doubt on a number.
+    #[serde(default)]
+    pub notes: Vec<String>,
     /// Files of this test (relative to the test's folder) with their SHA-256.
     pub files: Vec<(String, String)>,
     /// `null` when calibration, simulation and diagnosis ran (or were not asked for); else why
@@ -102,6 +107,10 @@ pub struct TestOutcome {
     /// Loop area ∮ response d(control) of the last cycle that has one, J.
     #[serde(default)]
     pub last_loop_area_j: Option<f64>,
+    /// Whether that loop is resolved (its branches do not coincide within the noise): a loop
+    /// area that is not is zero within resolution, whatever its sign.
+    #[serde(default)]
+    pub last_loop_area_resolved: Option<bool>,
     /// The curve as the test's plot shows it (x, response), SI, at most
     /// `views::OVERLAY_POINTS` samples: the series overlay draws it.
     #[serde(default)]
@@ -261,6 +270,7 @@ impl TestOutcome {
             diagnosis_words: None,
             why: vec![],
             warnings: vec![],
+            notes: vec![],
             files: vec![],
             model_error: None,
             header: TestHeader::default(),
@@ -269,6 +279,7 @@ impl TestOutcome {
             max_response: None,
             break_at: None,
             last_loop_area_j: None,
+            last_loop_area_resolved: None,
             overlay: vec![],
             needs: vec![],
             machine_stiffness: None,
@@ -376,13 +387,17 @@ fn stages(
         control_given: t.control.is_some(),
         compliance_given: t.settings.compliance.is_some(),
     };
-    crate::bridge::check(
+    let mut said = crate::bridge::Remarks::default();
+    let checked = crate::bridge::check(
         &mut rec,
         t.kind,
         t.settings.force_kind.unwrap_or(false),
         Some(roles),
-        &mut out.warnings,
-    )?;
+        &mut said,
+    );
+    out.warnings.append(&mut said.warnings);
+    out.notes.append(&mut said.notes);
+    checked?;
     // Without a length (pipeline or file) the test is still characterised, at the machine level:
     // with l₀ = 1 m the sectional control is numerically the machine control (eqs. (1), (2),
     // (5)), so the fitted slope is the machine stiffness once the three-point factor l₀³/48 is
@@ -405,12 +420,7 @@ fn stages(
             t.diameter_m,
             t.flat_section,
         )?;
-        // Only the section's notes: the length's are the reader's business here.
-        out.warnings.extend(
-            notes
-                .into_iter()
-                .filter(|n| n.starts_with("the moduli use the flat")),
-        );
+        out.notes.extend(notes);
         (g, f)
     } else {
         let g = cablab_measure::Geometry {
@@ -448,7 +458,7 @@ fn stages(
     }
     let mut curve = crate::bridge::curve(&rec)?;
     // A strain control (extensometer strain, torsional shear strain) in the kind's variable.
-    out.warnings.extend(crate::bridge::sectional_control(
+    out.notes.extend(crate::bridge::sectional_control(
         &rec,
         t.kind,
         &geom,
@@ -552,6 +562,8 @@ fn stages(
         "baseline_gap_rel": out.baseline_gap_rel,
         "diagnosis": diagnosis,
         "model_error": out.model_error,
+        "warnings": out.warnings,
+        "notes": out.notes,
     });
     if let Some(f) = &out.flat_section {
         result["geometry"]["flat_section"] = serde_json::json!(f);
@@ -725,13 +737,16 @@ fn fill_analysis(out: &mut TestOutcome, an: &Analysis) {
         .yield_point
         .as_ref()
         .map(|_| "bend of the first loading (two-slope hinge fit)".to_string());
-    out.last_loop_area_j = an.cycles.iter().rev().find_map(|c| c.loop_area);
+    let last_loop = an.cycles.iter().rev().find(|c| c.loop_area.is_some());
+    out.last_loop_area_j = last_loop.and_then(|c| c.loop_area);
+    out.last_loop_area_resolved = last_loop.and_then(|c| c.loop_area_resolved);
     out.piecewise = an
         .piecewise
         .as_ref()
         .and_then(|p| serde_json::to_value(p).ok());
     out.cycles = an.cycles.len();
     out.warnings.extend(an.warnings.iter().cloned());
+    out.notes.extend(an.notes.iter().cloned());
     for (k, v) in &an.why_by_key {
         out.why.push(format!("{k}: {v}"));
     }

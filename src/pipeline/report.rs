@@ -629,9 +629,15 @@ fn section(out_dir: &Path, o: &TestOutcome) -> TestSection {
         ));
         facts.push(("cycles".into(), o.cycles.to_string()));
         if let Some(a) = o.last_loop_area_j {
+            // A negative loop area is never a dissipated energy: said next to the number.
+            let sign_note = match o.last_loop_area_resolved {
+                Some(false) if a < 0.0 => " (negative, within resolution: 0)",
+                _ if a < 0.0 => " (negative: not a dissipated energy, see warning)",
+                _ => "",
+            };
             facts.push((
                 "loop area of last cycle".into(),
-                format!("{} mJ", fmt_num(a * 1e3, 3)),
+                format!("{} mJ{sign_note}", fmt_num(a * 1e3, 3)),
             ));
         }
         if let Some(g) = o.baseline_gap_rel {
@@ -652,6 +658,9 @@ fn section(out_dir: &Path, o: &TestOutcome) -> TestSection {
     }
     for w in &o.warnings {
         facts.push(("warning".into(), w.clone()));
+    }
+    for n in &o.notes {
+        facts.push(("note".into(), n.clone()));
     }
     let dir = out_dir.join("tests").join(&o.slug);
     let caption = |n: &str| {

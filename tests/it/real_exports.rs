@@ -61,8 +61,16 @@ pub(crate) fn stiffness(v: &Value) -> f64 {
 }
 
 pub(crate) fn warnings(v: &Value) -> Vec<String> {
-    v["warnings"]
-        .as_array()
+    strings(&v["warnings"])
+}
+
+/// The `notes` of an `analyze --json` (provenance, apart from the warnings).
+pub(crate) fn notes(v: &Value) -> Vec<String> {
+    strings(&v["notes"])
+}
+
+fn strings(v: &Value) -> Vec<String> {
+    v.as_array()
         .unwrap()
         .iter()
         .map(|w| w.as_str().unwrap().to_string())
@@ -111,11 +119,13 @@ fn uiuc_steel1045_extensometer_strain_beside_the_crosshead() {
     assert_eq!(a["control_channel"]["name"], "Strain");
     assert_eq!(a["control_channel"]["mount"], "specimen");
     let w = warnings(&a);
+    let n = notes(&a);
     assert!(
-        w.iter().any(|w| w.contains("specimen-mounted 'Strain'")),
-        "{w:?}"
+        n.iter().any(|w| w.contains("specimen-mounted 'Strain'")),
+        "{n:?}"
     );
-    assert!(w.iter().any(|w| w.contains("dF/dε")), "{w:?}");
+    assert!(n.iter().any(|w| w.contains("dF/dε")), "{n:?}");
+    assert!(!w.iter().any(|w| w.contains("specimen-mounted")), "{w:?}");
     assert!(!machine_flag(&w), "{w:?}");
     let fy = a["yield"]["response"].as_f64().unwrap();
     let ey = a["yield"]["control"].as_f64().unwrap();
@@ -193,7 +203,7 @@ fn sdata_numisheet_units_from_metadata_and_dic_strain() {
     let e = a["modulus_pa"].as_f64().unwrap();
     assert!((186e9..=206e9).contains(&e), "E {e:e}");
     assert!(within(stiffness(&a) / e, 1.409e-3 * 17.91e-3, 1e-9));
-    let w = warnings(&a);
+    let w = notes(&a);
     assert!(
         w.iter().any(|w| w.contains(
             "36 mm: the reduced parallel length A of the geometry code 'Geometry: A36R19W18'"
@@ -280,7 +290,7 @@ fn testxpert_english_standard_travel_gauge_length_and_cross_section() {
     let e = a["modulus_pa"].as_f64().unwrap();
     assert!(within(e, ea / 6.3812e-6, 1e-9), "E {e:e} = EA / 6.3812 mm²");
     assert_eq!(a["control_channel"]["mount"], "specimen");
-    let w = warnings(&a);
+    let w = notes(&a);
     assert!(
         w.iter()
             .any(|w| w.contains("'Standard travel'") && w.contains("'Crosshead absolute'")),
@@ -288,7 +298,15 @@ fn testxpert_english_standard_travel_gauge_length_and_cross_section() {
     );
     assert!(w.iter().any(|w| w.contains("6.3812 mm²")), "{w:?}");
     assert!(w.iter().any(|w| w.contains("20.0000 mm")), "{w:?}");
-    assert!(!machine_flag(&w), "{w:?}");
+    // Provenance only: none of it in the warnings.
+    assert!(
+        !warnings(&a)
+            .iter()
+            .any(|w| w.contains("6.3812 mm²") || w.contains("specimen-mounted")),
+        "{:?}",
+        warnings(&a)
+    );
+    assert!(!machine_flag(&warnings(&a)), "{:?}", warnings(&a));
     let fy = a["yield"]["response"].as_f64().unwrap();
     assert!((3300.0..=3480.0).contains(&fy), "yield {fy}");
 
@@ -367,7 +385,7 @@ fn a_strain_in_percent_is_the_sectional_strain() {
         );
         assert_eq!(a["control_channel"]["name"], "Strain 1");
         assert_eq!(a["control_channel"]["mount"], "specimen");
-        let w = warnings(&a);
+        let w = notes(&a);
         assert!(
             w.iter()
                 .any(|w| w.contains("not from the machine travel 'Crosshead'")),
@@ -409,11 +427,9 @@ fn a_torsional_shear_strain_becomes_the_twist() {
     let a = json(&args);
     assert!(within(stiffness(&a), gj, 0.005), "{:e}", stiffness(&a));
     assert!(
-        warnings(&a)
-            .iter()
-            .any(|w| w.contains("surface shear strain")),
+        notes(&a).iter().any(|w| w.contains("surface shear strain")),
         "{:?}",
-        warnings(&a)
+        notes(&a)
     );
     let out = cablab()
         .args(base)
@@ -538,4 +554,84 @@ fn a_machine_travel_flag_names_the_files_extensometer() {
         "Strain1",
     ]);
     assert!(within(stiffness(&b), ea, 0.005), "{:e}", stiffness(&b));
+}
+
+/// The Bluehill flexure layout (fixture written for cablab from E = 30 GPa, b × h = 12 × 4 mm,
+/// span 100 mm: (EI) = E b h³/12 = 1.92 N m², k = 48 (EI)/l³ = 92.16 N/mm, 10 N preload, ±0.04 N
+/// ripple): with only the kind given, span, section and label come from the `Specimen properties
+/// : …` lines, and they are notes, not warnings.
+#[test]
+fn bluehill_flexure_span_and_section_from_group_keys() {
+    let f = data("cablab__bluehill_flexure_three_point.csv");
+    let i = json(&["inspect", f.as_str()]);
+    assert_eq!(i["kind"], "three_point");
+    let a = json(&["analyze", f.as_str(), "--kind", "three-point"]);
+    let ei = stiffness(&a);
+    assert!(within(ei, 1.92, 0.01), "EI {ei:e}");
+    let e = a["modulus_pa"].as_f64().unwrap();
+    assert!(within(e, 30e9, 0.01), "E {e:e}");
+    assert!((e - ei / (12e-3 * 4e-3f64.powi(3) / 12.0)).abs() <= 1e-9 * e);
+    let n = notes(&a);
+    assert!(
+        n.iter().any(|n| n.contains("support span 100.0000 mm")),
+        "{n:?}"
+    );
+    assert!(
+        n.iter()
+            .any(|n| n.contains("flat section 12.0000 × 4.0000 mm")),
+        "{n:?}"
+    );
+    let w = warnings(&a);
+    assert!(
+        !w.iter()
+            .any(|w| w.contains("span") || w.contains("flat section")),
+        "{w:?}"
+    );
+}
+
+/// A file whose own names say compression (the GBK Bluehill fixture: `压缩应变 (位移)`,
+/// compressive strain) analysed as tension: the stiffness is the file's slope, 20 N/mm × 10 mm =
+/// 200 N, with a warning that it is not a tension stiffness; a tension export gets no such
+/// warning.
+#[test]
+fn a_compression_file_analysed_as_tension_is_warned() {
+    let a = analyze(
+        "cablab__bluehill_gbk_cyclic_compression.csv",
+        &["--length-mm", "10"],
+    );
+    assert!(within(stiffness(&a), 200.0, 0.01), "{:e}", stiffness(&a));
+    let w = warnings(&a);
+    assert!(
+        w.iter()
+            .any(|w| w.contains("the column '压缩应变 (位移)' says compression")),
+        "{w:?}"
+    );
+    let t = analyze("tensileanalyzer__uiuc_tension_steel1045_1.csv", &[]);
+    assert!(
+        !warnings(&t).iter().any(|w| w.contains("compression")),
+        "{:?}",
+        warnings(&t)
+    );
+}
+
+/// The Polish Bluehill layout (no-break-space thousands, decimal comma, Windows-1250): the
+/// stiffness over the whole 0..2500 N range is 5000 N/mm × 6 mm = 3.0·10⁴ N and E = EA / (π 4²/4
+/// mm²) = 2.387 GPa (the diameter from `Średnica`); the file says compression (`ściskające`).
+#[test]
+fn polish_bluehill_thousands_and_diameter() {
+    let a = analyze(
+        "cablab__bluehill_polish_cp1250_compression.csv",
+        &["--length-mm", "6"],
+    );
+    assert!(within(stiffness(&a), 3.0e4, 0.002), "{:e}", stiffness(&a));
+    let e = a["modulus_pa"].as_f64().unwrap();
+    assert!(
+        within(e, 3.0e4 / (std::f64::consts::PI * 4e-6), 0.002),
+        "{e:e}"
+    );
+    assert!(
+        warnings(&a).iter().any(|w| w.contains("says compression")),
+        "{:?}",
+        warnings(&a)
+    );
 }

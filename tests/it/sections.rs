@@ -3,7 +3,7 @@
 //! checked on generated linear logs whose modulus is known.
 
 use crate::common::cablab;
-use crate::real_exports::{json, stiffness, temp_file, warnings, within};
+use crate::real_exports::{json, notes, stiffness, temp_file, within};
 use serde_json::Value;
 
 /// Beam of the MTS three-point layout in EXPECTED.md: PLA, b = 11.86 mm, h = 2.937 mm, span
@@ -50,7 +50,7 @@ fn a_flat_beam_in_three_point_bending_gets_e_from_b_h_cubed_over_12() {
     let e = a["modulus_pa"].as_f64().unwrap();
     assert!(within(e, E_PLA, 0.005), "E {e:e}");
     assert!((e - ei / i).abs() <= 1e-9 * e, "E = EI/I exactly");
-    let w = warnings(&a);
+    let w = notes(&a);
     assert!(
         w.iter()
             .any(|w| w.contains("flat section 11.8600 × 2.9370 mm")
@@ -111,11 +111,11 @@ fn a_flat_strip_in_torsion_uses_saint_venants_torsion_constant() {
     let polar = b * h * (b * b + h * h) / 12.0;
     assert!(got / (2.0 * (1.0 + nu) * gj / polar) > 7.0);
     assert!(
-        warnings(&a)
+        notes(&a)
             .iter()
             .any(|w| w.contains("Saint-Venant's torsion constant of the rectangle J_t = 23.3")),
         "{:?}",
-        warnings(&a)
+        notes(&a)
     );
     // The same section stated in the file: no flag needed, and the note says where it came from.
     let (_d2, p2) = temp_file(
@@ -126,11 +126,11 @@ fn a_flat_strip_in_torsion_uses_saint_venants_torsion_constant() {
     let got = m["modulus_pa"].as_f64().unwrap();
     assert!(within(got, e, 0.005), "E from metadata {got:e}");
     assert!(
-        warnings(&m)
+        notes(&m)
             .iter()
             .any(|w| w.contains("flat section 10.0000 × 2.0000 mm (width × thickness, from the metadata's thickness and width)")),
         "{:?}",
-        warnings(&m)
+        notes(&m)
     );
 }
 
@@ -216,10 +216,10 @@ fn a_shear_strain_on_a_thin_strip_becomes_the_twist() {
     ]);
     assert!(within(stiffness(&a), gj, 0.005), "{:e}", stiffness(&a));
     assert!(
-        warnings(&a)
+        notes(&a)
             .iter()
             .any(|w| w.contains("largest surface shear strain of the flat section")),
         "{:?}",
-        warnings(&a)
+        notes(&a)
     );
 }

@@ -122,8 +122,13 @@ pub struct TestRecord {
     pub main_block: usize,
     /// Blocks joined into `data` (1-based, consecutive; one entry when nothing was joined).
     pub joined_blocks: Vec<usize>,
-    /// Warnings (file, line, column, message).
+    /// Warnings (file, line, column, message): what may make a value read wrong (a unit
+    /// missing or unreadable, cells read as missing, a time that runs back, ...).
     pub warnings: Vec<Diagnostic>,
+    /// Notes (file, line, column, message): what the reader settled that casts no doubt on a
+    /// value but says where it came from (the block read, blocks joined, first-row columns
+    /// moved to the metadata, a footer skipped, the specimen length taken from the metadata).
+    pub notes: Vec<Diagnostic>,
 }
 
 /// One channel in `inspect --json`.
@@ -195,6 +200,9 @@ pub struct InspectReport {
     pub blocks_joined: Vec<usize>,
     /// Every warning of the reader (file, line, column, message).
     pub warnings: Vec<Diagnostic>,
+    /// Every note of the reader (file, line, column, message): provenance, no doubt on a
+    /// value ([`TestRecord::notes`]).
+    pub notes: Vec<Diagnostic>,
 }
 
 fn dedupe(names: &mut [String]) -> Vec<usize> {
@@ -354,7 +362,7 @@ fn append_block(a: &mut RawBlock, b: RawBlock) {
 fn one_row_columns_to_metadata(
     block: &mut RawBlock,
     metadata: &mut Vec<(String, String)>,
-    warnings: &mut Vec<Diagnostic>,
+    notes: &mut Vec<Diagnostic>,
     source: &str,
 ) {
     let is_label = |b: &RawBlock, i: usize| b.label_slot.get(i).is_some_and(|s| s.is_some());
@@ -389,7 +397,7 @@ fn one_row_columns_to_metadata(
         names.push(format!("'{name}' = {}", value.trim()));
         metadata.push((name, value.trim().to_string()));
     }
-    warnings.push(Diagnostic {
+    notes.push(Diagnostic {
         file: source.into(),
         line: Some(block.first_data_line),
         column: None,
@@ -474,8 +482,9 @@ pub(crate) fn build(
         }
     };
     let mut warnings = std::mem::take(&mut raw.warnings);
+    let mut notes = std::mem::take(&mut raw.notes);
     if joined.len() > 1 {
-        warnings.push(Diagnostic {
+        notes.push(Diagnostic {
             file: source.clone(),
             line: Some(blocks[main_block - 1].names_line),
             column: None,
@@ -488,7 +497,7 @@ pub(crate) fn build(
             ),
         });
     } else if blocks.len() > 1 {
-        warnings.push(Diagnostic {
+        notes.push(Diagnostic {
             file: source.clone(),
             line: Some(blocks[main_block - 1].names_line),
             column: None,
@@ -514,7 +523,7 @@ pub(crate) fn build(
         append_block(&mut block, next);
     }
     drop(raw.blocks);
-    one_row_columns_to_metadata(&mut block, &mut raw.metadata, &mut warnings, &source);
+    one_row_columns_to_metadata(&mut block, &mut raw.metadata, &mut notes, &source);
 
     // Names and units.
     let n = block.columns.len();
@@ -808,9 +817,9 @@ pub(crate) fn build(
                 "neither the metadata nor the channels say which test this is".into(),
             )),
     };
-    let (specimen, notes) = specimen_from_metadata(&raw.metadata);
-    for m in notes {
-        warnings.push(Diagnostic {
+    let (specimen, specimen_notes) = specimen_from_metadata(&raw.metadata);
+    for m in specimen_notes {
+        notes.push(Diagnostic {
             file: source.clone(),
             line: None,
             column: None,
@@ -837,6 +846,7 @@ pub(crate) fn build(
         main_block,
         joined_blocks: joined,
         warnings,
+        notes,
     })
 }
 
@@ -882,7 +892,44 @@ fn to_frame(
     })
 }
 
+/// Words that say a test loads its specimen in compression (a word of their own, or, for the
+/// Chinese 压缩, anywhere in a name).
+const COMPRESSION_WORDS: &[&str] = &[
+    "compression",
+    "compressive",
+    "druckversuch",
+    "stauchung",
+    "compresión",
+    "compressione",
+    // Polish: ściskanie, przy ściskaniu, naprężenie ściskające (prefixes: a word of more than
+    // four letters matches at the start of a longer one).
+    "ściskani",
+    "ściskając",
+];
+
 impl TestRecord {
+    /// Where the file says its test is a compression test (a metadata key or value, a channel
+    /// name: `压缩应变 (位移)`, `Compressive stress`, `Druckversuch`), as one phrase, or None.
+    /// cablab has no compression kind: the caller warns when such a file is analysed as tension.
+    ///
+    /// Does not read signs: compression is negative in some exports and positive in others.
+    pub fn compression_evidence(&self) -> Option<String> {
+        let says = |t: &str| {
+            let l = t.to_lowercase();
+            l.contains("压缩")
+                || COMPRESSION_WORDS
+                    .iter()
+                    .any(|w| crate::roles::has_word(&l, w))
+        };
+        if let Some(c) = self.channels.iter().find(|c| says(&c.name)) {
+            return Some(format!("the column '{}'", c.name));
+        }
+        self.metadata
+            .iter()
+            .find(|(k, v)| says(k) || says(v))
+            .map(|(k, v)| format!("the metadata '{}: {}'", k.trim(), v.trim()))
+    }
+
     /// The evidence of this file that excludes `kind`, as one sentence, or None when nothing
     /// contradicts it. Kind words that contradict each other (an axial-torsional test's
     /// "tension" and "torsion") are not evidence and are left out; channel dimensions always
@@ -1017,6 +1064,7 @@ impl TestRecord {
             blocks_found: self.blocks.len(),
             blocks_joined: self.joined_blocks.clone(),
             warnings: self.warnings.clone(),
+            notes: self.notes.clone(),
         }
     }
 

@@ -491,6 +491,10 @@ pub(crate) fn kind_from_text(texts: &[&str]) -> Option<(TestKind, String)> {
                 "tres puntos",
                 "tre punti",
                 "flexion 3 points",
+                // Bluehill's flexure methods (`Flexure stress`, `Flexure strain (Extension)`);
+                // a four-point flexure file also names four points and stays unknown.
+                "flexure",
+                "flexural",
             ],
         ),
         (
@@ -603,7 +607,7 @@ const KIND_WORDS: &[(&str, &[TestKind])] = &[
 /// up to four letters must also end there. So "tension_100N" and "Torsionsversuch" match
 /// "tension" and "torsion", "Dreipunktbiegeversuch" matches "dreipunkt", "Zug" matches "zug",
 /// but "Zugabe" does not match "zug" and "extension" does not match "tension".
-fn has_word(text: &str, w: &str) -> bool {
+pub(crate) fn has_word(text: &str, w: &str) -> bool {
     let mut start = 0;
     while let Some(p) = text[start..].find(w) {
         let a = start + p;
@@ -710,12 +714,30 @@ pub(crate) fn kind_evidence(
     out
 }
 
+///
+/// Bluehill writes result and property keys as `Group : Name` (`Specimen properties : Support
+/// span`, `Strain : Tensile strain (Extension) gauge length`): the name is the part after the
+/// last ` : `. A bracket at the end is the unit and is cut (`Breite [mm]`, `Gage Length
+/// (Extensometer)`); a bracket with words after it qualifies the words before it and is dropped
+/// (`tensile strain gauge length`).
 fn norm_key(k: &str) -> String {
     let k = k.to_lowercase();
-    let k = match k.find(['[', '(']) {
-        Some(p) => k[..p].to_string(),
+    let mut k = match k.rfind(" : ") {
+        Some(p) => k[p + 3..].to_string(),
         None => k,
     };
+    while let Some(p) = k.find(['[', '(']) {
+        let after = k[p..].find([']', ')']).map(|c| p + c + 1);
+        match after {
+            Some(a) if !k[a..].trim().trim_end_matches(':').trim().is_empty() => {
+                k = format!("{} {}", k[..p].trim_end(), k[a..].trim_start());
+            }
+            _ => {
+                k.truncate(p);
+                break;
+            }
+        }
+    }
     k.trim().trim_end_matches(':').trim().to_string()
 }
 
@@ -864,6 +886,7 @@ fn stated_flat_section(
             "largeur éprouvette",
             "largeur",
             "ancho",
+            "anchura",
             "larghezza",
         ])?;
         Some((
@@ -886,6 +909,7 @@ fn stated_area(meta: &[(String, String)]) -> Option<f64> {
         "querschnitt",
         "anfangsquerschnitt",
         "area",
+        "área",
         "original area",
         "s0",
     ];
@@ -916,6 +940,7 @@ pub(crate) fn specimen_from_metadata(
         "probenkennung",
         "sample id",
         "sample",
+        "etykietka próbki",
         "probeta",
         "provino",
         "muestra",
@@ -929,6 +954,7 @@ pub(crate) fn specimen_from_metadata(
         "durchmesser",
         "diámetro",
         "diametro",
+        "średnica",
         "d0",
     ];
     let len_keys: [&[&str]; 3] = [
@@ -961,9 +987,14 @@ pub(crate) fn specimen_from_metadata(
     ];
     let find = |keys: &[&str]| -> Option<(String, String)> {
         for k in keys {
+            // A key of two or more words may also end the name (Bluehill's `Tensile strain
+            // gauge length`).
             let matches = |key: &str| {
                 let nk = norm_key(key);
-                nk == *k || nk.starts_with(&format!("{k} ")) || nk.starts_with(&format!("{k},"))
+                nk == *k
+                    || nk.starts_with(&format!("{k} "))
+                    || nk.starts_with(&format!("{k},"))
+                    || (k.contains(' ') && nk.ends_with(&format!(" {k}")))
             };
             if let Some((key, v)) = meta
                 .iter()
@@ -1042,6 +1073,54 @@ pub(crate) fn specimen_from_metadata(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Bluehill's `Group : Name` keys: the name after the last ` : `; a bracket at the end is the
+    /// unit, one with words after it is dropped; the specimen's gauge length from a key that
+    /// ends with it, its span and label from `Specimen properties : …`.
+    #[test]
+    fn bluehill_group_keys() {
+        assert_eq!(
+            norm_key("Specimen properties : Support span"),
+            "support span"
+        );
+        assert_eq!(
+            norm_key("Strain : Tensile strain (Extension) gauge length"),
+            "tensile strain gauge length"
+        );
+        assert_eq!(norm_key("Gage Length (Extensometer)"), "gage length");
+        assert_eq!(norm_key("Breite [mm]:"), "breite");
+        let meta = |kv: &[(&str, &str)]| -> Vec<(String, String)> {
+            kv.iter()
+                .map(|(k, v)| (k.to_string(), v.to_string()))
+                .collect()
+        };
+        let (sp, notes) = specimen_from_metadata(&meta(&[
+            (
+                "Strain : Tensile strain (Extension) gauge length",
+                "100.00000 mm",
+            ),
+            ("Specimen properties : Specimen label", "S-3"),
+        ]));
+        assert_eq!(sp.free_length_m, Some(0.1));
+        assert_eq!(sp.label.as_deref(), Some("S-3"));
+        assert!(notes.is_empty(), "{notes:?}");
+        // Before: "Specimen properties : Support span" matched the label key "specimen".
+        let (sp, _) = specimen_from_metadata(&meta(&[
+            ("Specimen properties : Support span", "125.00000 mm"),
+            ("Specimen properties : Specimen label", "1A"),
+        ]));
+        assert_eq!(sp.label.as_deref(), Some("1A"));
+        assert_eq!(sp.free_length_m, Some(0.125));
+        // Spanish Bluehill: `Propiedades de la probeta : Anchura / Espesor / Área`.
+        let es = meta(&[
+            ("Propiedades de la probeta : Anchura", "10.00000 mm"),
+            ("Propiedades de la probeta : Espesor", "1.00000 mm"),
+            ("Propiedades de la probeta : Área", "10.00000 mm^2"),
+        ]);
+        let (f, _) = flat_section_from_metadata(&es).unwrap();
+        assert_eq!((f.width_m, f.thickness_m), (0.01, 0.001));
+        assert!((stated_area(&es).unwrap() - 1e-5).abs() < 1e-15);
+    }
 
     fn facts(cols: &[(&str, &str)]) -> Vec<ChannelFacts> {
         cols.iter()

@@ -50,6 +50,9 @@ pub(crate) struct RawTable {
     pub blocks: Vec<RawBlock>,
     pub metadata: Vec<(String, String)>,
     pub warnings: Vec<Diagnostic>,
+    /// What the reader did that is worth saying but casts no doubt on a number (a footer
+    /// skipped, ...): `TestRecord::notes`.
+    pub notes: Vec<Diagnostic>,
     /// Detected separator (None for XML).
     pub separator: Option<Separator>,
     /// Decimal mark.
@@ -125,6 +128,9 @@ pub(crate) fn read_table(
             dec = d;
         }
     }
+    if let Some(t) = side_by_side_samples(bytes, eol, sep, dec) {
+        return Ok(t);
+    }
     let mut eng = Engine {
         text: bytes,
         source,
@@ -148,6 +154,119 @@ pub(crate) fn read_table(
     };
     eng.run()?;
     Ok(eng.out)
+}
+
+/// The Mecmesin Emperor export of several samples side by side: a names row whose first k cells
+/// are named and the rest empty (`Force,Distance,Time,Event,,,…`), a units row (`N,mm,min,,…`), a
+/// row that titles every k-th cell (`Sample 1,,,,Sample 2,,,,…`), blank lines, then rows of k cells
+/// per sample; a sample shorter than the others leaves its cells empty below its end. Each sample
+/// becomes one block titled by its cell (`--block N` picks it; the reader reads the longest).
+/// `None` for any other layout.
+///
+/// Does not join the samples: each is its own test (time restarts at 0).
+fn side_by_side_samples(bytes: &[u8], eol: u8, sep: Separator, dec: u8) -> Option<RawTable> {
+    let mut lines = Vec::new();
+    let mut pos = 0;
+    while pos < bytes.len() {
+        let end = memchr::memchr(eol, &bytes[pos..]).map_or(bytes.len(), |p| pos + p);
+        let mut line = &bytes[pos..end];
+        if let [rest @ .., b'\r'] = line {
+            line = rest;
+        }
+        lines.push(line);
+        pos = end + 1;
+        if lines.len() == 3 && !lines[2].starts_with(b"Sample ") {
+            return None;
+        }
+    }
+    if lines.len() < 5 {
+        return None;
+    }
+    let mut spans = Vec::new();
+    let texts = |line: &[u8], spans: &mut Vec<(usize, usize)>| -> Vec<String> {
+        split(line, sep, spans);
+        spans
+            .iter()
+            .map(|&sp| cell_text_raw(line, sp).trim().to_string())
+            .collect()
+    };
+    let names = texts(lines[0], &mut spans);
+    let units = texts(lines[1], &mut spans);
+    let titles = texts(lines[2], &mut spans);
+    let k = names.iter().position(|c| c.is_empty())?;
+    if k < 2
+        || names[k..].iter().any(|c| !c.is_empty())
+        || units[k.min(units.len())..].iter().any(|c| !c.is_empty())
+    {
+        return None;
+    }
+    let m = titles.len() / k;
+    let titled = |j: usize| titles.get(j * k).is_some_and(|t| t.starts_with("Sample "));
+    if m < 2
+        || !(0..m).all(titled)
+        || titles
+            .iter()
+            .enumerate()
+            .any(|(i, t)| i % k != 0 && !t.is_empty())
+    {
+        return None;
+    }
+    let first = (3..lines.len()).find(|&i| !lines[i].iter().all(|b| b.is_ascii_whitespace()))?;
+    let mut blocks: Vec<RawBlock> = (0..m)
+        .map(|j| RawBlock {
+            title: Some(titles[j * k].clone()),
+            names_line: 1,
+            units_line: Some(2),
+            first_data_line: first + 1,
+            header_cells: names[..k].to_vec(),
+            unit_cells: (0..k)
+                .map(|i| units.get(i).cloned().unwrap_or_default())
+                .collect(),
+            columns: vec![Vec::new(); k],
+            label_slot: vec![None; k],
+            line_runs: vec![(0, first + 1)],
+            ..Default::default()
+        })
+        .collect();
+    for line in &lines[first..] {
+        if line.iter().all(|b| b.is_ascii_whitespace()) {
+            continue;
+        }
+        split(line, sep, &mut spans);
+        for (j, b) in blocks.iter_mut().enumerate() {
+            for (c, col) in b.columns.iter_mut().enumerate() {
+                let v = match spans.get(j * k + c) {
+                    Some(&(a, e)) => match parse_cell(&line[a..e.max(a)], dec) {
+                        Cell::Num(v) => v,
+                        Cell::Empty | Cell::Missing => f64::NAN,
+                        // Text in a numeric cell: not this layout.
+                        Cell::Text => return None,
+                    },
+                    None => f64::NAN,
+                };
+                col.push(v);
+            }
+        }
+    }
+    for b in &mut blocks {
+        // A sample ends at its last row with a number: the empty rows below are the others'.
+        let rows = (0..b.columns[0].len())
+            .rev()
+            .find(|&r| b.columns.iter().any(|c| !c[r].is_nan()))
+            .map_or(0, |r| r + 1);
+        for c in &mut b.columns {
+            c.truncate(rows);
+        }
+        b.rows = rows;
+        b.last_data_line = first + rows;
+    }
+    blocks.retain(|b| b.rows > 0);
+    (!blocks.is_empty()).then(|| RawTable {
+        blocks,
+        separator: Some(sep),
+        decimal: dec,
+        ..Default::default()
+    })
 }
 
 fn sample_lines(bytes: &[u8], eol: u8, n: usize) -> Vec<&[u8]> {
@@ -980,7 +1099,7 @@ impl<'a> Engine<'a> {
                 .collect();
             if let Some(first) = after.first() {
                 let t = String::from_utf8_lossy(&self.text[first.start..first.end]);
-                self.out.warnings.push(Diagnostic {
+                self.out.notes.push(Diagnostic {
                     file: self.source.to_string(),
                     line: Some(first.line_no),
                     column: None,

@@ -215,6 +215,9 @@ pub fn parse_cell(raw: &[u8], dec: u8) -> Cell {
         };
     }
     let thou = if dec == b',' { b'.' } else { b',' };
+    if let Some(v) = space_grouped(s, thou) {
+        return parse_cell(&v, dec);
+    }
     let mut buf = [0u8; 64];
     if s.len() > buf.len() {
         return Cell::Text;
@@ -277,6 +280,39 @@ pub fn parse_cell(raw: &[u8], dec: u8) -> Cell {
         Ok(_) => Cell::Missing,
         Err(_) => na_or_text(s),
     }
+}
+
+/// A number whose digit groups are separated by a space, a no-break space (U+00A0, as Polish and
+/// French Windows locales write `1 000,34863`) or a narrow no-break space (U+202F), with the
+/// separator replaced by `thou`, so that [`parse_cell`] checks the groups of three like any
+/// thousands separator. `None` when no such separator stands between two digits.
+fn space_grouped(s: &[u8], thou: u8) -> Option<Vec<u8>> {
+    // Most cells that reach here are text: no allocation unless a space or a U+00A0/U+202F lead
+    // byte is there at all.
+    if !s.iter().any(|&b| b == b' ' || b == 0xC2 || b == 0xE2) {
+        return None;
+    }
+    let digit_at = |i: usize| s.get(i).is_some_and(|b| b.is_ascii_digit());
+    let mut out = Vec::with_capacity(s.len());
+    let mut i = 0;
+    let mut found = false;
+    while i < s.len() {
+        let width = match &s[i..] {
+            [b' ', ..] => 1,
+            [0xC2, 0xA0, ..] => 2,
+            [0xE2, 0x80, 0xAF, ..] => 3,
+            _ => 0,
+        };
+        if width > 0 && i > 0 && digit_at(i - 1) && digit_at(i + width) {
+            out.push(thou);
+            found = true;
+            i += width;
+        } else {
+            out.push(s[i]);
+            i += 1;
+        }
+    }
+    found.then_some(out)
 }
 
 /// Exact powers of ten representable in an f64.
@@ -419,6 +455,27 @@ mod tests {
         );
         assert_eq!(cells("\"unbalanced,x", Separator::Comma), ["unbalanced,x"]);
         assert_eq!(cells("", Separator::Comma), [""]);
+    }
+
+    #[test]
+    fn digit_groups_split_by_spaces() {
+        // Polish Bluehill (Windows-1250): a no-break space groups the thousands.
+        assert_eq!(
+            parse_cell("1\u{a0}000,34863".as_bytes(), b','),
+            Cell::Num(1000.34863)
+        );
+        assert_eq!(
+            parse_cell("-12 345,5".as_bytes(), b','),
+            Cell::Num(-12345.5)
+        );
+        assert_eq!(
+            parse_cell("1\u{202f}234.5".as_bytes(), b'.'),
+            Cell::Num(1234.5)
+        );
+        assert_eq!(parse_cell(b"1 000 000", b'.'), Cell::Num(1e6));
+        // Groups not of three are two numbers, not one.
+        assert_eq!(parse_cell(b"12 34", b','), Cell::Text);
+        assert_eq!(parse_cell(b"1 00,5", b','), Cell::Text);
     }
 
     #[test]

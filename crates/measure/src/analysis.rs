@@ -517,12 +517,53 @@ pub struct Analysis {
     pub break_point: Option<BreakPoint>,
     /// Samples (0-based, complete rows) excluded from the fits as isolated glitches.
     pub excluded_samples: Vec<usize>,
-    /// Warnings for the user.
+    /// Warnings for the user: statements that a number above may be wrong.
     pub warnings: Vec<String>,
+    /// Notes for the user: what the analysis did that casts no doubt on a number (the part
+    /// of the curve analysed, where the specimen broke, no unloading to judge by).
+    pub notes: Vec<String>,
     /// All reasons for null quantities as one string ("key: reason; ..."), or null.
     pub why: Option<String>,
     /// Reasons for null quantities, keyed by field name.
     pub why_by_key: BTreeMap<String, String>,
+}
+
+/// What a negative loop area means. A passive specimen cannot return more energy than it
+/// took, so ∮ F dx < 0 is never a dissipated energy:
+/// - where the loading and unloading branches coincide within the noise
+///   ([`CycleResult::loop_area_resolved`] false), the area is zero within resolution: a note;
+/// - otherwise (resolved, or not judged) the unloading lies above the loading beyond the noise:
+///   the control and the response are out of phase (sensor or filter lag, a drifting response
+///   channel) or the control is not the specimen's: a warning, since the area is then no
+///   measure of anything.
+///
+/// Does not change the areas: they stay as measured.
+fn negative_loops(cyc: &[CycleResult], warnings: &mut Vec<String>, notes: &mut Vec<String>) {
+    let show = |v: &[&CycleResult]| {
+        v.iter()
+            .map(|c| format!("{} ({:.3e} J)", c.index, c.loop_area.unwrap_or(f64::NAN)))
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    let negative: Vec<&CycleResult> = cyc
+        .iter()
+        .filter(|c| c.loop_area.is_some_and(|a| a < 0.0))
+        .collect();
+    let (within, beyond): (Vec<&CycleResult>, Vec<&CycleResult>) = negative
+        .into_iter()
+        .partition(|c| c.loop_area_resolved == Some(false));
+    if !within.is_empty() {
+        notes.push(format!(
+            "loop area negative in cycle(s) {} but within resolution: the loading and unloading branches coincide within the noise, so no energy is dissipated that the data can resolve (read as 0; a passive specimen cannot return more energy than it took)",
+            show(&within)
+        ));
+    }
+    if !beyond.is_empty() {
+        warnings.push(format!(
+            "loop area negative beyond the noise in cycle(s) {}: a passive specimen cannot return more energy than it took, so the unloading lying above the loading means the control and response are out of phase (sensor or filter lag, a drifting response channel) or the control is not the specimen's; the area is not a dissipated energy",
+            show(&beyond)
+        ));
+    }
 }
 
 /// Joins per-key reasons into one "key: reason; key: reason" string (None when empty).
@@ -587,6 +628,7 @@ pub fn analyze(
         });
     }
     let mut warnings = Vec::new();
+    let mut notes: Vec<String> = Vec::new();
     let mut why = BTreeMap::new();
 
     // A clock that does not run forward cannot time holds: judge them by sample index instead
@@ -705,7 +747,7 @@ pub fn analyze(
                 fw.push(xs[i]);
             }
             None => {
-                warnings.push(format!(
+                notes.push(format!(
                     "three-point: the first loading is analysed up to w/l0 = {geometry_limit:.3}, where geometry alone softens the force by {:.0} % (beyond it the sliding-support correction is not reliable)",
                     100.0 * THREE_POINT_GEOMETRY_LIMIT
                 ));
@@ -1016,7 +1058,7 @@ pub fn analyze(
             .all(|c| c.coincide == Some(true) && c.residual_significant != Some(true));
     let permanent = cyc.iter().any(|c| c.residual_significant == Some(true));
     let behaviour = if judged.is_empty() {
-        warnings.push("no unloading to judge reversibility by".into());
+        notes.push("no unloading to judge reversibility by".into());
         monotonic_class(bend.is_some(), stiffness.is_some(), &mut warnings)
     } else if reversible && stiffness.is_some() {
         if bend.is_some() {
@@ -1149,8 +1191,9 @@ pub fn analyze(
         response_before: response[j - 1],
         work_to_break: work,
     });
+    negative_loops(&cyc, &mut warnings, &mut notes);
     if let Some(b) = &break_point {
-        warnings.push(format!(
+        notes.push(format!(
             "the specimen broke at sample {} (control {:.4e}): the response fell below {:.0} % of its maximum and stayed there",
             b.sample,
             b.machine_control,
@@ -1332,6 +1375,7 @@ pub fn analyze(
         break_point,
         excluded_samples: excluded,
         warnings,
+        notes,
         why: join_why(&why),
         why_by_key: why,
     })

@@ -36,6 +36,10 @@ pub struct CycleResult {
     pub index: usize,
     /// ∮ response d(machine control) over the cycle, J.
     pub loop_area: Option<f64>,
+    /// Whether the loop is resolved: its branches do not coincide within the noise and the
+    /// control's resolution (`!coincide`). A loop area that is not resolved is zero within
+    /// resolution, whatever its sign; null when `coincide` is.
+    pub loop_area_resolved: Option<bool>,
     /// Sectional control (strain, 1/m, or deflection m for three-point) where the response
     /// reaches zero on the cycle's unloading (for three-point: where the punch loses contact).
     pub residual: Option<f64>,
@@ -178,6 +182,7 @@ pub fn cycles(inp: &CycleInputs) -> Vec<CycleResult> {
         let mut r = CycleResult {
             index: c,
             loop_area: Some(area),
+            loop_area_resolved: None,
             residual: None,
             residual_significant: None,
             residual_extrapolated: false,
@@ -326,6 +331,7 @@ pub fn cycles(inp: &CycleInputs) -> Vec<CycleResult> {
                         });
                     r.branch_gap_area = Some(gap);
                     r.coincide = Some(gap.abs() <= 4.0 * sd + q_control * (f_hi - f_lo));
+                    r.loop_area_resolved = r.coincide.map(|c| !c);
                 } else {
                     why.insert(
                         "coincide".into(),

@@ -100,6 +100,8 @@ td.num { text-align: right; font-variant-numeric: tabular-nums; }
 dl.facts { display: grid; grid-template-columns: max-content auto; gap: 0.15em 1.2em; margin: 0.6em 0 1em; }
 dl.facts dt { font-weight: bold; }
 dl.facts dd { margin: 0; font-variant-numeric: tabular-nums; }
+dl.facts dt.warning, dl.facts dd.warning { color: #8a3b00; }
+dl.facts dt.note, dl.facts dd.note { color: #666; font-weight: normal; font-size: 0.9em; }
 figure { margin: 0.8em 0 1.2em; break-inside: avoid; page-break-inside: avoid; }
 figure svg { max-width: 100%; height: auto; display: block; }
 figcaption { font-size: 0.9em; color: #333; margin-top: 0.3em; }
@@ -332,9 +334,15 @@ pub fn render_html(doc: &ReportDoc) -> String {
         if !t.facts.is_empty() {
             out.push_str("<dl class=\"facts\">\n");
             for (k, v) in &t.facts {
+                // Warnings stand out; notes (provenance, no doubt on a number) are muted.
+                let class = match k.as_str() {
+                    "warning" => " class=\"warning\"",
+                    "note" => " class=\"note\"",
+                    _ => "",
+                };
                 let _ = writeln!(
                     out,
-                    "<dt>{}</dt><dd>{}</dd>",
+                    "<dt{class}>{}</dt><dd{class}>{}</dd>",
                     escape_html(k),
                     escape_html(v)
                 );

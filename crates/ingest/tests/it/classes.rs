@@ -30,6 +30,14 @@ fn warned(r: &TestRecord, words: &[&str]) -> bool {
         .any(|w| words.iter().all(|x| w.message.contains(x)))
 }
 
+/// A note (provenance, no doubt on a value) with all of `words`, and no warning with them.
+fn noted(r: &TestRecord, words: &[&str]) -> bool {
+    !warned(r, words)
+        && r.notes
+            .iter()
+            .any(|w| words.iter().all(|x| w.message.contains(x)))
+}
+
 /// `rows` rows of a linear tension curve: t = 0.1 i s, x = 0.01 i mm, F = 2 i N.
 fn curve_rows(rows: usize, sep: &str, comma: bool) -> Vec<String> {
     (0..rows)
@@ -93,7 +101,7 @@ fn a_decimal_mark_switch_inside_the_data_is_read_and_reported() {
 }
 
 #[test]
-fn a_text_column_is_a_label_channel_and_an_end_marker_is_a_warning() {
+fn a_text_column_is_a_label_channel_and_an_end_marker_is_a_note() {
     // A Deben/CellScale-like export: a phase column of text among the numbers, an end marker.
     let mut text = String::from("Time (s)\tPhase\tExtension (mm)\tLoad (N)\n");
     for i in 0..50 {
@@ -122,9 +130,9 @@ fn a_text_column_is_a_label_channel_and_an_end_marker_is_a_warning() {
         "Load"
     );
     assert!(
-        warned(&r, &["END OF FILE", "after the last data row"]),
+        noted(&r, &["END OF FILE", "after the last data row"]),
         "{:?}",
-        r.warnings
+        r.notes
     );
     // A label channel has no numbers and says why in inspect.
     let rep = r.inspect();
@@ -189,7 +197,7 @@ fn consecutive_mts793_buffers_are_joined_and_block_picks_one() {
     let t = col(&r, "Time");
     assert!(t.windows(2).all(|w| w[1] > w[0]));
     assert!((t[399] - 3.99).abs() < 1e-12);
-    assert!(warned(&r, &["joined", "400 rows"]), "{:?}", r.warnings);
+    assert!(noted(&r, &["joined", "400 rows"]), "{:?}", r.notes);
     let rep = r.inspect();
     assert_eq!((rep.blocks_found, rep.blocks_joined.len()), (4, 4));
     // --block still reads one buffer.

@@ -25,6 +25,19 @@ fn val(r: &TestRecord, col: &str, row: usize) -> f64 {
         .unwrap_or_else(|| panic!("no column {col}"))[row - 1]
 }
 
+/// A fixture of `tests/data/` read with the default options.
+fn fixture(name: &str) -> TestRecord {
+    read_path(&data(name), &ReadOptions::default()).unwrap()
+}
+
+/// (name, unit as written) of every channel.
+fn names_units(r: &TestRecord) -> Vec<(&str, &str)> {
+    r.channels
+        .iter()
+        .map(|c| (c.name.as_str(), c.unit.as_str()))
+        .collect()
+}
+
 fn role_name(r: &TestRecord, role: Role) -> Option<&str> {
     r.channels
         .iter()
@@ -205,13 +218,15 @@ fn instron_metadata_nan_cells_and_inspect() {
             "kind",
             "blocks_found",
             "blocks_joined",
-            "warnings"
+            "warnings",
+            "notes"
         ]
     );
     assert_eq!(json["blocks_found"], 1);
     assert_eq!(json["blocks_joined"], serde_json::json!([1]));
     // Every reader warning is in the JSON, as the record carries it.
     assert_eq!(json["warnings"].as_array().unwrap().len(), r.warnings.len());
+    assert_eq!(json["notes"].as_array().unwrap().len(), r.notes.len());
     assert_eq!(json["metadata"]["Gauge length"], "25 mm");
     assert_eq!(json["kind"], "tension");
     let ch = json["channels"][0].as_object().unwrap();
@@ -247,19 +262,10 @@ fn catman_ascii_sample() {
 /// compression negative. Three channels with their units, not seven words.
 #[test]
 fn mts793_btw_names_with_single_spaces() {
-    let r = read_path(
-        &data("cablab__mts793_btw_three_point.dat"),
-        &ReadOptions::default(),
-    )
-    .unwrap();
+    let r = fixture("cablab__mts793_btw_three_point.dat");
     assert_eq!(r.provenance.format, Format::Mts793Dat);
-    let names: Vec<(&str, &str)> = r
-        .channels
-        .iter()
-        .map(|c| (c.name.as_str(), c.unit.as_str()))
-        .collect();
     assert_eq!(
-        names,
+        names_units(&r),
         [
             ("Ch 1 Displacement", "mm"),
             ("Ch 1 Force", "kN"),
@@ -585,4 +591,148 @@ fn catman_hot_tensile_maytec_is_the_control() {
         .position(|c| c.name == "Standardwegaufnehmer")
         .unwrap();
     assert_eq!(r.mount(k), cablab_ingest::Mount::Machine);
+}
+
+/// Bluehill flexure export written for cablab in the layout of the real one seen (results and
+/// specimen properties as `Group : Name,"value",unit` lines, CRLF, quoted values): the support
+/// span, the flat section and the label come from the `Specimen properties : …` lines, the kind
+/// from the method's word "flexure". Before, the span's line was taken as the label ("specimen
+/// …"), and span, thickness and width were missed.
+#[test]
+fn bluehill_flexure_group_keys_give_span_section_label_and_kind() {
+    let r = fixture("cablab__bluehill_flexure_three_point.csv");
+    assert_eq!(r.provenance.format, Format::BluehillCsv);
+    assert_eq!(r.kind, TestKind::ThreePoint, "{}", r.kind_reason);
+    assert_eq!(r.specimen.label.as_deref(), Some("F-07"));
+    assert!(rel(r.specimen.free_length_m.unwrap(), 0.1));
+    let (f, _) = r.flat_section.as_ref().unwrap();
+    assert!(rel(f.width_m, 12e-3) && rel(f.thickness_m, 4e-3), "{f:?}");
+    assert_eq!(r.data.height(), 401);
+    assert_eq!(role_name(&r, Role::Control), Some("Extension"));
+    assert_eq!(role_name(&r, Role::Response), Some("Load"));
+    assert!(rel(val(&r, "Extension", 401), 1.4e-3));
+    assert!(rel(val(&r, "Load", 1), 10.0));
+    // The span is provenance: a note, not a warning.
+    assert!(r.warnings.is_empty(), "{:?}", r.warnings);
+}
+
+/// Bluehill export with Chinese names in GBK (the layout of a real cyclic-compression export
+/// seen: `时间,位移,载荷,压缩应变 (位移),压缩应力,循环计数` over `(s),(mm),(N),(%),(MPa),`, CRLF,
+/// a trailing empty unit cell), written for cablab: 3 cycles 0 → 1 mm → 0 at 20 N/mm. The names
+/// decode exactly; "(位移)" ("(displacement)") inside a name is no unit: the units row says %.
+#[test]
+fn bluehill_chinese_names_in_gbk() {
+    let r = fixture("cablab__bluehill_gbk_cyclic_compression.csv");
+    assert_eq!(r.provenance.encoding, "gbk");
+    assert_eq!(r.provenance.format, Format::BluehillCsv);
+    assert_eq!(
+        names_units(&r),
+        [
+            ("时间", "s"),
+            ("位移", "mm"),
+            ("载荷", "N"),
+            ("压缩应变 (位移)", "%"),
+            ("压缩应力", "MPa"),
+            ("循环计数", "")
+        ]
+    );
+    assert_eq!(role_name(&r, Role::Time), Some("时间"));
+    assert_eq!(role_name(&r, Role::Control), Some("位移"));
+    assert_eq!(role_name(&r, Role::Response), Some("载荷"));
+    // Compression is no cablab kind: unknown, not guessed.
+    assert_eq!(r.kind, TestKind::Unknown);
+    assert_eq!(r.data.height(), 601);
+    assert!(rel(val(&r, "位移", 101), 1e-3));
+    assert!(rel(val(&r, "压缩应变 (位移)", 101), 0.1));
+    // Stress = load / 100 mm², written to 5 decimals of MPa.
+    let (sigma, f) = (val(&r, "压缩应力", 101), val(&r, "载荷", 101));
+    assert!((sigma - 1e4 * f).abs() <= 10.0, "{sigma} Pa against {f} N");
+}
+
+/// Mecmesin Emperor export (blokeley/forcelib, MIT): 10 samples side by side, 4 columns each
+/// (`Force,Distance,Time,Event` over `N,mm,min`), a `Sample 1,,,,Sample 2,…` title row and a blank
+/// line above the data; samples 9 and 10 end 40 rows early. Each sample is a block titled by its
+/// cell; the longest (the first of the ties) is read; time in minutes becomes seconds. Before,
+/// the file was refused ("numeric rows from line 5 on have no names row directly above them").
+#[test]
+fn mecmesin_emperor_samples_side_by_side_are_blocks() {
+    let r = fixture("forcelib__mecmesin_emperor_10_samples.csv");
+    assert_eq!(r.blocks.len(), 10);
+    let rows: Vec<usize> = r.blocks.iter().map(|b| b.rows).collect();
+    assert_eq!(
+        rows,
+        [4160, 4160, 4160, 4160, 4160, 4160, 4160, 4160, 4120, 4120]
+    );
+    assert_eq!(r.blocks[8].title.as_deref(), Some("Sample 9"));
+    assert_eq!(r.main_block, 1);
+    assert_eq!(
+        names_units(&r),
+        [
+            ("Force", "N"),
+            ("Distance", "mm"),
+            ("Time", "min"),
+            ("Event", "")
+        ]
+    );
+    assert_eq!(role_name(&r, Role::Time), Some("Time"));
+    assert_eq!(role_name(&r, Role::Control), Some("Distance"));
+    assert_eq!(role_name(&r, Role::Response), Some("Force"));
+    assert!(rel(val(&r, "Force", 1), 0.1202));
+    assert!(rel(val(&r, "Force", 4160), 0.03));
+    assert!(rel(val(&r, "Distance", 4160), 0.05));
+    // 0.06932 min = 4.1592 s.
+    assert!(rel(val(&r, "Time", 4160), 0.06932 * 60.0));
+    let max = r
+        .column_values("Force")
+        .unwrap()
+        .into_iter()
+        .fold(f64::MIN, f64::max);
+    assert!(rel(max, 7.1847));
+    // The choice is a note, not a warning; `--block 9` reads sample 9 to its own end.
+    assert!(r.warnings.is_empty(), "{:?}", r.warnings);
+    assert!(
+        r.notes.iter().any(|n| n.message.contains("10 data blocks")),
+        "{:?}",
+        r.notes
+    );
+    let nine = read_path(
+        &data("forcelib__mecmesin_emperor_10_samples.csv"),
+        &ReadOptions {
+            block: Some(9),
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    assert_eq!(nine.data.height(), 4120);
+    assert!(rel(val(&nine, "Force", 1), 0.3005));
+    assert!(rel(val(&nine, "Distance", 4120), 50.0025e-3));
+    assert!(rel(val(&nine, "Time", 4120), 0.06865 * 60.0));
+}
+
+/// Bluehill in Polish (the layout of a real export seen: Windows-1250, `;`, decimal comma, every
+/// value quoted, **a no-break space grouping the thousands** `"1 000,34863"`), written for
+/// cablab: 600 rows, 2 s a row, load 5000 N/mm × 0..0.5 mm. Loads and times of 1000 and more
+/// are numbers (before, they were read as missing, with a warning: the largest load 999.7 N
+/// instead of 2240.7 N in the real file); the diameter and the label come from `Właściwości
+/// próbki : Średnica` / `Etykietka próbki`.
+#[test]
+fn bluehill_polish_no_break_space_thousands() {
+    let r = fixture("cablab__bluehill_polish_cp1250_compression.csv");
+    assert_eq!(r.provenance.encoding, "windows-1250");
+    assert_eq!(r.data.height(), 600);
+    assert!(
+        !r.warnings
+            .iter()
+            .any(|w| w.message.contains("text where a number")),
+        "{:?}",
+        r.warnings
+    );
+    assert!(rel(val(&r, "Godzina", 600), 1198.0));
+    let f = r.column_values("obciążenie").unwrap();
+    assert!(f.iter().all(|v| v.is_finite()));
+    assert!((f[599] - 2500.0).abs() < 0.25, "{}", f[599]);
+    assert!(rel(val(&r, "Przemieszczenie", 600), 0.5e-3));
+    assert_eq!(r.specimen.diameter_m, Some(4e-3));
+    assert_eq!(r.specimen.label.as_deref(), Some("PL-1"));
+    assert!(r.compression_evidence().is_some());
 }
