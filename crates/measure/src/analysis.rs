@@ -53,7 +53,8 @@
 //! elastic range there. Pure: numbers in, numbers out.
 
 use crate::condition::{
-    correct_compliance, glitches, noise_level, segment, zero_offsets, Branch, Offsets, Segment,
+    correct_compliance, glitches_with, noise_level, reversal_threshold_with, segment_with,
+    zero_offsets_with, Branch, ChannelNoise, Offsets, Segment,
 };
 use crate::elastic::{auto_elastic_range_ar1, user_elastic_range, ElasticRange, Hinge};
 use crate::elastica::ThreePointElastica;
@@ -617,15 +618,24 @@ pub fn analyze(
         None => control.to_vec(),
     };
     let mut r = response.to_vec();
+    // Each channel's noise scales are computed once per state of its samples (as read, after
+    // glitches are replaced, after the offsets are taken off) and handed to every step.
+    let (mut cn, mut rn) = (ChannelNoise::of(&c), ChannelNoise::of(&r));
     // Isolated glitches (one sample off in one channel) are excluded from every fit: replaced,
     // in this copy only, by the mean of their neighbours.
-    let mut excluded: Vec<usize> = glitches(&r, &c);
-    let in_control = glitches(&c, &r);
+    let mut excluded: Vec<usize> = glitches_with(&r, &c, rn.jitter, cn.noise);
+    let in_control = glitches_with(&c, &r, cn.jitter, rn.noise);
     for &i in &excluded {
         r[i] = 0.5 * (r[i - 1] + r[i + 1]);
     }
     for &i in &in_control {
         c[i] = 0.5 * (c[i - 1] + c[i + 1]);
+    }
+    if !excluded.is_empty() {
+        rn = ChannelNoise::of(&r);
+    }
+    if !in_control.is_empty() {
+        cn = ChannelNoise::of(&c);
     }
     if !excluded.is_empty() || !in_control.is_empty() {
         let show = |v: &[usize]| {
@@ -646,13 +656,18 @@ pub fn analyze(
     excluded.extend(in_control);
     excluded.sort_unstable();
     excluded.dedup();
-    let offsets = opts.zero_offsets.then(|| zero_offsets(&mut c, &mut r));
+    let offsets = opts
+        .zero_offsets
+        .then(|| zero_offsets_with(&mut c, &mut r, cn, rn));
+    if offsets.is_some() {
+        (cn, rn) = (ChannelNoise::of(&c), ChannelNoise::of(&r));
+    }
     let noise = Noise {
-        control: noise_level(&c),
-        response: noise_level(&r),
+        control: cn.noise,
+        response: rn.noise,
     };
 
-    let segments = segment(time_s, &c, &r)?;
+    let segments = segment_with(time_s, &c, &r, cn, rn)?;
     // Orientation of the first loading.
     let first_idx: Vec<usize> = segments
         .iter()
@@ -670,6 +685,9 @@ pub fn analyze(
     };
     let cm: Vec<f64> = c.iter().map(|v| sign * v).collect();
     let rm: Vec<f64> = r.iter().map(|v| sign * v).collect();
+    // The reversal threshold of the oriented control: a sign flip changes no second
+    // difference's magnitude, nor the range, so the control's jitter serves as it is.
+    let h_cm = reversal_threshold_with(&cm, cn.jitter);
     let xs = sectional(kind, geom, &cm);
     let l0 = geom.free_length_m;
     let three = kind == TestKind::ThreePoint;
@@ -694,7 +712,7 @@ pub fn analyze(
     // all earlier extremes by more than the reversal threshold (module doc of `condition`).
     let env_idx: Vec<usize> = match opts.yield_method {
         YieldMethod::FirstLoading => first_idx.clone(),
-        _ => virgin_envelope(&segments, &cm, &first_idx),
+        _ => virgin_envelope(&segments, &cm, &first_idx, h_cm),
     };
     let mut fx: Vec<f64> = Vec::with_capacity(env_idx.len());
     let mut fw: Vec<f64> = Vec::with_capacity(env_idx.len());
@@ -1143,7 +1161,7 @@ pub fn analyze(
             sample: k,
         }
     };
-    let break_point = find_break(&cm, &rm, serial.0.sigma).map(|(j, work)| BreakPoint {
+    let break_point = find_break(&cm, &rm, serial.0.sigma, h_cm).map(|(j, work)| BreakPoint {
         sample: j,
         machine_control: control[j],
         response_before: response[j - 1],
@@ -1488,9 +1506,9 @@ fn stiffness_doubts(s: &Stiffness) -> Vec<String> {
 
 /// Indices of the virgin envelope: the first loading, then each later loading from its first
 /// sample beyond every earlier extreme (by more than the reversal threshold, so noise on a
-/// repeated amplitude adds nothing) to its end. `cm` is the oriented control.
-fn virgin_envelope(segments: &[Segment], cm: &[f64], first_idx: &[usize]) -> Vec<usize> {
-    let h = crate::condition::reversal_threshold(cm);
+/// repeated amplitude adds nothing) to its end. `cm` is the oriented control, `h` its reversal
+/// threshold.
+fn virgin_envelope(segments: &[Segment], cm: &[f64], first_idx: &[usize], h: f64) -> Vec<usize> {
     let mut out = first_idx.to_vec();
     let mut top = first_idx
         .iter()
@@ -1725,12 +1743,12 @@ fn offset_yield(
 ///   max(5, 1 % of the record) samples (or all that remain, at least 3) is below
 ///   [`BREAK_DROP`] of the maximum, and below it by 10 σ;
 /// * the response never comes back above 0.8 of the maximum, and the control has not gone
-///   back below its value at the maximum by more than its reversal threshold (an unloading is
-///   no break).
+///   back below its value at the maximum by more than its reversal threshold `h` (an
+///   unloading is no break).
 ///
 /// The break sample is the first sample of that sustained stretch below the drop level.
 /// Returns it and the work ∫ rm d(cm) up to it.
-fn find_break(cm: &[f64], rm: &[f64], sigma: f64) -> Option<(usize, f64)> {
+fn find_break(cm: &[f64], rm: &[f64], sigma: f64, h: f64) -> Option<(usize, f64)> {
     let n = rm.len();
     let k = (0..n).max_by(|&a, &b| rm[a].total_cmp(&rm[b]))?;
     let top = rm[k];
@@ -1749,7 +1767,6 @@ fn find_break(cm: &[f64], rm: &[f64], sigma: f64) -> Option<(usize, f64)> {
     };
     let j = (k + 1..n).find(|&j| rm[j] < level && sustained(j))?;
     let stays = rm[j..].iter().all(|&v| v < 0.8 * top);
-    let h = crate::condition::reversal_threshold(cm);
     let onward = cm[k..=j].iter().all(|&v| v >= cm[k] - h);
     if !(stays && onward) {
         return None;
