@@ -776,9 +776,9 @@ pub fn analyze(
         let seg = crate::elastic::segment_lines(&fx, &fy, 3);
         let k = seg.slopes.iter().copied().fold(0.0f64, f64::max);
         let z: Vec<f64> = xs.iter().zip(&rm).map(|(x, y)| y - k * x).collect();
-        let sn = crate::condition::serial_noise(&z);
+        let (sn, lr) = crate::condition::serial_noise_and_level(&z);
         let z_env: Vec<f64> = env_idx[..fx.len()].iter().map(|&i| z[i]).collect();
-        let (lr, le) = (noise_level(&z), noise_level(&z_env));
+        let le = noise_level(&z_env);
         let scale = if lr > 0.0 && le > 0.0 { le / lr } else { 1.0 };
         let dof = 0.19 * z_env.len().min(z.len()) as f64 / sn.long_run_factor();
         (sn, sn.sigma * scale, dof)

@@ -103,32 +103,44 @@ impl SerialNoise {
 /// Does not model noise that is not stationary; quantised signals whose noise is below one
 /// count give φ = 0 and σ from [`noise_level`].
 pub fn serial_noise(signal: &[f64]) -> SerialNoise {
+    serial_noise_and_level(signal).0
+}
+
+/// [`serial_noise`] and the signal's [`noise_level`], which is its scale at lag 1 (computed
+/// once for both).
+pub(crate) fn serial_noise_and_level(signal: &[f64]) -> (SerialNoise, f64) {
     let n = signal.len();
-    let white = SerialNoise {
-        sigma: noise_level(signal),
-        phi: 0.0,
-    };
     let mut lags = Vec::new();
     let mut k = 1usize;
     while n >= 20 * k.max(2) || (k == 1 && n >= 40) {
         lags.push(k);
         k = if k < 4 { k + 1 } else { k + k / 2 };
     }
+    let white = |sigma: f64| {
+        let w = SerialNoise { sigma, phi: 0.0 };
+        (w, sigma)
+    };
     if lags.len() < 3 {
-        return white;
+        return white(noise_level(signal));
     }
-    let v2: Vec<(f64, f64)> = lags
+    // The lag-1 scale is `noise_level`: the same differences in the same order.
+    let scales: Vec<(usize, f64)> = lags
         .iter()
-        .filter_map(|&k| {
+        .map(|&k| {
             let d: Vec<f64> = (0..n - 2 * k)
                 .map(|i| signal[i + 2 * k] - 2.0 * signal[i + k] + signal[i])
                 .collect();
-            let v = mad_sigma_of_second_differences(&d);
-            (v > 0.0).then_some((k as f64, v * v))
+            (k, mad_sigma_of_second_differences(&d))
         })
         .collect();
+    let level = scales[0].1;
+    let v2: Vec<(f64, f64)> = scales
+        .iter()
+        .filter(|(_, v)| *v > 0.0)
+        .map(|&(k, v)| (k as f64, v * v))
+        .collect();
     if v2.len() < 3 {
-        return white;
+        return white(level);
     }
     // For a given φ, minimise Σ ((v_k² − σ² g_k − c k⁴)/v_k²)² over σ² ≥ 0, c ≥ 0.
     let fit = |phi: f64| -> (f64, f64) {
@@ -180,12 +192,13 @@ pub fn serial_noise(signal: &[f64]) -> SerialNoise {
         }
     }
     if best.2.is_nan() || best.2 <= 0.0 {
-        return white;
+        return white(level);
     }
-    SerialNoise {
+    let sn = SerialNoise {
         sigma: best.2.sqrt(),
         phi: best.1.min(0.999),
-    }
+    };
+    (sn, level)
 }
 
 /// Isolated glitch samples of `signal`: a sample `i` that jumps away from both neighbours in
@@ -1149,6 +1162,25 @@ mod tests {
     /// with AR(1) noise of φ = 0.9 it reads φ within 0.03 and σ within 15 % (the lag-1
     /// estimate alone says a quarter of σ); a slow sine (period 3000 samples, amplitude
     /// 200 σ) with white noise is no correlation.
+    /// The level `serial_noise_and_level` returns beside the AR(1) model is `noise_level`, bit
+    /// for bit, on records too short for the lags (< 40 samples), short and long ones, white
+    /// and AR(1) noise, and a flat one (no scale above zero: the white model).
+    #[test]
+    fn serial_noise_level_is_noise_level() {
+        for (n, phi) in [(12, 0.0), (39, 0.5), (40, 0.0), (300, 0.9), (6000, 0.0), (20_000, 0.7)] {
+            let s: Vec<f64> = crate::stats::tests::ar1_noise(n, phi, n as u64)
+                .iter()
+                .enumerate()
+                .map(|(i, e)| 0.01 * i as f64 + e)
+                .collect();
+            let (m, level) = serial_noise_and_level(&s);
+            assert_eq!(level.to_bits(), noise_level(&s).to_bits(), "n {n}");
+            assert_eq!(m, serial_noise(&s));
+        }
+        let (m, level) = serial_noise_and_level(&[2.0; 500]);
+        assert_eq!((m.sigma, m.phi, level), (0.0, 0.0, 0.0));
+    }
+
     #[test]
     fn serial_noise_reads_the_ar1_model_of_a_record() {
         let n = 6000;
