@@ -950,6 +950,7 @@ pub fn analyze(
             (end, from_fit_x(e.fit.x_intercept().unwrap_or(t.knee_x)))
         })
     });
+    let control_resolution = crate::condition::resolution(&c);
     let cyc = cycles(&CycleInputs {
         control: &cm,
         sectional: &xs,
@@ -958,7 +959,7 @@ pub fn analyze(
         stiffness_factor: factor,
         three_point: three,
         sectional_per_control: per_control,
-        control_resolution: crate::condition::resolution(&c),
+        control_resolution,
         zero_sectional: toe_ref.map_or(0.0, |t| t.1),
         toe_end_control: toe_ref.map_or(f64::NEG_INFINITY, |t| t.0 / per_control),
         serial: crate::condition::SerialNoise {
@@ -1252,7 +1253,13 @@ pub fn analyze(
         }
         _ => None,
     };
-    let holds = hold_relaxation(&segments, &c, &r, serial.0.phi, (serial.1, serial.2));
+    let holds = hold_relaxation(
+        &segments,
+        (&c, &r),
+        (3.0 * cn.noise).max(control_resolution),
+        serial.0.phi,
+        (serial.1, serial.2),
+    );
     // Rate dependence: every hold that trends relaxes, and two do (or the only one): a viscous
     // specimen relaxes after loading and recovers after unloading; a drift trends one way at
     // every hold, whatever the control did before it; one hold's fluke among several is not a
@@ -1381,11 +1388,12 @@ fn first_unloading_fit(
 }
 
 /// Response change over each hold that is not the initial rest (see [`HoldRelaxation`];
-/// `phi` and `prior` the record's AR(1) noise, as for the stiffness interval).
+/// `tol` the control's stillness, three noise σ or its resolution if larger; `phi` and
+/// `prior` the record's AR(1) noise, as for the stiffness interval).
 fn hold_relaxation(
     segments: &[Segment],
-    control: &[f64],
-    response: &[f64],
+    (control, response): (&[f64], &[f64]),
+    tol: f64,
     phi: f64,
     prior: (f64, f64),
 ) -> Vec<HoldRelaxation> {
@@ -1398,7 +1406,6 @@ fn hold_relaxation(
     // A hold's band reaches into the ramps on either side (it is one reversal threshold
     // wide): only its core, where the control is within its noise or resolution of the
     // hold's median, is still; the ramps' ends would otherwise pass for relaxation.
-    let tol = (3.0 * noise_level(control)).max(crate::condition::resolution(control));
     held.into_iter()
         .filter_map(|s| {
             let med = crate::stats::median(&control[s.start..s.end]);
