@@ -464,9 +464,10 @@ impl<'a> Conditioned<'a> {
         curve: &Curve,
         compliance: Option<f64>,
     ) -> Option<Conditioned<'a>> {
-        let clock_ok = curve.time_s.as_deref().is_none_or(|t| {
-            t.windows(2).all(|w| w[1] >= w[0]) && t.last() > t.first()
-        });
+        let clock_ok = curve
+            .time_s
+            .as_deref()
+            .is_none_or(|t| t.windows(2).all(|w| w[1] >= w[0]) && t.last() > t.first());
         match an.offsets {
             Some(offsets) if compliance.is_none() && an.excluded_samples.is_empty() && clock_ok => {
                 Some(Conditioned {
@@ -497,9 +498,22 @@ pub fn diag_test_from(
     let (control, response, offsets, labels) = match cond {
         Some(c) => {
             // `zero_offsets` subtracts in place: the same operation on the same samples.
-            let control = curve.control.iter().map(|v| v - c.offsets.control).collect();
-            let response = curve.response.iter().map(|v| v - c.offsets.response).collect();
-            (control, response, c.offsets, cablab_measure::labels(c.segments, n))
+            let control = curve
+                .control
+                .iter()
+                .map(|v| v - c.offsets.control)
+                .collect();
+            let response = curve
+                .response
+                .iter()
+                .map(|v| v - c.offsets.response)
+                .collect();
+            (
+                control,
+                response,
+                c.offsets,
+                cablab_measure::labels(c.segments, n),
+            )
         }
         None => {
             let mut control = curve.control.clone();
@@ -876,8 +890,16 @@ mod tests {
             assert_eq!(bits(&a.time_s), bits(&b.time_s), "{name}");
             assert_eq!(a.labels, b.labels, "{name}");
             assert_eq!(
-                (oa.control.to_bits(), oa.response.to_bits(), oa.samples_at_rest),
-                (ob.control.to_bits(), ob.response.to_bits(), ob.samples_at_rest),
+                (
+                    oa.control.to_bits(),
+                    oa.response.to_bits(),
+                    oa.samples_at_rest
+                ),
+                (
+                    ob.control.to_bits(),
+                    ob.response.to_bits(),
+                    ob.samples_at_rest
+                ),
                 "{name}"
             );
             if reused {
@@ -885,5 +907,4 @@ mod tests {
             }
         }
     }
-
 }

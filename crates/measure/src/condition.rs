@@ -1065,8 +1065,8 @@ pub fn zero_offsets_with(
         control_noise.noise,
     )
     .first()
-        .filter(|r| r.0 == 0)
-        .map_or(0, |r| r.1);
+    .filter(|r| r.0 == 0)
+    .map_or(0, |r| r.1);
     let (oc, or) = if rest >= 3 {
         let k = rest as f64;
         (
@@ -1167,7 +1167,14 @@ mod tests {
     /// and AR(1) noise, and a flat one (no scale above zero: the white model).
     #[test]
     fn serial_noise_level_is_noise_level() {
-        for (n, phi) in [(12, 0.0), (39, 0.5), (40, 0.0), (300, 0.9), (6000, 0.0), (20_000, 0.7)] {
+        for (n, phi) in [
+            (12, 0.0),
+            (39, 0.5),
+            (40, 0.0),
+            (300, 0.9),
+            (6000, 0.0),
+            (20_000, 0.7),
+        ] {
             let s: Vec<f64> = crate::stats::tests::ar1_noise(n, phi, n as u64)
                 .iter()
                 .enumerate()

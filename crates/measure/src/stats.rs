@@ -470,9 +470,8 @@ fn t_quantile_band(p: f64, dof: f64) -> Option<(f64, f64)> {
     const REL: f64 = 1e-9;
     const GAP: f64 = 1e-12;
     // ln of the density's constant Γ((ν+1)/2) / (√(νπ) Γ(ν/2)).
-    let ln_c = ln_gamma(0.5 * (dof + 1.0))
-        - ln_gamma(0.5 * dof)
-        - 0.5 * (dof * std::f64::consts::PI).ln();
+    let ln_c =
+        ln_gamma(0.5 * (dof + 1.0)) - ln_gamma(0.5 * dof) - 0.5 * (dof * std::f64::consts::PI).ln();
     let pdf = |t: f64| (ln_c - 0.5 * (dof + 1.0) * (t * t / dof).ln_1p()).exp();
     // The CDF is concave for t > 0: from the normal quantile, Newton's steps approach the
     // quantile from below after the first.
@@ -489,7 +488,8 @@ fn t_quantile_band(p: f64, dof: f64) -> Option<(f64, f64)> {
             break;
         }
     }
-    if !settled || !(t > 0.0 && t.is_finite()) {
+    // `t` is finite (every step was) and at least 0; p = 0.5 settles at 0, where no band is.
+    if !settled || t <= 0.0 {
         return None;
     }
     let (a, b) = (t * (1.0 - REL), t * (1.0 + REL));
@@ -649,13 +649,27 @@ pub(crate) mod tests {
     /// probabilities from 0.5 to 1 − 10⁻⁶ (the plain bisection asks the CDF every time).
     #[test]
     fn t_quantiles_equal_the_plain_bisection_bit_for_bit() {
-        let plain = |p: f64, dof: f64| {
-            t_quantile_bisection(p, dof, |t| student_t_cdf(t, dof) < p)
-        };
+        let plain = |p: f64, dof: f64| t_quantile_bisection(p, dof, |t| student_t_cdf(t, dof) < p);
         let mut dofs: Vec<f64> = (1..=60).map(f64::from).collect();
         dofs.extend([
-            0.3, 0.5, 0.9, 1.5, 2.7, 7.25, 99.5, 180.0, 222.0, 393.928_504_991_550_4, 1e3, 2047.0,
-            1e4, 5e4, 1e5, 1e6, 1e7, 1e9,
+            0.3,
+            0.5,
+            0.9,
+            1.5,
+            2.7,
+            7.25,
+            99.5,
+            180.0,
+            222.0,
+            393.928_504_991_550_4,
+            1e3,
+            2047.0,
+            1e4,
+            5e4,
+            1e5,
+            1e6,
+            1e7,
+            1e9,
         ]);
         let mut banded = 0;
         for &dof in &dofs {
