@@ -463,7 +463,8 @@ pub fn read_options(r: &crate::cli::ReaderArgs, kind: Option<TestKind>) -> Resul
 /// A measured test as the calibration and the diagnosis see it: zero offsets removed (as the
 /// characterisation does: an untared load cell is conditioning, not an unmodelled effect),
 /// cycle/branch labels from the one segmenter, time stamps (sample index when the file has
-/// none). Returns the test and the offsets taken off.
+/// none). Returns the test and the offsets taken off. Conditions the curve itself; the run
+/// hands over what the characterisation found instead ([`diag_test_from`]).
 pub fn diag_test(
     kind: TestKind,
     geom: &cablab_measure::Geometry,
@@ -471,16 +472,91 @@ pub fn diag_test(
     specimen: Option<String>,
     rod_setup: Option<cablab_rod::TestSetup>,
 ) -> Result<(cablab_diagnose::DiagTest, cablab_measure::Offsets)> {
+    diag_test_from(kind, geom, curve, specimen, rod_setup, None)
+}
+
+/// The offsets and segments a characterisation found on a curve, for [`diag_test_from`].
+#[derive(Debug, Clone, Copy)]
+pub struct Conditioned<'a> {
+    /// The zero offsets it took off.
+    pub offsets: cablab_measure::Offsets,
+    /// Its cycles and branches.
+    pub segments: &'a [cablab_measure::Segment],
+}
+
+impl<'a> Conditioned<'a> {
+    /// What `an` (the characterisation of `curve`, with the machine compliance `compliance`
+    /// removed when given) found, when it conditioned the very samples [`diag_test`] would:
+    /// offsets taken off, no compliance removed, no glitch replaced, and the holds timed by
+    /// the same clock (the file's time when it runs forward, else none: the characterisation
+    /// then times by sample index where [`diag_test`] would use the backward clock). None
+    /// otherwise: the diagnosis' test is conditioned from the curve itself.
+    pub fn by(
+        an: &'a cablab_measure::Analysis,
+        curve: &Curve,
+        compliance: Option<f64>,
+    ) -> Option<Conditioned<'a>> {
+        let clock_ok = curve
+            .time_s
+            .as_deref()
+            .is_none_or(|t| t.windows(2).all(|w| w[1] >= w[0]) && t.last() > t.first());
+        match an.offsets {
+            Some(offsets) if compliance.is_none() && an.excluded_samples.is_empty() && clock_ok => {
+                Some(Conditioned {
+                    offsets,
+                    segments: &an.segments,
+                })
+            }
+            _ => None,
+        }
+    }
+}
+
+/// [`diag_test`], with the offsets and segments of the characterisation when given (`cond`,
+/// see [`Conditioned::by`]): the same test, bit for bit, without conditioning the curve again.
+pub fn diag_test_from(
+    kind: TestKind,
+    geom: &cablab_measure::Geometry,
+    curve: &Curve,
+    specimen: Option<String>,
+    rod_setup: Option<cablab_rod::TestSetup>,
+    cond: Option<Conditioned>,
+) -> Result<(cablab_diagnose::DiagTest, cablab_measure::Offsets)> {
     let n = curve.control.len();
-    let mut control = curve.control.clone();
-    let mut response = curve.response.clone();
-    let offsets = cablab_measure::zero_offsets(&mut control, &mut response);
     let time_s = curve
         .time_s
         .clone()
         .unwrap_or_else(|| (0..n).map(|i| i as f64).collect());
-    let segments = cablab_measure::segment(Some(&time_s), &control, &response)?;
-    let labels = cablab_measure::labels(&segments, n)
+    let (control, response, offsets, labels) = match cond {
+        Some(c) => {
+            // `zero_offsets` subtracts in place: the same operation on the same samples.
+            let control = curve
+                .control
+                .iter()
+                .map(|v| v - c.offsets.control)
+                .collect();
+            let response = curve
+                .response
+                .iter()
+                .map(|v| v - c.offsets.response)
+                .collect();
+            (
+                control,
+                response,
+                c.offsets,
+                cablab_measure::labels(c.segments, n),
+            )
+        }
+        None => {
+            let mut control = curve.control.clone();
+            let mut response = curve.response.clone();
+            let offsets = cablab_measure::zero_offsets(&mut control, &mut response);
+            let segments = cablab_measure::segment(Some(&time_s), &control, &response)?;
+            let labels = cablab_measure::labels(&segments, n);
+            (control, response, offsets, labels)
+        }
+    };
+    let labels = labels
         .into_iter()
         .map(|l| cablab_diagnose::SegLabel {
             cycle: l.cycle,
@@ -793,5 +869,115 @@ mod tests {
         assert_eq!(said.warnings.len(), 1, "{said:?}");
         assert!(said.warnings[0].contains("lower bound"), "{said:?}");
         assert_eq!(said.notes.len(), 1, "{said:?}");
+    }
+
+    /// A torsion log of three cycles (rest, ramps, dwells, a yield-like bend) with noise and
+    /// offsets on both channels: 6,000 samples, time stamps when `clock`.
+    fn cyclic_curve(clock: bool) -> Curve {
+        let mut c = vec![0.0; 200];
+        for a in [0.02, 0.04, 0.06] {
+            c.extend((0..800).map(|i| a * i as f64 / 800.0));
+            c.extend(std::iter::repeat_n(a, 200));
+            c.extend((0..800).map(|i| a * (1.0 - i as f64 / 800.0)));
+        }
+        let mut plastic = 0.0f64;
+        let mut last = 0.0;
+        let response: Vec<f64> = c
+            .iter()
+            .enumerate()
+            .map(|(i, &x)| {
+                // Elastic up to 0.03 rad of elastic twist, then a tenth of the slope.
+                let trial = 50.0 * (x - plastic);
+                if trial > 1.5 && x > last {
+                    plastic = x - 0.03;
+                }
+                last = x;
+                let r = 50.0 * (x - plastic);
+                let noise = 0.01 * ((i as f64 * 12.9898).sin() * 43_758.545).fract();
+                0.3 + r + noise
+            })
+            .collect();
+        let control: Vec<f64> = c
+            .iter()
+            .enumerate()
+            .map(|(i, x)| 0.001 + x + 1e-5 * ((i as f64 * 78.233).sin() * 43_758.545).fract())
+            .collect();
+        Curve {
+            time_s: clock.then(|| (0..control.len()).map(|i| 0.01 * i as f64).collect()),
+            control,
+            response,
+            dropped_rows: 0,
+        }
+    }
+
+    /// The diagnosis' test built from the characterisation's offsets and segments is the test
+    /// conditioned from the curve itself, bit for bit, with and without a time column; a
+    /// compliance removed, a glitch replaced or a clock that runs backwards make the
+    /// characterisation's conditioning another curve's, and it is not handed over.
+    #[test]
+    fn the_characterisations_conditioning_is_the_diagnosis_test_s() {
+        let geom = cablab_measure::Geometry {
+            free_length_m: 0.05,
+            diameter_m: Some(2e-3),
+        };
+        let kind = TestKind::Torsion;
+        let glitched = {
+            let mut c = cyclic_curve(true);
+            c.response[3000] += 40.0;
+            c
+        };
+        let backwards = {
+            let mut c = cyclic_curve(true);
+            c.time_s.as_mut().unwrap().swap(100, 101);
+            c
+        };
+        let cases = [
+            ("time", cyclic_curve(true), None, true),
+            ("no time", cyclic_curve(false), None, true),
+            ("compliance", cyclic_curve(true), Some(1e-4), false),
+            ("glitch", glitched, None, false),
+            ("backward clock", backwards, None, false),
+        ];
+        for (name, curve, compliance, reused) in cases {
+            let opts = cablab_measure::AnalyzeOptions {
+                compliance_m_per_n: compliance,
+                ..Default::default()
+            };
+            let an = cablab_measure::analyze(
+                kind,
+                &geom,
+                curve.time_s.as_deref(),
+                &curve.control,
+                &curve.response,
+                &opts,
+            )
+            .unwrap();
+            assert!(an.segments.len() > 6, "{name}: {:?}", an.segments);
+            let cond = Conditioned::by(&an, &curve, compliance);
+            assert_eq!(cond.is_some(), reused, "{name}");
+            let (a, oa) = diag_test_from(kind, &geom, &curve, None, None, cond).unwrap();
+            let (b, ob) = diag_test(kind, &geom, &curve, None, None).unwrap();
+            let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+            assert_eq!(bits(&a.control), bits(&b.control), "{name}");
+            assert_eq!(bits(&a.response), bits(&b.response), "{name}");
+            assert_eq!(bits(&a.time_s), bits(&b.time_s), "{name}");
+            assert_eq!(a.labels, b.labels, "{name}");
+            assert_eq!(
+                (
+                    oa.control.to_bits(),
+                    oa.response.to_bits(),
+                    oa.samples_at_rest
+                ),
+                (
+                    ob.control.to_bits(),
+                    ob.response.to_bits(),
+                    ob.samples_at_rest
+                ),
+                "{name}"
+            );
+            if reused {
+                assert!(oa.samples_at_rest > 0, "{name}: {oa:?}");
+            }
+        }
     }
 }

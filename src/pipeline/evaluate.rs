@@ -614,12 +614,15 @@ fn model_part(
     // 3. calibrate and simulate the baseline
     let mut rod_setup = cablab_rod::TestSetup::new(t.kind, geom.free_length_m);
     rod_setup.elements = c.file.model.elements;
-    let (dtest, offsets) = crate::bridge::diag_test(
+    // The offsets and segments the characterisation found, when it conditioned these very
+    // samples (not after a compliance or a glitch was taken out).
+    let (dtest, offsets) = crate::bridge::diag_test_from(
         t.kind,
         geom,
         curve,
         Some(t.specimen.clone()),
         Some(rod_setup),
+        crate::bridge::Conditioned::by(an, curve, t.settings.compliance),
     )?;
     let tests = std::slice::from_ref(&dtest);
     let rod = Rod::default();

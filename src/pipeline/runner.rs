@@ -229,6 +229,7 @@ pub(crate) fn evaluate_tests(
 ) -> Result<(Vec<TestOutcome>, usize)> {
     std::fs::create_dir_all(out_dir.join("tests"))
         .with_context(|| format!("cannot create {}", out_dir.display()))?;
+    keep_freed_memory();
     let diagnosis = diagnosis_on(c, o);
     let jobs = o
         .jobs
@@ -284,6 +285,27 @@ pub(crate) fn evaluate_tests(
     }
     let cached_n = results.iter().filter(|r| r.1).count();
     Ok((results.into_iter().map(|r| r.0).collect(), cached_n))
+}
+
+/// Below this size glibc's allocator serves blocks from its heaps instead of fresh `mmap`s.
+const MMAP_THRESHOLD_BYTES: i32 = 4 << 20;
+/// Free memory at the top of a heap beyond this is returned to the system.
+const TRIM_THRESHOLD_BYTES: i32 = 32 << 20;
+
+/// Let glibc's allocator keep freed blocks of up to [`MMAP_THRESHOLD_BYTES`] for reuse. A test
+/// allocates and frees many curve-sized buffers (20,000 samples: 160 KB, just above glibc's
+/// initial 128 KB `mmap` threshold), and each fresh `mmap` is paged in and zeroed by the kernel
+/// again: 92,000 page faults and 0.3 s of system time on compare.sh's campaign of 100 tests,
+/// 13,000 and 0.1 s with the blocks kept (peak memory +10 MB at `--jobs 2`).
+///
+/// Does nothing on other allocators and systems; changes no result.
+fn keep_freed_memory() {
+    #[cfg(all(target_os = "linux", target_env = "gnu"))]
+    // SAFETY: mallopt only sets two of the allocator's tuning parameters; any value is valid.
+    unsafe {
+        libc::mallopt(libc::M_MMAP_THRESHOLD, MMAP_THRESHOLD_BYTES);
+        libc::mallopt(libc::M_TRIM_THRESHOLD, TRIM_THRESHOLD_BYTES);
+    }
 }
 
 /// Copy (hard-link where the file system allows) a test's files from the folder `from` into

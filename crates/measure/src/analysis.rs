@@ -53,7 +53,8 @@
 //! elastic range there. Pure: numbers in, numbers out.
 
 use crate::condition::{
-    correct_compliance, glitches, noise_level, segment, zero_offsets, Branch, Offsets, Segment,
+    correct_compliance, glitches_with, noise_level, reversal_threshold_with, segment_with,
+    zero_offsets_with, Branch, ChannelNoise, Offsets, Segment,
 };
 use crate::elastic::{auto_elastic_range_ar1, user_elastic_range, ElasticRange, Hinge};
 use crate::elastica::ThreePointElastica;
@@ -659,15 +660,24 @@ pub fn analyze(
         None => control.to_vec(),
     };
     let mut r = response.to_vec();
+    // Each channel's noise scales are computed once per state of its samples (as read, after
+    // glitches are replaced, after the offsets are taken off) and handed to every step.
+    let (mut cn, mut rn) = (ChannelNoise::of(&c), ChannelNoise::of(&r));
     // Isolated glitches (one sample off in one channel) are excluded from every fit: replaced,
     // in this copy only, by the mean of their neighbours.
-    let mut excluded: Vec<usize> = glitches(&r, &c);
-    let in_control = glitches(&c, &r);
+    let mut excluded: Vec<usize> = glitches_with(&r, &c, rn.jitter, cn.noise);
+    let in_control = glitches_with(&c, &r, cn.jitter, rn.noise);
     for &i in &excluded {
         r[i] = 0.5 * (r[i - 1] + r[i + 1]);
     }
     for &i in &in_control {
         c[i] = 0.5 * (c[i - 1] + c[i + 1]);
+    }
+    if !excluded.is_empty() {
+        rn = ChannelNoise::of(&r);
+    }
+    if !in_control.is_empty() {
+        cn = ChannelNoise::of(&c);
     }
     if !excluded.is_empty() || !in_control.is_empty() {
         let show = |v: &[usize]| {
@@ -688,13 +698,18 @@ pub fn analyze(
     excluded.extend(in_control);
     excluded.sort_unstable();
     excluded.dedup();
-    let offsets = opts.zero_offsets.then(|| zero_offsets(&mut c, &mut r));
+    let offsets = opts
+        .zero_offsets
+        .then(|| zero_offsets_with(&mut c, &mut r, cn, rn));
+    if offsets.is_some() {
+        (cn, rn) = (ChannelNoise::of(&c), ChannelNoise::of(&r));
+    }
     let noise = Noise {
-        control: noise_level(&c),
-        response: noise_level(&r),
+        control: cn.noise,
+        response: rn.noise,
     };
 
-    let segments = segment(time_s, &c, &r)?;
+    let segments = segment_with(time_s, &c, &r, cn, rn)?;
     // Orientation of the first loading.
     let first_idx: Vec<usize> = segments
         .iter()
@@ -712,6 +727,9 @@ pub fn analyze(
     };
     let cm: Vec<f64> = c.iter().map(|v| sign * v).collect();
     let rm: Vec<f64> = r.iter().map(|v| sign * v).collect();
+    // The reversal threshold of the oriented control: a sign flip changes no second
+    // difference's magnitude, nor the range, so the control's jitter serves as it is.
+    let h_cm = reversal_threshold_with(&cm, cn.jitter);
     let xs = sectional(kind, geom, &cm);
     let l0 = geom.free_length_m;
     let three = kind == TestKind::ThreePoint;
@@ -736,7 +754,7 @@ pub fn analyze(
     // all earlier extremes by more than the reversal threshold (module doc of `condition`).
     let env_idx: Vec<usize> = match opts.yield_method {
         YieldMethod::FirstLoading => first_idx.clone(),
-        _ => virgin_envelope(&segments, &cm, &first_idx),
+        _ => virgin_envelope(&segments, &cm, &first_idx, h_cm),
     };
     let mut fx: Vec<f64> = Vec::with_capacity(env_idx.len());
     let mut fw: Vec<f64> = Vec::with_capacity(env_idx.len());
@@ -800,9 +818,9 @@ pub fn analyze(
         let seg = crate::elastic::segment_lines(&fx, &fy, 3);
         let k = seg.slopes.iter().copied().fold(0.0f64, f64::max);
         let z: Vec<f64> = xs.iter().zip(&rm).map(|(x, y)| y - k * x).collect();
-        let sn = crate::condition::serial_noise(&z);
+        let (sn, lr) = crate::condition::serial_noise_and_level(&z);
         let z_env: Vec<f64> = env_idx[..fx.len()].iter().map(|&i| z[i]).collect();
-        let (lr, le) = (noise_level(&z), noise_level(&z_env));
+        let le = noise_level(&z_env);
         let scale = if lr > 0.0 && le > 0.0 { le / lr } else { 1.0 };
         let dof = 0.19 * z_env.len().min(z.len()) as f64 / sn.long_run_factor();
         (sn, sn.sigma * scale, dof)
@@ -974,6 +992,7 @@ pub fn analyze(
             (end, from_fit_x(e.fit.x_intercept().unwrap_or(t.knee_x)))
         })
     });
+    let control_resolution = crate::condition::resolution(&c);
     let cyc = cycles(&CycleInputs {
         control: &cm,
         sectional: &xs,
@@ -982,7 +1001,7 @@ pub fn analyze(
         stiffness_factor: factor,
         three_point: three,
         sectional_per_control: per_control,
-        control_resolution: crate::condition::resolution(&c),
+        control_resolution,
         zero_sectional: toe_ref.map_or(0.0, |t| t.1),
         toe_end_control: toe_ref.map_or(f64::NEG_INFINITY, |t| t.0 / per_control),
         serial: crate::condition::SerialNoise {
@@ -1185,7 +1204,7 @@ pub fn analyze(
             sample: k,
         }
     };
-    let break_point = find_break(&cm, &rm, serial.0.sigma).map(|(j, work)| BreakPoint {
+    let break_point = find_break(&cm, &rm, serial.0.sigma, h_cm).map(|(j, work)| BreakPoint {
         sample: j,
         machine_control: control[j],
         response_before: response[j - 1],
@@ -1277,7 +1296,13 @@ pub fn analyze(
         }
         _ => None,
     };
-    let holds = hold_relaxation(&segments, &c, &r, serial.0.phi, (serial.1, serial.2));
+    let holds = hold_relaxation(
+        &segments,
+        (&c, &r),
+        (3.0 * cn.noise).max(control_resolution),
+        serial.0.phi,
+        (serial.1, serial.2),
+    );
     // Rate dependence: every hold that trends relaxes, and two do (or the only one): a viscous
     // specimen relaxes after loading and recovers after unloading; a drift trends one way at
     // every hold, whatever the control did before it; one hold's fluke among several is not a
@@ -1407,11 +1432,12 @@ fn first_unloading_fit(
 }
 
 /// Response change over each hold that is not the initial rest (see [`HoldRelaxation`];
-/// `phi` and `prior` the record's AR(1) noise, as for the stiffness interval).
+/// `tol` the control's stillness, three noise σ or its resolution if larger; `phi` and
+/// `prior` the record's AR(1) noise, as for the stiffness interval).
 fn hold_relaxation(
     segments: &[Segment],
-    control: &[f64],
-    response: &[f64],
+    (control, response): (&[f64], &[f64]),
+    tol: f64,
     phi: f64,
     prior: (f64, f64),
 ) -> Vec<HoldRelaxation> {
@@ -1424,7 +1450,6 @@ fn hold_relaxation(
     // A hold's band reaches into the ramps on either side (it is one reversal threshold
     // wide): only its core, where the control is within its noise or resolution of the
     // hold's median, is still; the ramps' ends would otherwise pass for relaxation.
-    let tol = (3.0 * noise_level(control)).max(crate::condition::resolution(control));
     held.into_iter()
         .filter_map(|s| {
             let med = crate::stats::median(&control[s.start..s.end]);
@@ -1532,9 +1557,9 @@ fn stiffness_doubts(s: &Stiffness) -> Vec<String> {
 
 /// Indices of the virgin envelope: the first loading, then each later loading from its first
 /// sample beyond every earlier extreme (by more than the reversal threshold, so noise on a
-/// repeated amplitude adds nothing) to its end. `cm` is the oriented control.
-fn virgin_envelope(segments: &[Segment], cm: &[f64], first_idx: &[usize]) -> Vec<usize> {
-    let h = crate::condition::reversal_threshold(cm);
+/// repeated amplitude adds nothing) to its end. `cm` is the oriented control, `h` its reversal
+/// threshold.
+fn virgin_envelope(segments: &[Segment], cm: &[f64], first_idx: &[usize], h: f64) -> Vec<usize> {
     let mut out = first_idx.to_vec();
     let mut top = first_idx
         .iter()
@@ -1769,12 +1794,12 @@ fn offset_yield(
 ///   max(5, 1 % of the record) samples (or all that remain, at least 3) is below
 ///   [`BREAK_DROP`] of the maximum, and below it by 10 σ;
 /// * the response never comes back above 0.8 of the maximum, and the control has not gone
-///   back below its value at the maximum by more than its reversal threshold (an unloading is
-///   no break).
+///   back below its value at the maximum by more than its reversal threshold `h` (an
+///   unloading is no break).
 ///
 /// The break sample is the first sample of that sustained stretch below the drop level.
 /// Returns it and the work ∫ rm d(cm) up to it.
-fn find_break(cm: &[f64], rm: &[f64], sigma: f64) -> Option<(usize, f64)> {
+fn find_break(cm: &[f64], rm: &[f64], sigma: f64, h: f64) -> Option<(usize, f64)> {
     let n = rm.len();
     let k = (0..n).max_by(|&a, &b| rm[a].total_cmp(&rm[b]))?;
     let top = rm[k];
@@ -1793,7 +1818,6 @@ fn find_break(cm: &[f64], rm: &[f64], sigma: f64) -> Option<(usize, f64)> {
     };
     let j = (k + 1..n).find(|&j| rm[j] < level && sustained(j))?;
     let stays = rm[j..].iter().all(|&v| v < 0.8 * top);
-    let h = crate::condition::reversal_threshold(cm);
     let onward = cm[k..=j].iter().all(|&v| v >= cm[k] - h);
     if !(stays && onward) {
         return None;

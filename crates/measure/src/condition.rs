@@ -103,32 +103,44 @@ impl SerialNoise {
 /// Does not model noise that is not stationary; quantised signals whose noise is below one
 /// count give φ = 0 and σ from [`noise_level`].
 pub fn serial_noise(signal: &[f64]) -> SerialNoise {
+    serial_noise_and_level(signal).0
+}
+
+/// [`serial_noise`] and the signal's [`noise_level`], which is its scale at lag 1 (computed
+/// once for both).
+pub(crate) fn serial_noise_and_level(signal: &[f64]) -> (SerialNoise, f64) {
     let n = signal.len();
-    let white = SerialNoise {
-        sigma: noise_level(signal),
-        phi: 0.0,
-    };
     let mut lags = Vec::new();
     let mut k = 1usize;
     while n >= 20 * k.max(2) || (k == 1 && n >= 40) {
         lags.push(k);
         k = if k < 4 { k + 1 } else { k + k / 2 };
     }
+    let white = |sigma: f64| {
+        let w = SerialNoise { sigma, phi: 0.0 };
+        (w, sigma)
+    };
     if lags.len() < 3 {
-        return white;
+        return white(noise_level(signal));
     }
-    let v2: Vec<(f64, f64)> = lags
+    // The lag-1 scale is `noise_level`: the same differences in the same order.
+    let scales: Vec<(usize, f64)> = lags
         .iter()
-        .filter_map(|&k| {
+        .map(|&k| {
             let d: Vec<f64> = (0..n - 2 * k)
                 .map(|i| signal[i + 2 * k] - 2.0 * signal[i + k] + signal[i])
                 .collect();
-            let v = mad_sigma_of_second_differences(&d);
-            (v > 0.0).then_some((k as f64, v * v))
+            (k, mad_sigma_of_second_differences(&d))
         })
         .collect();
+    let level = scales[0].1;
+    let v2: Vec<(f64, f64)> = scales
+        .iter()
+        .filter(|(_, v)| *v > 0.0)
+        .map(|&(k, v)| (k as f64, v * v))
+        .collect();
     if v2.len() < 3 {
-        return white;
+        return white(level);
     }
     // For a given φ, minimise Σ ((v_k² − σ² g_k − c k⁴)/v_k²)² over σ² ≥ 0, c ≥ 0.
     let fit = |phi: f64| -> (f64, f64) {
@@ -180,12 +192,13 @@ pub fn serial_noise(signal: &[f64]) -> SerialNoise {
         }
     }
     if best.2.is_nan() || best.2 <= 0.0 {
-        return white;
+        return white(level);
     }
-    SerialNoise {
+    let sn = SerialNoise {
         sigma: best.2.sqrt(),
         phi: best.1.min(0.999),
-    }
+    };
+    (sn, level)
 }
 
 /// Isolated glitch samples of `signal`: a sample `i` that jumps away from both neighbours in
@@ -206,8 +219,21 @@ pub fn glitches(signal: &[f64], partner: &[f64]) -> Vec<usize> {
     if n < 5 || partner.len() != n {
         return Vec::new();
     }
-    let sigma = jitter_level(signal);
-    let sigma_p = noise_level(partner);
+    glitches_with(signal, partner, jitter_level(signal), noise_level(partner))
+}
+
+/// [`glitches`] with the signal's [`jitter_level`] `sigma` and the partner's [`noise_level`]
+/// `sigma_p` given (see [`ChannelNoise`]).
+pub(crate) fn glitches_with(
+    signal: &[f64],
+    partner: &[f64],
+    sigma: f64,
+    sigma_p: f64,
+) -> Vec<usize> {
+    let n = signal.len();
+    if n < 5 || partner.len() != n {
+        return Vec::new();
+    }
     let turns = |v: &[f64], i: usize, s: f64| {
         let (a, b) = (v[i] - v[i - 1], v[i] - v[i + 1]);
         a * b > 0.0 && a.abs().min(b.abs()) > 3.0 * s
@@ -305,8 +331,12 @@ fn approx_gcd(a: f64, b: f64, tol: f64) -> f64 {
 /// count as a cycle. Loops that small are far below what a stiffness, yield or hysteresis
 /// analysis resolves.
 pub fn reversal_threshold(signal: &[f64]) -> f64 {
+    reversal_threshold_with(signal, jitter_level(signal))
+}
+
+/// [`reversal_threshold`] with the signal's [`jitter_level`] `sigma` given.
+pub(crate) fn reversal_threshold_with(signal: &[f64], sigma: f64) -> f64 {
     let n = signal.len().max(2) as f64;
-    let sigma = jitter_level(signal);
     let (lo, hi) = min_max(signal);
     (1.5 * 2.0 * sigma * (2.0 * n.ln()).sqrt()).max(MIN_REVERSAL_FRACTION * (hi - lo))
 }
@@ -329,64 +359,57 @@ pub const JITTER_MAX_LAG: usize = 4;
 /// Does not look at lags beyond [`JITTER_MAX_LAG`]: curvature grows as k², and a densely
 /// cycled test would read as jitter.
 ///
-/// A test's conditioning asks for the same channel's jitter up to a dozen times (glitches,
-/// reversal thresholds, holds, offsets, segmentation; in the characterisation and again for
-/// the model): each thread remembers the last [`JITTER_MEMO`] signals of ≥ 1,000 samples and
-/// their σ. A signal is recognised only when it is the same numbers bit for bit, so the memo
-/// returns exactly what the computation would.
 pub fn jitter_level(signal: &[f64]) -> f64 {
-    if signal.len() < 1000 {
-        return jitter_level_of(signal);
-    }
-    let same = |a: &[f64]| {
-        a.len() == signal.len()
-            && a.iter()
-                .zip(signal)
-                .all(|(x, y)| x.to_bits() == y.to_bits())
-    };
-    let hit = MEMO.with_borrow(|m| m.iter().find(|(v, _)| same(v)).map(|e| e.1));
-    if let Some(sigma) = hit {
-        return sigma;
-    }
-    let sigma = jitter_level_of(signal);
-    MEMO.with_borrow_mut(|m| {
-        if m.len() == JITTER_MEMO {
-            m.pop_front();
-        }
-        m.push_back((signal.to_vec(), sigma));
-    });
-    sigma
+    ChannelNoise::of(signal).jitter
 }
 
-/// How many signals (and their σ) [`jitter_level`] remembers per thread.
-pub const JITTER_MEMO: usize = 6;
-
-thread_local! {
-    static MEMO: std::cell::RefCell<std::collections::VecDeque<(Vec<f64>, f64)>> =
-        const { std::cell::RefCell::new(std::collections::VecDeque::new()) };
+/// The two noise scales of one channel's samples, computed together in one pass over the
+/// second differences (the lag-1 pass of [`jitter_level`] is [`noise_level`] itself: the same
+/// differences in the same order). A test is conditioned with each of its signals' scales
+/// computed once and handed on ([`zero_offsets_with`], [`segment_with`]), not
+/// asked for again by every step that needs them.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct ChannelNoise {
+    /// [`noise_level`]: the Gaussian σ of the lag-1 second differences (MAD).
+    pub noise: f64,
+    /// [`jitter_level`]: the σ of the jitter over 1–4 samples (at least `noise`).
+    pub jitter: f64,
 }
 
-/// [`jitter_level`] computed.
-fn jitter_level_of(signal: &[f64]) -> f64 {
-    // On ≥ 20 samples the lag-1 pass below is `noise_level` itself, the same differences in the
-    // same order: start from NaN (`NaN.max(x)` is x) instead of computing it twice.
-    let mut sigma = if signal.len() >= 20 {
-        f64::NAN
-    } else {
-        noise_level(signal)
-    };
-    let mut k = 1;
-    while k <= JITTER_MAX_LAG && signal.len() >= 20 * k {
-        let d2: Vec<f64> = (0..signal.len() - 2 * k)
-            .map(|i| signal[i + 2 * k] - 2.0 * signal[i + k] + signal[i])
-            .collect();
-        sigma = sigma.max(mad_sigma_of_second_differences(&d2));
-        if k <= 2 {
-            sigma = sigma.max(trimmed_rms(&d2, JITTER_TRIM) / 6f64.sqrt());
+impl ChannelNoise {
+    /// Both scales of `signal`: exactly [`noise_level`] and [`jitter_level`] of it.
+    pub fn of(signal: &[f64]) -> ChannelNoise {
+        if signal.len() < 20 {
+            // No lag is used: the jitter is the noise.
+            let noise = noise_level(signal);
+            return ChannelNoise {
+                noise,
+                jitter: noise,
+            };
         }
-        k *= 2;
+        let mut noise = f64::NAN;
+        let mut sigma = f64::NAN;
+        let mut k = 1;
+        while k <= JITTER_MAX_LAG && signal.len() >= 20 * k {
+            let d2: Vec<f64> = (0..signal.len() - 2 * k)
+                .map(|i| signal[i + 2 * k] - 2.0 * signal[i + k] + signal[i])
+                .collect();
+            let mad = mad_sigma_of_second_differences(&d2);
+            if k == 1 {
+                noise = mad;
+            }
+            // `NaN.max(x)` is x: the first lag starts the maximum.
+            sigma = sigma.max(mad);
+            if k <= 2 {
+                sigma = sigma.max(trimmed_rms(&d2, JITTER_TRIM) / 6f64.sqrt());
+            }
+            k *= 2;
+        }
+        ChannelNoise {
+            noise,
+            jitter: sigma,
+        }
     }
-    sigma
 }
 
 /// Share of the largest second differences [`jitter_level`]'s RMS leaves out (turning points,
@@ -593,6 +616,28 @@ pub fn holds_still(
     threshold: f64,
 ) -> Vec<(usize, usize)> {
     let n = control.len();
+    let response = response
+        .filter(|r| r.len() == n)
+        .map(|r| (r, jitter_level(r)));
+    // The control's noise only judges creep, which only a response asks for.
+    let sigma_c = if response.is_some() {
+        noise_level(control)
+    } else {
+        0.0
+    };
+    holds_still_with(time_s, control, response, threshold, sigma_c)
+}
+
+/// [`holds_still`] with the response (if any, of the control's length) paired with its
+/// [`jitter_level`], and the control's [`noise_level`] `sigma_c` given.
+fn holds_still_with(
+    time_s: Option<&[f64]>,
+    control: &[f64],
+    response: Option<(&[f64], f64)>,
+    threshold: f64,
+    sigma_c: f64,
+) -> Vec<(usize, usize)> {
+    let n = control.len();
     if n < 3 {
         return Vec::new();
     }
@@ -622,15 +667,14 @@ pub fn holds_still(
         p
     };
     let pc = prefix(control);
-    let resp = response.filter(|r| r.len() == n);
-    let pr = resp.map(prefix);
-    let hr = resp.map_or(0.0, |r| {
+    let resp = response.filter(|r| r.0.len() == n);
+    let pr = resp.map(|r| prefix(r.0));
+    let hr = resp.map_or(0.0, |(r, jitter)| {
         let (lo, hi) = min_max(r);
-        reversal_threshold(r).max(0.1 * (hi - lo))
+        reversal_threshold_with(r, jitter).max(0.1 * (hi - lo))
     });
     // `j`: the end of the band stretch (the creep test runs over all of it); `e` <= `j`: the
     // end of the hold tried (the response test runs up to it).
-    let sigma_c = noise_level(control);
     let still = |i: usize, e: usize, j: usize| {
         let mean = |p: &[f64], a: usize, b: usize| (p[b] - p[a]) / (b - a) as f64;
         let Some(p) = &pr else {
@@ -786,6 +830,24 @@ pub fn segment(
     control: &[f64],
     response: &[f64],
 ) -> Result<Vec<Segment>, MeasureError> {
+    segment_with(
+        time_s,
+        control,
+        response,
+        ChannelNoise::of(control),
+        ChannelNoise::of(response),
+    )
+}
+
+/// [`segment`] with the control's and the response's [`ChannelNoise`] given (of these very
+/// samples).
+pub fn segment_with(
+    time_s: Option<&[f64]>,
+    control: &[f64],
+    response: &[f64],
+    control_noise: ChannelNoise,
+    response_noise: ChannelNoise,
+) -> Result<Vec<Segment>, MeasureError> {
     let n = control.len();
     if response.len() != n {
         return Err(MeasureError::LengthMismatch {
@@ -810,8 +872,14 @@ pub fn segment(
             got: n,
         });
     }
-    let h = reversal_threshold(control);
-    let hold_runs = holds_still(time_s, control, Some(response), h);
+    let h = reversal_threshold_with(control, control_noise.jitter);
+    let hold_runs = holds_still_with(
+        time_s,
+        control,
+        Some((response, response_noise.jitter)),
+        h,
+        control_noise.noise,
+    );
     let tps = turning_points(control, h);
 
     // Monotone runs between turning points: (start, end_exclusive, rising).
@@ -967,6 +1035,20 @@ pub struct Offsets {
 /// level.
 pub fn zero_offsets(control: &mut [f64], response: &mut [f64]) -> Offsets {
     let n = control.len().min(response.len());
+    let cn = ChannelNoise::of(&control[..n]);
+    let rn = ChannelNoise::of(&response[..n]);
+    zero_offsets_with(control, response, cn, rn)
+}
+
+/// [`zero_offsets`] with the [`ChannelNoise`] of the control and the response given (of their
+/// first `min(len)` samples, as they are before the offsets are taken off).
+pub fn zero_offsets_with(
+    control: &mut [f64],
+    response: &mut [f64],
+    control_noise: ChannelNoise,
+    response_noise: ChannelNoise,
+) -> Offsets {
+    let n = control.len().min(response.len());
     if n == 0 {
         return Offsets {
             control: 0.0,
@@ -974,11 +1056,17 @@ pub fn zero_offsets(control: &mut [f64], response: &mut [f64]) -> Offsets {
             samples_at_rest: 0,
         };
     }
-    let h = reversal_threshold(&control[..n]);
-    let rest = holds_still(None, &control[..n], Some(&response[..n]), h)
-        .first()
-        .filter(|r| r.0 == 0)
-        .map_or(0, |r| r.1);
+    let h = reversal_threshold_with(&control[..n], control_noise.jitter);
+    let rest = holds_still_with(
+        None,
+        &control[..n],
+        Some((&response[..n], response_noise.jitter)),
+        h,
+        control_noise.noise,
+    )
+    .first()
+    .filter(|r| r.0 == 0)
+    .map_or(0, |r| r.1);
     let (oc, or) = if rest >= 3 {
         let k = rest as f64;
         (
@@ -1074,6 +1162,32 @@ mod tests {
     /// with AR(1) noise of φ = 0.9 it reads φ within 0.03 and σ within 15 % (the lag-1
     /// estimate alone says a quarter of σ); a slow sine (period 3000 samples, amplitude
     /// 200 σ) with white noise is no correlation.
+    /// The level `serial_noise_and_level` returns beside the AR(1) model is `noise_level`, bit
+    /// for bit, on records too short for the lags (< 40 samples), short and long ones, white
+    /// and AR(1) noise, and a flat one (no scale above zero: the white model).
+    #[test]
+    fn serial_noise_level_is_noise_level() {
+        for (n, phi) in [
+            (12, 0.0),
+            (39, 0.5),
+            (40, 0.0),
+            (300, 0.9),
+            (6000, 0.0),
+            (20_000, 0.7),
+        ] {
+            let s: Vec<f64> = crate::stats::tests::ar1_noise(n, phi, n as u64)
+                .iter()
+                .enumerate()
+                .map(|(i, e)| 0.01 * i as f64 + e)
+                .collect();
+            let (m, level) = serial_noise_and_level(&s);
+            assert_eq!(level.to_bits(), noise_level(&s).to_bits(), "n {n}");
+            assert_eq!(m, serial_noise(&s));
+        }
+        let (m, level) = serial_noise_and_level(&[2.0; 500]);
+        assert_eq!((m.sigma, m.phi, level), (0.0, 0.0, 0.0));
+    }
+
     #[test]
     fn serial_noise_reads_the_ar1_model_of_a_record() {
         let n = 6000;
@@ -1143,11 +1257,11 @@ mod tests {
     }
 
     /// `jitter_level` is its definition to the last bit (the lag-1 scale computed once, the
-    /// trimmed RMS over a radix sort, repeated signals from the memo): the largest of
-    /// `noise_level`, the MAD σ at lags 1, 2, 4 and the trimmed RMS σ at lags 1 and 2 over
-    /// comparison-sorted |d|, on short and long noisy ramps, a quantised staircase and signals
-    /// with NaNs; a signal that differs from a remembered one in one sample's last bit gets its
-    /// own σ.
+    /// trimmed RMS over a radix sort): the largest of `noise_level`, the MAD σ at lags 1, 2, 4
+    /// and the trimmed RMS σ at lags 1 and 2 over comparison-sorted |d|, on short and long
+    /// noisy ramps, a quantised staircase and signals with NaNs; and `ChannelNoise::of` is
+    /// exactly (`noise_level`, that definition), so a conditioning that computes a channel's
+    /// scales once and hands them on gets the numbers each step used to compute for itself.
     #[test]
     fn jitter_level_is_its_definition_bit_for_bit() {
         fn by_definition(signal: &[f64]) -> f64 {
@@ -1200,16 +1314,20 @@ mod tests {
                 *v = f64::NAN;
             }
             signals.push(gaps);
-            // Twice over: the second round is served from the memo (n ≥ 1,000).
-            for s in signals.iter().chain(&signals) {
+            let same = |a: f64, b: f64| a.to_bits() == b.to_bits() || (a.is_nan() && b.is_nan());
+            for s in &signals {
                 let (a, b) = (jitter_level(s), by_definition(s));
+                assert!(same(a, b), "n {n}: {a} vs {b}");
+                let both = ChannelNoise::of(s);
+                assert!(same(both.jitter, b), "n {n}: {both:?} vs {b}");
                 assert!(
-                    a.to_bits() == b.to_bits() || (a.is_nan() && b.is_nan()),
-                    "n {n}: {a} vs {b}"
+                    same(both.noise, noise_level(s)),
+                    "n {n}: {both:?} vs {}",
+                    noise_level(s)
                 );
             }
         }
-        // Same length, same ends, louder middle: not the remembered signal.
+        // A louder middle: a larger σ, its definition's.
         let quiet = noisy(&vec![0.0; 2000], 1.0, 9);
         let mut loud = quiet.clone();
         for v in &mut loud[500..1500] {
@@ -1218,13 +1336,6 @@ mod tests {
         let (a, b) = (jitter_level(&quiet), jitter_level(&loud));
         assert_eq!(b.to_bits(), by_definition(&loud).to_bits());
         assert!(b > 1.5 * a, "{a} {b}");
-        // One sample's last bit: its own σ, which is its definition's.
-        let mut nudged = quiet.clone();
-        nudged[1000] = f64::from_bits(nudged[1000].to_bits() ^ 1);
-        assert_eq!(
-            jitter_level(&nudged).to_bits(),
-            by_definition(&nudged).to_bits()
-        );
     }
 
     /// `jitter_level` equals `noise_level` on white noise; on clean triangle cycles and on a

@@ -32,7 +32,8 @@ pub use analysis::{
 };
 pub use condition::{
     correct_compliance, labels, noise_level, quantum, resolution, reversal_threshold, segment,
-    turning_points, zero_offsets, Branch, Extremum, Label, Offsets, Segment, TurningPoint,
+    segment_with, turning_points, zero_offsets, zero_offsets_with, Branch, ChannelNoise, Extremum,
+    Label, Offsets, Segment, TurningPoint,
 };
 pub use elastic::{auto_elastic_range, hinge_fit, user_elastic_range, ElasticRange, Hinge};
 pub use elastica::ThreePointElastica;

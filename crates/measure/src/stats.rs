@@ -414,6 +414,14 @@ pub fn student_t_cdf(t: f64, dof: f64) -> f64 {
 
 /// Student-t quantile: the t with P(T ≤ t) = p, for 0 < p < 1 and dof > 0 (bisection on the CDF
 /// to 1e-12 relative). NaN outside that domain.
+///
+/// The bisection asks one question, whether P(T ≤ t) < p, some 45 times. Most of its midpoints
+/// lie far from the quantile, where the answer is known without the incomplete beta function:
+/// a few Newton steps locate the quantile t*, and where the CDF is checked to lie below p at
+/// t*(1 − 10⁻⁹) and above it at t*(1 + 10⁻⁹), each by more than 10⁻¹² (a hundred times the
+/// CDF's own rounding), the answers outside that band are read off; inside it the CDF is
+/// evaluated as before. The same midpoints, the same answers: the same number to the last bit,
+/// at about half the evaluations.
 pub fn student_t_quantile(p: f64, dof: f64) -> f64 {
     if !(p > 0.0 && p < 1.0 && dof > 0.0) {
         return f64::NAN;
@@ -421,8 +429,20 @@ pub fn student_t_quantile(p: f64, dof: f64) -> f64 {
     if p < 0.5 {
         return -student_t_quantile(1.0 - p, dof);
     }
+    let band = t_quantile_band(p, dof);
+    t_quantile_bisection(p, dof, |t| match band {
+        Some((a, _)) if t <= a => true,
+        Some((_, b)) if t >= b => false,
+        _ => student_t_cdf(t, dof) < p,
+    })
+}
+
+/// The bisection of [`student_t_quantile`] (p ≥ 0.5) with `below(t)` answering whether
+/// P(T ≤ t) < p.
+fn t_quantile_bisection(p: f64, dof: f64, below: impl Fn(f64) -> bool) -> f64 {
+    debug_assert!(p >= 0.5 && dof > 0.0);
     let mut hi = 1.0;
-    while student_t_cdf(hi, dof) < p {
+    while below(hi) {
         hi *= 2.0;
         if hi > 1e12 {
             return f64::INFINITY;
@@ -431,7 +451,7 @@ pub fn student_t_quantile(p: f64, dof: f64) -> f64 {
     let mut lo = 0.0;
     for _ in 0..200 {
         let mid = 0.5 * (lo + hi);
-        if student_t_cdf(mid, dof) < p {
+        if below(mid) {
             lo = mid;
         } else {
             hi = mid;
@@ -441,6 +461,39 @@ pub fn student_t_quantile(p: f64, dof: f64) -> f64 {
         }
     }
     0.5 * (lo + hi)
+}
+
+/// An interval (a, b) around the Student-t quantile of p ≥ 0.5 with P(T ≤ a) < p − 10⁻¹² and
+/// P(T ≤ b) > p + 10⁻¹² as the CDF evaluates them, b/a − 1 ≈ 2·10⁻⁹; None when Newton's
+/// method does not settle or the checks fail (then every question goes to the CDF).
+fn t_quantile_band(p: f64, dof: f64) -> Option<(f64, f64)> {
+    const REL: f64 = 1e-9;
+    const GAP: f64 = 1e-12;
+    // ln of the density's constant Γ((ν+1)/2) / (√(νπ) Γ(ν/2)).
+    let ln_c =
+        ln_gamma(0.5 * (dof + 1.0)) - ln_gamma(0.5 * dof) - 0.5 * (dof * std::f64::consts::PI).ln();
+    let pdf = |t: f64| (ln_c - 0.5 * (dof + 1.0) * (t * t / dof).ln_1p()).exp();
+    // The CDF is concave for t > 0: from the normal quantile, Newton's steps approach the
+    // quantile from below after the first.
+    let mut t = normal_quantile(p).max(0.0);
+    let mut settled = false;
+    for _ in 0..30 {
+        let step = (student_t_cdf(t, dof) - p) / pdf(t);
+        if !step.is_finite() {
+            return None;
+        }
+        t = (t - step).max(0.0);
+        if step.abs() <= 1e-11 * t {
+            settled = true;
+            break;
+        }
+    }
+    // `t` is finite (every step was) and at least 0; p = 0.5 settles at 0, where no band is.
+    if !settled || t <= 0.0 {
+        return None;
+    }
+    let (a, b) = (t * (1.0 - REL), t * (1.0 + REL));
+    (student_t_cdf(a, dof) < p - GAP && student_t_cdf(b, dof) > p + GAP).then_some((a, b))
 }
 
 /// Standard normal quantile Φ⁻¹(p), 0 < p < 1 (Acklam's rational approximation, relative error
@@ -589,6 +642,45 @@ pub(crate) mod tests {
             1.959_963_985,
             max_relative = 1e-6
         );
+    }
+
+    /// The quantile with the band of known answers is the plain bisection's number to the last
+    /// bit, over whole and fractional degrees of freedom from 0.3 to 10⁹ and tail
+    /// probabilities from 0.5 to 1 − 10⁻⁶ (the plain bisection asks the CDF every time).
+    #[test]
+    fn t_quantiles_equal_the_plain_bisection_bit_for_bit() {
+        let plain = |p: f64, dof: f64| t_quantile_bisection(p, dof, |t| student_t_cdf(t, dof) < p);
+        let mut dofs: Vec<f64> = (1..=60).map(f64::from).collect();
+        dofs.extend([
+            0.3,
+            0.5,
+            0.9,
+            1.5,
+            2.7,
+            7.25,
+            99.5,
+            180.0,
+            222.0,
+            393.928_504_991_550_4,
+            1e3,
+            2047.0,
+            1e4,
+            5e4,
+            1e5,
+            1e6,
+            1e7,
+            1e9,
+        ]);
+        let mut banded = 0;
+        for &dof in &dofs {
+            for p in [0.5, 0.6, 0.9, 0.95, 0.975, 0.995, 0.999, 1.0 - 1e-6] {
+                let (a, b) = (student_t_quantile(p, dof), plain(p, dof));
+                assert_eq!(a.to_bits(), b.to_bits(), "p {p}, dof {dof}: {a} vs {b}");
+                banded += usize::from(t_quantile_band(p, dof).is_some());
+            }
+        }
+        // The band is found almost everywhere (p = 0.5 has none: its quantile is 0).
+        assert!(banded > 8 * dofs.len() * 7 / 10, "{banded}");
     }
 
     #[test]
