@@ -106,15 +106,20 @@ impl LawCatalog for Registry {
 }
 
 /// The friction branch's starts from a fitted special case without it (slip levels ν, share of
-/// the stiffness φ_k, share of the yield strength φ_s): few levels sharing much, many sharing
-/// little.
-pub const FRICTION_SPLITS: [(f64, f64, f64); 3] = [(2.0, 0.3, 0.3), (4.0, 0.25, 0.2), (10.0, 0.2, 0.1)];
+/// the stiffness φ_k, share of the yield strength φ_s, density exponent χ): few levels sharing
+/// much, many sharing little; one with early slip (χ = −0.5, in Segalman's range for joints).
+pub const FRICTION_SPLITS: [(f64, f64, f64, f64); 4] = [
+    (2.0, 0.3, 0.3, 0.0),
+    (4.0, 0.25, 0.2, 0.0),
+    (4.0, 0.25, 0.2, -0.5),
+    (10.0, 0.2, 0.1, 0.0),
+];
 
 /// Starts for a model that adds `friction_hysteresis` to the fitted special case `warm`: the
 /// Iwan elements take a share of what the special case fitted, so that the start keeps its
-/// initial slope and (nearly) its plateau. Per ([`FRICTION_SPLITS`]) (ν, φ_k, φ_s):
+/// initial slope and (nearly) its plateau. Per ([`FRICTION_SPLITS`]) (ν, φ_k, φ_s, χ):
 ///
-/// S ← (1 − φ_k) S,  S_f = φ_k S;  Y ← (1 − φ_s) Y,  Y_f = φ_s Y;  n_f = ν,  χ_f = 0,
+/// S ← (1 − φ_k) S,  S_f = φ_k S;  Y ← (1 − φ_s) Y,  Y_f = φ_s Y;  n_f = ν,  χ_f = χ,
 ///
 /// for every stiffness S of the base (`EI`, or `EI1` and `EI2` of a piecewise law) and its yield
 /// Y (`M_y`, `F_y`; a yield at its upper bound, the elastic limit, is not split and the
@@ -157,7 +162,7 @@ fn friction_split_starts(model: &ModelSpec, specs: &[ParamSpec], warm: &ParamMap
         .find(|(s, &v)| role(s) == 'y' && named(&s.name).is_some() && !s.at_bound(v, 1e-3));
     FRICTION_SPLITS
         .iter()
-        .map(|&(nu, phi_k, phi_s)| {
+        .map(|&(nu, phi_k, phi_s, chi)| {
             specs
                 .iter()
                 .zip(&base)
@@ -168,7 +173,7 @@ fn friction_split_starts(model: &ModelSpec, specs: &[ParamSpec], warm: &ParamMap
                         'y' if yield_.is_some() => (1.0 - phi_s) * v,
                         's' => yield_.map_or(v, |(_, &y)| phi_s * y),
                         'n' => nu,
-                        'c' => 0.0,
+                        'c' => chi,
                         _ => v,
                     };
                     inside(s, p)
