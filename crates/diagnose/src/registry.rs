@@ -1,6 +1,8 @@
 //! The diagnosis' view of the project's law registry (`cablab-laws`) and rod (`cablab-rod`):
 //! which law-level effects exist for a base law, their parameters with bounds and starting values
-//! scaled to the data, building laws from fitted values, and replaying three-point histories.
+//! scaled to the data, the starts a friction branch needs from its fitted special case
+//! ([`LawCatalog::warm_starts`]), building laws from fitted values, and replaying three-point
+//! histories.
 //!
 //! The registry's own bounds are admissibility limits (1e-12 … 1e12); a fit needs bounds that
 //! say "plausible for these data", so each parameter gets bounds from its role (stiffness,
@@ -456,6 +458,53 @@ mod tests {
         let names: Vec<&str> = specs.iter().map(|s| s.name.as_str()).collect();
         assert_eq!(names, ["EA", "F_y", "H"]);
         assert!(specs[0].lower < 1e5 && specs[0].upper > 1e5 && specs[0].log_scale);
+    }
+
+    /// The friction branch starts from the fitted elastoplastic law split in shares: stiffness
+    /// and yield strength of the base and the branch add up to the special case's, the slip
+    /// levels and exponent as listed; nothing for a model without friction or one that already
+    /// had it; a yield at its upper bound (the elastic limit) is not split.
+    #[test]
+    fn friction_starts_split_the_special_case() {
+        let sc = DataScales {
+            stiffness: 1.4e-3,
+            stress_max: 0.03,
+            strain_max: 40.0,
+            duration_s: 50.0,
+            dt_min_s: 0.02,
+        };
+        let kind = TestKind::PureBending;
+        let ep = ModelSpec::law("elastoplastic");
+        let fr = ep.with(Effect::FrictionHysteresis);
+        let specs = Registry.specs(kind, &fr, &sc).unwrap();
+        let names: Vec<&str> = specs.iter().map(|s| s.name.as_str()).collect();
+        assert_eq!(names, ["EI", "M_y", "HI", "EI_f", "M_f", "n_f", "chi_f"]);
+        let warm = ParamMap(vec![
+            ("EI".into(), 1.8e-3),
+            ("M_y".into(), 0.024),
+            ("HI".into(), 1e-4),
+        ]);
+        let starts = Registry.warm_starts(kind, &fr, &specs, &warm);
+        assert_eq!(starts.len(), FRICTION_SPLITS.len());
+        // Equal to rounding (each start is mapped through its bounds' axis and back).
+        let close = |a: f64, b: f64| (a / b - 1.0).abs() < 1e-9;
+        for (p, &(nu, phi_k, phi_s, chi)) in starts.iter().zip(&FRICTION_SPLITS) {
+            assert!(close(p[0] + p[3], 1.8e-3) && close(p[3], phi_k * 1.8e-3), "{p:?}");
+            assert!(close(p[1] + p[4], 0.024) && close(p[4], phi_s * 0.024), "{p:?}");
+            assert!(close(p[2], 1e-4) && close(p[5], nu), "{p:?}");
+            assert!((p[6] - chi).abs() < 1e-12, "{p:?}");
+        }
+        assert!(Registry.warm_starts(kind, &ep, &specs[..3], &warm).is_empty());
+        let mut had = warm.clone();
+        had.0.push(("EI_f".into(), 3e-4));
+        assert!(Registry.warm_starts(kind, &fr, &specs, &had).is_empty());
+        // The elastic limit: the yield stays where it is, the friction strength starts at its
+        // initial value.
+        let mut elastic = warm.clone();
+        elastic.0[1].1 = specs[1].upper;
+        let p = &Registry.warm_starts(kind, &fr, &specs, &elastic)[0];
+        assert_eq!(p[1], specs[1].at_fraction(0.98));
+        assert!(close(p[4], specs[4].initial), "{p:?}");
     }
 
     #[test]

@@ -6,6 +6,10 @@
 //! virgin backbone. In bending each slider is a circle in the moment plane (radial return, as in
 //! [`crate::elastoplastic`] with zero hardening). This law carries only the friction stress:
 //! compose it with a baseline through [`crate::Parallel`].
+//!
+//! The elements sample a power-law density of slip strains (exponent χ) lumped into ν slip
+//! levels ([`IwanElements::slip_levels`]); ν is real and the elements are continuous in it, so
+//! that a calibration fits how many distinct levels slip (a cable's wire layers) as it fits χ.
 
 use crate::channel::{eye, norm1, Channel};
 use crate::law::{ComponentStep, Law, LawResponse, Strain6, Stress6, Tangent6};
