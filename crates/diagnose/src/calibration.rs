@@ -754,7 +754,8 @@ mod tests {
                 // The number of slip levels held at the truth's: the response is only piecewise
                 // smooth in it (a level appears at each whole number), where forward differences
                 // and secants see different one-sided slopes.
-                pinned: (law == "friction_hysteresis").then(|| ParamMap(vec![("n_f".into(), 10.0)])),
+                pinned: (law == "friction_hysteresis")
+                    .then(|| ParamMap(vec![("n_f".into(), 10.0)])),
                 ..CalibrateOptions::default()
             };
             let fd = calibrate(ctx, &tests, &model, &opts(0)).unwrap();

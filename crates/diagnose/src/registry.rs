@@ -138,17 +138,18 @@ fn friction_split_starts(model: &ModelSpec, specs: &[ParamSpec], warm: &ParamMap
         "n_f" => 'n',
         "chi_f" => 'c',
         "F_y" | "M_y" => 'y',
-        n if n.starts_with("EA") || n.starts_with("GJ") || n.starts_with("EI") => {
-            if n.len() == 2 || n[2..].chars().all(|c| c.is_ascii_digit()) {
-                'S'
-            } else {
-                '-'
-            }
+        // A base stiffness: `EI`, or `EI1`, `EI2` of a piecewise law (not `EI_v1`, `EI_f`).
+        n if ["EA", "GJ", "EI"].contains(&n.get(..2).unwrap_or(""))
+            && n[2..].chars().all(|c| c.is_ascii_digit()) =>
+        {
+            'S'
         }
         _ => '-',
     };
     if !model.has(Effect::FrictionHysteresis)
-        || specs.iter().any(|s| role(s) == 'k' && named(&s.name).is_some())
+        || specs
+            .iter()
+            .any(|s| role(s) == 'k' && named(&s.name).is_some())
     {
         return vec![];
     }
@@ -489,12 +490,20 @@ mod tests {
         // Equal to rounding (each start is mapped through its bounds' axis and back).
         let close = |a: f64, b: f64| (a / b - 1.0).abs() < 1e-9;
         for (p, &(nu, phi_k, phi_s, chi)) in starts.iter().zip(&FRICTION_SPLITS) {
-            assert!(close(p[0] + p[3], 1.8e-3) && close(p[3], phi_k * 1.8e-3), "{p:?}");
-            assert!(close(p[1] + p[4], 0.024) && close(p[4], phi_s * 0.024), "{p:?}");
+            assert!(
+                close(p[0] + p[3], 1.8e-3) && close(p[3], phi_k * 1.8e-3),
+                "{p:?}"
+            );
+            assert!(
+                close(p[1] + p[4], 0.024) && close(p[4], phi_s * 0.024),
+                "{p:?}"
+            );
             assert!(close(p[2], 1e-4) && close(p[5], nu), "{p:?}");
             assert!((p[6] - chi).abs() < 1e-12, "{p:?}");
         }
-        assert!(Registry.warm_starts(kind, &ep, &specs[..3], &warm).is_empty());
+        assert!(Registry
+            .warm_starts(kind, &ep, &specs[..3], &warm)
+            .is_empty());
         let mut had = warm.clone();
         had.0.push(("EI_f".into(), 3e-4));
         assert!(Registry.warm_starts(kind, &fr, &specs, &had).is_empty());

@@ -176,7 +176,14 @@ struct Alone {
 }
 
 fn friction_alone(kind: TestKind, levels: f64, chi: f64, noise: f64, seed: u64) -> Alone {
-    let t = case(kind, &[("n_f", levels), ("chi_f", chi)], 0.33, 0.2, noise, seed);
+    let t = case(
+        kind,
+        &[("n_f", levels), ("chi_f", chi)],
+        0.33,
+        0.2,
+        noise,
+        seed,
+    );
     let opts = DiagnoseOptions {
         candidates: Some(vec![Effect::FrictionHysteresis]),
         starts: std::env::var("STARTS").map_or(4, |s| s.parse().unwrap()),
@@ -214,7 +221,10 @@ fn few_slip_levels_are_fitted_and_closed_to_the_floor() {
         (TestKind::Tension, 6.0, -0.5, 0.003, 2),
     ] {
         let a = friction_alone(kind, levels, chi, noise, seed);
-        let at = format!("{kind} {levels} levels χ {chi} noise {noise}: {:?}", a.params);
+        let at = format!(
+            "{kind} {levels} levels χ {chi} noise {noise}: {:?}",
+            a.params
+        );
         assert!(a.base > 3.0, "{at}: baseline {}", a.base);
         assert!(a.after <= 1.5, "{at}: {} × the floor", a.after);
         if levels <= 4.0 {
@@ -254,7 +264,10 @@ fn family() {
         .map(|k| k.parse().unwrap())
         .collect();
     let num = |var: &str, default: &str| -> Vec<f64> {
-        list(var, default).iter().map(|x| x.parse().unwrap()).collect()
+        list(var, default)
+            .iter()
+            .map(|x| x.parse().unwrap())
+            .collect()
     };
     let levels = num("LEVELS", "2,3,4,6");
     let chis = num("CHIS", "-0.5,0,1,3");

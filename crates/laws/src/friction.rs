@@ -354,7 +354,10 @@ mod tests {
         for chi in [-0.5, 0.0, 2.0] {
             for n in [1usize, 2, 3, 7] {
                 let whole = IwanElements::slip_levels(Channel::Twist, k, sf, n as f64, chi);
-                assert_eq!(whole, IwanElements::power_law(Channel::Twist, k, sf, n, chi));
+                assert_eq!(
+                    whole,
+                    IwanElements::power_law(Channel::Twist, k, sf, n, chi)
+                );
                 for nu in [n as f64 - 1e-7, n as f64 + 1e-7] {
                     if nu < 1.0 {
                         continue;
@@ -378,8 +381,17 @@ mod tests {
         }
         // One level: elastic–perfectly-plastic friction, slope K up to σ_f at σ_f/K.
         let one = IwanElements::slip_levels(Channel::Axial, k, sf, 1.0, 0.7);
-        assert_eq!(one.elements, [JenkinsElement { stiffness: k, threshold: sf }]);
-        assert_eq!(IwanElements::slip_levels(Channel::Axial, k, sf, 0.3, 0.7), one);
+        assert_eq!(
+            one.elements,
+            [JenkinsElement {
+                stiffness: k,
+                threshold: sf
+            }]
+        );
+        assert_eq!(
+            IwanElements::slip_levels(Channel::Axial, k, sf, 0.3, 0.7),
+            one
+        );
     }
 
     #[test]
