@@ -304,6 +304,19 @@ pub trait LawCatalog: Sync {
         names: &[String],
         values: &[f64],
     ) -> Result<Box<dyn Law>, DiagError>;
+    /// More starting points for a fit of `model` warm-started from `warm` (the fitted values of
+    /// a special case, by name), in the order of `specs`, where the generic starts are known to
+    /// miss the basin (a parallel branch that must take its share of the special case's
+    /// stiffness and strength). Default: none.
+    fn warm_starts(
+        &self,
+        _kind: TestKind,
+        _model: &ModelSpec,
+        _specs: &[ParamSpec],
+        _warm: &crate::calibration::ParamMap,
+    ) -> Vec<Vec<f64>> {
+        vec![]
+    }
 }
 
 /// The rod side of the diagnosis, for tests that do not load the section uniformly

@@ -6,6 +6,10 @@
 //! virgin backbone. In bending each slider is a circle in the moment plane (radial return, as in
 //! [`crate::elastoplastic`] with zero hardening). This law carries only the friction stress:
 //! compose it with a baseline through [`crate::Parallel`].
+//!
+//! The elements sample a power-law density of slip strains (exponent χ) lumped into ν slip
+//! levels ([`IwanElements::slip_levels`]); ν is real and the elements are continuous in it, so
+//! that a calibration fits how many distinct levels slip (a cable's wire layers) as it fits χ.
 
 use crate::channel::{eye, norm1, Channel};
 use crate::law::{ComponentStep, Law, LawResponse, Strain6, Stress6, Tangent6};
@@ -51,8 +55,8 @@ impl IwanElements {
     ///
     /// σ_b(ε) = K [ε − ε^{χ+2} / ((χ+2) ε_f^{χ+1})] for ε ≤ ε_f, σ_f = K ε_f (χ+1)/(χ+2) beyond,
     ///
-    /// (tangent K (1 − (ε/ε_f)^{χ+1})). Does not check its arguments: χ ≤ −1 or K ≤ 0 give
-    /// non-finite thresholds.
+    /// (tangent K (1 − (ε/ε_f)^{χ+1})). The same as [`IwanElements::slip_levels`] with ν = n.
+    /// Does not check its arguments: χ ≤ −1 or K ≤ 0 give non-finite thresholds.
     pub fn power_law(
         channel: Channel,
         total_stiffness: f64,
@@ -60,21 +64,64 @@ impl IwanElements {
         n: usize,
         chi: f64,
     ) -> Self {
-        let n = n.max(1);
-        let k = total_stiffness / n as f64;
-        let q = 1.0 / (chi + 1.0);
-        let u: Vec<f64> = (1..=n).map(|i| (i as f64 / n as f64).powf(q)).collect();
-        let eps_f = if chi == 0.0 {
-            // Σ i/n = (n + 1)/2 in closed form: the uniform elements as they always were.
-            2.0 * n as f64 * max_friction / ((n as f64 + 1.0) * total_stiffness)
+        Self::slip_levels(channel, total_stiffness, max_friction, n.max(1) as f64, chi)
+    }
+
+    /// The power-law density of [`IwanElements::power_law`] lumped into ν = `levels` ≥ 1 slip
+    /// levels, ν real: the density's distribution function F(u) = u^{χ+1} (u = ε*/ε_f) replaced
+    /// by a staircase of m = ⌈ν⌉ steps, the first m − 1 of height 1/ν at the quantiles i/ν and
+    /// the last, the remainder, at u = 1:
+    ///
+    /// w_i = 1/ν, u_i = (i/ν)^{1/(χ+1)} (i < m);  w_m = (ν − m + 1)/ν, u_m = 1;
+    /// k_i = K w_i,  s_i = k_i ε_f u_i,  ε_f = σ_f / (K Σ_i w_i u_i).
+    ///
+    /// A whole ν = n gives n equal elements (the power law's quantiles exactly); between whole
+    /// numbers the last level's share grows from 0 (ν = n⁺, n levels) to 1/ν (ν = n + 1), so the
+    /// elements, and the response, are continuous in ν: a calibration can fit the number of
+    /// distinct slip levels (the wire layers that slip, each at its own strain) as it fits χ.
+    /// ν = 1 is one Jenkins element; ν → ∞ the continuum backbone. Does not check its
+    /// arguments: ν < 1 is taken as 1, χ ≤ −1 or K ≤ 0 give non-finite thresholds.
+    pub fn slip_levels(
+        channel: Channel,
+        total_stiffness: f64,
+        max_friction: f64,
+        levels: f64,
+        chi: f64,
+    ) -> Self {
+        let nu = levels.max(1.0);
+        // A count within rounding of a whole number is that number (no element of zero share).
+        let m = if (nu - nu.round()).abs() < 1e-9 {
+            nu.round()
         } else {
-            n as f64 * max_friction / (total_stiffness * u.iter().sum::<f64>())
+            nu.ceil()
+        } as usize;
+        let whole = m as f64 == nu;
+        let q = 1.0 / (chi + 1.0);
+        // Stiffness k_i and position u_i of each level; a whole ν keeps the arithmetic of n
+        // equal elements (K/n, n σ_f / (K Σ u_i)) to the last bit.
+        let k = total_stiffness / nu;
+        let ku: Vec<(f64, f64)> = (1..=m)
+            .map(|i| {
+                if i < m || whole {
+                    (k, (i as f64 / nu).powf(q))
+                } else {
+                    (total_stiffness * (nu - (m - 1) as f64) / nu, 1.0)
+                }
+            })
+            .collect();
+        let eps_f = if whole && chi == 0.0 {
+            // Σ i/n = (n + 1)/2 in closed form: the uniform elements as they always were.
+            2.0 * nu * max_friction / ((nu + 1.0) * total_stiffness)
+        } else if whole {
+            nu * max_friction / (total_stiffness * ku.iter().map(|p| p.1).sum::<f64>())
+        } else {
+            max_friction / ku.iter().map(|(k, u)| k * u).sum::<f64>()
         };
-        let elements = u
+        let elements = ku
             .iter()
-            .map(|&ui| JenkinsElement {
+            .map(|&(k, u)| JenkinsElement {
                 stiffness: k,
-                threshold: k * eps_f * ui,
+                threshold: k * eps_f * u,
             })
             .collect();
         IwanElements { channel, elements }
@@ -288,6 +335,63 @@ mod tests {
             assert!((a.threshold - exact).abs() < 1e-15);
             assert!((a.threshold - b.threshold).abs() < 1e-8);
         }
+    }
+
+    /// Slip levels: a whole ν is the power law's n elements to the last bit; a fractional ν adds
+    /// a last level at ε_f whose share grows from 0, so the backbone is continuous in ν across
+    /// the whole numbers; the friction strength is σ_f whatever ν; ν = 1 is one Jenkins element.
+    #[test]
+    fn slip_levels_are_continuous_in_their_number() {
+        let (k, sf) = (4.0, 1.0);
+        let bb = |law: &IwanElements| -> Vec<f64> {
+            (0..=300).map(|i| law.backbone(0.002 * i as f64)).collect()
+        };
+        let apart = |a: &[f64], b: &[f64]| {
+            a.iter()
+                .zip(b)
+                .fold(0.0f64, |m, (x, y)| m.max((x - y).abs()))
+        };
+        for chi in [-0.5, 0.0, 2.0] {
+            for n in [1usize, 2, 3, 7] {
+                let whole = IwanElements::slip_levels(Channel::Twist, k, sf, n as f64, chi);
+                assert_eq!(
+                    whole,
+                    IwanElements::power_law(Channel::Twist, k, sf, n, chi)
+                );
+                for nu in [n as f64 - 1e-7, n as f64 + 1e-7] {
+                    if nu < 1.0 {
+                        continue;
+                    }
+                    let near = IwanElements::slip_levels(Channel::Twist, k, sf, nu, chi);
+                    assert!(apart(&bb(&near), &bb(&whole)) < 1e-5, "χ {chi} ν {nu}");
+                }
+                // Halfway to the next count: one level more, the last of half a share, and the
+                // saturation unchanged.
+                let half = IwanElements::slip_levels(Channel::Twist, k, sf, n as f64 + 0.5, chi);
+                assert_eq!(half.elements.len(), n + 1);
+                let last = half.elements[n];
+                assert!((last.stiffness - k * 0.5 / (n as f64 + 0.5)).abs() < 1e-12);
+                assert!((half.backbone(10.0) - sf).abs() < 1e-12, "χ {chi} ν {n}.5");
+                let total: f64 = half.elements.iter().map(|e| e.stiffness).sum();
+                assert!((total - k).abs() < 1e-12);
+                // The last level slips at ε_f, after every other one.
+                let slip = |e: &JenkinsElement| e.threshold / e.stiffness;
+                assert!(half.elements[..n].iter().all(|e| slip(e) < slip(&last)));
+            }
+        }
+        // One level: elastic–perfectly-plastic friction, slope K up to σ_f at σ_f/K.
+        let one = IwanElements::slip_levels(Channel::Axial, k, sf, 1.0, 0.7);
+        assert_eq!(
+            one.elements,
+            [JenkinsElement {
+                stiffness: k,
+                threshold: sf
+            }]
+        );
+        assert_eq!(
+            IwanElements::slip_levels(Channel::Axial, k, sf, 0.3, 0.7),
+            one
+        );
     }
 
     #[test]

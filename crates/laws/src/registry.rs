@@ -17,8 +17,9 @@
 //! - `viscoelasticity`: elastoplastic + Maxwell branch `S_v1` (e.g. `EI_v1`), `tau_v1` (s); optional
 //!   branches 2 and 3 (`S_v2`, `tau_v2`, `S_v3`, `tau_v3`; stiffness default 0 = absent).
 //! - `friction_hysteresis`: elastoplastic + Iwan elements of total stiffness `S_f` (e.g. `EI_f`)
-//!   saturating at the friction strength `M_f` (`F_f` in tension), `n_f` elements (default 10)
-//!   sampling a power-law density of slip strains with exponent `chi_f` (default 0: uniform).
+//!   saturating at the friction strength `M_f` (`F_f` in tension), `n_f` slip levels (default 10;
+//!   real: a fraction adds a last, partial level) sampling a power-law density of slip strains
+//!   with exponent `chi_f` (default 0: uniform).
 //! - `BASE+EXT+…`: extensions stacked, each at most once: `viscoelasticity` and
 //!   `friction_hysteresis` (parallel branches) on `linear`, `piecewise_linear` or `elastoplastic`;
 //!   `kinematic_hardening` and `stiffness_degradation` (hardening rules of the one return
@@ -428,8 +429,8 @@ fn specs_for(kind: TestKind, base: Base, exts: &[Ext]) -> Result<Vec<ParamSpec>,
                     Some(10.0),
                     1.0,
                     200.0,
-                    "number of Jenkins elements (integer)".into(),
-                    false,
+                    "number of slip levels (Jenkins elements of equal stiffness; a fraction adds a last level of that share)".into(),
+                    true,
                 ));
                 v.push(spec(
                     "chi_f".into(),
@@ -597,9 +598,6 @@ pub fn build(
                 s.lower, s.upper, s.unit
             )));
         }
-        if s.name == "n_f" && v.fract() != 0.0 {
-            return Err(invalid("must be a whole number".into()));
-        }
         values.insert(s.name.as_str(), v);
     }
     let get = |k: &str| values.get(k).copied().unwrap_or(0.0);
@@ -697,11 +695,11 @@ pub fn build(
                     branches,
                 })
             }
-            Ext::Friction => Box::new(IwanElements::power_law(
+            Ext::Friction => Box::new(IwanElements::slip_levels(
                 ch,
                 get(&format!("{}_f", n.stiff)),
                 get(&format!("{}_f", n.strength)),
-                get("n_f") as usize,
+                get("n_f"),
                 get("chi_f"),
             )),
             Ext::Kinematic | Ext::Degradation => continue,
@@ -765,12 +763,12 @@ mod tests {
             (
                 TestKind::Tension,
                 "friction_hysteresis",
-                &["EA", "F_y", "H", "EA_f", "F_f", "chi_f"][..],
+                &["EA", "F_y", "H", "EA_f", "F_f", "n_f", "chi_f"][..],
             ),
             (
                 TestKind::Torsion,
                 "linear+friction_hysteresis",
-                &["GJ", "GJ_f", "M_f", "chi_f"][..],
+                &["GJ", "GJ_f", "M_f", "n_f", "chi_f"][..],
             ),
         ];
         for (kind, law, fitted) in want {
@@ -826,7 +824,7 @@ mod tests {
         );
         assert_eq!(
             names("linear+friction_hysteresis+viscoelasticity"),
-            ["EI", "EI_v1", "tau_v1", "EI_f", "M_f", "chi_f"]
+            ["EI", "EI_v1", "tau_v1", "EI_f", "M_f", "n_f", "chi_f"]
         );
         let (canonical, ..) =
             parse("elastoplastic+friction_hysteresis+stiffness_degradation").unwrap();
@@ -953,7 +951,7 @@ mod tests {
                 ("M_y", 1.0),
                 ("EI_f", 1.0),
                 ("M_f", 1.0),
-                ("n_f", 2.5),
+                ("n_f", 0.5),
             ]),
         )
         .unwrap_err();
