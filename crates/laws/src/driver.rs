@@ -106,7 +106,13 @@ impl<'a> SensSection<'a> {
     /// [`UniformSection::trial`], writing ∂σ/∂p over the columns into `ds` given ∂ε/∂p in `de`
     /// (both `ncol` long); `None` when the law cannot differentiate this state.
     #[inline]
-    pub fn trial(&mut self, strain: f64, dt: f64, de: &[f64], ds: &mut [f64]) -> Option<(f64, f64)> {
+    pub fn trial(
+        &mut self,
+        strain: f64,
+        dt: f64,
+        de: &[f64],
+        ds: &mut [f64],
+    ) -> Option<(f64, f64)> {
         ds.iter_mut().for_each(|v| *v = 0.0);
         let step = ComponentStep {
             component: self.component,
@@ -122,6 +128,18 @@ impl<'a> SensSection<'a> {
         };
         self.law
             .update_component_sens(step, &self.old, &mut self.new, sens)
+    }
+
+    /// [`UniformSection::trial`] without sensitivities (a Newton's trials on the strain); a
+    /// [`SensSection::trial`] must follow before [`SensSection::commit`].
+    #[inline]
+    pub fn trial_value(&mut self, strain: f64, dt: f64) -> (f64, f64) {
+        let step = ComponentStep {
+            component: self.component,
+            strain,
+            dt,
+        };
+        self.law.update_component(step, &self.old, &mut self.new)
     }
 
     /// Make the last trial the committed state.

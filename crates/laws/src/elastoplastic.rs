@@ -349,10 +349,7 @@ impl PlasticChannel {
         let Some([g, n, dphi]) = plastic else {
             let k_n = self.stiffness_at(alpha_n);
             let dk = self.stiffness_sens(alpha_n, dir);
-            return (
-                dk * e_tr + k_n * dir.de_tr,
-                [dir.dep, dir.dx, dir.dalpha],
-            );
+            return (dk * e_tr + k_n * dir.de_tr, [dir.dep, dir.dx, dir.dalpha]);
         };
         let (b, c, h) = (self.kin_recovery, self.kin_hardening, self.iso_hardening);
         let alpha = alpha_n + g;
@@ -651,7 +648,11 @@ impl PlasticParam {
 impl PlasticChannel {
     /// The parameters of [`Law::sens_params`], in order.
     fn sens_params(&self, kinematic: bool) -> Vec<PlasticParam> {
-        let mut v = vec![PlasticParam::Stiffness, PlasticParam::Yield, PlasticParam::Iso];
+        let mut v = vec![
+            PlasticParam::Stiffness,
+            PlasticParam::Yield,
+            PlasticParam::Iso,
+        ];
         if kinematic {
             v.push(PlasticParam::Kin);
         }

@@ -47,7 +47,8 @@ pub use elastoplastic::{ChannelState, Degradation, Elastoplastic, PlasticChannel
 pub use error::LawError;
 pub use friction::{IwanElements, JenkinsElement};
 pub use law::{
-    update_component_via_full, ComponentStep, Law, LawResponse, SensStep, Strain6, Stress6, Tangent6,
+    update_component_via_full, ComponentStep, Law, LawResponse, SensStep, Strain6, Stress6,
+    Tangent6,
 };
 pub use linear::{LinearElastic, SectionStiffness};
 pub use parallel::Parallel;

@@ -58,7 +58,10 @@ fn cases(kind: TestKind) -> Vec<(&'static str, BTreeMap<String, f64>)> {
         with("viscoelasticity", &[]),
         with("linear+viscoelasticity", &[]),
         with("viscoelasticity", &[("tau_v1", 1e3)]),
-        with("kinematic_hardening+stiffness_degradation+viscoelasticity", &[]),
+        with(
+            "kinematic_hardening+stiffness_degradation+viscoelasticity",
+            &[],
+        ),
     ]
 }
 
@@ -90,8 +93,17 @@ fn sensitivities_match_central_differences_over_generated_histories() {
                     drive_uniform(build(kind, law_name, &p).unwrap().as_ref(), c, &e, &t)
                 };
                 let (up, down) = (at(v + h), at(v - h));
-                let fd: Vec<f64> = up.iter().zip(&down).map(|(a, b)| (a - b) / (2.0 * h)).collect();
-                let err = col.iter().zip(&fd).map(|(a, b)| (a - b).powi(2)).sum::<f64>().sqrt();
+                let fd: Vec<f64> = up
+                    .iter()
+                    .zip(&down)
+                    .map(|(a, b)| (a - b) / (2.0 * h))
+                    .collect();
+                let err = col
+                    .iter()
+                    .zip(&fd)
+                    .map(|(a, b)| (a - b).powi(2))
+                    .sum::<f64>()
+                    .sqrt();
                 let norm = fd.iter().map(|v| v * v).sum::<f64>().sqrt();
                 assert!(
                     err <= 1e-5 * norm + 1e-9 * size / v,
