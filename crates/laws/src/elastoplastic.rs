@@ -312,59 +312,47 @@ impl PlasticChannel {
         (r, Some([g, n, dphi]))
     }
 
-    /// ∂k/∂p at accumulated plastic deformation `alpha` for fixed Δγ: k = k₀ (1 − D(α)) with
-    /// D = D_∞ (1 − e^(−α/α_D)), along a direction moving k₀, D_∞, α_D and the committed α_n
-    /// by `dir.dk0`, `dir.dd_inf`, `dir.dalpha_d`, `dir.dalpha`.
-    fn stiffness_sens(&self, alpha: f64, dir: &AxisDir) -> f64 {
-        match &self.degradation {
-            None => dir.dk0,
+    /// The linearisation of [`PlasticChannel::return_map_axis`] at one step, from the
+    /// committed `[ε_pl, x, α]` and the step's `plastic` data
+    /// ([`PlasticChannel::return_map_axis_with`]); see [`AxisLin`].
+    fn axis_lin(&self, e: f64, old: [f64; 3], plastic: Option<[f64; 3]>) -> AxisLin {
+        let [ep, x, alpha_n] = old;
+        let (g, n, dphi) = match plastic {
+            Some([g, n, dphi]) => (g, n, dphi),
+            None => (0.0, 0.0, f64::NAN),
+        };
+        let alpha = alpha_n + g;
+        // ∂k/∂p at fixed Δγ: k = k₀ (1 − D(α)), D = D_∞ (1 − e^(−α/α_D)).
+        let dk = match &self.degradation {
+            None => [1.0, 0.0, 0.0, 0.0],
             Some(d) => {
                 let ex = (-alpha / d.alpha_d).exp();
                 let one_minus = -(-alpha / d.alpha_d).exp_m1();
-                let d_damage = dir.dd_inf * one_minus
-                    + d.d_inf
-                        * ex
-                        * (dir.dalpha / d.alpha_d - alpha * dir.dalpha_d / (d.alpha_d * d.alpha_d));
-                dir.dk0 * (1.0 - d.damage(alpha)) - self.stiffness * d_damage
+                let k0 = self.stiffness;
+                [
+                    1.0 - d.d_inf * one_minus,
+                    -k0 * one_minus,
+                    -k0 * d.d_inf * ex / d.alpha_d,
+                    k0 * d.d_inf * ex * alpha / (d.alpha_d * d.alpha_d),
+                ]
             }
-        }
-    }
-
-    /// The derivative of [`PlasticChannel::return_map_axis`] along `dir` (a parameter, the
-    /// strain, the committed state), from the committed `[ε_pl, x, α]` and the step's
-    /// `plastic` data ([`PlasticChannel::return_map_axis_with`]): ∂σ and ∂[ε_pl, x, α]_new.
-    /// Elastic: σ = k(α_n)(e − ε_pl). Plastic: Δγ from the implicit consistency condition
-    /// φ(Δγ; p) = 0, ∂Δγ = −∂φ|_Δγ / φ'(Δγ) with ∂φ|_Δγ = n ∂a − ∂β Δγ − ∂σ_y − ∂H α − H ∂α_n,
-    /// a = k(α) e_tr − x/(1 + bΔγ), β = k(α) + c/(1 + bΔγ) (b, the recovery, is held); then
-    /// σ = k(α)(e_tr − Δγ n), ε_pl + Δγ n, (x + cΔγ n)/(1 + bΔγ), α_n + Δγ differentiated.
-    fn axis_sens(
-        &self,
-        e: f64,
-        old: [f64; 3],
-        plastic: Option<[f64; 3]>,
-        dir: &AxisDir,
-    ) -> (f64, [f64; 3]) {
-        let [ep, x, alpha_n] = old;
-        let e_tr = e - ep;
-        let Some([g, n, dphi]) = plastic else {
-            let k_n = self.stiffness_at(alpha_n);
-            let dk = self.stiffness_sens(alpha_n, dir);
-            return (dk * e_tr + k_n * dir.de_tr, [dir.dep, dir.dx, dir.dalpha]);
         };
-        let (b, c, h) = (self.kin_recovery, self.kin_hardening, self.iso_hardening);
-        let alpha = alpha_n + g;
-        let k = self.stiffness_at(alpha);
-        let k_rate = self.stiffness_rate(alpha);
-        let r = 1.0 / (1.0 + b * g);
-        let dk = self.stiffness_sens(alpha, dir);
-        let da = dk * e_tr + k * dir.de_tr - r * dir.dx;
-        let dbeta = dk + dir.dc * r;
-        let dphi_p = n * da - dbeta * g - dir.dsy - dir.dh * alpha - h * dir.dalpha;
-        let dg = -dphi_p / dphi;
-        let dk_total = dk + k_rate * dg;
-        let ds = dk_total * (e_tr - g * n) + k * (dir.de_tr - dg * n);
-        let dx_new = r * (dir.dx + dir.dc * g * n + c * dg * n) - r * r * b * dg * (x + c * g * n);
-        (ds, [dir.dep + dg * n, dx_new, dir.dalpha + dg])
+        AxisLin {
+            plastic: plastic.is_some(),
+            e_tr: e - ep,
+            x,
+            g,
+            n,
+            dphi,
+            alpha,
+            k: self.stiffness_at(alpha),
+            k_rate: self.stiffness_rate(alpha),
+            r: 1.0 / (1.0 + self.kin_recovery * g),
+            dk,
+            b: self.kin_recovery,
+            c: self.kin_hardening,
+            h: self.iso_hardening,
+        }
     }
 
     /// [`PlasticChannel::return_map`] through the scalar path when the strain and the history lie
@@ -561,12 +549,16 @@ impl Law for Elastoplastic {
             return None;
         };
         p.channel.position(component)?;
-        Some(
-            p.sens_params(self.label.contains("kinematic"))
-                .into_iter()
-                .map(|q| q.name(p.channel))
-                .collect(),
-        )
+        let (params, np) = p.sens_params(self.label.starts_with("kinematic"));
+        Some(params[..np].iter().map(|q| q.name(p.channel)).collect())
+    }
+
+    fn sens_count(&self, component: usize) -> Option<usize> {
+        let [p] = self.plastic.as_slice() else {
+            return None;
+        };
+        p.channel.position(component)?;
+        Some(p.sens_params(self.label.starts_with("kinematic")).1)
     }
 
     fn update_component_sens(
@@ -590,13 +582,16 @@ impl Law for Elastoplastic {
         for (&row, &v) in rows.iter().zip(&r.state) {
             new[row] = v;
         }
-        if d == 2 {
-            new[1 - pos] = 0.0;
-            new[d + 1 - pos] = 0.0;
-        }
         let ncol = sens.de.len();
-        let params = p.sens_params(self.label.contains("kinematic"));
-        sens.d_new.iter_mut().for_each(|v| *v = 0.0);
+        if d == 2 {
+            // Off the axis the state and its derivatives stay 0.
+            for row in [1 - pos, d + 1 - pos] {
+                new[row] = 0.0;
+                sens.d_new[row * ncol..(row + 1) * ncol].fill(0.0);
+            }
+        }
+        let (params, np) = p.sens_params(self.label.starts_with("kinematic"));
+        let lin = p.axis_lin(step.strain, st, plastic);
         for j in 0..ncol {
             let at = |row: usize| sens.d_old[row * ncol + j];
             let mut dir = AxisDir {
@@ -606,10 +601,10 @@ impl Law for Elastoplastic {
                 dalpha: at(rows[2]),
                 ..AxisDir::default()
             };
-            if let Some(q) = j.checked_sub(sens.first).and_then(|l| params.get(l)) {
-                dir.set(*q);
+            if let Some(q) = j.checked_sub(sens.first).filter(|&l| l < np) {
+                dir.set(params[q]);
             }
-            let (ds, dst) = p.axis_sens(step.strain, st, plastic, &dir);
+            let (ds, dst) = lin.apply(&dir);
             sens.ds[j] += ds;
             for (&row, &v) in rows.iter().zip(&dst) {
                 sens.d_new[row * ncol + j] = v;
@@ -646,24 +641,80 @@ impl PlasticParam {
 }
 
 impl PlasticChannel {
-    /// The parameters of [`Law::sens_params`], in order.
-    fn sens_params(&self, kinematic: bool) -> Vec<PlasticParam> {
-        let mut v = vec![
-            PlasticParam::Stiffness,
-            PlasticParam::Yield,
-            PlasticParam::Iso,
-        ];
+    /// The parameters of [`Law::sens_params`], in order: the first of the array, and how many
+    /// (no allocation: called every step).
+    fn sens_params(&self, kinematic: bool) -> ([PlasticParam; 6], usize) {
+        use PlasticParam::*;
+        let mut v = [Stiffness, Yield, Iso, Kin, DInf, AlphaD];
+        let mut np = 3;
         if kinematic {
-            v.push(PlasticParam::Kin);
+            np += 1;
         }
         if self.degradation.is_some() {
-            v.extend([PlasticParam::DInf, PlasticParam::AlphaD]);
+            v[np] = DInf;
+            v[np + 1] = AlphaD;
+            np += 2;
         }
-        v
+        (v, np)
     }
 }
 
-/// A direction of [`PlasticChannel::axis_sens`]: the derivatives of e − ε_pl, of the committed
+/// One step of [`PlasticChannel::return_map_axis`] linearised: what its derivative along any
+/// direction ([`AxisLin::apply`]) needs, computed once per step.
+#[derive(Debug, Clone, Copy)]
+struct AxisLin {
+    /// Whether the step yields (Δγ > 0 from the consistency condition).
+    plastic: bool,
+    /// e − ε_pl,n, x_n, Δγ, n, φ'(Δγ) and α = α_n + Δγ.
+    e_tr: f64,
+    x: f64,
+    g: f64,
+    n: f64,
+    dphi: f64,
+    alpha: f64,
+    /// k(α), dk/dα and 1/(1 + bΔγ).
+    k: f64,
+    k_rate: f64,
+    r: f64,
+    /// ∂k/∂(k₀, D_∞, α_n, α_D) at fixed Δγ.
+    dk: [f64; 4],
+    /// Recovery b, kinematic modulus c, isotropic modulus H.
+    b: f64,
+    c: f64,
+    h: f64,
+}
+
+impl AxisLin {
+    /// The derivative of the step along `dir` (a parameter, the strain, the committed state):
+    /// ∂σ and ∂[ε_pl, x, α]_new. Elastic: σ = k(α_n)(e − ε_pl). Plastic: Δγ from the implicit
+    /// consistency condition φ(Δγ; p) = 0, ∂Δγ = −∂φ|_Δγ / φ'(Δγ) with
+    /// ∂φ|_Δγ = n ∂a − ∂β Δγ − ∂σ_y − ∂H α − H ∂α_n, a = k(α) e_tr − x/(1 + bΔγ),
+    /// β = k(α) + c/(1 + bΔγ) (b, the recovery, is held); then σ = k(α)(e_tr − Δγ n),
+    /// ε_pl + Δγ n, (x + cΔγ n)/(1 + bΔγ) and α_n + Δγ differentiated.
+    #[inline]
+    fn apply(&self, dir: &AxisDir) -> (f64, [f64; 3]) {
+        let dk = self.dk[0] * dir.dk0
+            + self.dk[1] * dir.dd_inf
+            + self.dk[2] * dir.dalpha
+            + self.dk[3] * dir.dalpha_d;
+        let (k, e_tr) = (self.k, self.e_tr);
+        if !self.plastic {
+            return (dk * e_tr + k * dir.de_tr, [dir.dep, dir.dx, dir.dalpha]);
+        }
+        let (g, n, r, b, c) = (self.g, self.n, self.r, self.b, self.c);
+        let da = dk * e_tr + k * dir.de_tr - r * dir.dx;
+        let dbeta = dk + dir.dc * r;
+        let dphi_p = n * da - dbeta * g - dir.dsy - dir.dh * self.alpha - self.h * dir.dalpha;
+        let dg = -dphi_p / self.dphi;
+        let dk_total = dk + self.k_rate * dg;
+        let ds = dk_total * (e_tr - g * n) + k * (dir.de_tr - dg * n);
+        let dx_new =
+            r * (dir.dx + dir.dc * g * n + c * dg * n) - r * r * b * dg * (self.x + c * g * n);
+        (ds, [dir.dep + dg * n, dx_new, dir.dalpha + dg])
+    }
+}
+
+/// A direction of [`AxisLin::apply`]: the derivatives of e − ε_pl, of the committed
 /// ε_pl, x and α, and of the parameters k₀, σ_y, H, c, D_∞, α_D.
 #[derive(Debug, Clone, Copy, Default)]
 struct AxisDir {

@@ -73,6 +73,12 @@ pub trait Law: Send + Sync + std::fmt::Debug {
         None
     }
 
+    /// The length of [`Law::sens_params`] without building the names (composites ask it every
+    /// step).
+    fn sens_count(&self, component: usize) -> Option<usize> {
+        self.sens_params(component).map(|v| v.len())
+    }
+
     /// [`Law::update_component`] with forward (tangent) sensitivities: the same stress, tangent
     /// and `new` state, and the derivatives along every column of `sens` (see [`SensStep`]) of
     /// the stress (added to `sens.ds`) and of the new state (written to `sens.d_new`), given

@@ -130,6 +130,10 @@ impl Law for LinearElastic {
         Some(vec![crate::registry::names(ch).stiff.to_string()])
     }
 
+    fn sens_count(&self, component: usize) -> Option<usize> {
+        (2..6).contains(&component).then_some(1)
+    }
+
     /// σ = k ε: ∂σ = ε ∂k + k ∂ε (no state).
     fn update_component_sens(
         &self,
@@ -138,7 +142,7 @@ impl Law for LinearElastic {
         new: &mut [f64],
         sens: SensStep<'_>,
     ) -> Option<(f64, f64)> {
-        self.sens_params(step.component)?;
+        self.sens_count(step.component)?;
         let (s, k) = self.update_component(step, old, new);
         for (j, (ds, de)) in sens.ds.iter_mut().zip(sens.de).enumerate() {
             *ds += k * de + if j == sens.first { step.strain } else { 0.0 };

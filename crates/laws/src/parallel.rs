@@ -82,6 +82,10 @@ impl Law for Parallel {
         Some(v)
     }
 
+    fn sens_count(&self, component: usize) -> Option<usize> {
+        Some(self.base.sens_count(component)? + self.extension.sens_count(component)?)
+    }
+
     /// Stresses and their derivatives add; the state derivatives split as the states do.
     fn update_component_sens(
         &self,
@@ -92,7 +96,7 @@ impl Law for Parallel {
     ) -> Option<(f64, f64)> {
         let nb = self.base.n_state();
         let ncol = sens.de.len();
-        let first_ext = sens.first + self.base.sens_params(step.component)?.len();
+        let first_ext = sens.first + self.base.sens_count(step.component)?;
         let (bo, eo) = old.split_at(nb);
         let (bn, en) = new.split_at_mut(nb);
         let (dbo, deo) = sens.d_old.split_at(nb * ncol);

@@ -209,7 +209,7 @@ pub(crate) struct Names {
     pub(crate) strength: &'static str,
     strength_unit: &'static str,
     pub(crate) hard: &'static str,
-    strain: &'static str,
+    pub(crate) strain: &'static str,
     strain_unit: &'static str,
     stiff_max: f64,
     strength_max: f64,

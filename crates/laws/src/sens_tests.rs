@@ -41,7 +41,7 @@ fn cases(kind: TestKind) -> Vec<(&'static str, BTreeMap<String, f64>)> {
     let hard = if kind == TestKind::Tension { "H" } else { "HI" };
     let with = |law: &'static str, extra: &[(&str, f64)]| {
         let mut p = example_params(kind, law, k, y).unwrap();
-        if law != "linear" && !law.starts_with("linear") {
+        if !law.starts_with("linear") && !law.starts_with("piecewise") {
             p.insert(hard.to_string(), 0.1 * k);
         }
         for (n, v) in extra {
@@ -57,6 +57,8 @@ fn cases(kind: TestKind) -> Vec<(&'static str, BTreeMap<String, f64>)> {
         with("stiffness_degradation", &[]),
         with("viscoelasticity", &[]),
         with("linear+viscoelasticity", &[]),
+        with("piecewise_linear", &[]),
+        with("piecewise_linear+viscoelasticity", &[]),
         with("viscoelasticity", &[("tau_v1", 1e3)]),
         with(
             "kinematic_hardening+stiffness_degradation+viscoelasticity",
@@ -119,7 +121,7 @@ fn sensitivities_match_central_differences_over_generated_histories() {
 #[test]
 fn laws_without_sensitivities_say_so() {
     let (k, y) = example_scale(TestKind::PureBending);
-    for law in ["piecewise_linear", "friction_hysteresis"] {
+    for law in ["friction_hysteresis", "elastoplastic+friction_hysteresis"] {
         let p = example_params(TestKind::PureBending, law, k, y).unwrap();
         let l = build(TestKind::PureBending, law, &p).unwrap();
         assert!(l.sens_params(3).is_none(), "{law}");

@@ -157,6 +157,11 @@ impl Law for MaxwellBranches {
         Some(vec![format!("{stiff}_v1"), "tau_v1".into()])
     }
 
+    fn sens_count(&self, component: usize) -> Option<usize> {
+        self.channel.position(component)?;
+        (self.branches.len() == 1).then_some(2)
+    }
+
     /// σᵢ = e^(−x) σᵢ,ₙ + kᵢ r(x) Δε differentiated: the decay and ramp factors through τᵢ
     /// ([`MaxwellBranch::factor_rates`]), kᵢ directly, σᵢ,ₙ and Δε = ε − εₙ through the state
     /// and the strain.
@@ -168,30 +173,33 @@ impl Law for MaxwellBranches {
         sens: SensStep<'_>,
     ) -> Option<(f64, f64)> {
         let pos = self.channel.position(step.component)?;
+        let [b] = self.branches.as_slice() else {
+            return None;
+        };
         let d = self.channel.dim();
         let (s, k_alg) = self.update_component(step, old, new);
         let ncol = sens.de.len();
-        sens.d_new.iter_mut().for_each(|v| *v = 0.0);
+        let at = d + pos;
+        if d == 2 {
+            // Off the axis the state and its derivatives stay 0.
+            for row in [1 - pos, d + 1 - pos] {
+                sens.d_new[row * ncol..(row + 1) * ncol].fill(0.0);
+            }
+        }
         let de = step.strain - old[pos];
+        let (decay, ramp) = b.factors(step.dt);
+        let (d_decay, d_ramp) = b.factor_rates(step.dt);
         for j in 0..ncol {
             let dde = sens.de[j] - sens.d_old[pos * ncol + j];
             sens.d_new[pos * ncol + j] = sens.de[j];
-            for (i, b) in self.branches.iter().enumerate() {
-                let at = d * (1 + i) + pos;
-                let (decay, ramp) = b.factors(step.dt);
-                let (mut d_decay, mut d_ramp, mut dk) = (0.0, 0.0, 0.0);
-                if j.checked_sub(sens.first) == Some(2 * i) {
-                    dk = 1.0;
-                } else if j.checked_sub(sens.first) == Some(2 * i + 1) {
-                    (d_decay, d_ramp) = b.factor_rates(step.dt);
-                }
-                let dsi = d_decay * old[at]
-                    + decay * sens.d_old[at * ncol + j]
-                    + (dk * ramp + b.stiffness * d_ramp) * de
-                    + b.stiffness * ramp * dde;
-                sens.d_new[at * ncol + j] = dsi;
-                sens.ds[j] += dsi;
+            let mut dsi = decay * sens.d_old[at * ncol + j] + b.stiffness * ramp * dde;
+            match j.checked_sub(sens.first) {
+                Some(0) => dsi += ramp * de,
+                Some(1) => dsi += d_decay * old[at] + b.stiffness * d_ramp * de,
+                _ => {}
             }
+            sens.d_new[at * ncol + j] = dsi;
+            sens.ds[j] += dsi;
         }
         Some((s, k_alg))
     }
