@@ -4,12 +4,18 @@
 //! The forward model replays each test's measured control history ([`Forward::simulate`]); the
 //! residuals are (simulated − measured) response on the samples the fit may see, weighted per test
 //! by 1/σ (the test's noise floor), so a joint fit over tests of different size and unit is a
-//! proper χ². Bounds are handled by the change of variables of [`crate::params`]; the Jacobian is
-//! by forward differences, one parameter per rayon task, or (in the polish by default) between
-//! those by Broyden's secant update after a step that went as predicted
+//! proper χ². Bounds are handled by the change of variables of [`crate::params`]. The Jacobian
+//! comes from the forward model's sensitivities where it has them
+//! ([`Forward::simulate_jacobian`]: ∂σ/∂p propagated through the law's state recursion in the same
+//! replay, one replay with k derivative columns instead of k + 1 replays;
+//! [`FitOptions::sensitivities`]), chained through dp/dz of the bounds' map and centred like the
+//! residuals when the offset is profiled out; otherwise (laws without sensitivities, the rod) by
+//! forward differences, one parameter per rayon task. In the polish by default Broyden's secant
+//! update replaces some of them after a step that went as predicted
 //! ([`FitOptions::polish_secant`]). Uncertainties come from the Gauss–Newton covariance
-//! s²(JᵀJ)⁻¹ at the optimum (physical parameters, a fresh finite-difference Jacobian), inflated
-//! by (1+ρ₁)/(1−ρ₁) for the lag-1 autocorrelation ρ₁ of the residuals.
+//! s²(JᵀJ)⁻¹ at the optimum (physical parameters, a fresh Jacobian: sensitivities or finite
+//! differences, never a secant one), inflated by (1+ρ₁)/(1−ρ₁) for the lag-1 autocorrelation ρ₁
+//! of the residuals.
 //! What it does not do: decide which model to fit (see `diagnose`) or simulate anything itself.
 
 use crate::params::ParamSpec;
@@ -89,7 +95,7 @@ pub struct FitOptions {
     pub secant: usize,
     /// The same in the polish on every fitted sample (default [`SECANT_UPDATES`]): it starts
     /// near the optimum, where the residuals are close to linear. The uncertainties always
-    /// come from a fresh finite-difference Jacobian at the optimum.
+    /// come from a fresh Jacobian (sensitivities or finite differences) at the optimum.
     pub polish_secant: usize,
     /// Most samples per branch of the history the starts descend on (a branch-preserving
     /// decimation, see [`crate::calibration`]); 0: every sample. The end is scored, polished and

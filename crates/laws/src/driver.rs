@@ -11,6 +11,11 @@
 //! 0.07 ms (linear), 0.5 ms (elastoplastic) and 1.9 ms (stiffness degradation, whose return map
 //! is a Newton solve) on the project's 2-core machine (`cargo bench -p cablab-laws`).
 //!
+//! [`SensSection`] steps the same way with forward sensitivities: the state's derivatives with
+//! respect to the law's parameters ([`Law::sens_params`]) ride along in two more buffers, so one
+//! replay gives the response and every Jacobian column of a fit ([`drive_uniform_sens`] here,
+//! `replay_uniform_sens` in `cablab-rod`).
+//!
 //! Does not: convert a machine's control into strain, or know a test's geometry (`cablab-rod`).
 
 use crate::law::{ComponentStep, Law, SensStep};

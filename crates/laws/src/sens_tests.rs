@@ -55,10 +55,22 @@ fn cases(kind: TestKind) -> Vec<(&'static str, BTreeMap<String, f64>)> {
         with("kinematic_hardening", &[]),
         with("kinematic_hardening", &[("b_kin", 0.5 * k / y)]),
         with("stiffness_degradation", &[]),
-        with("stiffness_degradation", &[("D_inf", 0.9), ("alpha_D", 0.05 * y / k)]),
-        with("stiffness_degradation", &[("D_inf", 0.95), ("alpha_D", 30.0 * y / k)]),
-        with("stiffness_degradation", &[("D_inf", 0.5), ("alpha_D", 0.01 * y / k)]),
-        with("stiffness_degradation+viscoelasticity", &[("D_inf", 0.9), ("alpha_D", 0.05 * y / k), ("tau_v1", 0.05)]),
+        with(
+            "stiffness_degradation",
+            &[("D_inf", 0.9), ("alpha_D", 0.05 * y / k)],
+        ),
+        with(
+            "stiffness_degradation",
+            &[("D_inf", 0.95), ("alpha_D", 30.0 * y / k)],
+        ),
+        with(
+            "stiffness_degradation",
+            &[("D_inf", 0.5), ("alpha_D", 0.01 * y / k)],
+        ),
+        with(
+            "stiffness_degradation+viscoelasticity",
+            &[("D_inf", 0.9), ("alpha_D", 0.05 * y / k), ("tau_v1", 0.05)],
+        ),
         with("viscoelasticity", &[]),
         with("linear+viscoelasticity", &[]),
         with("piecewise_linear", &[]),

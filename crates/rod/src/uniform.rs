@@ -6,7 +6,9 @@
 //!
 //! [`replay_uniform`] is the diagnosis's hot loop (a calibration evaluates it tens of thousands of
 //! times): no allocation per sample, one scalar return mapping per sample without compliance and
-//! one per Newton trial with it.
+//! one per Newton trial with it. [`replay_uniform_sens`] replays the same history with forward
+//! sensitivities (the Jacobian columns of a fit in one replay; with compliance, ∂ε/∂p from the
+//! series relation).
 //!
 //! Does not: run the rod (three-point bending and the pure-bending path are in
 //! [`crate::drivers`]), or read files.
