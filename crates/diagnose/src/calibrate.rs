@@ -4,12 +4,18 @@
 //! The forward model replays each test's measured control history ([`Forward::simulate`]); the
 //! residuals are (simulated − measured) response on the samples the fit may see, weighted per test
 //! by 1/σ (the test's noise floor), so a joint fit over tests of different size and unit is a
-//! proper χ². Bounds are handled by the change of variables of [`crate::params`]; the Jacobian is
-//! by forward differences, one parameter per rayon task, or (in the polish by default) between
-//! those by Broyden's secant update after a step that went as predicted
+//! proper χ². Bounds are handled by the change of variables of [`crate::params`]. The Jacobian
+//! comes from the forward model's sensitivities where it has them
+//! ([`Forward::simulate_jacobian`]: ∂σ/∂p propagated through the law's state recursion in the same
+//! replay, one replay with k derivative columns instead of k + 1 replays;
+//! [`FitOptions::sensitivities`]), chained through dp/dz of the bounds' map and centred like the
+//! residuals when the offset is profiled out; otherwise (laws without sensitivities, the rod) by
+//! forward differences, one parameter per rayon task. In the polish by default Broyden's secant
+//! update replaces some of them after a step that went as predicted
 //! ([`FitOptions::polish_secant`]). Uncertainties come from the Gauss–Newton covariance
-//! s²(JᵀJ)⁻¹ at the optimum (physical parameters, a fresh finite-difference Jacobian), inflated
-//! by (1+ρ₁)/(1−ρ₁) for the lag-1 autocorrelation ρ₁ of the residuals.
+//! s²(JᵀJ)⁻¹ at the optimum (physical parameters, a fresh Jacobian: sensitivities or finite
+//! differences, never a secant one), inflated by (1+ρ₁)/(1−ρ₁) for the lag-1 autocorrelation ρ₁
+//! of the residuals.
 //! What it does not do: decide which model to fit (see `diagnose`) or simulate anything itself.
 
 use crate::params::ParamSpec;
@@ -33,6 +39,19 @@ pub trait Forward: Sync {
     /// sample into `out` (length `n_samples(test)`). An error means the model could not follow the
     /// history with these parameters (the fit treats the point as infeasible).
     fn simulate(&self, params: &[f64], test: usize, out: &mut [f64]) -> Result<(), String>;
+    /// [`Forward::simulate`] with the derivatives of the response: `jac[j]` (one per parameter,
+    /// `n_samples(test)` long) receives ∂out/∂p_j (forward sensitivities through the model's
+    /// state recursion). `Ok(false)`, the default: no analytic derivatives for this test, and
+    /// the fit differentiates numerically (`out` and `jac` are then unspecified).
+    fn simulate_jacobian(
+        &self,
+        _params: &[f64],
+        _test: usize,
+        _out: &mut [f64],
+        _jac: &mut [Vec<f64>],
+    ) -> Result<bool, String> {
+        Ok(false)
+    }
 }
 
 /// The measurements a fit is scored against.
@@ -76,7 +95,7 @@ pub struct FitOptions {
     pub secant: usize,
     /// The same in the polish on every fitted sample (default [`SECANT_UPDATES`]): it starts
     /// near the optimum, where the residuals are close to linear. The uncertainties always
-    /// come from a fresh finite-difference Jacobian at the optimum.
+    /// come from a fresh Jacobian (sensitivities or finite differences) at the optimum.
     pub polish_secant: usize,
     /// Most samples per branch of the history the starts descend on (a branch-preserving
     /// decimation, see [`crate::calibration`]); 0: every sample. The end is scored, polished and
@@ -86,6 +105,10 @@ pub struct FitOptions {
     /// simulation per parameter over every fitted sample); it also stops once a step gains less
     /// than [`POLISH_CONVERGED`].
     pub polish_jacobians: usize,
+    /// Jacobians from the forward model's sensitivities ([`Forward::simulate_jacobian`]: one
+    /// replay with the derivatives propagated through the state recursion instead of one replay
+    /// per parameter) wherever every test has them (default); finite differences otherwise.
+    pub sensitivities: bool,
 }
 
 impl Default for FitOptions {
@@ -98,6 +121,7 @@ impl Default for FitOptions {
             polish_secant: SECANT_UPDATES,
             per_branch: 64,
             polish_jacobians: POLISH_JACOBIANS,
+            sensitivities: true,
         }
     }
 }
@@ -192,6 +216,27 @@ impl Forward for Pinned<'_> {
     fn simulate(&self, params: &[f64], test: usize, out: &mut [f64]) -> Result<(), String> {
         self.inner.simulate(&self.expand(params), test, out)
     }
+    /// The inner model's columns of the free parameters.
+    fn simulate_jacobian(
+        &self,
+        params: &[f64],
+        test: usize,
+        out: &mut [f64],
+        jac: &mut [Vec<f64>],
+    ) -> Result<bool, String> {
+        let n = out.len();
+        let mut full = vec![vec![0.0; n]; self.full.len()];
+        if !self
+            .inner
+            .simulate_jacobian(&self.expand(params), test, out, &mut full)?
+        {
+            return Ok(false);
+        }
+        for (c, &j) in jac.iter_mut().zip(&self.free) {
+            std::mem::swap(c, &mut full[j]);
+        }
+        Ok(true)
+    }
 }
 
 /// Cost of parameter vectors that the model cannot simulate (per residual, in noise units).
@@ -270,6 +315,8 @@ struct Problem<'a> {
     last: Mutex<Option<LastJacobian>>,
     /// Residual evaluations (trial steps) since the last Jacobian.
     trials: AtomicUsize,
+    /// Try the forward model's sensitivities before finite differences.
+    sensitivities: bool,
 }
 
 /// A Jacobian handed to Levenberg–Marquardt, the point it belongs to, and how many secant
@@ -349,6 +396,24 @@ impl Problem<'_> {
             .map(|(s, &zi)| s.from_unbounded(zi))
             .collect()
     }
+    /// The Jacobian at the current point: from the forward model's sensitivities when it has
+    /// them (chain rule through p(z), [`unbounded_rate`]), else [`Problem::finite_differences`].
+    fn fresh_jacobian(&self) -> DMatrix<f64> {
+        if self.sensitivities {
+            let specs = self.fwd.specs();
+            let p = self.phys(&self.z);
+            let dpdz: Vec<f64> = specs
+                .iter()
+                .zip(self.z.iter())
+                .zip(&p)
+                .map(|((s, &z), &p)| unbounded_rate(s, z, p))
+                .collect();
+            if let Some(j) = analytic_jacobian(self.fwd, self.data, &p, &dpdz) {
+                return j;
+            }
+        }
+        self.finite_differences()
+    }
     /// The Jacobian at the current point by forward differences, one parameter per rayon task
     /// (columns in parameter order).
     fn finite_differences(&self) -> DMatrix<f64> {
@@ -411,7 +476,7 @@ impl LeastSquaresProblem<f64, Dyn, Dyn> for Problem<'_> {
                 let j = secant_update(&l.j, &l.z, &l.r, &self.z, &self.r)?;
                 Some((j, l.secant + 1))
             });
-        let (j, updates) = secant.unwrap_or_else(|| (self.finite_differences(), 0));
+        let (j, updates) = secant.unwrap_or_else(|| (self.fresh_jacobian(), 0));
         *last = Some(LastJacobian {
             j: j.clone(),
             z: self.z.clone(),
@@ -420,6 +485,65 @@ impl LeastSquaresProblem<f64, Dyn, Dyn> for Problem<'_> {
         });
         Some(j)
     }
+}
+
+/// dp/da of a parameter on its axis a (ln p on a log axis, p itself on a linear one) at `p`,
+/// and the axis' width a(upper) − a(lower) (0 when the bounds coincide).
+fn axis_rate(s: &ParamSpec, p: f64) -> (f64, f64) {
+    if s.log_scale {
+        (p, (s.upper / s.lower).ln().max(0.0))
+    } else {
+        (1.0, (s.upper - s.lower).max(0.0))
+    }
+}
+
+/// dp/dz of [`ParamSpec::from_unbounded`] at z (physical value `p` there): p = a⁻¹(a_lo + (a_hi
+/// − a_lo)(1 + sin z)/2) on the parameter's axis a.
+fn unbounded_rate(s: &ParamSpec, z: f64, p: f64) -> f64 {
+    let (dp_da, width) = axis_rate(s, p);
+    dp_da * width * 0.5 * z.cos()
+}
+
+/// The Jacobian of the weighted residuals ([`residuals`]) at physical parameters `p` with
+/// respect to coordinates x with dp_j/dx_j = `dpdx[j]`, from the forward model's sensitivities
+/// ([`Forward::simulate_jacobian`], one task per test): row by row w_t (∂sim_i/∂p_j − its mean
+/// over the fitted samples when the offset is profiled out) dp_j/dx_j. `None` when a test has no
+/// sensitivities or cannot be simulated there, or an entry is not finite.
+fn analytic_jacobian(
+    fwd: &dyn Forward,
+    data: &FitData,
+    p: &[f64],
+    dpdx: &[f64],
+) -> Option<DMatrix<f64>> {
+    let k = p.len();
+    let per_test: Vec<Option<Vec<Vec<f64>>>> = (0..fwd.n_tests())
+        .into_par_iter()
+        .map(|t| {
+            let n = fwd.n_samples(t);
+            let mut out = vec![0.0; n];
+            let mut jac = vec![vec![0.0; n]; k];
+            matches!(fwd.simulate_jacobian(p, t, &mut out, &mut jac), Ok(true)).then_some(jac)
+        })
+        .collect();
+    let mut j = DMatrix::zeros(data.n(), k);
+    let mut row0 = 0;
+    for (t, cols) in per_test.iter().enumerate() {
+        let cols = cols.as_ref()?;
+        let idx = &data.fit_idx[t];
+        for (c, col) in cols.iter().enumerate() {
+            let mean = if data.free_offset && !idx.is_empty() {
+                idx.iter().map(|&i| col[i]).sum::<f64>() / idx.len() as f64
+            } else {
+                0.0
+            };
+            let scale = data.weight[t] * dpdx[c];
+            for (r, &i) in idx.iter().enumerate() {
+                j[(row0 + r, c)] = scale * (col[i] - mean);
+            }
+        }
+        row0 += idx.len();
+    }
+    j.iter().all(|v| v.is_finite()).then_some(j)
 }
 
 /// Ends of two starts whose costs (χ² in noise units) differ by less than this, and by less than
@@ -612,7 +736,15 @@ pub fn fit_coarse(
             (params, cost, r) = (polished.params, polished.cost, polished.residuals);
         }
     }
-    finish(fwd, data, params, r, cost, starts.len(), evaluations)
+    finish(
+        fwd,
+        data,
+        params,
+        r,
+        cost,
+        (starts.len(), evaluations),
+        opts.sensitivities,
+    )
 }
 
 /// The end of a descent, or a point scored on every fitted sample.
@@ -661,6 +793,7 @@ fn descend(
         secant,
         last: Mutex::new(None),
         trials: AtomicUsize::new(0),
+        sensitivities: opts.sensitivities,
     };
     match r0 {
         Some(r) => {
@@ -698,8 +831,8 @@ fn finish(
     params: Vec<f64>,
     r0: Option<DVector<f64>>,
     cost: f64,
-    starts: usize,
-    evaluations: usize,
+    (starts, evaluations): (usize, usize),
+    sensitivities: bool,
 ) -> Fit {
     let specs = fwd.specs();
     let n = data.n();
@@ -729,23 +862,40 @@ fn finish(
     if let (Some(r0), true) = (&r0, n > k) {
         // Jacobian on the unit axes u_j ∈ [0, 1] of each parameter's bounds (log or linear), so
         // that "determined" means the same for every parameter: known to within 2 % of its range.
-        let cols: Vec<Option<DVector<f64>>> = (0..k)
-            .into_par_iter()
-            .map(|j| {
-                let s = &specs[j];
-                let u0 = s.fraction(params[j]);
-                let h = if u0 + 1e-6 > 1.0 { -1e-6 } else { 1e-6 };
-                let mut p = params.clone();
-                p[j] = s.at_fraction(u0 + h);
-                let dp = p[j] - params[j];
-                if dp == 0.0 {
-                    return Some(DVector::zeros(r0.len()));
-                }
-                residuals(fwd, data, &p).map(|r| (r - r0) / h)
+        // From the sensitivities (dp/du = dp/da · width of the axis) when the model has them.
+        let analytic = sensitivities
+            .then(|| {
+                let dpdu: Vec<f64> = specs
+                    .iter()
+                    .zip(&params)
+                    .map(|(s, &p)| {
+                        let (dp_da, width) = axis_rate(s, p);
+                        dp_da * width
+                    })
+                    .collect();
+                analytic_jacobian(fwd, data, &params, &dpdu)
             })
-            .collect();
-        if cols.iter().all(Option::is_some) {
-            let ju = DMatrix::from_columns(&cols.into_iter().flatten().collect::<Vec<_>>());
+            .flatten();
+        let ju = analytic.or_else(|| {
+            let cols: Vec<Option<DVector<f64>>> = (0..k)
+                .into_par_iter()
+                .map(|j| {
+                    let s = &specs[j];
+                    let u0 = s.fraction(params[j]);
+                    let h = if u0 + 1e-6 > 1.0 { -1e-6 } else { 1e-6 };
+                    let mut p = params.clone();
+                    p[j] = s.at_fraction(u0 + h);
+                    let dp = p[j] - params[j];
+                    if dp == 0.0 {
+                        return Some(DVector::zeros(r0.len()));
+                    }
+                    residuals(fwd, data, &p).map(|r| (r - r0) / h)
+                })
+                .collect();
+            let cols: Option<Vec<DVector<f64>>> = cols.into_iter().collect();
+            cols.map(|c| DMatrix::from_columns(&c))
+        });
+        if let Some(ju) = ju {
             let infl = (1.0 + rho1.max(0.0)) / (1.0 - rho1.max(0.0));
             let s2 = cost / (n - k) as f64 * infl;
             // Free parameters: not at a bound.

@@ -780,4 +780,175 @@ mod tests {
             assert!(fd.std.iter().flatten().count() >= 2, "{law}: {:?}", fd.std);
         }
     }
+
+    /// Two tension specimens of the same length (the second a replicate with its stiffness and
+    /// strength factors), elastoplastic with kinematic hardening and viscoelasticity, machine
+    /// compliance and sensor drift: every column of the model's sensitivities, for each test,
+    /// agrees with a central difference of its replay to 10⁻⁵ of the column's norm (plus the
+    /// difference's rounding floor; columns that cannot move a test, the other test's factors,
+    /// are exactly 0).
+    #[test]
+    fn model_sensitivities_match_central_differences_of_the_replay() {
+        use cablab_core::Effect;
+        let ctx = Context::project();
+        let model = ModelSpec::law("elastoplastic")
+            .with(Effect::KinematicHardening)
+            .with(Effect::Viscoelasticity)
+            .with(Effect::MachineCompliance)
+            .with(Effect::SensorDrift);
+        let mut a = triangle();
+        a.control.iter_mut().for_each(|c| *c *= 0.05);
+        // Responses of an elastoplastic specimen (for data-scaled bounds and starts).
+        let plain = ModelSpec::law("elastoplastic");
+        let one = [a.clone()];
+        let f0 = ModelForward::new(&one, &plain, ctx.catalog, ctx.rod).unwrap();
+        a.response = f0.simulate_all(&[7.96e4, 54.0, 2400.0]).unwrap().remove(0);
+        let mut b = a.clone();
+        b.control.iter_mut().for_each(|c| *c *= 1.3);
+        let tests = [a, b];
+        let fwd = ModelForward::new(&tests, &model, ctx.catalog, ctx.rod).unwrap();
+        let specs = fwd.specs();
+        let names: Vec<&str> = specs.iter().map(|s| s.name.as_str()).collect();
+        assert!(names.contains(&"compliance") && names.contains(&"stiffness_factor_2"));
+        // Inside the bounds, away from them; the yield strength low enough to yield.
+        let p: Vec<f64> = specs
+            .iter()
+            .map(|s| match s.name.as_str() {
+                "EA" => 7.96e4,
+                "F_y" => 30.0,
+                "H" => 2400.0,
+                "compliance" => 0.3 * s.upper,
+                "drift_per_s" => 0.1 * s.upper,
+                "stiffness_factor_2" => 1.1,
+                "strength_factor_2" => 0.9,
+                _ => s.initial,
+            })
+            .collect();
+        for (s, &v) in specs.iter().zip(&p) {
+            assert!(
+                v > s.lower && v < s.upper,
+                "{} = {v} outside its bounds",
+                s.name
+            );
+        }
+        for (t, test) in tests.iter().enumerate() {
+            let n = test.control.len();
+            let mut out = vec![0.0; n];
+            let mut jac = vec![vec![0.0; n]; p.len()];
+            assert!(fwd.simulate_jacobian(&p, t, &mut out, &mut jac).unwrap());
+            let mut plain = vec![0.0; n];
+            fwd.simulate(&p, t, &mut plain).unwrap();
+            let gap = out
+                .iter()
+                .zip(&plain)
+                .map(|(x, y)| (x - y).abs())
+                .fold(0.0, f64::max);
+            assert!(gap < 1e-9, "test {t}: response off by {gap}");
+            for (j, col) in jac.iter().enumerate() {
+                let h = 1e-6 * p[j].abs();
+                let at = |x: f64| {
+                    let mut q = p.clone();
+                    q[j] = x;
+                    let mut o = vec![0.0; n];
+                    fwd.simulate(&q, t, &mut o).unwrap();
+                    o
+                };
+                let (up, down) = (at(p[j] + h), at(p[j] - h));
+                let fd: Vec<f64> = up
+                    .iter()
+                    .zip(&down)
+                    .map(|(x, y)| (x - y) / (2.0 * h))
+                    .collect();
+                let err = col
+                    .iter()
+                    .zip(&fd)
+                    .map(|(x, y)| (x - y).powi(2))
+                    .sum::<f64>()
+                    .sqrt();
+                let norm = fd.iter().map(|v| v * v).sum::<f64>().sqrt();
+                // Floor: the replay's own rounding (and the compliance Newton's tolerance) in
+                // a central difference, 10⁻⁹ of the response's size per unit relative change.
+                let size = out.iter().map(|v| v * v).sum::<f64>().sqrt();
+                let floor = 1e-9 * size / p[j].abs();
+                let other_factor = t == 0 && names[j].ends_with("factor_2");
+                if other_factor {
+                    assert!(col.iter().all(|&v| v == 0.0) && norm == 0.0, "{}", names[j]);
+                } else {
+                    assert!(
+                        norm > 0.0 && err <= 1e-5 * norm + floor,
+                        "test {t} ∂/∂{}: error {err:e} of {norm:e}",
+                        names[j]
+                    );
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn sensitivity_jacobians_reach_the_finite_difference_optimum_and_its_uncertainties() {
+        // The laws with sensitivities in tension past yield (the triangle history scaled to
+        // ±0.05 mm, a hold and a reversal), their example parameters as the truth, pseudo-noise
+        // of 0.05 N: fitted with finite-difference Jacobians and with sensitivity ones, the
+        // parameters agree within the finite-difference fit's standard error, the costs within
+        // a tie and the standard errors (Gauss–Newton covariance from either Jacobian) to 2 %.
+        let ctx = Context::project();
+        for law in [
+            "elastoplastic",
+            "kinematic_hardening",
+            "stiffness_degradation",
+            "viscoelasticity",
+        ] {
+            let mut t = triangle();
+            t.labels.clear();
+            t.control.iter_mut().for_each(|c| *c *= 0.05);
+            let model = ModelSpec::law(law);
+            let one = [t.clone()];
+            let fwd = ModelForward::new(&one, &model, ctx.catalog, ctx.rod).unwrap();
+            let example =
+                cablab_laws::example_params(TestKind::Tension, law, 7.96e4, 54.0).unwrap();
+            let truth: Vec<f64> = fwd
+                .specs()
+                .iter()
+                .map(|s| example.get(&s.name).copied().unwrap_or(s.initial))
+                .collect();
+            t.response = fwd.simulate_all(&truth).unwrap().remove(0);
+            for (i, r) in t.response.iter_mut().enumerate() {
+                *r += 0.05 * ((i * 7919 % 13) as f64 - 6.0) / 6.0;
+            }
+            let tests = [t];
+            let opts = |sensitivities| CalibrateOptions {
+                noise: Some(vec![0.05]),
+                fit: FitOptions {
+                    sensitivities,
+                    ..FitOptions::default()
+                },
+                ..CalibrateOptions::default()
+            };
+            let fd = calibrate(ctx, &tests, &model, &opts(false)).unwrap();
+            let an = calibrate(ctx, &tests, &model, &opts(true)).unwrap();
+            assert!(
+                (fd.chi2 - an.chi2).abs() <= calibrate::COST_TIE.max(1e-3 * fd.chi2),
+                "{law}: chi2 {} (finite differences) vs {} (sensitivities)",
+                fd.chi2,
+                an.chi2
+            );
+            for (j, s) in fd.specs.iter().enumerate() {
+                if let Some(se) = fd.std[j] {
+                    let (a, b) = (fd.values[j], an.values[j]);
+                    assert!(
+                        (a - b).abs() <= se,
+                        "{law}: {} = {a} ± {se} (finite differences) vs {b}",
+                        s.name
+                    );
+                    let se_an = an.std[j].expect("identified either way");
+                    assert!(
+                        (se_an / se - 1.0).abs() < 0.02,
+                        "{law}: σ({}) {se} (finite differences) vs {se_an}",
+                        s.name
+                    );
+                }
+            }
+            assert!(fd.std.iter().flatten().count() >= 2, "{law}: {:?}", fd.std);
+        }
+    }
 }

@@ -650,7 +650,104 @@ impl Forward for ModelForward<'_> {
     }
     fn simulate(&self, p: &[f64], test: usize, out: &mut [f64]) -> Result<(), String> {
         let t = &self.tests[test];
-        // A replicate's own stiffness and strength (see `specimen_factor_specs`).
+        let law = self.law_of(p, test)?;
+        let law: &dyn Law = law.as_ref();
+        let c = self.i_compliance.map_or(0.0, |i| p[i]);
+        if cablab_rod::uniform::is_uniform(t.kind) {
+            let mut setup = cablab_rod::TestSetup::new(t.kind, t.free_length_m);
+            setup.machine_compliance = c;
+            cablab_rod::replay_uniform(&setup, law, &t.control, &t.time_s, out)
+                .map_err(|e| e.to_string())?;
+        } else {
+            let rod = self.rod.ok_or("no rod solver")?;
+            let mu = self.i_friction.map_or(0.0, |i| p[i]);
+            rod.simulate(t, law, &t.control, mu, c, out)?;
+        }
+        if let Some(i) = self.i_drift {
+            let t0 = t.time_s[0];
+            for (o, &ti) in out.iter_mut().zip(&t.time_s) {
+                *o += p[i] * (ti - t0);
+            }
+        }
+        Ok(())
+    }
+
+    /// Uniform tests whose law has sensitivities for every law parameter of the model
+    /// ([`cablab_rod::uniform::replay_uniform_sens`]): the law's columns (a replicate's factors
+    /// by the chain rule through k = f·k₀, σ_y = g·σ_y0), the compliance's, and the drift's
+    /// (t − t₀); other tests' factors are 0. Three-point tests and laws without: `Ok(false)`.
+    fn simulate_jacobian(
+        &self,
+        p: &[f64],
+        test: usize,
+        out: &mut [f64],
+        jac: &mut [Vec<f64>],
+    ) -> Result<bool, String> {
+        let t = &self.tests[test];
+        if !cablab_rod::uniform::is_uniform(t.kind) {
+            return Ok(false);
+        }
+        let law = self.law_of(p, test)?;
+        let mut setup = cablab_rod::TestSetup::new(t.kind, t.free_length_m);
+        setup.machine_compliance = self.i_compliance.map_or(0.0, |i| p[i]);
+        let with_c = self.i_compliance.is_some();
+        let Some(sens) = cablab_rod::uniform::replay_uniform_sens(
+            &setup,
+            law.as_ref(),
+            &t.control,
+            &t.time_s,
+            out,
+            with_c,
+        )
+        .map_err(|e| e.to_string())?
+        else {
+            return Ok(false);
+        };
+        jac.iter_mut()
+            .for_each(|c| c.iter_mut().for_each(|v| *v = 0.0));
+        for (j, name) in self.names[..self.n_law].iter().enumerate() {
+            let Some(col) = sens.params.iter().position(|n| n == name) else {
+                return Ok(false);
+            };
+            let col = &sens.columns[col];
+            // p_j enters the law as p_j·f with f a replicate's factor (1 otherwise).
+            let factor = self.i_factor[test].and_then(|i| {
+                if is_elastic_stiffness(name) {
+                    Some(i)
+                } else if is_yield_strength(name) {
+                    Some(i + 1)
+                } else {
+                    None
+                }
+            });
+            let f = factor.map_or(1.0, |i| p[i]);
+            for (d, &c) in jac[j].iter_mut().zip(col) {
+                *d = f * c;
+            }
+            if let Some(i) = factor {
+                for (d, &c) in jac[i].iter_mut().zip(col) {
+                    *d += p[j] * c;
+                }
+            }
+        }
+        if let (Some(i), Some(col)) = (self.i_compliance, sens.columns.last()) {
+            jac[i].copy_from_slice(col);
+        }
+        if let Some(i) = self.i_drift {
+            let t0 = t.time_s[0];
+            for ((o, d), &ti) in out.iter_mut().zip(jac[i].iter_mut()).zip(&t.time_s) {
+                *o += p[i] * (ti - t0);
+                *d = ti - t0;
+            }
+        }
+        Ok(true)
+    }
+}
+
+impl ModelForward<'_> {
+    /// The sectional law of test `test` at parameters `p`: a replicate's own stiffness and
+    /// strength (see `specimen_factor_specs`).
+    fn law_of(&self, p: &[f64], test: usize) -> Result<Box<dyn Law>, String> {
         let own;
         let law_values: &[f64] = match self.i_factor[test] {
             Some(i) => {
@@ -671,28 +768,13 @@ impl Forward for ModelForward<'_> {
             }
             None => &p[..self.n_law],
         };
-        let law = self
-            .catalog
-            .build(t.kind, &self.model, &self.names[..self.n_law], law_values)
-            .map_err(|e| e.to_string())?;
-        let law: &dyn Law = law.as_ref();
-        let c = self.i_compliance.map_or(0.0, |i| p[i]);
-        if cablab_rod::uniform::is_uniform(t.kind) {
-            let mut setup = cablab_rod::TestSetup::new(t.kind, t.free_length_m);
-            setup.machine_compliance = c;
-            cablab_rod::replay_uniform(&setup, law, &t.control, &t.time_s, out)
-                .map_err(|e| e.to_string())?;
-        } else {
-            let rod = self.rod.ok_or("no rod solver")?;
-            let mu = self.i_friction.map_or(0.0, |i| p[i]);
-            rod.simulate(t, law, &t.control, mu, c, out)?;
-        }
-        if let Some(i) = self.i_drift {
-            let t0 = t.time_s[0];
-            for (o, &ti) in out.iter_mut().zip(&t.time_s) {
-                *o += p[i] * (ti - t0);
-            }
-        }
-        Ok(())
+        self.catalog
+            .build(
+                self.tests[test].kind,
+                &self.model,
+                &self.names[..self.n_law],
+                law_values,
+            )
+            .map_err(|e| e.to_string())
     }
 }

@@ -11,9 +11,14 @@
 //! 0.07 ms (linear), 0.5 ms (elastoplastic) and 1.9 ms (stiffness degradation, whose return map
 //! is a Newton solve) on the project's 2-core machine (`cargo bench -p cablab-laws`).
 //!
+//! [`SensSection`] steps the same way with forward sensitivities: the state's derivatives with
+//! respect to the law's parameters ([`Law::sens_params`]) ride along in two more buffers, so one
+//! replay gives the response and every Jacobian column of a fit ([`drive_uniform_sens`] here,
+//! `replay_uniform_sens` in `cablab-rod`).
+//!
 //! Does not: convert a machine's control into strain, or know a test's geometry (`cablab-rod`).
 
-use crate::law::{ComponentStep, Law};
+use crate::law::{ComponentStep, Law, SensStep};
 
 /// One integration point loaded in one strain component (the others held at 0): committed state,
 /// trial steps from it, and commit. A trial may be repeated from the same committed state (a
@@ -62,6 +67,119 @@ impl<'a> UniformSection<'a> {
     pub fn commit(&mut self) {
         std::mem::swap(&mut self.old, &mut self.new);
     }
+}
+
+/// [`UniformSection`] with forward sensitivities ([`Law::update_component_sens`]): the
+/// committed and trial state and their derivatives over `ncol` columns, the law's parameters
+/// ([`Law::sens_params`]) first, then `extra` columns that act only through the strain (the
+/// machine compliance). The virgin state does not depend on the parameters.
+#[derive(Debug)]
+pub struct SensSection<'a> {
+    law: &'a dyn Law,
+    component: usize,
+    ncol: usize,
+    old: Vec<f64>,
+    new: Vec<f64>,
+    d_old: Vec<f64>,
+    d_new: Vec<f64>,
+}
+
+impl<'a> SensSection<'a> {
+    /// `law` in its virgin state loaded in `component`, with its parameters' columns and
+    /// `extra` more; `None` when the law has no sensitivities for that component.
+    pub fn new(law: &'a dyn Law, component: usize, extra: usize) -> Option<Self> {
+        let ncol = law.sens_params(component)?.len() + extra;
+        let n = law.n_state();
+        let mut old = vec![0.0; n];
+        law.init_state(&mut old);
+        Some(SensSection {
+            law,
+            component,
+            ncol,
+            new: old.clone(),
+            old,
+            d_old: vec![0.0; n * ncol],
+            d_new: vec![0.0; n * ncol],
+        })
+    }
+
+    /// Number of columns.
+    pub fn ncol(&self) -> usize {
+        self.ncol
+    }
+
+    /// [`UniformSection::trial`], writing ∂σ/∂p over the columns into `ds` given ∂ε/∂p in `de`
+    /// (both `ncol` long); `None` when the law cannot differentiate this state.
+    #[inline]
+    pub fn trial(
+        &mut self,
+        strain: f64,
+        dt: f64,
+        de: &[f64],
+        ds: &mut [f64],
+    ) -> Option<(f64, f64)> {
+        ds.iter_mut().for_each(|v| *v = 0.0);
+        let step = ComponentStep {
+            component: self.component,
+            strain,
+            dt,
+        };
+        let sens = SensStep {
+            first: 0,
+            d_old: &self.d_old,
+            d_new: &mut self.d_new,
+            de,
+            ds,
+        };
+        self.law
+            .update_component_sens(step, &self.old, &mut self.new, sens)
+    }
+
+    /// [`UniformSection::trial`] without sensitivities (a Newton's trials on the strain); a
+    /// [`SensSection::trial`] must follow before [`SensSection::commit`].
+    #[inline]
+    pub fn trial_value(&mut self, strain: f64, dt: f64) -> (f64, f64) {
+        let step = ComponentStep {
+            component: self.component,
+            strain,
+            dt,
+        };
+        self.law.update_component(step, &self.old, &mut self.new)
+    }
+
+    /// Make the last trial the committed state.
+    #[inline]
+    pub fn commit(&mut self) {
+        std::mem::swap(&mut self.old, &mut self.new);
+        std::mem::swap(&mut self.d_old, &mut self.d_new);
+    }
+}
+
+/// [`drive_uniform`] with the sensitivities of the response to the law's parameters
+/// ([`Law::sens_params`], in that order): the response and one column ∂σ/∂p per parameter;
+/// `None` when the law has none for `component` or cannot differentiate a state on the way.
+pub fn drive_uniform_sens(
+    law: &dyn Law,
+    component: usize,
+    strain: &[f64],
+    time_s: &[f64],
+) -> Option<(Vec<f64>, Vec<Vec<f64>>)> {
+    let mut section = SensSection::new(law, component, 0)?;
+    let ncol = section.ncol();
+    let mut out = Vec::with_capacity(strain.len());
+    let mut cols = vec![Vec::with_capacity(strain.len()); ncol];
+    let (de, mut ds) = (vec![0.0; ncol], vec![0.0; ncol]);
+    let mut t_prev = time_s.first().copied().unwrap_or(0.0);
+    for (i, &e) in strain.iter().enumerate() {
+        let t = time_s.get(i).copied().unwrap_or(t_prev);
+        let dt = if t > t_prev { t - t_prev } else { 0.0 };
+        t_prev = t.max(t_prev);
+        let (s, _) = section.trial(e, dt, &de, &mut ds)?;
+        out.push(s);
+        cols.iter_mut().zip(&ds).for_each(|(c, &d)| c.push(d));
+        section.commit();
+    }
+    Some((out, cols))
 }
 
 /// Response in `component` (0..6) of `law` driven from the virgin state through `strain` at times

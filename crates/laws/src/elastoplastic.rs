@@ -22,7 +22,7 @@
 //! `uniaxial_tests` hold it to the vector code at 1e-12, in practice bit for bit).
 
 use crate::channel::{eye, norm1, Channel};
-use crate::law::{ComponentStep, Law, LawResponse, Strain6, Tangent6};
+use crate::law::{ComponentStep, Law, LawResponse, SensStep, Strain6, Tangent6};
 use crate::linear::SectionStiffness;
 use nalgebra::{Matrix2, Vector2};
 
@@ -242,18 +242,33 @@ impl PlasticChannel {
         back_stress: f64,
         alpha_n: f64,
     ) -> AxisReturn {
+        self.return_map_axis_with(e, plastic_strain, back_stress, alpha_n)
+            .0
+    }
+
+    /// [`PlasticChannel::return_map_axis`], with the plastic step's multiplier Δγ, direction n
+    /// and φ'(Δγ) when it yields (what its sensitivities need).
+    #[inline(always)]
+    fn return_map_axis_with(
+        &self,
+        e: f64,
+        plastic_strain: f64,
+        back_stress: f64,
+        alpha_n: f64,
+    ) -> (AxisReturn, Option<[f64; 3]>) {
         let (ep, x) = (plastic_strain, back_stress);
         let e_tr = e - ep;
         let k_n = self.stiffness_at(alpha_n);
         let a0 = k_n * e_tr - x;
         let f_tr = norm1(a0) - (self.yield_strength + self.iso_hardening * alpha_n);
         if f_tr <= 0.0 {
-            return AxisReturn {
+            let elastic = AxisReturn {
                 stress: k_n * e_tr,
                 tangent: k_n,
                 tangent_across: k_n,
                 state: [ep, x, alpha_n],
             };
+            return (elastic, None);
         }
         let c = self.kin_hardening;
         let b = self.kin_recovery;
@@ -288,11 +303,55 @@ impl PlasticChannel {
         let tangent = k + (dk * (e_tr - g * n) - k * n) * dg - (k * g / na) * p * da;
         // Across the axis n has no entry, so P = 1 there and ∂a/∂ε = k.
         let tangent_across = k - (k * g / na) * 1.0 * k;
-        AxisReturn {
+        let r = AxisReturn {
             stress,
             tangent,
             tangent_across,
             state: new,
+        };
+        (r, Some([g, n, dphi]))
+    }
+
+    /// The linearisation of [`PlasticChannel::return_map_axis`] at one step, from the
+    /// committed `[ε_pl, x, α]` and the step's `plastic` data
+    /// ([`PlasticChannel::return_map_axis_with`]); see [`AxisLin`].
+    fn axis_lin(&self, e: f64, old: [f64; 3], plastic: Option<[f64; 3]>) -> AxisLin {
+        let [ep, x, alpha_n] = old;
+        let (g, n, dphi) = match plastic {
+            Some([g, n, dphi]) => (g, n, dphi),
+            None => (0.0, 0.0, f64::NAN),
+        };
+        let alpha = alpha_n + g;
+        // ∂k/∂p at fixed Δγ: k = k₀ (1 − D(α)), D = D_∞ (1 − e^(−α/α_D)).
+        let dk = match &self.degradation {
+            None => [1.0, 0.0, 0.0, 0.0],
+            Some(d) => {
+                let ex = (-alpha / d.alpha_d).exp();
+                let one_minus = -(-alpha / d.alpha_d).exp_m1();
+                let k0 = self.stiffness;
+                [
+                    1.0 - d.d_inf * one_minus,
+                    -k0 * one_minus,
+                    -k0 * d.d_inf * ex / d.alpha_d,
+                    k0 * d.d_inf * ex * alpha / (d.alpha_d * d.alpha_d),
+                ]
+            }
+        };
+        AxisLin {
+            plastic: plastic.is_some(),
+            e_tr: e - ep,
+            x,
+            g,
+            n,
+            dphi,
+            alpha,
+            k: self.stiffness_at(alpha),
+            k_rate: self.stiffness_rate(alpha),
+            r: 1.0 / (1.0 + self.kin_recovery * g),
+            dk,
+            b: self.kin_recovery,
+            c: self.kin_hardening,
+            h: self.iso_hardening,
         }
     }
 
@@ -480,6 +539,208 @@ impl Law for Elastoplastic {
             let k = self.elastic.diagonal()[component];
             (k * strain, k)
         })
+    }
+
+    /// One plastic channel loaded on its axis: its stiffness, yield strength and isotropic
+    /// hardening, then the kinematic hardening modulus (`kinematic_hardening`), then D_∞ and
+    /// α_D (`stiffness_degradation`). The recovery b_kin is held (not fitted).
+    fn sens_params(&self, component: usize) -> Option<Vec<String>> {
+        let [p] = self.plastic.as_slice() else {
+            return None;
+        };
+        p.channel.position(component)?;
+        let (params, np) = p.sens_params(self.label.starts_with("kinematic"));
+        Some(params[..np].iter().map(|q| q.name(p.channel)).collect())
+    }
+
+    fn sens_count(&self, component: usize) -> Option<usize> {
+        let [p] = self.plastic.as_slice() else {
+            return None;
+        };
+        p.channel.position(component)?;
+        Some(p.sens_params(self.label.starts_with("kinematic")).1)
+    }
+
+    fn update_component_sens(
+        &self,
+        step: ComponentStep,
+        old: &[f64],
+        new: &mut [f64],
+        sens: SensStep<'_>,
+    ) -> Option<(f64, f64)> {
+        let [p] = self.plastic.as_slice() else {
+            return None;
+        };
+        let pos = p.channel.position(step.component)?;
+        let d = p.channel.dim();
+        if d == 2 && !(old[1 - pos] == 0.0 && old[d + 1 - pos] == 0.0) {
+            return None;
+        }
+        let rows = [pos, d + pos, 2 * d];
+        let st = [old[rows[0]], old[rows[1]], old[rows[2]]];
+        let (r, plastic) = p.return_map_axis_with(step.strain, st[0], st[1], st[2]);
+        for (&row, &v) in rows.iter().zip(&r.state) {
+            new[row] = v;
+        }
+        let ncol = sens.de.len();
+        if d == 2 {
+            // Off the axis the state and its derivatives stay 0.
+            for row in [1 - pos, d + 1 - pos] {
+                new[row] = 0.0;
+                sens.d_new[row * ncol..(row + 1) * ncol].fill(0.0);
+            }
+        }
+        let (params, np) = p.sens_params(self.label.starts_with("kinematic"));
+        let lin = p.axis_lin(step.strain, st, plastic);
+        for j in 0..ncol {
+            let at = |row: usize| sens.d_old[row * ncol + j];
+            let mut dir = AxisDir {
+                de_tr: sens.de[j] - at(rows[0]),
+                dep: at(rows[0]),
+                dx: at(rows[1]),
+                dalpha: at(rows[2]),
+                ..AxisDir::default()
+            };
+            if let Some(q) = j.checked_sub(sens.first).filter(|&l| l < np) {
+                dir.set(params[q]);
+            }
+            let (ds, dst) = lin.apply(&dir);
+            sens.ds[j] += ds;
+            for (&row, &v) in rows.iter().zip(&dst) {
+                sens.d_new[row * ncol + j] = v;
+            }
+        }
+        Some((r.stress, r.tangent))
+    }
+}
+
+/// A parameter of a plastic channel that sensitivities are taken with respect to.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum PlasticParam {
+    Stiffness,
+    Yield,
+    Iso,
+    Kin,
+    DInf,
+    AlphaD,
+}
+
+impl PlasticParam {
+    /// The registry name on `channel` (`EI`, `M_y`, `HI`, `HI_kin`, `D_inf`, `alpha_D`).
+    fn name(self, channel: Channel) -> String {
+        let n = crate::registry::names(channel);
+        match self {
+            PlasticParam::Stiffness => n.stiff.to_string(),
+            PlasticParam::Yield => format!("{}_y", n.strength),
+            PlasticParam::Iso => n.hard.to_string(),
+            PlasticParam::Kin => format!("{}_kin", n.hard),
+            PlasticParam::DInf => "D_inf".into(),
+            PlasticParam::AlphaD => "alpha_D".into(),
+        }
+    }
+}
+
+impl PlasticChannel {
+    /// The parameters of [`Law::sens_params`], in order: the first of the array, and how many
+    /// (no allocation: called every step).
+    fn sens_params(&self, kinematic: bool) -> ([PlasticParam; 6], usize) {
+        use PlasticParam::*;
+        let mut v = [Stiffness, Yield, Iso, Kin, DInf, AlphaD];
+        let mut np = 3;
+        if kinematic {
+            np += 1;
+        }
+        if self.degradation.is_some() {
+            v[np] = DInf;
+            v[np + 1] = AlphaD;
+            np += 2;
+        }
+        (v, np)
+    }
+}
+
+/// One step of [`PlasticChannel::return_map_axis`] linearised: what its derivative along any
+/// direction ([`AxisLin::apply`]) needs, computed once per step.
+#[derive(Debug, Clone, Copy)]
+struct AxisLin {
+    /// Whether the step yields (Δγ > 0 from the consistency condition).
+    plastic: bool,
+    /// e − ε_pl,n, x_n, Δγ, n, φ'(Δγ) and α = α_n + Δγ.
+    e_tr: f64,
+    x: f64,
+    g: f64,
+    n: f64,
+    dphi: f64,
+    alpha: f64,
+    /// k(α), dk/dα and 1/(1 + bΔγ).
+    k: f64,
+    k_rate: f64,
+    r: f64,
+    /// ∂k/∂(k₀, D_∞, α_n, α_D) at fixed Δγ.
+    dk: [f64; 4],
+    /// Recovery b, kinematic modulus c, isotropic modulus H.
+    b: f64,
+    c: f64,
+    h: f64,
+}
+
+impl AxisLin {
+    /// The derivative of the step along `dir` (a parameter, the strain, the committed state):
+    /// ∂σ and ∂[ε_pl, x, α]_new. Elastic: σ = k(α_n)(e − ε_pl). Plastic: Δγ from the implicit
+    /// consistency condition φ(Δγ; p) = 0, ∂Δγ = −∂φ|_Δγ / φ'(Δγ) with
+    /// ∂φ|_Δγ = n ∂a − ∂β Δγ − ∂σ_y − ∂H α − H ∂α_n, a = k(α) e_tr − x/(1 + bΔγ),
+    /// β = k(α) + c/(1 + bΔγ) (b, the recovery, is held); then σ = k(α)(e_tr − Δγ n),
+    /// ε_pl + Δγ n, (x + cΔγ n)/(1 + bΔγ) and α_n + Δγ differentiated.
+    #[inline]
+    fn apply(&self, dir: &AxisDir) -> (f64, [f64; 3]) {
+        let dk = self.dk[0] * dir.dk0
+            + self.dk[1] * dir.dd_inf
+            + self.dk[2] * dir.dalpha
+            + self.dk[3] * dir.dalpha_d;
+        let (k, e_tr) = (self.k, self.e_tr);
+        if !self.plastic {
+            return (dk * e_tr + k * dir.de_tr, [dir.dep, dir.dx, dir.dalpha]);
+        }
+        let (g, n, r, b, c) = (self.g, self.n, self.r, self.b, self.c);
+        let da = dk * e_tr + k * dir.de_tr - r * dir.dx;
+        let dbeta = dk + dir.dc * r;
+        let dphi_p = n * da - dbeta * g - dir.dsy - dir.dh * self.alpha - self.h * dir.dalpha;
+        let dg = -dphi_p / self.dphi;
+        let dk_total = dk + self.k_rate * dg;
+        let ds = dk_total * (e_tr - g * n) + k * (dir.de_tr - dg * n);
+        let dx_new =
+            r * (dir.dx + dir.dc * g * n + c * dg * n) - r * r * b * dg * (self.x + c * g * n);
+        (ds, [dir.dep + dg * n, dx_new, dir.dalpha + dg])
+    }
+}
+
+/// A direction of [`AxisLin::apply`]: the derivatives of e − ε_pl, of the committed
+/// ε_pl, x and α, and of the parameters k₀, σ_y, H, c, D_∞, α_D.
+#[derive(Debug, Clone, Copy, Default)]
+struct AxisDir {
+    de_tr: f64,
+    dep: f64,
+    dx: f64,
+    dalpha: f64,
+    dk0: f64,
+    dsy: f64,
+    dh: f64,
+    dc: f64,
+    dd_inf: f64,
+    dalpha_d: f64,
+}
+
+impl AxisDir {
+    /// Move parameter `q` by 1.
+    fn set(&mut self, q: PlasticParam) {
+        match q {
+            PlasticParam::Stiffness => self.dk0 = 1.0,
+            PlasticParam::Yield => self.dsy = 1.0,
+            PlasticParam::Iso => self.dh = 1.0,
+            PlasticParam::Kin => self.dc = 1.0,
+            PlasticParam::DInf => self.dd_inf = 1.0,
+            PlasticParam::AlphaD => self.dalpha_d = 1.0,
+        }
     }
 }
 

@@ -65,6 +65,54 @@ pub trait Law: Send + Sync + std::fmt::Debug {
     fn update_component(&self, step: ComponentStep, old: &[f64], new: &mut [f64]) -> (f64, f64) {
         update_component_via_full(self, step, old, new)
     }
+
+    /// The parameters (registry names, [`crate::param_specs`]) whose forward sensitivities
+    /// [`Law::update_component_sens`] propagates when `component` is loaded, in column order;
+    /// `None` (the default) when the law has none, and the caller differentiates numerically.
+    fn sens_params(&self, _component: usize) -> Option<Vec<String>> {
+        None
+    }
+
+    /// The length of [`Law::sens_params`] without building the names (composites ask it every
+    /// step).
+    fn sens_count(&self, component: usize) -> Option<usize> {
+        self.sens_params(component).map(|v| v.len())
+    }
+
+    /// [`Law::update_component`] with forward (tangent) sensitivities: the same stress, tangent
+    /// and `new` state, and the derivatives along every column of `sens` (see [`SensStep`]) of
+    /// the stress (added to `sens.ds`) and of the new state (written to `sens.d_new`), given
+    /// those of the committed state (`sens.d_old`) and of the strain (`sens.de`). Linear in
+    /// `d_old` and `de`, so a caller may solve for `de` (machine compliance) by calling it twice.
+    /// `None` (the default, and for a state the law does not differentiate): no sensitivities.
+    fn update_component_sens(
+        &self,
+        _step: ComponentStep,
+        _old: &[f64],
+        _new: &mut [f64],
+        _sens: SensStep<'_>,
+    ) -> Option<(f64, f64)> {
+        None
+    }
+}
+
+/// The derivative buffers of one [`Law::update_component_sens`] step, over `de.len()` columns
+/// (directions of parameter space): the law's own parameters ([`Law::sens_params`]) sit in the
+/// columns `first..first + n`, other columns (a composite's other part, the machine compliance)
+/// act only through the strain and the state. State derivatives are row-major, one row of
+/// `de.len()` columns per state entry: `d_old[i · ncol + j]` = ∂state_i/∂p_j.
+#[derive(Debug)]
+pub struct SensStep<'a> {
+    /// Column of the law's first parameter.
+    pub first: usize,
+    /// ∂(committed state)/∂p, `n_state · ncol` entries.
+    pub d_old: &'a [f64],
+    /// ∂(new state)/∂p, written.
+    pub d_new: &'a mut [f64],
+    /// ∂ε/∂p of the loaded component's strain, `ncol` entries.
+    pub de: &'a [f64],
+    /// ∂σ/∂p of the loaded component's stress, `ncol` entries, added to.
+    pub ds: &'a mut [f64],
 }
 
 /// One step of [`Law::update_component`]: the loaded component (0..6), its strain and the time

@@ -34,18 +34,21 @@ pub mod parallel;
 pub mod piecewise;
 pub mod registry;
 #[cfg(test)]
+mod sens_tests;
+#[cfg(test)]
 mod testutil;
 #[cfg(test)]
 mod uniaxial_tests;
 pub mod viscoelastic;
 
 pub use channel::Channel;
-pub use driver::{drive_uniform, drive_uniform_into};
+pub use driver::{drive_uniform, drive_uniform_into, drive_uniform_sens, SensSection};
 pub use elastoplastic::{ChannelState, Degradation, Elastoplastic, PlasticChannel};
 pub use error::LawError;
 pub use friction::{IwanElements, JenkinsElement};
 pub use law::{
-    update_component_via_full, ComponentStep, Law, LawResponse, Strain6, Stress6, Tangent6,
+    update_component_via_full, ComponentStep, Law, LawResponse, SensStep, Strain6, Stress6,
+    Tangent6,
 };
 pub use linear::{LinearElastic, SectionStiffness};
 pub use parallel::Parallel;

@@ -5,7 +5,7 @@
 //! components it does not treat inelastically, with the documented defaults. No history, no rate.
 
 use crate::channel::Channel;
-use crate::law::{ComponentStep, Law, LawResponse, Strain6, Tangent6};
+use crate::law::{ComponentStep, Law, LawResponse, SensStep, Strain6, Tangent6};
 use nalgebra::Vector6;
 
 /// Diagonal elastic stiffnesses of an isotropic circular section (chapter eq. (17)).
@@ -120,6 +120,34 @@ impl Law for LinearElastic {
             Some(&k) => (k * strain, k),
             None => (f64::NAN, f64::NAN),
         }
+    }
+
+    /// The loaded channel's stiffness (`EA`, `GJ` or `EI`; none for the shear components).
+    fn sens_params(&self, component: usize) -> Option<Vec<String>> {
+        let ch = [Channel::Axial, Channel::Twist, Channel::Bending]
+            .into_iter()
+            .find(|c| c.position(component).is_some())?;
+        Some(vec![crate::registry::names(ch).stiff.to_string()])
+    }
+
+    fn sens_count(&self, component: usize) -> Option<usize> {
+        (2..6).contains(&component).then_some(1)
+    }
+
+    /// σ = k ε: ∂σ = ε ∂k + k ∂ε (no state).
+    fn update_component_sens(
+        &self,
+        step: ComponentStep,
+        old: &[f64],
+        new: &mut [f64],
+        sens: SensStep<'_>,
+    ) -> Option<(f64, f64)> {
+        self.sens_count(step.component)?;
+        let (s, k) = self.update_component(step, old, new);
+        for (j, (ds, de)) in sens.ds.iter_mut().zip(sens.de).enumerate() {
+            *ds += k * de + if j == sens.first { step.strain } else { 0.0 };
+        }
+        Some((s, k))
     }
 }
 

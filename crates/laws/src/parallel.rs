@@ -6,7 +6,7 @@
 //! Kinematic hardening and stiffness degradation modify the plastic flow itself and are options
 //! of [`crate::Elastoplastic`] instead.
 
-use crate::law::{ComponentStep, Law, LawResponse, Strain6, Tangent6};
+use crate::law::{ComponentStep, Law, LawResponse, SensStep, Strain6, Tangent6};
 
 /// Two laws in parallel.
 #[derive(Debug)]
@@ -74,6 +74,50 @@ impl Law for Parallel {
         let (sb, tb) = self.base.update_component(step, bo, bn);
         let (se, te) = self.extension.update_component(step, eo, en);
         (sb + se, tb + te)
+    }
+    /// The baseline's parameters, then the extension's (none unless both have them).
+    fn sens_params(&self, component: usize) -> Option<Vec<String>> {
+        let mut v = self.base.sens_params(component)?;
+        v.extend(self.extension.sens_params(component)?);
+        Some(v)
+    }
+
+    fn sens_count(&self, component: usize) -> Option<usize> {
+        Some(self.base.sens_count(component)? + self.extension.sens_count(component)?)
+    }
+
+    /// Stresses and their derivatives add; the state derivatives split as the states do.
+    fn update_component_sens(
+        &self,
+        step: ComponentStep,
+        old: &[f64],
+        new: &mut [f64],
+        sens: SensStep<'_>,
+    ) -> Option<(f64, f64)> {
+        let nb = self.base.n_state();
+        let ncol = sens.de.len();
+        let first_ext = sens.first + self.base.sens_count(step.component)?;
+        let (bo, eo) = old.split_at(nb);
+        let (bn, en) = new.split_at_mut(nb);
+        let (dbo, deo) = sens.d_old.split_at(nb * ncol);
+        let (dbn, den) = sens.d_new.split_at_mut(nb * ncol);
+        let base = SensStep {
+            first: sens.first,
+            d_old: dbo,
+            d_new: dbn,
+            de: sens.de,
+            ds: sens.ds,
+        };
+        let (sb, tb) = self.base.update_component_sens(step, bo, bn, base)?;
+        let ext = SensStep {
+            first: first_ext,
+            d_old: deo,
+            d_new: den,
+            de: sens.de,
+            ds: sens.ds,
+        };
+        let (se, te) = self.extension.update_component_sens(step, eo, en, ext)?;
+        Some((sb + se, tb + te))
     }
 }
 

@@ -6,7 +6,7 @@
 //! response is isotropic in the bending plane. Other components are linear elastic. No history.
 
 use crate::channel::{eye, norm1, Channel};
-use crate::law::{ComponentStep, Law, LawResponse, Strain6, Tangent6};
+use crate::law::{ComponentStep, Law, LawResponse, SensStep, Strain6, Tangent6};
 use crate::linear::SectionStiffness;
 use nalgebra::{Matrix2, Vector2};
 
@@ -94,6 +94,53 @@ impl Law for PiecewiseLinear {
         let m = self.magnitude(r);
         let nn = n * n;
         (m * n, self.k2 * nn + (m / r) * (1.0 - nn))
+    }
+
+    /// k₁, k₂ and the threshold strain of the loaded channel (`EI1`, `EI2`, `K_t`).
+    fn sens_params(&self, component: usize) -> Option<Vec<String>> {
+        self.channel.position(component)?;
+        let n = crate::registry::names(self.channel);
+        Some(vec![
+            format!("{}1", n.stiff),
+            format!("{}2", n.stiff),
+            format!("{}_t", n.strain),
+        ])
+    }
+
+    fn sens_count(&self, component: usize) -> Option<usize> {
+        self.channel.position(component).map(|_| 3)
+    }
+
+    /// No history: σ = k₁ ε below the threshold, n (k₁ ε_t + k₂ (|ε| − ε_t)) above it, so
+    /// ∂σ/∂(k₁, k₂, ε_t) = (ε, 0, 0) or n (ε_t, |ε| − ε_t, k₁ − k₂), plus the tangent times ∂ε.
+    fn update_component_sens(
+        &self,
+        step: ComponentStep,
+        old: &[f64],
+        new: &mut [f64],
+        sens: SensStep<'_>,
+    ) -> Option<(f64, f64)> {
+        self.channel.position(step.component)?;
+        let (s, k) = self.update_component(step, old, new);
+        let e = step.strain;
+        let r = norm1(e);
+        let own = if r < self.threshold || r == 0.0 {
+            [e, 0.0, 0.0]
+        } else {
+            let n = e / r;
+            [
+                n * self.threshold,
+                n * (r - self.threshold),
+                n * (self.k1 - self.k2),
+            ]
+        };
+        for (j, (ds, de)) in sens.ds.iter_mut().zip(sens.de).enumerate() {
+            *ds += k * de;
+            if let Some(v) = j.checked_sub(sens.first).and_then(|l| own.get(l)) {
+                *ds += v;
+            }
+        }
+        Some((s, k))
     }
 }
 

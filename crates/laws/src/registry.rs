@@ -204,19 +204,19 @@ fn canonical_name(base: Base, exts: &[Ext]) -> String {
 }
 
 /// Names and units of a channel's quantities.
-struct Names {
-    stiff: &'static str,
+pub(crate) struct Names {
+    pub(crate) stiff: &'static str,
     stiff_unit: &'static str,
-    strength: &'static str,
+    pub(crate) strength: &'static str,
     strength_unit: &'static str,
-    hard: &'static str,
-    strain: &'static str,
+    pub(crate) hard: &'static str,
+    pub(crate) strain: &'static str,
     strain_unit: &'static str,
     stiff_max: f64,
     strength_max: f64,
 }
 
-fn names(ch: Channel) -> Names {
+pub(crate) fn names(ch: Channel) -> Names {
     match ch {
         Channel::Axial => Names {
             stiff: "EA",

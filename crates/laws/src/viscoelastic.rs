@@ -9,7 +9,7 @@
 //! baseline through [`crate::Parallel`].
 
 use crate::channel::{eye, Channel};
-use crate::law::{ComponentStep, Law, LawResponse, Strain6, Stress6, Tangent6};
+use crate::law::{ComponentStep, Law, LawResponse, SensStep, Strain6, Stress6, Tangent6};
 
 /// One Maxwell branch.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -31,6 +31,23 @@ impl MaxwellBranch {
         } else {
             ((-x).exp(), -(-x).exp_m1() / x)
         }
+    }
+
+    /// The derivatives of [`MaxwellBranch::factors`] with respect to τ: with x = Δt/τ,
+    /// ∂e^(−x)/∂τ = e^(−x) x/τ and ∂[(1 − e^(−x))/x]/∂τ = −(x/τ)·((1 + x)e^(−x) − 1)/x² (a
+    /// series below x = 10⁻³, where the quotient cancels); 0 at Δt = 0 or τ = ∞.
+    pub fn factor_rates(&self, dt: f64) -> (f64, f64) {
+        let x = if dt > 0.0 { dt / self.tau_s } else { 0.0 };
+        if x == 0.0 || !self.tau_s.is_finite() {
+            return (0.0, 0.0);
+        }
+        let ramp_x = if x < 1e-3 {
+            -0.5 + x / 3.0 - x * x / 8.0 + x * x * x / 30.0
+        } else {
+            ((-x).exp() * (1.0 + x) - 1.0) / (x * x)
+        };
+        let dx = -x / self.tau_s;
+        (-(-x).exp() * dx, ramp_x * dx)
     }
 }
 
@@ -128,6 +145,63 @@ impl Law for MaxwellBranches {
             Some(_) => (s, k_alg),
             None => (0.0, 0.0),
         }
+    }
+    /// One branch (`EI_v1`, `tau_v1` on the law's channel); several: none (the registry drops
+    /// absent branches, so a branch's place does not tell its name).
+    fn sens_params(&self, component: usize) -> Option<Vec<String>> {
+        self.channel.position(component)?;
+        if self.branches.len() != 1 {
+            return None;
+        }
+        let stiff = crate::registry::names(self.channel).stiff;
+        Some(vec![format!("{stiff}_v1"), "tau_v1".into()])
+    }
+
+    fn sens_count(&self, component: usize) -> Option<usize> {
+        self.channel.position(component)?;
+        (self.branches.len() == 1).then_some(2)
+    }
+
+    /// σᵢ = e^(−x) σᵢ,ₙ + kᵢ r(x) Δε differentiated: the decay and ramp factors through τᵢ
+    /// ([`MaxwellBranch::factor_rates`]), kᵢ directly, σᵢ,ₙ and Δε = ε − εₙ through the state
+    /// and the strain.
+    fn update_component_sens(
+        &self,
+        step: ComponentStep,
+        old: &[f64],
+        new: &mut [f64],
+        sens: SensStep<'_>,
+    ) -> Option<(f64, f64)> {
+        let pos = self.channel.position(step.component)?;
+        let [b] = self.branches.as_slice() else {
+            return None;
+        };
+        let d = self.channel.dim();
+        let (s, k_alg) = self.update_component(step, old, new);
+        let ncol = sens.de.len();
+        let at = d + pos;
+        if d == 2 {
+            // Off the axis the state and its derivatives stay 0.
+            for row in [1 - pos, d + 1 - pos] {
+                sens.d_new[row * ncol..(row + 1) * ncol].fill(0.0);
+            }
+        }
+        let de = step.strain - old[pos];
+        let (decay, ramp) = b.factors(step.dt);
+        let (d_decay, d_ramp) = b.factor_rates(step.dt);
+        for j in 0..ncol {
+            let dde = sens.de[j] - sens.d_old[pos * ncol + j];
+            sens.d_new[pos * ncol + j] = sens.de[j];
+            let mut dsi = decay * sens.d_old[at * ncol + j] + b.stiffness * ramp * dde;
+            match j.checked_sub(sens.first) {
+                Some(0) => dsi += ramp * de,
+                Some(1) => dsi += d_decay * old[at] + b.stiffness * d_ramp * de,
+                _ => {}
+            }
+            sens.d_new[at * ncol + j] = dsi;
+            sens.ds[j] += dsi;
+        }
+        Some((s, k_alg))
     }
 }
 
