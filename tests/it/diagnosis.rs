@@ -181,13 +181,18 @@ fn ladder_climbs_from_linear_elasticity_to_the_noise_floor() {
         matches!(l[0].effect, Effect::Plasticity | Effect::FrictionHysteresis),
         "{l:?}"
     );
+    // An added rung lowers the held-out gap; a dropped one is the parsimony rule preferring the
+    // smaller model, so its gap may rise, but not beyond the noise floor.
+    let floor = cablab_diagnose::diagnose::NOISE_FLOOR_FIT * d.verdict.noise_rel;
     for r in &l {
-        assert!(
-            r.gap_after_rel < r.gap_before_rel,
-            "{r:?} in {l:#?} noise {}",
-            d.verdict.noise_rel
-        );
+        let ok = match r.step {
+            "add" => r.gap_after_rel < r.gap_before_rel,
+            _ => r.gap_after_rel <= floor,
+        };
+        assert!(ok, "{r:?} in {l:#?} noise {}", d.verdict.noise_rel);
     }
+    // The verdict, unlike the greedy ladder, names the withheld effect.
+    assert_eq!(d.verdict.effect, Effect::KinematicHardening, "{:?}", d.verdict);
     // The greedy path here takes friction elements first (they close most of the linear law's
     // gap), then plasticity; the laws stack, so kinematic hardening follows and the ladder ends
     // at the noise floor, from 100× it at the linear rung.
