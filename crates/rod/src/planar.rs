@@ -333,6 +333,7 @@ struct SupportEval {
 /// the residual is on, not a difference quotient across a kink of the law (at N ≈ 0 a step of
 /// the difference quotient opens or closes the contact and a secant of μN⁺ of the order
 /// μ k_n/2 enters the tangent, which stalled Newton where the punch lets go of the rod).
+#[allow(clippy::too_many_arguments)]
 fn support_forces(
     sup: &Support,
     pa: Vector2<f64>,
@@ -762,13 +763,22 @@ impl<'a> PlanarRod<'a> {
     }
 
     /// At a converged configuration: move each support whose state calls for another friction
-    /// branch than the frozen one to that branch. Returns whether any moved.
+    /// branch than the frozen one to that branch; from sliding one way to sliding the other, to
+    /// stick first (the equilibrium of a slip branch lets the rod slide freely, so the state
+    /// it leaves calls for the opposite slip whenever the truth is stick: during a dwell, where
+    /// a relaxing section lowers the normal force below what held the rod, the branches
+    /// alternated ± and never settled). Returns whether any moved.
     fn update_friction_branches(&mut self) -> bool {
         let mut changed = false;
         for s in &mut self.supports {
             if let Some(f) = s.frozen {
                 if f != s.decided {
-                    s.frozen = Some(s.decided);
+                    s.frozen = Some(match (f, s.decided) {
+                        (FrictionBranch::Slip(a), FrictionBranch::Slip(b)) if a != b => {
+                            FrictionBranch::Stick
+                        }
+                        (_, d) => d,
+                    });
                     changed = true;
                 }
             }
@@ -870,11 +880,15 @@ impl<'a> PlanarRod<'a> {
             }
             // Friction branches first (at most a few switches, then the state decides at every
             // evaluation), then the punch's active set.
+            // A new branch is solved from the step's start: the equilibrium of the branch it
+            // leaves can lie far off (a stick spring holding 100 × μN), and Newton from there
+            // found unphysical equilibria (the rod wrapped round a support) on coarse rods.
             if switches < MAX_FRICTION_SWITCHES && self.update_friction_branches() {
                 switches += 1;
                 if switches == MAX_FRICTION_SWITCHES {
                     self.supports.iter_mut().for_each(|s| s.frozen = None);
                 }
+                self.q.clone_from(&start);
                 continue;
             }
             if !self.update_punch_active_set() {
