@@ -566,6 +566,31 @@ mod tests {
         assert!(rough > 1e-3, "{rough}");
     }
 
+    /// The pair the blind check left at 2.1 × the noise floor (three-point, viscoelasticity with
+    /// support friction, 0.3 % noise, seed 1): its own model (elastoplastic + Maxwell branch +
+    /// friction coefficient at the rollers), calibrated to the log, fits it to the noise floor
+    /// and finds the rollers' μ. Before the rod's friction was an active set, 68 of 101 replays
+    /// with μ between 0.10 and 0.30 of this cable failed to converge (a Maxwell branch relaxing
+    /// in a dwell with the rod held by friction), so the calibration could not move μ.
+    #[test]
+    fn a_relaxing_cable_on_rough_supports_fits_to_the_noise_floor() {
+        use cablab_diagnose::{calibrate, CalibrateOptions, Context, ModelSpec};
+        let pair = [Effect::Viscoelasticity, Effect::SupportFriction];
+        let c = generate_set_at(TestKind::ThreePoint, &pair, 0.003, 1, Layout::TestXpert, 10.0);
+        let c = c.unwrap();
+        let model = ModelSpec::law("elastoplastic")
+            .with(Effect::Viscoelasticity)
+            .with(Effect::SupportFriction);
+        let cal = calibrate(Context::project(), &c.tests, &model, &CalibrateOptions::default());
+        let cal = cal.unwrap();
+        let floor = cablab_diagnose::floors::noise_floor(&c.tests)[0];
+        let ratio = cal.gap_rms[0] / floor;
+        let mu = cal.get("support_friction").unwrap();
+        assert!(ratio < 1.5, "rms gap {ratio} × the noise floor");
+        // The truth's μ is 0.2509.
+        assert!((mu - 0.2509).abs() < 0.04, "μ {mu}");
+    }
+
     /// A set of one draws exactly the single case (the historic matrix is unchanged), and every
     /// uniform-kind pair builds a case the registry accepts, with two lengths when compliance is
     /// one of the pair.
