@@ -521,6 +521,76 @@ mod tests {
         assert!(p.contains(&[Effect::MachineCompliance, Effect::SupportFriction]));
     }
 
+    /// Every three-point set the blind check withholds (each pair of [`pairs_for`], each single
+    /// effect, none) generates at both noise levels with the seed the committed three-point
+    /// matrix uses (1): the truth's rod converges on each history (the sensor drift + support
+    /// friction truth used to stop at sample 432, where the punch lets go of the yielded rod).
+    /// Each history is the 49.6 s protocol at 10 Hz (497 samples), two specimens when machine
+    /// compliance is withheld, every response finite and the rollers' friction visible in it.
+    #[test]
+    fn every_three_point_set_generates_at_both_noise_levels() {
+        let kind = TestKind::ThreePoint;
+        let mut sets: Vec<Vec<Effect>> = pairs_for(kind).iter().map(|p| p.to_vec()).collect();
+        sets.push(vec![]);
+        sets.extend(truths_for(kind).into_iter().map(|t| vec![t]));
+        assert_eq!(sets.len(), 20 + 1 + 7);
+        for set in &sets {
+            for noise in [0.003, 0.01] {
+                let c = generate_set_at(kind, set, noise, 1, Layout::TestXpert, 10.0)
+                    .unwrap_or_else(|e| panic!("{} at {noise}: {e}", set_label(set)));
+                let n = if set.contains(&Effect::MachineCompliance) {
+                    2
+                } else {
+                    1
+                };
+                assert_eq!(c.tests.len(), n, "{}", c.name);
+                for t in &c.tests {
+                    assert_eq!(t.response.len(), 497, "{}", c.name);
+                    assert!(t.response.iter().all(|r| r.is_finite()), "{}", c.name);
+                }
+            }
+        }
+        // Below first yield (the first cycle, to 0.6 w_y) a frictionless rod loads and unloads
+        // along one curve; the rollers' friction opens a loop there (loading above unloading
+        // at the same deflection, 0.3 w_y: samples 6 and 38).
+        let loop_at = |set: &[Effect]| {
+            let c = generate_set_at(kind, set, 0.0, 1, Layout::TestXpert, 10.0).unwrap();
+            let t = &c.tests[0];
+            assert!((t.control[6] - t.control[38]).abs() < 1e-9 * t.control[6], "{}", c.name);
+            let peak = t.response.iter().fold(0.0f64, |m, r| m.max(r.abs()));
+            (t.response[6] - t.response[38]) / peak
+        };
+        let smooth = loop_at(&[]);
+        let rough = loop_at(&[Effect::SupportFriction]);
+        assert!(smooth.abs() < 1e-6, "{smooth}");
+        assert!(rough > 1e-3, "{rough}");
+    }
+
+    /// The pair the blind check left at 2.1 × the noise floor (three-point, viscoelasticity with
+    /// support friction, 0.3 % noise, seed 1): its own model (elastoplastic + Maxwell branch +
+    /// friction coefficient at the rollers), calibrated to the log, fits it to the noise floor
+    /// and finds the rollers' μ. Before the rod's friction was an active set, 68 of 101 replays
+    /// with μ between 0.10 and 0.30 of this cable failed to converge (a Maxwell branch relaxing
+    /// in a dwell with the rod held by friction), so the calibration could not move μ.
+    #[test]
+    fn a_relaxing_cable_on_rough_supports_fits_to_the_noise_floor() {
+        use cablab_diagnose::{calibrate, CalibrateOptions, Context, ModelSpec};
+        let pair = [Effect::Viscoelasticity, Effect::SupportFriction];
+        let c = generate_set_at(TestKind::ThreePoint, &pair, 0.003, 1, Layout::TestXpert, 10.0);
+        let c = c.unwrap();
+        let model = ModelSpec::law("elastoplastic")
+            .with(Effect::Viscoelasticity)
+            .with(Effect::SupportFriction);
+        let cal = calibrate(Context::project(), &c.tests, &model, &CalibrateOptions::default());
+        let cal = cal.unwrap();
+        let floor = cablab_diagnose::floors::noise_floor(&c.tests)[0];
+        let ratio = cal.gap_rms[0] / floor;
+        let mu = cal.get("support_friction").unwrap();
+        assert!(ratio < 1.5, "rms gap {ratio} × the noise floor");
+        // The truth's μ is 0.2509.
+        assert!((mu - 0.2509).abs() < 0.04, "μ {mu}");
+    }
+
     /// A set of one draws exactly the single case (the historic matrix is unchanged), and every
     /// uniform-kind pair builds a case the registry accepts, with two lengths when compliance is
     /// one of the pair.

@@ -1,8 +1,10 @@
 //! cablab-rod: a static, geometrically exact Cosserat rod and the drivers of the four tests.
 //!
 //! - [`planar`]: the geometrically exact rod (Simo–Reissner finite elements, in-plane: an exact
-//!   reduction of the 3D rod for in-plane loading), penalty contact with rigid supports and punch,
-//!   Newton with line search and step bisection, internal law variables per integration point.
+//!   reduction of the 3D rod for in-plane loading), penalty contact with rigid supports and punch
+//!   (the punch's contact and the supports' Coulomb friction branches — stick, slip ±, lifted —
+//!   as active sets around Newton), Newton with line search and step bisection, internal law
+//!   variables per integration point.
 //! - [`drivers`]: the tests as run — tension, torsion, pure bending, three-point bending —
 //!   replaying a control path ([`simulate_path`]) or a measured history ([`simulate_history`]),
 //!   machine compliance in series solved in one place (`series`).

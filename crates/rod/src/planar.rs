@@ -37,6 +37,9 @@ type Vec6 = SVector<f64, 6>;
 /// converged: with EA ≫ EI/L² the residual has a round-off floor (ε·EA·L/l₀ per element) above a
 /// purely relative residual test, while the configuration is already exact to ~10⁻⁹.
 pub(crate) const SMALL_CORRECTION: f64 = 1e-9;
+/// Friction branch switches per solve before the supports' branches are left to the state at
+/// every evaluation (the active-set loop of [`PlanarRod::solve`]).
+const MAX_FRICTION_SWITCHES: usize = 6;
 /// Law 6-vector index of the planar (shear γ, axial Γ₃, bending K₁) components, and their sign.
 const LAW_INDEX: [usize; 3] = [1, 2, 3];
 const LAW_SIGN: [f64; 3] = [-1.0, 1.0, 1.0];
@@ -90,6 +93,12 @@ pub struct Support {
     pub tangential_force_n: f64,
     trial: (f64, Vector2<f64>, f64),
     hint: usize,
+    /// The friction branch the residual is held on during a solve (None: decided from the state
+    /// at every evaluation), the branch the state calls for at the last evaluation, and the one
+    /// of the last committed step (see [`PlanarRod::solve`]).
+    frozen: Option<FrictionBranch>,
+    decided: FrictionBranch,
+    committed_branch: FrictionBranch,
     /// Normal force the support exerts on the rod at the last evaluation, N.
     pub normal_force_n: f64,
     /// Tangential (friction) force on the rod at the last evaluation, N.
@@ -120,6 +129,9 @@ impl Support {
             tangential_force_n: 0.0,
             trial: (contact_s_m, contact_point, 0.0),
             hint: 0,
+            frozen: None,
+            decided: FrictionBranch::Free,
+            committed_branch: FrictionBranch::Stick,
             normal_force_n: 0.0,
             friction_force_n: 0.0,
             off_end: false,
@@ -276,6 +288,17 @@ fn geometric_stiffness(kin: &Kinematics, sig_shear: f64, sig_axial: f64) -> Mat6
     g
 }
 
+/// Which branch of the regularised Coulomb law a support's friction force is on.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum FrictionBranch {
+    /// No friction: μ = 0, or the support does not press on the rod (N ≤ 0, limit μN⁺ = 0).
+    Free,
+    /// The stick spring: T = T_old − k_t·slip, inside the limit.
+    Stick,
+    /// Sliding: T = ±μN (the sign of the trial force).
+    Slip(f64),
+}
+
 /// Forces of a support on one element and the trial contact state.
 #[derive(Debug, Clone, Copy)]
 struct SupportEval {
@@ -291,6 +314,8 @@ struct SupportEval {
     s_c: f64,
     /// Current contact point on the centreline, m.
     p_c: Vector2<f64>,
+    /// The friction branch the force is on.
+    branch: FrictionBranch,
 }
 
 /// The forces a support exerts on the segment a–b: a normal penalty on the signed gap, plus
@@ -301,6 +326,14 @@ struct SupportEval {
 /// round support (the contact point moves through the material without sliding) therefore costs
 /// no friction. Forces are split to the end points by the contact parameter ξ. Returns None when
 /// the support does not project onto the segment (unless `clamp`).
+///
+/// `branch`: None decides the friction branch from the state (the residual); Some keeps the
+/// given one with its formula extended smoothly beyond its range (stick without the limit, slip
+/// as ±μN without N⁺), which the tangent's finite differences use: the derivative of the branch
+/// the residual is on, not a difference quotient across a kink of the law (at N ≈ 0 a step of
+/// the difference quotient opens or closes the contact and a secant of μN⁺ of the order
+/// μ k_n/2 enters the tangent, which stalled Newton where the punch lets go of the rod).
+#[allow(clippy::too_many_arguments)]
 fn support_forces(
     sup: &Support,
     pa: Vector2<f64>,
@@ -309,6 +342,7 @@ fn support_forces(
     l0: f64,
     clamp: bool,
     anchor: Vector2<f64>,
+    branch: Option<FrictionBranch>,
 ) -> Option<SupportEval> {
     let d = pb - pa;
     let len = d.norm();
@@ -327,14 +361,22 @@ fn support_forces(
     let mut fa = (1.0 - xi) * normal * n;
     let mut fb = xi * normal * n;
     let mut friction = 0.0;
+    let mut decided = FrictionBranch::Free;
     if sup.mu > 0.0 {
         let slip = t.dot(&(anchor - sup.contact_point));
         let trial = sup.tangential_force_n - sup.k_tangent * slip;
         let limit = sup.mu * normal.max(0.0);
-        friction = if trial.abs() > limit {
-            limit * trial.signum()
+        decided = branch.unwrap_or(if limit <= 0.0 {
+            FrictionBranch::Free
+        } else if trial.abs() > limit {
+            FrictionBranch::Slip(trial.signum())
         } else {
-            trial
+            FrictionBranch::Stick
+        });
+        friction = match decided {
+            FrictionBranch::Free => 0.0,
+            FrictionBranch::Stick => trial,
+            FrictionBranch::Slip(sign) => sign * sup.mu * normal,
         };
         fa += (1.0 - xi) * friction * t;
         fb += xi * friction * t;
@@ -346,6 +388,7 @@ fn support_forces(
         friction,
         s_c: s_a + xi * l0,
         p_c: pa + xi * d,
+        branch: decided,
     })
 }
 
@@ -599,6 +642,7 @@ impl<'a> PlanarRod<'a> {
                             self.l0[e],
                             false,
                             pa,
+                            Some(FrictionBranch::Free),
                         )
                         .is_some()
                         {
@@ -640,16 +684,23 @@ impl<'a> PlanarRod<'a> {
                     q[e_anchor].xy() + (q[e_anchor + 1].xy() - q[e_anchor].xy()) * xi_anchor
                 }
             };
-            let Some(ev) = support_forces(sup, pa, pb, s_a, l0, true, anchor_of(pa, pb, &self.q))
-            else {
+            let anchor = anchor_of(pa, pb, &self.q);
+            let Some(ev) = support_forces(sup, pa, pb, s_a, l0, true, anchor, sup.frozen) else {
                 continue;
+            };
+            // The branch the state calls for (the same as `ev.branch` when nothing is frozen).
+            let decided = match sup.frozen {
+                None => ev.branch,
+                Some(_) => support_forces(sup, pa, pb, s_a, l0, true, anchor, None)
+                    .map_or(ev.branch, |d| d.branch),
             };
             for d in 0..2 {
                 self.res[e][d] -= ev.fa[d];
                 self.res[e + 1][d] -= ev.fb[d];
             }
             if tangent {
-                // Central differences of the contact forces w.r.t. (xa, ya, xb, yb).
+                // Central differences of the contact forces w.r.t. (xa, ya, xb, yb), on the
+                // friction branch of the residual (see `support_forces`).
                 let h = 1e-7 * l0;
                 let mut jac = SMatrix::<f64, 4, 4>::zeros();
                 for j in 0..4 {
@@ -665,6 +716,7 @@ impl<'a> PlanarRod<'a> {
                         l0,
                         true,
                         anchor_of(p_plus[0], p_plus[1], &self.q),
+                        Some(ev.branch),
                     );
                     let fm = support_forces(
                         sup,
@@ -674,6 +726,7 @@ impl<'a> PlanarRod<'a> {
                         l0,
                         true,
                         anchor_of(p_minus[0], p_minus[1], &self.q),
+                        Some(ev.branch),
                     );
                     if let (Some(fp), Some(fm)) = (fp, fm) {
                         for d in 0..2 {
@@ -697,7 +750,40 @@ impl<'a> PlanarRod<'a> {
             sup.normal_force_n = ev.normal;
             sup.friction_force_n = ev.friction;
             sup.trial = (ev.s_c, ev.p_c, ev.friction);
+            sup.decided = decided;
         }
+    }
+
+    /// Hold each rough support's friction on one branch for the coming Newton solve: the one it
+    /// ended the last committed step on (stick at the start).
+    fn freeze_friction(&mut self) {
+        for s in &mut self.supports {
+            s.frozen = (s.mu > 0.0).then_some(s.committed_branch);
+        }
+    }
+
+    /// At a converged configuration: move each support whose state calls for another friction
+    /// branch than the frozen one to that branch; from sliding one way to sliding the other, to
+    /// stick first (the equilibrium of a slip branch lets the rod slide freely, so the state
+    /// it leaves calls for the opposite slip whenever the truth is stick: during a dwell, where
+    /// a relaxing section lowers the normal force below what held the rod, the branches
+    /// alternated ± and never settled). Returns whether any moved.
+    fn update_friction_branches(&mut self) -> bool {
+        let mut changed = false;
+        for s in &mut self.supports {
+            if let Some(f) = s.frozen {
+                if f != s.decided {
+                    s.frozen = Some(match (f, s.decided) {
+                        (FrictionBranch::Slip(a), FrictionBranch::Slip(b)) if a != b => {
+                            FrictionBranch::Stick
+                        }
+                        (_, d) => d,
+                    });
+                    changed = true;
+                }
+            }
+        }
+        changed
     }
 
     /// Scaled norm of the residual over the free degrees of freedom (moments divided by the rod length).
@@ -748,6 +834,16 @@ impl<'a> PlanarRod<'a> {
     /// values are applied as increments in the first iteration. On success the trial state is
     /// ready to [`commit`](Self::commit); on failure the configuration is left where Newton stopped
     /// (the caller restores it). `step` only labels errors.
+    ///
+    /// Contact is an active set around Newton. Punch: see below. Support friction: each rough
+    /// support's force is held on one branch of the Coulomb law (stick, slip ±, or free when the
+    /// support does not press) during a Newton solve, starting from the branch of the last
+    /// committed step; at the converged configuration a support whose state calls for another
+    /// branch moves to it and the step is solved again (at most [`MAX_FRICTION_SWITCHES`] times,
+    /// then the state decides at every evaluation). Each Newton solve then sees a smooth
+    /// residual: deciding the branch at every iterate let the iterates flip between stick, slip
+    /// and a lifted contact (where the normal force of a trial configuration changes sign) and
+    /// stall; the equilibrium is the same, as the branch is checked on it.
     pub fn solve(&mut self, dt: f64, step: usize) -> Result<usize, RodError> {
         // Punch contact by an active set around Newton: start from the last committed contact
         // status (so unloading does not first throw the rod off the punch), converge, then release
@@ -755,9 +851,23 @@ impl<'a> PlanarRod<'a> {
         if let Some(p) = self.punch.as_mut() {
             p.active.clone_from(&p.active_committed);
         }
+        self.freeze_friction();
+        let start = self.q.clone();
         let mut total = 0;
+        let mut switches = 0;
         for _ in 0..(4 * self.nodes()).max(20) {
-            total += self.solve_newton(dt, step)?;
+            let solved = self.solve_newton(dt, step);
+            let solved = match solved {
+                // A frozen branch the step cannot reach an equilibrium on (a stick spring held
+                // where the support slides far): once more with the branch decided by the state.
+                Err(_) if self.supports.iter().any(|s| s.frozen.is_some()) => {
+                    self.supports.iter_mut().for_each(|s| s.frozen = None);
+                    self.q.clone_from(&start);
+                    self.solve_newton(dt, step)
+                }
+                other => other,
+            };
+            total += solved?;
             if let Some(si) = self.supports.iter().position(|s| s.off_end) {
                 return Err(RodError::NotConverged {
                     step,
@@ -767,6 +877,19 @@ impl<'a> PlanarRod<'a> {
                         "the rod slid off support {si}: the deflection is too large for the rod length (increase the overhang)"
                     ),
                 });
+            }
+            // Friction branches first (at most a few switches, then the state decides at every
+            // evaluation), then the punch's active set.
+            // A new branch is solved from the step's start: the equilibrium of the branch it
+            // leaves can lie far off (a stick spring holding 100 × μN), and Newton from there
+            // found unphysical equilibria (the rod wrapped round a support) on coarse rods.
+            if switches < MAX_FRICTION_SWITCHES && self.update_friction_branches() {
+                switches += 1;
+                if switches == MAX_FRICTION_SWITCHES {
+                    self.supports.iter_mut().for_each(|s| s.frozen = None);
+                }
+                self.q.clone_from(&start);
+                continue;
             }
             if !self.update_punch_active_set() {
                 return Ok(total);
@@ -793,6 +916,7 @@ impl<'a> PlanarRod<'a> {
         }
         for s in &mut self.supports {
             (s.contact_s_m, s.contact_point, s.tangential_force_n) = s.trial;
+            s.committed_branch = s.decided;
         }
     }
 }
