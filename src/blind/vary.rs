@@ -722,3 +722,4 @@ mod tests {
         assert_eq!(c(&[SensorDrift], Option::None, &[]), Class::Wrong);
     }
 }
+
