@@ -734,8 +734,9 @@ mod tests {
     #[test]
     fn varied_cases_get_their_verdicts() {
         use cablab_diagnose::{diagnose, Context, DiagnoseOptions};
-        let cases: [(u64, &[Effect]); 6] = [
+        let cases: [(u64, &[Effect]); 7] = [
             (131, &[]),
+            (29, &[]),
             (16, &[]),
             (3, &[Effect::Viscoelasticity]),
             (175, &[Effect::SensorDrift]),
