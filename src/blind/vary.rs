@@ -62,7 +62,12 @@ pub fn vary_case(kinds: &[TestKind], seed: u64) -> Result<VaryCase, String> {
     let kinds: Vec<TestKind> = kinds
         .iter()
         .copied()
-        .filter(|k| matches!(k, TestKind::Tension | TestKind::Torsion | TestKind::PureBending))
+        .filter(|k| {
+            matches!(
+                k,
+                TestKind::Tension | TestKind::Torsion | TestKind::PureBending
+            )
+        })
         .collect();
     if kinds.is_empty() {
         return Err("--vary makes tension, torsion and pure bending cases only".into());
@@ -426,8 +431,10 @@ pub fn vary_case(kinds: &[TestKind], seed: u64) -> Result<VaryCase, String> {
 /// `n` varied cases (seeds `1..=n`) among `kinds`, generated in parallel; those that fail to
 /// generate are returned as messages.
 pub fn vary_matrix(kinds: &[TestKind], n: u64) -> (Vec<VaryCase>, Vec<String>) {
-    let made: Vec<Result<VaryCase, String>> =
-        (1..=n).into_par_iter().map(|s| vary_case(kinds, s)).collect();
+    let made: Vec<Result<VaryCase, String>> = (1..=n)
+        .into_par_iter()
+        .map(|s| vary_case(kinds, s))
+        .collect();
     let mut out = (Vec::new(), Vec::new());
     made.into_iter().for_each(|m| match m {
         Ok(c) => out.0.push(c),
@@ -538,7 +545,15 @@ pub fn render(r: &BlindReport, meta: &BTreeMap<String, Meta>) -> String {
     let _ = writeln!(
         s,
         "{:<13} {:>4} {:>6} {:>8} {:>7} {:>7} {:>6}  {:>22}  {:>13}",
-        "cases", "n", "right", "partial", "missed", "unexpl", "wrong", "floor/true noise", "gap after"
+        "cases",
+        "n",
+        "right",
+        "partial",
+        "missed",
+        "unexpl",
+        "wrong",
+        "floor/true noise",
+        "gap after"
     );
     let ratio = |o: &CaseOutcome| {
         meta.get(&o.name)
@@ -590,15 +605,24 @@ pub fn render(r: &BlindReport, meta: &BTreeMap<String, Meta>) -> String {
     row("all", all.clone());
     row(
         "null",
-        all.iter().copied().filter(|o| o.truths.is_empty()).collect(),
+        all.iter()
+            .copied()
+            .filter(|o| o.truths.is_empty())
+            .collect(),
     );
     row(
         "single",
-        all.iter().copied().filter(|o| o.truths.len() == 1).collect(),
+        all.iter()
+            .copied()
+            .filter(|o| o.truths.len() == 1)
+            .collect(),
     );
     row(
         "pair",
-        all.iter().copied().filter(|o| o.truths.len() == 2).collect(),
+        all.iter()
+            .copied()
+            .filter(|o| o.truths.len() == 2)
+            .collect(),
     );
     let mut tags: Vec<&'static str> = meta.values().flat_map(|m| m.tags.clone()).collect();
     tags.sort();
@@ -660,26 +684,57 @@ mod tests {
             .map(|s| vary_case(&UNIFORM, s).unwrap_or_else(|e| panic!("seed {s}: {e}")))
             .collect();
         let n_of = |k: usize| cases.iter().filter(|c| c.case.truths.len() == k).count();
-        assert!(n_of(0) >= 3 && n_of(1) >= 8 && n_of(2) >= 8, "{} {} {}", n_of(0), n_of(1), n_of(2));
+        assert!(
+            n_of(0) >= 3 && n_of(1) >= 8 && n_of(2) >= 8,
+            "{} {} {}",
+            n_of(0),
+            n_of(1),
+            n_of(2)
+        );
         for tag in [
-            "const", "step-up", "step-down", "two-sided", "hold-peak", "hold-zero", "rate-change",
-            "white", "ar1", "quant", "spikes", "hum", "short", "long", "weak",
+            "const",
+            "step-up",
+            "step-down",
+            "two-sided",
+            "hold-peak",
+            "hold-zero",
+            "rate-change",
+            "white",
+            "ar1",
+            "quant",
+            "spikes",
+            "hum",
+            "short",
+            "long",
+            "weak",
         ] {
-            assert!(cases.iter().any(|c| c.tags.contains(&tag)), "no case tagged {tag}");
+            assert!(
+                cases.iter().any(|c| c.tags.contains(&tag)),
+                "no case tagged {tag}"
+            );
         }
         for c in &cases {
             let n = c.case.tests[0].control.len();
             assert!((1900..=52_000).contains(&n), "{}: {n} samples", c.case.name);
-            assert!(c.case.tests.len() == 1 + usize::from(c.case.truths.contains(&Effect::MachineCompliance)));
+            assert!(
+                c.case.tests.len()
+                    == 1 + usize::from(c.case.truths.contains(&Effect::MachineCompliance))
+            );
             if c.tags.contains(&"white") {
-                let peak = c.case.tests[0].response.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+                let peak = c.case.tests[0]
+                    .response
+                    .iter()
+                    .fold(0.0f64, |m, v| m.max(v.abs()));
                 let ratio = c.true_noise / (c.case.noise_rel * peak);
                 assert!((1.1..2.7).contains(&ratio), "{}: {ratio}", c.case.name);
             }
         }
         let again = vary_case(&UNIFORM, 7).unwrap();
         assert_eq!(again.case.name, cases[6].case.name);
-        assert_eq!(again.case.tests[0].response, cases[6].case.tests[0].response);
+        assert_eq!(
+            again.case.tests[0].response,
+            cases[6].case.tests[0].response
+        );
         assert!(vary_case(&[TestKind::ThreePoint], 1).is_err());
     }
 
@@ -715,13 +770,19 @@ mod tests {
         let pair = [KinematicHardening, SensorDrift];
         let c = |t: &[Effect], v, e: &[Effect]| classify(&outcome(t, v, e));
         assert_eq!(c(&[], Some(None), &[]), Class::Right);
-        assert_eq!(c(&[], Some(Viscoelasticity), &[Viscoelasticity]), Class::Wrong);
+        assert_eq!(
+            c(&[], Some(Viscoelasticity), &[Viscoelasticity]),
+            Class::Wrong
+        );
         assert_eq!(c(&[], Some(Unexplained), &[]), Class::Unexplained);
         assert_eq!(c(&pair, Some(SensorDrift), &pair), Class::Right);
         assert_eq!(c(&pair, Some(SensorDrift), &[SensorDrift]), Class::Partial);
         assert_eq!(c(&pair, Some(None), &[]), Class::Missed);
         assert_eq!(c(&pair, Some(Unexplained), &[]), Class::Unexplained);
-        assert_eq!(c(&pair, Some(SensorDrift), &[SensorDrift, Viscoelasticity]), Class::Wrong);
+        assert_eq!(
+            c(&pair, Some(SensorDrift), &[SensorDrift, Viscoelasticity]),
+            Class::Wrong
+        );
         assert_eq!(c(&[SensorDrift], Option::None, &[]), Class::Wrong);
     }
 

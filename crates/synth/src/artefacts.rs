@@ -147,7 +147,11 @@ pub fn apply(
             r += a.hum_rel * fs * (std::f64::consts::TAU * a.hum_hz * t + hum_phase).sin();
         }
         if a.spike_share > 0.0 && rng_extra.random_bool(a.spike_share.min(1.0)) {
-            let sign = if rng_extra.random_bool(0.5) { 1.0 } else { -1.0 };
+            let sign = if rng_extra.random_bool(0.5) {
+                1.0
+            } else {
+                -1.0
+            };
             r += sign * a.spike_rel * fs;
         }
         let c = rec.control_machine[i] + a.control_offset + sd_c * nc;
@@ -309,7 +313,17 @@ mod tests {
             hum_hz: 50.0,
             ..plain.clone()
         };
-        let h = apply(TestKind::Tension, &hum, &t49, &c, &r, &[], 1e-3, 1.0 / 49.0, 3);
+        let h = apply(
+            TestKind::Tension,
+            &hum,
+            &t49,
+            &c,
+            &r,
+            &[],
+            1e-3,
+            1.0 / 49.0,
+            3,
+        );
         let w = &h.response_measured[1..];
         let amp = w.iter().fold(0.0f64, |m, v| m.max(v.abs()));
         assert!((amp - 0.2).abs() < 1e-3, "hum amplitude {amp}");
