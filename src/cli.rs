@@ -468,6 +468,11 @@ pub enum BenchWhat {
         /// Also withhold every applicable pair of effects per kind (issue 13.6).
         #[arg(long)]
         pairs: bool,
+        /// Instead of the standard matrix, diagnose the first N cases of the varied family
+        /// (protocol, rates, holds, sampling, noise model and effect sizes drawn per case;
+        /// tension, torsion and pure bending of `--kinds`).
+        #[arg(long, value_name = "N")]
+        vary: Option<u64>,
         /// Keep only the cases whose name (`kind/effects/noise/seed/layout`) contains one of
         /// these, comma-separated (`--only +sensor_drift,noise1.0%`): to rerun a class of cases.
         #[arg(long, value_delimiter = ',')]

@@ -32,15 +32,15 @@ pub struct BlindCase {
 
 /// Nominal specimen of a kind for the blind cases (the chapter's cable): free length, stiffness
 /// name and value, strength name and value, hardening name.
-struct Nominal {
-    length_m: f64,
-    stiff: (&'static str, f64),
-    strength: (&'static str, f64),
-    hard: &'static str,
-    strain: &'static str,
+pub(crate) struct Nominal {
+    pub(crate) length_m: f64,
+    pub(crate) stiff: (&'static str, f64),
+    pub(crate) strength: (&'static str, f64),
+    pub(crate) hard: &'static str,
+    pub(crate) strain: &'static str,
 }
 
-fn nominal(kind: TestKind) -> Option<Nominal> {
+pub(crate) fn nominal(kind: TestKind) -> Option<Nominal> {
     match kind {
         TestKind::Tension => Some(Nominal {
             length_m: 0.032,

@@ -7,11 +7,14 @@
 //!
 //! - [`cases`]: the case design (truth effects per kind, parameter draws, protocols, layouts).
 //! - [`score`]: the diagnosis of each case, timed, and the report.
+//! - [`vary`]: the varied family (`--vary N`): protocols, rates, sampling, noise models and
+//!   effect sizes drawn per case, unlike the standard matrix's fixed ones.
 //!
 //! This module adds the write → read leg and the command.
 
 pub mod cases;
 pub mod score;
+pub mod vary;
 
 use crate::commands::{CliError, CmdResult};
 use cablab_core::TestKind;
@@ -50,11 +53,14 @@ pub fn through_readers(case: &mut BlindCase) -> Result<(), String> {
     Ok(())
 }
 
-/// `cablab bench blind`.
+/// `cablab bench blind` (`vary`: `Some(n)` diagnoses the first n cases of the varied family,
+/// [`vary`], instead of the standard matrix; `seeds` and `pairs` are then not used).
+#[allow(clippy::too_many_arguments)]
 pub fn bench(
     seeds: u64,
     kind_names: &[String],
     pairs: bool,
+    vary: Option<u64>,
     only: &[String],
     out: Option<&std::path::Path>,
     json: Option<&std::path::Path>,
@@ -71,9 +77,18 @@ pub fn bench(
         }
     }
     let seed_list: Vec<u64> = (1..=seeds).collect();
-    let (mut cases, gen_errors) = cases::standard_matrix(&kinds, &[0.003, 0.01], &seed_list);
+    let mut varied = Vec::new();
+    let (mut cases, gen_errors) = match vary {
+        Some(n) => {
+            let (v, e) = vary::vary_matrix(&kinds, n);
+            let c = v.iter().map(|c| c.case.clone()).collect();
+            varied = v;
+            (c, e)
+        }
+        None => cases::standard_matrix(&kinds, &[0.003, 0.01], &seed_list),
+    };
     let mut errors = gen_errors;
-    if pairs {
+    if pairs && vary.is_none() {
         let (more, more_errors) = cases::pair_matrix(&kinds, &[0.003, 0.01], &seed_list);
         cases.extend(more);
         errors.extend(more_errors);
@@ -88,6 +103,15 @@ pub fn bench(
             false
         }
     });
+    // The varied cases' tags and noise, with the floor on the tests as read back.
+    let meta: std::collections::BTreeMap<String, vary::Meta> = varied
+        .into_iter()
+        .filter_map(|mut v| {
+            let read = cases.iter().find(|c| c.name == v.case.name)?;
+            v.case.tests = read.tests.clone();
+            Some((v.case.name.clone(), vary::Meta::of(&v)))
+        })
+        .collect();
     let rod = Rod::default();
     let ctx = cablab_diagnose::Context {
         catalog: &Registry,
@@ -111,7 +135,17 @@ pub fn bench(
     });
     bar.finish_and_clear();
     let kinds_text: Vec<&str> = kinds.iter().map(|k| k.as_str()).collect();
-    let mut text = format!(
+    let mut text = if let Some(n) = vary {
+        format!(
+            "# Blind check of the gap diagnosis on a varied family, through the real readers\n\n\
+             `cablab bench blind --vary {n} --kinds {}`: the first {n} cases of the varied family \
+             (`src/blind/vary.rs`: protocol, rates, holds, sampling, noise model, effect sizes and \
+             the specimen drawn per case), written by the virtual lab in the three layouts in turn, \
+             read back by cablab-ingest, diagnosed without the truth.\n\n```\n",
+            kinds.iter().map(|k| k.as_str()).collect::<Vec<_>>().join(",")
+        )
+    } else {
+        format!(
         "# Blind check of the gap diagnosis, through the real readers\n\n\
          `cablab bench blind --seeds {seeds} --kinds {}{}{}`: every effect that applies to the kind, \
          withheld, plus null cases{}; noise 0.3 % and 1 % of full scale; {seeds} parameter draws \
@@ -131,8 +165,12 @@ pub fn bench(
             ""
         },
         rod.max_points
-    );
+    )
+    };
     text.push_str(&score::render(&report));
+    if vary.is_some() {
+        text.push_str(&vary::render(&report, &meta));
+    }
     text.push_str("```\n");
     if !errors.is_empty() {
         text.push_str(&format!(

@@ -56,7 +56,7 @@ use serde::Serialize;
 // The diagnosis' parts, at the paths they had before the split.
 pub use crate::calibration::{calibrate, CalibrateOptions, Calibration, OptParamMap, ParamMap};
 pub use crate::floors::{noise_floor, resolution_floor, rounding_like, shift_in_resolution};
-pub use crate::holdout::{split, HoldoutSummary, Split};
+pub use crate::holdout::{drop_glitches, split, HoldoutSummary, Split};
 pub use crate::ladder::Rung;
 pub use crate::locate::{locate, locate_span, Located, SpanShares, SPAN_GROUPS};
 pub use crate::options::{Context, DiagnoseOptions, HoldoutPolicy};
@@ -274,7 +274,9 @@ pub fn diagnose(
             why: format!("{} noise levels for {} tests", noise.len(), tests.len()),
         });
     }
-    let (train, held) = split(tests, &opts.holdout)?;
+    let mut sp = split(tests, &opts.holdout)?;
+    drop_glitches(tests, &mut sp);
+    let (train, held) = sp;
     let scale = tests
         .iter()
         .map(DiagTest::response_scale)

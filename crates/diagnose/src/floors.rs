@@ -3,13 +3,52 @@
 
 use crate::model::DiagTest;
 
-/// Noise floor per test: σ of the response noise estimated from the data itself
-/// (`cablab_measure::noise_level`: MAD of the second differences, robust to turning points).
+/// Lag-1 correlation of the response noise from which the noise floor is its marginal σ over
+/// several lags ([`cablab_measure::condition::serial_noise`]) instead of the lag-1 estimate.
+/// White noise reads φ < 0.1 on the blind check's standard cases (σ over lags within 7 % of the
+/// lag-1 one); the varied family's AR(1) noise with φ = 0.3–0.95 reads 0.3–0.94.
+pub const SERIAL_PHI: f64 = 0.2;
+
+/// Above this φ the several-lag estimate is not used: the fit has read a smooth stretch of the
+/// signal (a relaxing hold, a slow turn) as a random walk of huge σ (the varied family: φ = 1.00
+/// and σ 10–18 × the noise on two short logs with holds), where the generator's AR(1) noise
+/// reads at most 0.94.
+pub const SERIAL_PHI_MAX: f64 = 0.98;
+
+/// Noise floor per test: σ of the response noise estimated from the data itself.
+///
+/// The held-out gap is an RMS over samples, so the floor it is measured against is the noise's
+/// marginal σ. For white noise that is `cablab_measure::noise_level` (MAD of the second
+/// differences, robust to turning points and isolated glitches). Serially correlated noise
+/// (an AR(1) with lag-1 correlation φ: a filtered amplifier, a slow logger average) shows only
+/// √((1 − φ)(3 − φ)/3) of its σ in the lag-1 differences (a third at φ = 0.9), and a
+/// quantised one whose counts rarely change between samples shows none: the floor would sit
+/// far below the noise, a null case would read 2–3 × the floor and be called `unexplained`,
+/// and a candidate that follows the slow noise would look like an explanation (the varied
+/// family, `cablab bench blind --vary`). So when the differences at several lags
+/// ([`cablab_measure::condition::serial_noise`]) find φ ≥ [`SERIAL_PHI`], or a σ more than
+/// twice the lag-1 one, the floor is the larger of the two estimates (not when φ ≥
+/// [`SERIAL_PHI_MAX`]). Never below the rounding of a quantised response (q/√12, q its count,
+/// `cablab_measure::quantum`): noise of a count or two whose second differences are mostly
+/// zero reads σ = 0 at every lag.
+///
+/// Does not see noise slower than the longest lag (a hum aliased to a slow wave): it stays in
+/// the gap.
 pub fn noise_floor(tests: &[DiagTest]) -> Vec<f64> {
     tests
         .iter()
         .map(|t| {
-            let s = cablab_measure::noise_level(&t.response);
+            let white = cablab_measure::noise_level(&t.response);
+            let serial = cablab_measure::condition::serial_noise(&t.response);
+            // φ at the top of its grid is a smooth signal read as a random walk, not noise.
+            let serial_ok = serial.phi < SERIAL_PHI_MAX;
+            let s = if serial_ok && (serial.phi >= SERIAL_PHI || white < 0.5 * serial.sigma) {
+                white.max(serial.sigma)
+            } else {
+                white
+            };
+            // A quantised reading is off by its rounding at least (uniform over a count).
+            let s = s.max(cablab_measure::quantum(&t.response) / 12f64.sqrt());
             // The control is measured too: its noise, or the rounding of a quantised encoder
             // (uniform over one count: σ = q/√12), reaches the simulated response through the
             // stiffness. A 0.1 µm encoder on a 32 mm cable is ~0.25 N per count.

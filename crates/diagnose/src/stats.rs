@@ -1,5 +1,6 @@
 //! Small statistics the diagnosis needs on residual series: RMS, lag-1 autocorrelation, the
-//! effective sample size of autocorrelated residuals. (The noise floor is `cablab_measure::noise_level`.)
+//! effective sample size of autocorrelated residuals. (The noise floor is
+//! `crate::floors::noise_floor`.)
 //!
 //! Pure functions on slices; no fitting, no I/O.
 

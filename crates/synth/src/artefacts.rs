@@ -128,6 +128,13 @@ pub fn apply(
     let sd_c = a.control_noise_rel * c_max;
     let phi = a.noise_ar1.clamp(0.0, 0.999);
     let mut nr_prev: Option<f64> = None;
+    // Spikes and hum from a stream of their own (the noise above is unchanged by them).
+    let mut rng_extra = ChaCha8Rng::seed_from_u64(seed ^ 0x5b1c_e0d5_4a11_0001);
+    let hum_phase: f64 = if a.hum_rel > 0.0 {
+        rng_extra.random_range(0.0..std::f64::consts::TAU)
+    } else {
+        0.0
+    };
     for i in 0..rec.time_s.len() {
         let t = rec.time_s[i];
         let e: f64 = rng.sample(StandardNormal);
@@ -135,7 +142,18 @@ pub fn apply(
         // AR(1) with unit marginal variance (white for φ = 0; the first sample is stationary).
         let nr = nr_prev.map_or(e, |p| phi * p + (1.0 - phi * phi).sqrt() * e);
         nr_prev = Some(nr);
-        let r = rec.response[i] + a.drift_per_s * t + a.response_offset + sd_r * nr;
+        let mut r = rec.response[i] + a.drift_per_s * t + a.response_offset + sd_r * nr;
+        if a.hum_rel > 0.0 {
+            r += a.hum_rel * fs * (std::f64::consts::TAU * a.hum_hz * t + hum_phase).sin();
+        }
+        if a.spike_share > 0.0 && rng_extra.random_bool(a.spike_share.min(1.0)) {
+            let sign = if rng_extra.random_bool(0.5) {
+                1.0
+            } else {
+                -1.0
+            };
+            r += sign * a.spike_rel * fs;
+        }
         let c = rec.control_machine[i] + a.control_offset + sd_c * nc;
         rec.response_measured.push(quantise(r, q_r));
         rec.control_measured.push(quantise(c, q_c));
@@ -258,6 +276,61 @@ mod tests {
         assert!((dec.time_s[1] - 0.04).abs() < 1e-12);
         let (rho4, _) = lag1(&dec.response_measured[1..]);
         assert!((rho4 - 0.8f64.powi(4)).abs() < 0.03, "rho4 {rho4}");
+    }
+
+    /// Spikes hit about the requested share of samples by exactly ± their size; hum is a sine
+    /// of the requested amplitude at the mains frequency as sampled (at 49 Hz logging, 50 Hz
+    /// hum shows as a 1 Hz wave); neither changes the Gaussian noise of the other samples.
+    #[test]
+    fn spikes_and_hum_on_top_of_unchanged_noise() {
+        let n = 20_000;
+        let (t, c, r) = quiet(n);
+        let plain = Artefacts {
+            noise_rel: 1e-3,
+            adc_bits: 0,
+            ..Artefacts::default()
+        };
+        let base = apply(TestKind::Tension, &plain, &t, &c, &r, &[], 1e-3, 0.01, 3);
+        let spiky = Artefacts {
+            spike_share: 0.01,
+            spike_rel: 0.05,
+            ..plain.clone()
+        };
+        let s = apply(TestKind::Tension, &spiky, &t, &c, &r, &[], 1e-3, 0.01, 3);
+        let d: Vec<f64> = (0..n)
+            .map(|i| s.response_measured[i] - base.response_measured[i])
+            .collect();
+        let hits = d.iter().filter(|v| v.abs() > 1e-9).count();
+        assert!((150..=250).contains(&hits), "{hits} spikes");
+        assert!(d
+            .iter()
+            .all(|v| v.abs() < 1e-9 || (v.abs() - 5.0).abs() < 1e-9));
+        // 49 Hz logging: 50 Hz hum aliases to 1 Hz, amplitude 0.2 % of 100 N.
+        let t49: Vec<f64> = (0..n).map(|i| i as f64 / 49.0).collect();
+        let hum = Artefacts {
+            noise_rel: 0.0,
+            hum_rel: 2e-3,
+            hum_hz: 50.0,
+            ..plain.clone()
+        };
+        let h = apply(
+            TestKind::Tension,
+            &hum,
+            &t49,
+            &c,
+            &r,
+            &[],
+            1e-3,
+            1.0 / 49.0,
+            3,
+        );
+        let w = &h.response_measured[1..];
+        let amp = w.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        assert!((amp - 0.2).abs() < 1e-3, "hum amplitude {amp}");
+        // One period of the alias is 49 samples: the wave repeats, about a zero mean.
+        assert!((0..n - 100).all(|i| (w[i] - w[i + 49]).abs() < 1e-6));
+        let mean = w[..49 * 400].iter().sum::<f64>() / (49.0 * 400.0);
+        assert!(mean.abs() < 1e-6, "mean {mean}");
     }
 
     #[test]

@@ -3,8 +3,8 @@
 //!
 //! A [`SynthSpec`] names the specimen, the truth law (a registry law plus an optional extension),
 //! the machine [`Protocol`] (control cycles, response-limited cycles with event detection, holds),
-//! the rig [`Artefacts`] (noise, quantisation, offsets, drift, machine compliance, slack, sample
-//! rate) and the export [`Layout`] (testXpert II, Bluehill CSV, MTS 793 `.dat`). [`generate`]
+//! the rig [`Artefacts`] (noise, quantisation, offsets, drift, machine compliance, slack, spikes,
+//! mains hum, sample rate) and the export [`Layout`] (testXpert II, Bluehill CSV, MTS 793 `.dat`). [`generate`]
 //! returns the file bytes together with the noise-free truth and the channels as written.
 //!
 //! Module map: [`spec`] (the data), [`protocol`] (control history, event detection), [`truth`]

@@ -232,6 +232,18 @@ pub struct Artefacts {
     /// made at the logger's rate, so φ shows in the file as φᵏ, and turning points between kept
     /// rows are lost.
     pub decimate: usize,
+    /// Share of logged samples (0–1) hit by an isolated spike: one sample off by ± `spike_rel`
+    /// of full scale (a connector or a logger glitch); 0 = none. Drawn from a stream of its
+    /// own, so the noise of a spec without spikes or hum is unchanged.
+    pub spike_share: f64,
+    /// Size of a spike, fraction of the load-cell full scale.
+    pub spike_rel: f64,
+    /// Amplitude of mains hum on the response, fraction of the load-cell full scale: a sine at
+    /// `hum_hz` sampled at the logger's rate (so it aliases to |f − k·f_s|, a slow wave when
+    /// the logger runs near a divisor of the mains frequency); 0 = none.
+    pub hum_rel: f64,
+    /// Mains frequency of the hum, Hz (50 or 60).
+    pub hum_hz: f64,
 }
 
 impl Default for Artefacts {
@@ -252,6 +264,10 @@ impl Default for Artefacts {
             slack: 0.0,
             noise_ar1: 0.0,
             decimate: 0,
+            spike_share: 0.0,
+            spike_rel: 0.0,
+            hum_rel: 0.0,
+            hum_hz: 50.0,
         }
     }
 }
@@ -381,10 +397,19 @@ impl SynthSpec {
             ("artefacts.control_noise_rel", a.control_noise_rel),
             ("artefacts.machine_compliance", a.machine_compliance),
             ("artefacts.slack", a.slack),
+            ("artefacts.spike_rel", a.spike_rel),
+            ("artefacts.hum_rel", a.hum_rel),
+            ("artefacts.hum_hz", a.hum_hz),
         ] {
             if !(v.is_finite() && v >= 0.0) {
                 return Err(invalid(name, format!("must be >= 0, got {v}")));
             }
+        }
+        if !(0.0..=1.0).contains(&a.spike_share) {
+            return Err(invalid(
+                "artefacts.spike_share",
+                format!("must be in [0, 1], got {}", a.spike_share),
+            ));
         }
         if let Some(fs) = a.response_full_scale {
             if !(fs.is_finite() && fs > 0.0) {
