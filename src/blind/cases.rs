@@ -556,7 +556,11 @@ mod tests {
         let loop_at = |set: &[Effect]| {
             let c = generate_set_at(kind, set, 0.0, 1, Layout::TestXpert, 10.0).unwrap();
             let t = &c.tests[0];
-            assert!((t.control[6] - t.control[38]).abs() < 1e-9 * t.control[6], "{}", c.name);
+            assert!(
+                (t.control[6] - t.control[38]).abs() < 1e-9 * t.control[6],
+                "{}",
+                c.name
+            );
             let peak = t.response.iter().fold(0.0f64, |m, r| m.max(r.abs()));
             (t.response[6] - t.response[38]) / peak
         };
@@ -576,12 +580,24 @@ mod tests {
     fn a_relaxing_cable_on_rough_supports_fits_to_the_noise_floor() {
         use cablab_diagnose::{calibrate, CalibrateOptions, Context, ModelSpec};
         let pair = [Effect::Viscoelasticity, Effect::SupportFriction];
-        let c = generate_set_at(TestKind::ThreePoint, &pair, 0.003, 1, Layout::TestXpert, 10.0);
+        let c = generate_set_at(
+            TestKind::ThreePoint,
+            &pair,
+            0.003,
+            1,
+            Layout::TestXpert,
+            10.0,
+        );
         let c = c.unwrap();
         let model = ModelSpec::law("elastoplastic")
             .with(Effect::Viscoelasticity)
             .with(Effect::SupportFriction);
-        let cal = calibrate(Context::project(), &c.tests, &model, &CalibrateOptions::default());
+        let cal = calibrate(
+            Context::project(),
+            &c.tests,
+            &model,
+            &CalibrateOptions::default(),
+        );
         let cal = cal.unwrap();
         let floor = cablab_diagnose::floors::noise_floor(&c.tests)[0];
         let ratio = cal.gap_rms[0] / floor;

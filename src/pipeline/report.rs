@@ -277,6 +277,7 @@ pub fn results_tables(
                     break_at: o.break_at.map(|[c, r]| (shown_control(o, c), r)),
                     loop_area_j: o.last_loop_area_j,
                     warnings: o.warnings.len(),
+                    notes: o.notes.len(),
                     model: model_state(o),
                 })
                 .collect();

@@ -192,7 +192,12 @@ fn ladder_climbs_from_linear_elasticity_to_the_noise_floor() {
         assert!(ok, "{r:?} in {l:#?} noise {}", d.verdict.noise_rel);
     }
     // The verdict, unlike the greedy ladder, names the withheld effect.
-    assert_eq!(d.verdict.effect, Effect::KinematicHardening, "{:?}", d.verdict);
+    assert_eq!(
+        d.verdict.effect,
+        Effect::KinematicHardening,
+        "{:?}",
+        d.verdict
+    );
     // The greedy path here takes friction elements first (they close most of the linear law's
     // gap), then plasticity; the laws stack, so kinematic hardening follows and the ladder ends
     // at the noise floor, from 100× it at the linear rung.

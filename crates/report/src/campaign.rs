@@ -345,6 +345,9 @@ pub struct SpecimenResult {
     pub loop_area_j: Option<f64>,
     /// Number of warnings.
     pub warnings: usize,
+    /// Number of notes (provenance, a loop area within resolution): statements that are not a
+    /// doubt on a number.
+    pub notes: usize,
     /// `ok`, `failed: …` (the model part), or `not run`.
     pub model: String,
 }
@@ -382,6 +385,7 @@ pub fn results_table(kind: TestKind, rows: &[SpecimenResult]) -> Grid {
         format!("break {cs} [{cu}]"),
         "loop area of last cycle [mJ]".to_string(),
         "warnings".to_string(),
+        "notes".to_string(),
         "model".to_string(),
     ];
     let mut methods: Vec<&str> = rows
@@ -406,6 +410,7 @@ pub fn results_table(kind: TestKind, rows: &[SpecimenResult]) -> Grid {
                     .map_or(Cell::Text("none".into()), |p| Cell::Num(p.0 * cf)),
                 Cell::opt(r.loop_area_j.map(|a| a * 1e3)),
                 Cell::Int(r.warnings as i64),
+                Cell::Int(r.notes as i64),
                 Cell::Text(r.model.clone()),
             ]
         })
