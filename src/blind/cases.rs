@@ -501,6 +501,29 @@ fn build(jobs: Vec<(TestKind, Vec<Effect>, f64, u64)>) -> (Vec<BlindCase>, Vec<S
 mod tests {
     use super::*;
 
+    /// Torsion, a Maxwell branch beside a stiffness degradation (seed 2, the blind check's draw):
+    /// friction elements mimic part of both, and the climb from the best single effect stops at
+    /// friction + degradation with 8× (0.3 % noise) or 2.6× (1 %) the floor left. The search from
+    /// the next-best single effects (`ALT_STARTS`) names the pair at the floor.
+    #[test]
+    fn a_degradation_beside_a_maxwell_branch_is_named_as_the_pair() {
+        use cablab_diagnose::{diagnose, Context, DiagnoseOptions};
+        let truth = [Effect::StiffnessDegradation, Effect::Viscoelasticity];
+        for (noise, layout) in [(0.003, Layout::BluehillCsv), (0.01, Layout::TestXpert)] {
+            let kind = TestKind::Torsion;
+            let mut c = generate_set_at(kind, &truth, noise, 2, layout, sample_rate(kind)).unwrap();
+            crate::blind::through_readers(&mut c).unwrap();
+            let d = diagnose(Context::project(), &c.tests, &DiagnoseOptions::default()).unwrap();
+            let v = &d.verdict;
+            let mut named = v.effects.clone();
+            named.sort();
+            let mut want = truth.to_vec();
+            want.sort();
+            assert_eq!(named, want, "{}: {:?}", c.name, v.effects);
+            assert!(v.gap_after_rel <= 1.5 * v.noise_rel, "{}: {v:?}", c.name);
+        }
+    }
+
     /// Uniform kinds: C(7,2) = 21 pairs less piecewise elasticity with kinematic hardening and
     /// with stiffness degradation; three-point (no kinematic hardening, support friction added):
     /// C(7,2) = 21 less piecewise elasticity with stiffness degradation.
