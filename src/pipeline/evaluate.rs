@@ -155,10 +155,30 @@ pub struct TestHeader {
     pub specimen_id: Option<String>,
     /// Operator / tester.
     pub operator: Option<String>,
-    /// Test date (and time) as written.
+    /// Test date (and time) as written; a spreadsheet serial date (testXpert) read as a calendar
+    /// date beside the serial ([`readable_date`]).
     pub date: Option<String>,
     /// Machine or load cell.
     pub machine: Option<String>,
+}
+
+/// A date as a reader expects it: an OLE Automation / spreadsheet serial date (days since
+/// 1899-12-30, the fraction the time of day; testXpert writes `Datum/Uhrzeit 43817,4751`) as
+/// `2019-12-18 11:24 (serial 43817,4751)`; anything else as written. Serials are recognised only
+/// between 20000 and 80000 (1954–2119), so a year or a day count is not taken for one.
+pub fn readable_date(written: &str) -> String {
+    let v: Option<f64> = written.trim().replace(',', ".").parse().ok();
+    let Some(v) = v.filter(|v| (20_000.0..80_000.0).contains(v)) else {
+        return written.to_string();
+    };
+    let epoch = chrono::NaiveDate::from_ymd_opt(1899, 12, 30)
+        .and_then(|d| d.and_hms_opt(0, 0, 0))
+        .expect("a valid date");
+    let secs = (v * 86_400.0).round() as i64;
+    match epoch.checked_add_signed(chrono::TimeDelta::seconds(secs)) {
+        Some(t) => format!("{} (serial {})", t.format("%Y-%m-%d %H:%M"), written.trim()),
+        None => written.to_string(),
+    }
 }
 
 impl TestHeader {
@@ -186,7 +206,8 @@ impl TestHeader {
                 "prüfdatum",
                 "datum/uhrzeit",
                 "date/time",
-            ]),
+            ])
+            .map(|d| readable_date(&d)),
             machine: find(&[
                 "machine",
                 "maschinendaten",
@@ -972,6 +993,24 @@ mod tests {
         assert_eq!(h.date.as_deref(), Some("16.05.2019"));
         assert_eq!(h.machine.as_deref(), Some("virtual machine"));
         assert_eq!(TestHeader::from_metadata(None, &[]), TestHeader::default());
+    }
+
+    /// testXpert's `Datum/Uhrzeit` is a spreadsheet serial: 43817.4751 days after 1899-12-30 is
+    /// 2019-12-18 11:24:08.6 (Python's datetime gives the same); dates as text stay as written.
+    #[test]
+    fn serial_dates_are_read_as_calendar_dates() {
+        assert_eq!(
+            readable_date("43817,4751"),
+            "2019-12-18 11:24 (serial 43817,4751)"
+        );
+        assert_eq!(
+            readable_date("43665.4246"),
+            "2019-07-19 10:11 (serial 43665.4246)"
+        );
+        assert_eq!(readable_date("25569"), "1970-01-01 00:00 (serial 25569)");
+        for kept in ["16.05.2019", "2019", "12345", "2019-05-16 10:00", "1e9"] {
+            assert_eq!(readable_date(kept), kept);
+        }
     }
 
     #[test]
