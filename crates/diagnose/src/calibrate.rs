@@ -675,8 +675,15 @@ pub fn fit_coarse(
         // may end a little off the full problem's optimum, and a nested start (the special
         // case's optimum) must stay a floor the fit cannot end above. Those far above the best
         // end on the decimation are not scored (they cannot be the best on every sample).
+        // The last start itself (the nested start when the caller warm-starts: the special
+        // case's optimum) is always scored: a coarse model that is not the full one (the rod's
+        // 10-element descent model against the full rod) can rank it far above ends that only
+        // fit the coarse model's own discretisation, and pruning it let nested candidates end
+        // worse than the baseline they contain.
         let best_coarse = runs.iter().map(|r| r.cost).fold(f64::INFINITY, f64::min);
-        let worth = |c: f64| c <= PRUNE_FACTOR * best_coarse + COST_TIE;
+        let floor_start = 2 * starts.len() - 1;
+        let worth =
+            |i: usize, c: f64| i == floor_start || c <= PRUNE_FACTOR * best_coarse + COST_TIE;
         runs.extend(starts.iter().zip(&descents).map(|(p, d)| Run {
             params: p.clone(),
             cost: d.1,
@@ -685,8 +692,9 @@ pub fn fit_coarse(
         }));
         runs = runs
             .into_par_iter()
-            .map(|run| {
-                if !worth(run.cost) {
+            .enumerate()
+            .map(|(i, run)| {
+                if !worth(i, run.cost) {
                     return Run {
                         cost: f64::INFINITY,
                         residuals: None,
@@ -993,6 +1001,62 @@ mod tests {
                 ParamSpec::linear("b", -10.0, 10.0, 0.0),
             ],
         }
+    }
+
+    /// [`Relax`] with its time constant misrepresented by a factor: a coarse model that is not
+    /// the full one (as the rod's 10-element descent model is not the full rod).
+    struct Distorted(Relax, f64);
+    impl Forward for Distorted {
+        fn specs(&self) -> &[ParamSpec] {
+            self.0.specs()
+        }
+        fn n_tests(&self) -> usize {
+            1
+        }
+        fn n_samples(&self, i: usize) -> usize {
+            self.0.n_samples(i)
+        }
+        fn simulate(&self, p: &[f64], i: usize, out: &mut [f64]) -> Result<(), String> {
+            self.0.simulate(&[p[0], p[1] * self.1, p[2]], i, out)
+        }
+    }
+
+    /// The last start (a nested start: the special case's optimum) is scored on every sample
+    /// whatever its cost on the coarse problem: with a coarse model biased by 30 % in τ, the
+    /// nested start sits far above the coarse ends there, yet it is the best point of the full
+    /// problem, and the fit (no polish, so only the scoring decides) must not end above it.
+    #[test]
+    fn the_nested_start_is_a_floor_even_when_the_coarse_model_ranks_it_low() {
+        let m = relax();
+        let truth = [3.0, 0.7, 0.2];
+        let mut clean = vec![0.0; m.t.len()];
+        m.simulate(&truth, 0, &mut clean).unwrap();
+        let sigma = 0.003;
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
+        let nd = Normal::new(0.0, sigma).unwrap();
+        let y: Vec<f64> = clean.iter().map(|c| c + nd.sample(&mut rng)).collect();
+        let data = FitData {
+            measured: vec![&y],
+            weight: vec![1.0 / sigma],
+            fit_idx: vec![(0..y.len()).collect()],
+            free_offset: false,
+        };
+        let coarse = Distorted(relax(), 1.3);
+        let nested = truth.to_vec();
+        let at_nested = residuals(&m, &data, &nested).unwrap().norm_squared();
+        let opts = FitOptions {
+            polish_jacobians: 0,
+            ..FitOptions::default()
+        };
+        let starts = [vec![1.0, 5.0, 0.0], nested];
+        let f = fit_coarse(&m, &data, Some((&coarse, &data)), &starts, &opts);
+        assert!(
+            f.cost <= at_nested + COST_TIE,
+            "ended at χ² {} above the nested start's {at_nested} ({:?})",
+            f.cost,
+            f.params
+        );
+        assert!((f.params[1] - 0.7).abs() < 0.01, "{:?}", f.params);
     }
 
     #[test]
