@@ -710,6 +710,29 @@ mod tests {
         );
     }
 
+    /// The triangle history in tension scaled to ±0.05 mm over 32 mm (about twice the yield
+    /// strain either way, a hold and a reversal), `law` at its registry example parameters as
+    /// the truth, plus a deterministic pseudo-noise of ±0.05 N.
+    fn past_yield(ctx: Context, law: &str) -> DiagTest {
+        let mut t = triangle();
+        t.labels.clear();
+        t.control.iter_mut().for_each(|c| *c *= 0.05);
+        let model = ModelSpec::law(law);
+        let one = [t.clone()];
+        let fwd = ModelForward::new(&one, &model, ctx.catalog, ctx.rod).unwrap();
+        let example = cablab_laws::example_params(TestKind::Tension, law, 7.96e4, 54.0).unwrap();
+        let truth: Vec<f64> = fwd
+            .specs()
+            .iter()
+            .map(|s| example.get(&s.name).copied().unwrap_or(s.initial))
+            .collect();
+        t.response = fwd.simulate_all(&truth).unwrap().remove(0);
+        for (i, r) in t.response.iter_mut().enumerate() {
+            *r += 0.05 * ((i * 7919 % 13) as f64 - 6.0) / 6.0;
+        }
+        t
+    }
+
     #[test]
     fn secant_jacobians_reach_the_finite_difference_optimum_within_its_uncertainty() {
         // Each law of the registry but the piecewise ones, in tension past yield (the triangle
@@ -725,25 +748,8 @@ mod tests {
             "viscoelasticity",
             "friction_hysteresis",
         ] {
-            let mut t = triangle();
-            t.labels.clear();
-            // ±0.05 mm over 32 mm: about twice the yield strain either way.
-            t.control.iter_mut().for_each(|c| *c *= 0.05);
             let model = ModelSpec::law(law);
-            let one = [t.clone()];
-            let fwd = ModelForward::new(&one, &model, ctx.catalog, ctx.rod).unwrap();
-            let example =
-                cablab_laws::example_params(TestKind::Tension, law, 7.96e4, 54.0).unwrap();
-            let truth: Vec<f64> = fwd
-                .specs()
-                .iter()
-                .map(|s| example.get(&s.name).copied().unwrap_or(s.initial))
-                .collect();
-            t.response = fwd.simulate_all(&truth).unwrap().remove(0);
-            for (i, r) in t.response.iter_mut().enumerate() {
-                *r += 0.05 * ((i * 7919 % 13) as f64 - 6.0) / 6.0;
-            }
-            let tests = [t];
+            let tests = [past_yield(ctx, law)];
             let opts = |secant| CalibrateOptions {
                 noise: Some(vec![0.05]),
                 fit: FitOptions {
@@ -898,24 +904,8 @@ mod tests {
             "stiffness_degradation",
             "viscoelasticity",
         ] {
-            let mut t = triangle();
-            t.labels.clear();
-            t.control.iter_mut().for_each(|c| *c *= 0.05);
             let model = ModelSpec::law(law);
-            let one = [t.clone()];
-            let fwd = ModelForward::new(&one, &model, ctx.catalog, ctx.rod).unwrap();
-            let example =
-                cablab_laws::example_params(TestKind::Tension, law, 7.96e4, 54.0).unwrap();
-            let truth: Vec<f64> = fwd
-                .specs()
-                .iter()
-                .map(|s| example.get(&s.name).copied().unwrap_or(s.initial))
-                .collect();
-            t.response = fwd.simulate_all(&truth).unwrap().remove(0);
-            for (i, r) in t.response.iter_mut().enumerate() {
-                *r += 0.05 * ((i * 7919 % 13) as f64 - 6.0) / 6.0;
-            }
-            let tests = [t];
+            let tests = [past_yield(ctx, law)];
             let opts = |sensitivities| CalibrateOptions {
                 noise: Some(vec![0.05]),
                 fit: FitOptions {
