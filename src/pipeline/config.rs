@@ -289,6 +289,11 @@ pub struct DiagnosisSettings {
     /// Kinds to diagnose (all when absent).
     #[serde(default)]
     pub kinds: Option<Vec<String>>,
+    /// Calibrate the candidates even where the baseline already fits to the noise floor (the
+    /// verdict is `none` then whatever they give). Not serialised when false, so pipelines and
+    /// cache keys written before it existed stay the same.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub all_candidates: bool,
 }
 
 impl Default for DiagnosisSettings {
@@ -298,6 +303,7 @@ impl Default for DiagnosisSettings {
             candidates: None,
             ladder: false,
             kinds: None,
+            all_candidates: false,
         }
     }
 }

@@ -697,6 +697,7 @@ fn model_part(
             baseline: c.file.model.baseline.clone(),
             candidates: c.candidates.clone(),
             ladder: c.file.diagnosis.ladder,
+            all_candidates: c.file.diagnosis.all_candidates,
             ..Default::default()
         };
         let d = cablab_diagnose::diagnose(ctx, tests, &dopts).context("diagnosing the gap")?;
@@ -871,6 +872,7 @@ pub fn words(d: &cablab_diagnose::Diagnosis) -> String {
             .collect(),
         noise_rel: d.verdict.noise_rel,
         top_location: top,
+        candidates_skipped: d.candidates_skipped.is_some(),
     })
 }
 

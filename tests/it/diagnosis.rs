@@ -126,8 +126,24 @@ fn finds_sensor_drift() {
 
 #[test]
 fn diagnosis_json_has_the_contract_keys() {
-    let d = verdict_of(&case(Effect::None, 3));
+    let c = case(Effect::None, 3);
+    // A campaign's default: the null case's baseline fits to the floor, no candidate is
+    // calibrated, and the JSON says why.
+    let fast = serde_json::to_value(verdict_of(&c)).unwrap();
+    assert_eq!(fast["effects"], serde_json::json!([]));
+    assert!(fast["candidates_skipped"]
+        .as_str()
+        .is_some_and(|w| w.contains("noise floor")));
+    assert_eq!(fast["verdict"]["effect"], "none");
+    // `cablab diagnose`'s: every candidate, with the contract's keys.
+    let all = DiagnoseOptions {
+        all_candidates: true,
+        ..Default::default()
+    };
+    let d = diagnose(ctx(), &c.tests, &all).unwrap();
     let v = serde_json::to_value(&d).unwrap();
+    assert!(v.get("candidates_skipped").is_none());
+    assert_eq!(v["verdict"], fast["verdict"]);
     for k in ["law", "params", "gap_rel"] {
         assert!(v["baseline"].get(k).is_some(), "baseline.{k}");
     }

@@ -243,6 +243,10 @@ pub struct Diagnosis {
     pub holdout: HoldoutSummary,
     /// Candidates that could not be fitted (model not in the registry, simulation failed).
     pub failed: Vec<Failed>,
+    /// Why no candidate was calibrated (`effects` is then empty): the baseline already fits to
+    /// the noise floor ([`DiagnoseOptions::all_candidates`]). Absent when they were.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub candidates_skipped: Option<String>,
 }
 
 /// A candidate that could not be scored, and why.
@@ -326,7 +330,20 @@ pub fn diagnose(
         &resolution,
         &base_opts,
     );
+    // The baseline already fits the held-out data to the noise floor: the verdict is `none`
+    // whatever a candidate gives (`choose`), so the candidates are not calibrated unless asked.
+    let base_gap_noise = (base.rss_noise / base.n_held.max(1) as f64).sqrt();
+    let candidates_skipped =
+        (!opts.all_candidates && base_gap_noise <= NOISE_FLOOR_FIT).then(|| {
+            format!(
+            "the baseline fits the held-out data to the noise floor ({base_gap_noise:.2} × the \
+             noise, ≤ {NOISE_FLOOR_FIT}): no effect can explain a gap that is not there, so the \
+             candidates were not calibrated (all_candidates = true under [diagnosis] \
+             calibrates them anyway; `cablab diagnose` always does)"
+        )
+        });
     let cands: Vec<Effect> = match &opts.candidates {
+        _ if candidates_skipped.is_some() => vec![],
         Some(c) => c
             .iter()
             .copied()
@@ -593,6 +610,7 @@ pub fn diagnose(
             n_train,
         },
         failed,
+        candidates_skipped,
     })
 }
 

@@ -69,6 +69,12 @@ pub struct DiagnoseOptions {
     pub free_offset: bool,
     /// Try the baseline's elastic limit (yield out of the data's reach, see `elastic_limit`).
     pub elastic_limit: bool,
+    /// Calibrate the candidate effects even when the baseline already fits the held-out data to
+    /// the noise floor ([`crate::diagnose::NOISE_FLOOR_FIT`]). Off by default: the verdict is then `none`
+    /// whatever the candidates give (no effect can explain a gap that is not there), so their
+    /// calibrations (most of a diagnosis' cost) would only fill the table of candidates.
+    /// Campaigns use the default (`[diagnosis] all_candidates`); `cablab diagnose` sets it.
+    pub all_candidates: bool,
 }
 
 impl Default for DiagnoseOptions {
@@ -85,6 +91,7 @@ impl Default for DiagnoseOptions {
             noise: None,
             free_offset: true,
             elastic_limit: true,
+            all_candidates: false,
         }
     }
 }

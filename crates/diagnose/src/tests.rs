@@ -291,7 +291,13 @@ fn demo_elastic_tension() -> DiagTest {
 fn elastic_range_tension_with_encoder_rounding_gives_none_and_no_yield() {
     let t = demo_elastic_tension();
     let peak = t.response_scale();
-    let d = diagnose(ctx(), &[t], &DiagnoseOptions::default()).unwrap();
+    // Every candidate calibrated, as the resolution rule is what this checks (by default they
+    // are skipped where the baseline fits to the noise floor).
+    let all = DiagnoseOptions {
+        all_candidates: true,
+        ..Default::default()
+    };
+    let d = diagnose(ctx(), &[t], &all).unwrap();
     let table: Vec<_> = d
         .effects
         .iter()
@@ -662,4 +668,61 @@ fn a_named_effect_that_leaves_a_gap_says_part_is_unexplained() {
     let d = make(0.0);
     assert_eq!(d.verdict.effects, [Effect::SensorDrift]);
     assert!(d.verdict.remainder.is_none(), "{:?}", d.verdict.remainder);
+}
+
+#[test]
+fn candidates_are_skipped_where_the_baseline_fits_to_the_noise_floor_and_nothing_else_changes() {
+    // A null case (the elastoplastic truth at 0.3 % noise): the baseline fits to the floor, so
+    // the verdict is `none` whatever the candidates give. By default they are not calibrated;
+    // asked for, they are, and the verdict, the baseline and the gap are the same.
+    let t = tension(
+        "elastoplastic",
+        &TRUTH,
+        None,
+        Artefacts {
+            noise_rel: 0.003,
+            ..Artefacts::default()
+        },
+    );
+    let fast = diagnose(ctx(), std::slice::from_ref(&t), &DiagnoseOptions::default()).unwrap();
+    let g0 = fast.verdict.gap_rel / fast.verdict.noise_rel;
+    assert!(
+        g0 <= crate::diagnose::NOISE_FLOOR_FIT,
+        "null case at {g0} × the floor"
+    );
+    assert_eq!(fast.verdict.effect, Effect::None);
+    assert!(fast.effects.is_empty(), "{:?}", fast.effects);
+    let why = fast
+        .candidates_skipped
+        .as_deref()
+        .expect("skipped, with why");
+    assert!(
+        why.contains("noise floor") && why.contains("all_candidates"),
+        "{why}"
+    );
+    let all = DiagnoseOptions {
+        all_candidates: true,
+        ..Default::default()
+    };
+    let full = diagnose(ctx(), &[t], &all).unwrap();
+    assert!(full.candidates_skipped.is_none());
+    assert!(full.effects.len() >= 5, "{:?}", full.effects);
+    assert_eq!(full.verdict.effect, Effect::None);
+    assert!(full.verdict.effects.is_empty());
+    assert_eq!(full.verdict.gap_rel, fast.verdict.gap_rel);
+    assert_eq!(full.baseline.params.0, fast.baseline.params.0);
+    // Where the baseline does not fit to the floor, nothing is skipped (kinematic hardening
+    // withheld: the verdict needs the candidates).
+    let kh = tension(
+        "elastoplastic",
+        &TRUTH,
+        Some(("kinematic_hardening", vec![("H_kin", 8e3)])),
+        Artefacts {
+            noise_rel: 0.003,
+            ..Artefacts::default()
+        },
+    );
+    let d = diagnose(ctx(), &[kh], &DiagnoseOptions::default()).unwrap();
+    assert!(d.candidates_skipped.is_none());
+    assert_eq!(d.verdict.effect, Effect::KinematicHardening);
 }

@@ -26,6 +26,9 @@ pub struct DiagnosisSummary {
     pub noise_rel: f64,
     /// The location with the largest residual share and that share (`cycle 3 unloading`, 0.41).
     pub top_location: Option<(String, f64)>,
+    /// The candidates were not calibrated: the baseline already fits to the noise floor.
+    #[serde(default)]
+    pub candidates_skipped: bool,
 }
 
 /// A held-out gap within this factor of the noise floor counts as "at the noise floor" in words.
@@ -90,7 +93,15 @@ pub fn diagnosis_words(s: &DiagnosisSummary) -> String {
              is needed to explain these tests.",
             fmt_percent(s.gap_before_rel, 1),
             fmt_percent(s.noise_rel, 1)
-        ))
+        ));
+            if s.candidates_skipped {
+                paras.push(
+                    "The candidate effects were not calibrated: none could be told from the \
+                     noise (`all_candidates = true` under [diagnosis] calibrates them anyway; \
+                     `cablab diagnose` always does)."
+                        .to_string(),
+                );
+            }
         }
         ("unexplained", _) => paras.push(format!(
             "Which: unexplained. The {baseline}'s held-out gap is {} of the largest measured \
@@ -226,6 +237,31 @@ mod tests {
     }
 
     #[test]
+    fn a_null_case_whose_candidates_were_skipped_says_so() {
+        let s = DiagnosisSummary {
+            baseline_law: "elastoplastic".into(),
+            gap_before_rel: 0.009,
+            verdict_effect: "none".into(),
+            noise_rel: 0.008,
+            candidates_skipped: true,
+            ..Default::default()
+        };
+        let w = diagnosis_words(&s);
+        assert!(
+            w.starts_with("Which: none. The elastoplastic baseline already fits"),
+            "{w}"
+        );
+        assert!(
+            w.ends_with(
+                "The candidate effects were not calibrated: none could be told from the noise \
+                 (`all_candidates = true` under [diagnosis] calibrates them anyway; `cablab \
+                 diagnose` always does)."
+            ),
+            "{w}"
+        );
+    }
+
+    #[test]
     fn remaining_gap_is_called_out() {
         let s = DiagnosisSummary {
             baseline_law: "elastoplastic".into(),
@@ -238,6 +274,7 @@ mod tests {
             ],
             noise_rel: 0.01,
             top_location: None,
+            candidates_skipped: false,
         };
         let w = diagnosis_words(&s);
         assert!(
