@@ -853,7 +853,7 @@ fn a_candidate_at_its_special_case_ties_the_baseline_and_is_not_chosen() {
     use crate::floors::noise_floor;
     use crate::holdout::{drop_glitches, split};
     use crate::model::ModelForward;
-    use crate::select::{applicable, choose, fit_failure, score};
+    use crate::select::{applicable, choose, fit_failure, ic_tolerance, score, simpler};
     let t = tension(
         "elastoplastic",
         &TRUTH,
@@ -932,6 +932,26 @@ fn a_candidate_at_its_special_case_ties_the_baseline_and_is_not_chosen() {
         );
         let pick = choose(&base, std::slice::from_ref(&c), &[true]);
         assert_eq!(pick.effect, Effect::None, "{e:?}");
+        // Were it not filtered out (it explains none of the excess gap), the information
+        // criterion could not prefer it either: its effective parameters are the baseline's
+        // (the extension's sit on a bound or have no influence), so the two criteria tie within
+        // the tolerance and the simpler model, the baseline (fewer nominal parameters), comes
+        // first.
+        let (ic_b, ic_c) = (pick.ic_of(&base), pick.ic_of(&c));
+        assert!(
+            (ic_c - ic_b).abs() <= ic_tolerance(pick.n_eff),
+            "{e:?}: IC {ic_c} vs {ic_b}"
+        );
+        assert_eq!(
+            c.cal.effective_params(),
+            base.cal.effective_params(),
+            "{e:?}"
+        );
+        assert_eq!(
+            simpler(&base, ic_b, &c, ic_c),
+            std::cmp::Ordering::Less,
+            "{e:?}"
+        );
     }
     assert_eq!(checked, 5, "extensions checked");
 }
