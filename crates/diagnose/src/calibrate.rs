@@ -555,9 +555,9 @@ pub const COST_TIE: f64 = 1.0;
 /// and compute uncertainties there. "Best" is the earliest start that ends within a tie
 /// ([`COST_TIE`]) of the lowest cost: ends closer than that are not told apart by the data, and
 /// the caller orders its starts by preference (the data-informed or warm point first; a nested
-/// start, which only guarantees the special case, last).
+/// start, near the special case, last; the exact special case is [`fit_coarse`]'s floor).
 pub fn fit(fwd: &dyn Forward, data: &FitData, starts: &[Vec<f64>], opts: &FitOptions) -> Fit {
-    fit_coarse(fwd, data, None, starts, opts)
+    fit_coarse(fwd, data, None, starts, None, opts)
 }
 
 /// A start or end of a descent whose cost on the coarse problem exceeds this multiple of the best
@@ -605,11 +605,19 @@ pub const POLISH_CONVERGED: f64 = 0.01;
 /// coarse problem), the best is polished on `data` ([`POLISH_ITERATIONS`]) and its
 /// uncertainties are computed on `data`. Cost, `n_fit` and residual statistics are always those
 /// of `data`, so fits with and without a coarse problem compare.
+///
+/// `floor`: a point the fit cannot end above (the exact special case of a nested model,
+/// [`crate::calibration`]'s nested point, its extension switched off on a bound where need be).
+/// It is not descended from (on a bound the map of the bounds has no gradient); it is scored on
+/// `data` after every end and start, so it is kept (and, after a coarse descent, polished) only
+/// when none of them ends within a tie of it or below: whatever the descents do on the coarse
+/// problem, the cost is at most the floor's.
 pub fn fit_coarse(
     fwd: &dyn Forward,
     data: &FitData,
     coarse: Option<(&dyn Forward, &FitData)>,
     starts: &[Vec<f64>],
+    floor: Option<&[f64]>,
     opts: &FitOptions,
 ) -> Fit {
     let specs = fwd.specs();
@@ -710,6 +718,16 @@ pub fn fit_coarse(
                 }
             })
             .collect();
+    }
+    if let Some(p) = floor {
+        // After every end and start: ties go to them.
+        let r = residuals(fwd, data, p);
+        runs.push(Run {
+            params: p.to_vec(),
+            cost: r.as_ref().map_or(f64::INFINITY, |r| r.norm_squared()),
+            evaluations: 1,
+            residuals: r,
+        });
     }
     let mut evaluations = runs.iter().map(|r| r.evaluations).sum();
     let lowest = runs.iter().map(|r| r.cost).fold(f64::INFINITY, f64::min);
@@ -1049,7 +1067,7 @@ mod tests {
             ..FitOptions::default()
         };
         let starts = [vec![1.0, 5.0, 0.0], nested];
-        let f = fit_coarse(&m, &data, Some((&coarse, &data)), &starts, &opts);
+        let f = fit_coarse(&m, &data, Some((&coarse, &data)), &starts, None, &opts);
         assert!(
             f.cost <= at_nested + COST_TIE,
             "ended at χ² {} above the nested start's {at_nested} ({:?})",
@@ -1057,6 +1075,59 @@ mod tests {
             f.params
         );
         assert!((f.params[1] - 0.7).abs() < 0.01, "{:?}", f.params);
+    }
+
+    /// The floor (the exact special case of a nested model, on a bound of its extension's
+    /// parameter) is kept when every descent ends above it: here no start is near it and the
+    /// coarse model misplaces τ by 30 %, so the descents end at the coarse model's optimum, many
+    /// noise units above the floor on the full problem. With the floor the fit ends at or below
+    /// it, polished or not (the polish starts on the bound, where the map of the bounds has no
+    /// gradient in that parameter); without it, above.
+    #[test]
+    fn a_fit_never_ends_above_its_floor() {
+        let mut m = relax();
+        // b's range starts at the truth's value: the floor sits on its lower bound.
+        m.specs[2] = ParamSpec::linear("b", 0.2, 10.0, 1.0);
+        let truth = [3.0, 0.7, 0.2];
+        let mut clean = vec![0.0; m.t.len()];
+        m.simulate(&truth, 0, &mut clean).unwrap();
+        let sigma = 0.003;
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
+        let nd = Normal::new(0.0, sigma).unwrap();
+        let y: Vec<f64> = clean.iter().map(|c| c + nd.sample(&mut rng)).collect();
+        let data = FitData {
+            measured: vec![&y],
+            weight: vec![1.0 / sigma],
+            fit_idx: vec![(0..y.len()).collect()],
+            free_offset: false,
+        };
+        let mut coarse = Distorted(relax(), 1.3);
+        coarse.0.specs = m.specs.clone();
+        let at_floor = residuals(&m, &data, &truth).unwrap().norm_squared();
+        let starts = [vec![1.0, 5.0, 1.0], vec![50.0, 0.01, 5.0]];
+        for polish_jacobians in [0, POLISH_JACOBIANS] {
+            let opts = FitOptions {
+                polish_jacobians,
+                ..FitOptions::default()
+            };
+            let run = |floor: Option<&[f64]>| {
+                fit_coarse(&m, &data, Some((&coarse, &data)), &starts, floor, &opts)
+            };
+            let without = run(None);
+            assert!(
+                without.cost > at_floor + 10.0,
+                "the descents should end above the floor: {} vs {at_floor}",
+                without.cost
+            );
+            let with = run(Some(&truth));
+            assert!(
+                with.cost <= at_floor,
+                "polish {polish_jacobians}: ended at χ² {} above the floor's {at_floor} ({:?})",
+                with.cost,
+                with.params
+            );
+            assert_eq!(with.at_bound[2], Some("lower"), "{:?}", with.params);
+        }
     }
 
     #[test]

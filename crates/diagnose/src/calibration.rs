@@ -278,7 +278,9 @@ pub fn calibrate(
         && 2 * n_kept < n_replayed
         && coarse_data.n() > 2 * fwd.specs().len();
     let coarse = use_coarse.then_some((coarse_fwd, &coarse_data));
-    let mut f = calibrate::fit_coarse(fwd, &data, coarse, &starts, &opts.fit);
+    // The exact special case of a warm-started (nested) model: a floor the fit cannot end above.
+    let floor = opts.warm.as_ref().map(|w| nested_point(fwd.specs(), w));
+    let mut f = calibrate::fit_coarse(fwd, &data, coarse, &starts, floor.as_deref(), &opts.fit);
     if let Some(p) = &pinned {
         // Back to the whole model: pinned parameters carry no standard error; one pinned at a
         // bound is reported there.
@@ -471,12 +473,14 @@ fn pick(test: &DiagTest, idx: &[usize]) -> DiagTest {
 ///
 /// Nested start. A warm point is a fitted special case of the model (the baseline, or the model
 /// one effect smaller): one more start puts the parameters it does not name
-/// where their effect is switched off ([`switched_off`]; 0.1 % off the bounds, where the gradient
-/// is still √0.001 ≈ 3 % of its largest), so that start *is* the special case and
-/// Levenberg–Marquardt, which never increases the cost, cannot end worse than it. It comes last
-/// and does not replace the others: a yield strength switched off is out of the data's reach and
-/// has no gradient, and where the other starts end as well (ties go to the earlier start) their
-/// result is kept.
+/// where their effect is switched off ([`switched_off`]) but 0.1 % off the bounds, where the
+/// gradient is still √0.001 ≈ 3 % of its largest, so that a descent can leave the special case.
+/// That start is only near the special case (a Maxwell or kinematic hardening stiffness, a
+/// compliance at 0.1 % of its range changes the χ²); the exact special case ([`nested_point`])
+/// is the fit's floor, scored on every fitted sample and kept when no descent ends below it. The
+/// start comes last and does not replace the others: a yield strength switched off is out of
+/// the data's reach and has no gradient, and where the other starts end as well (ties go to the
+/// earlier start) their result is kept.
 fn make_starts(specs: &[ParamSpec], warm: Option<&ParamMap>, n: usize, seed: u64) -> Vec<Vec<f64>> {
     let inside = |s: &ParamSpec, p: f64| s.at_fraction(s.fraction(p).clamp(0.02, 0.98));
     let near = |s: &ParamSpec, p: f64| s.at_fraction(s.fraction(p).clamp(1e-3, 1.0 - 1e-3));
@@ -516,12 +520,27 @@ fn make_starts(specs: &[ParamSpec], warm: Option<&ParamMap>, n: usize, seed: u64
         k += 1;
     }
     if let Some(w) = warm {
-        let nested: Vec<f64> = specs.iter().map(|s| near(s, switched_off(s, w))).collect();
+        let nested: Vec<f64> = nested_point(specs, w)
+            .iter()
+            .zip(specs)
+            .map(|(&p, s)| near(s, p))
+            .collect();
         if nested != first {
             out.push(nested);
         }
     }
     out
+}
+
+/// The nested point of a model warm-started from its special case `warm`: every parameter at
+/// [`switched_off`], exactly (on a bound where that is where the effect vanishes), so that the
+/// model there *is* the special case. The fit scores it on every fitted sample and keeps it
+/// when no descent ends below it ([`calibrate::fit_coarse`]'s floor).
+pub(crate) fn nested_point(specs: &[ParamSpec], warm: &ParamMap) -> Vec<f64> {
+    specs
+        .iter()
+        .map(|s| switched_off(s, warm).clamp(s.lower, s.upper))
+        .collect()
 }
 
 /// The value at which a parameter of an extended model reproduces its special case `warm` (the

@@ -386,7 +386,8 @@ pub(crate) fn choose(base: &Scored, scored: &[Scored], resolved: &[bool]) -> Cho
 /// Why a candidate's calibration counts as failed, if it does: it ends worse on the training
 /// samples (the cost the fit minimises) than the baseline by more than a part in 10³ (plus one
 /// noise unit squared). An extension that contains the baseline as its special case starts from
-/// it ([nested starts](crate::calibration)) and cannot end there; one that replaces the
+/// it ([nested starts](crate::calibration)) and cannot end above it (the exact special case is
+/// its fit's floor, [`crate::calibrate::fit_coarse`]); one that replaces the
 /// baseline's law (piecewise elasticity) can, and then does not follow the data as well as the
 /// baseline. Either way it is no explanation: it takes no part in the verdict and is shown apart.
 pub(crate) fn fit_failure(base: &Scored, s: &Scored) -> Option<String> {
