@@ -109,6 +109,11 @@ pub struct FitOptions {
     /// replay with the derivatives propagated through the state recursion instead of one replay
     /// per parameter) wherever every test has them (default); finite differences otherwise.
     pub sensitivities: bool,
+    /// The same for the descents from the starts (with `sensitivities`; default true): off,
+    /// they take finite differences and only the polish and the uncertainties the
+    /// sensitivities. [`crate::calibration::calibrate`] turns it off for models with friction
+    /// (see there).
+    pub descent_sensitivities: bool,
 }
 
 impl Default for FitOptions {
@@ -122,6 +127,7 @@ impl Default for FitOptions {
             per_branch: 64,
             polish_jacobians: POLISH_JACOBIANS,
             sensitivities: true,
+            descent_sensitivities: true,
         }
     }
 }
@@ -641,6 +647,10 @@ pub fn fit_coarse(
     } else {
         (0..starts.len()).collect()
     };
+    let descent_opts = FitOptions {
+        sensitivities: opts.sensitivities && opts.descent_sensitivities,
+        ..*opts
+    };
     let from_start = |i: usize, stop: Stop| {
         descend(
             cf,
@@ -650,7 +660,7 @@ pub fn fit_coarse(
             iterations,
             stop,
             opts.secant,
-            opts,
+            &descent_opts,
         )
     };
     let first: Vec<(Run, f64)> = informed

@@ -12,7 +12,7 @@
 //! that a calibration fits how many distinct levels slip (a cable's wire layers) as it fits χ.
 
 use crate::channel::{eye, norm1, Channel};
-use crate::law::{ComponentStep, Law, LawResponse, Strain6, Stress6, Tangent6};
+use crate::law::{ComponentStep, Law, LawResponse, SensStep, Strain6, Stress6, Tangent6};
 use nalgebra::{Matrix2, Vector2};
 
 /// One Jenkins element.
@@ -24,6 +24,30 @@ pub struct JenkinsElement {
     pub threshold: f64,
 }
 
+/// What [`IwanElements::slip_levels`] builds the elements from: the registry's friction
+/// parameters (`EI_f`/`GJ_f`/`EA_f`, `M_f`/`F_f`, `n_f`, `chi_f`), in that order.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct IwanParams {
+    /// Total stiffness K of the elements.
+    pub total_stiffness: f64,
+    /// Friction strength σ_f = Σ s_i.
+    pub max_friction: f64,
+    /// Slip levels ν (real; below 1 taken as 1).
+    pub levels: f64,
+    /// Exponent χ of the density of slip strains.
+    pub chi: f64,
+}
+
+/// The derivatives of one element with respect to the four [`IwanParams`] (K, σ_f, ν, χ):
+/// of its stiffness k_i, its threshold s_i and its slip strain s_i/k_i (kept apart from the
+/// first two, so that a level whose share tends to 0 differentiates without cancellation).
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct ElementRates {
+    dk: [f64; 4],
+    ds: [f64; 4],
+    dslip: [f64; 4],
+}
+
 /// Parallel Jenkins elements on one channel.
 #[derive(Debug, Clone, PartialEq)]
 pub struct IwanElements {
@@ -31,6 +55,12 @@ pub struct IwanElements {
     pub channel: Channel,
     /// The elements.
     pub elements: Vec<JenkinsElement>,
+    /// The parameters the elements were built from.
+    pub params: IwanParams,
+    /// Per element, the derivatives of the element with respect to `params`
+    /// ([`IwanElements::slip_levels`]); the sensitivities
+    /// ([`Law::update_component_sens`]) need one per element.
+    rates: Vec<ElementRates>,
 }
 
 impl IwanElements {
@@ -124,7 +154,19 @@ impl IwanElements {
                 threshold: k * eps_f * u,
             })
             .collect();
-        IwanElements { channel, elements }
+        let params = IwanParams {
+            total_stiffness,
+            max_friction,
+            levels,
+            chi,
+        };
+        let rates = element_rates(&params, nu, m, whole, &ku, eps_f);
+        IwanElements {
+            channel,
+            elements,
+            params,
+            rates,
+        }
     }
 
     /// The virgin loading curve σ_b(ε) = Σ sign(ε) min(k_i |ε|, s_i) for scalar strain ε.
@@ -136,6 +178,82 @@ impl IwanElements {
             .sum();
         eps.signum() * sum
     }
+}
+
+/// The derivatives of the elements of [`IwanElements::slip_levels`] (levels `m`, stiffness and
+/// position `ku`, saturation strain `eps_f`) with respect to (K, σ_f, ν, χ). With weights
+/// w_i = k_i/K, S = Σ w_i u_i and ε_f = σ_f/(K S), each element is k_i = K w_i with slip strain
+/// e_i = ε_f u_i and threshold s_i = k_i e_i, so
+///
+/// ∂ε_f = ε_f (∂σ_f/σ_f − ∂K/K − ∂S/S),  ∂e_i = u_i ∂ε_f + ε_f ∂u_i,  ∂s_i = ∂k_i e_i + k_i ∂e_i;
+///
+/// on the quantile levels ∂w_i/∂ν = −1/ν², ∂u_i/∂ν = −q u_i/ν, ∂u_i/∂χ = −q² u_i ln(i/ν)
+/// (q = 1/(χ+1)); the last level of a fractional ν, w_m = (ν − m + 1)/ν at u_m = 1, has
+/// ∂w_m/∂ν = (m − 1)/ν² and does not move. At a whole ν = n the elements have a kink in ν: from
+/// below the last level is that remainder (∂u_n = 0), from above it is the n-th quantile
+/// (∂u_n/∂ν = −q/n) beside a new level of share 0 at u = 1, which adds ∂w = 1/n at the n-th's
+/// slip strain (the same element to first order: both one-sided derivatives have
+/// ∂w_n/∂ν = (n − 1)/n²). The rates there are the mean of the two sides (∂u_n/∂ν = −q/(2n)),
+/// what a central difference sees. ν below 1 is clamped: no rate in ν.
+fn element_rates(
+    p: &IwanParams,
+    nu: f64,
+    m: usize,
+    whole: bool,
+    ku: &[(f64, f64)],
+    eps_f: f64,
+) -> Vec<ElementRates> {
+    let (big_k, chi) = (p.total_stiffness, p.chi);
+    let q = 1.0 / (chi + 1.0);
+    let clamped = p.levels < 1.0;
+    // Weight w_i and the rates ∂w_i/∂ν, ∂u_i/∂ν, ∂u_i/∂χ of each level.
+    let levels: Vec<(f64, f64, f64, f64)> = ku
+        .iter()
+        .enumerate()
+        .map(|(i0, &(_, u))| {
+            let i = i0 + 1;
+            let last = i == m;
+            if last && !whole {
+                let w = (nu - (m - 1) as f64) / nu;
+                (w, (m - 1) as f64 / (nu * nu), 0.0, 0.0)
+            } else {
+                let dw = if last {
+                    (m - 1) as f64 / (nu * nu)
+                } else {
+                    -1.0 / (nu * nu)
+                };
+                let du_nu = if last { -0.5 * q / nu } else { -q * u / nu };
+                let du_chi = -q * q * u * (i as f64 / nu).ln();
+                (1.0 / nu, dw, du_nu, du_chi)
+            }
+        })
+        .collect();
+    let s: f64 = levels.iter().zip(ku).map(|(l, &(_, u))| l.0 * u).sum();
+    let (mut ds_nu, mut ds_chi) = (0.0, 0.0);
+    for (&(w, dw, du_nu, du_chi), &(_, u)) in levels.iter().zip(ku) {
+        ds_nu += dw * u + w * du_nu;
+        ds_chi += w * du_chi;
+    }
+    let nu_on = if clamped { 0.0 } else { 1.0 };
+    // ∂ε_f over (K, σ_f, ν, χ).
+    let d_eps_f = [
+        -eps_f / big_k,
+        1.0 / (big_k * s),
+        -nu_on * eps_f * ds_nu / s,
+        -eps_f * ds_chi / s,
+    ];
+    levels
+        .iter()
+        .zip(ku)
+        .map(|(&(w, dw, du_nu, du_chi), &(k, u))| {
+            let e = eps_f * u;
+            let dk = [w, 0.0, nu_on * big_k * dw, 0.0];
+            let du = [0.0, 0.0, nu_on * du_nu, du_chi];
+            let dslip: [f64; 4] = std::array::from_fn(|j| u * d_eps_f[j] + eps_f * du[j]);
+            let ds = std::array::from_fn(|j| dk[j] * e + k * dslip[j]);
+            ElementRates { dk, ds, dslip }
+        })
+        .collect()
 }
 
 impl Law for IwanElements {
@@ -232,6 +350,93 @@ impl Law for IwanElements {
             }
         }
         (s, c)
+    }
+
+    /// The channel's friction parameters: `S_f`, `Y_f` (e.g. `EI_f`, `M_f`), `n_f`, `chi_f`.
+    fn sens_params(&self, component: usize) -> Option<Vec<String>> {
+        self.sens_count(component)?;
+        let n = crate::registry::names(self.channel);
+        Some(vec![
+            format!("{}_f", n.stiff),
+            format!("{}_f", n.strength),
+            "n_f".into(),
+            "chi_f".into(),
+        ])
+    }
+
+    fn sens_count(&self, component: usize) -> Option<usize> {
+        self.channel.position(component)?;
+        (self.rates.len() == self.elements.len()).then_some(4)
+    }
+
+    /// The scalar path of [`Law::update_component`] differentiated element by element (each
+    /// elastic–perfectly-plastic): sticking, σ_i = k_i (ε − p_i), ∂σ_i = ∂k_i (ε − p_i) +
+    /// k_i (∂ε − ∂p_i), ∂p unchanged; slipping, σ_i = n s_i, ∂σ_i = n ∂s_i, p_i = ε − n s_i/k_i,
+    /// ∂p_i = ∂ε − n ∂(s_i/k_i) (n = ±1). The elements' rates in (K, σ_f, ν, χ) are those of
+    /// their construction (`element_rates`). `None` off the axis (where `update_component` takes
+    /// the vector update).
+    fn update_component_sens(
+        &self,
+        step: ComponentStep,
+        old: &[f64],
+        new: &mut [f64],
+        sens: SensStep<'_>,
+    ) -> Option<(f64, f64)> {
+        self.sens_count(step.component)?;
+        let ch = self.channel;
+        let d = ch.dim();
+        let pos = ch.position(step.component)?;
+        let on_axis = d == 1 || old.iter().skip(1 - pos).step_by(2).all(|&v| v == 0.0);
+        if !on_axis {
+            return None;
+        }
+        let strain = step.strain;
+        let ncol = sens.de.len();
+        let own = sens.first..sens.first + 4;
+        let mut s = 0.0;
+        let mut c = 0.0;
+        for (i, (el, r)) in self.elements.iter().zip(&self.rates).enumerate() {
+            let at = d * i;
+            let p = old[at + pos];
+            let tr = el.stiffness * (strain - p);
+            let ntr = norm1(tr);
+            let row = (at + pos) * ncol..(at + pos + 1) * ncol;
+            let d_old = &sens.d_old[row.clone()];
+            let d_new = &mut sens.d_new[row];
+            if ntr <= el.threshold {
+                new[at + pos] = p;
+                s += tr;
+                c += el.stiffness * 1.0;
+                for (((dn, &dp), &de), ds) in
+                    d_new.iter_mut().zip(d_old).zip(sens.de).zip(&mut *sens.ds)
+                {
+                    *dn = dp;
+                    *ds += el.stiffness * (de - dp);
+                }
+                let ep = strain - p;
+                for (ds, dk) in sens.ds[own.clone()].iter_mut().zip(r.dk) {
+                    *ds += dk * ep;
+                }
+            } else {
+                let n = tr / ntr;
+                new[at + pos] = p + ((ntr - el.threshold) / el.stiffness) * n;
+                s += el.threshold * n;
+                c += (el.stiffness * el.threshold / ntr) * (1.0 - n * n);
+                d_new.copy_from_slice(sens.de);
+                for (dn, g) in d_new[own.clone()].iter_mut().zip(r.dslip) {
+                    *dn -= n * g;
+                }
+                for (ds, dsi) in sens.ds[own.clone()].iter_mut().zip(r.ds) {
+                    *ds += n * dsi;
+                }
+            }
+            if d == 2 {
+                new[at + 1 - pos] = 0.0;
+                let off = at + 1 - pos;
+                sens.d_new[off * ncol..(off + 1) * ncol].fill(0.0);
+            }
+        }
+        Some((s, c))
     }
 }
 
@@ -389,8 +594,8 @@ mod tests {
             }]
         );
         assert_eq!(
-            IwanElements::slip_levels(Channel::Axial, k, sf, 0.3, 0.7),
-            one
+            IwanElements::slip_levels(Channel::Axial, k, sf, 0.3, 0.7).elements,
+            one.elements
         );
     }
 

@@ -353,13 +353,16 @@ mod tests {
         }
     }
 
-    /// A law without sensitivities (friction) replays as `Ok(None)`; a three-point test is an
-    /// error, as in `replay_uniform`.
+    /// A law without sensitivities (two Maxwell branches) replays as `Ok(None)`; a three-point
+    /// test is an error, as in `replay_uniform`.
     #[test]
     fn replay_sensitivities_fall_back_and_reject_what_replay_rejects() {
         let (k, y) = example_scale(TestKind::Tension);
-        let p = example_params(TestKind::Tension, "friction_hysteresis", k, y).unwrap();
-        let law = build(TestKind::Tension, "friction_hysteresis", &p).unwrap();
+        let mut p = example_params(TestKind::Tension, "viscoelasticity", k, y).unwrap();
+        p.insert("EA_v2".into(), 0.1 * k);
+        p.insert("tau_v2".into(), 5.0);
+        let law = build(TestKind::Tension, "viscoelasticity", &p).unwrap();
+        assert!(law.sens_params(2).is_none());
         let setup = TestSetup::new(TestKind::Tension, 0.3);
         let mut out = vec![0.0; 3];
         let r = replay_uniform_sens(
