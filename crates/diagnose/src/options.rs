@@ -9,7 +9,10 @@ use serde::Serialize;
 #[derive(Debug, Clone, PartialEq, Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum HoldoutPolicy {
-    /// The last cycle of every test (the last 30 % of samples of a test without cycles).
+    /// The last cycle of every test (the last 30 % of samples of a test without cycles); when
+    /// the last cycle reaches past the control range of the others (a growing amplitude whose
+    /// largest level is one cycle), the latest cycle within that range
+    /// ([`crate::holdout::held_cycle`]).
     LastCycle,
     /// The last fraction of samples of every test.
     LastFraction(f64),
