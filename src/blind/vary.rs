@@ -823,11 +823,12 @@ mod tests {
     /// cycle (pure bending, kinematic hardening alone, 0.12 % noise): that cycle is the first
     /// whose unloading yields in reverse, so held out it left the fit unable to tell kinematic
     /// from isotropic hardening, and the true model 14.9 × the floor (the verdict: three effects,
-    /// 2.8 ×). The held-out cycle is now the one before it, within what the fit saw
-    /// ([`cablab_diagnose::diagnose::split`]): the truth alone, at the floor.
+    /// 2.8 ×, with the default [`HoldoutPolicy::LastCycle`]). Holding out the cycle before it,
+    /// within what the fit saw ([`HoldoutPolicy::LastCycleWithinReach`]): the truth alone, at
+    /// the floor.
     #[test]
     fn a_step_up_log_whose_largest_level_is_one_cycle_names_its_effect() {
-        use cablab_diagnose::{diagnose, Context, DiagnoseOptions};
+        use cablab_diagnose::{diagnose, Context, DiagnoseOptions, HoldoutPolicy};
         let mut c = vary_case(&UNIFORM, 257).unwrap().case;
         assert_eq!(c.truths, vec![Effect::KinematicHardening], "{}", c.name);
         assert!(
@@ -836,7 +837,11 @@ mod tests {
             c.name
         );
         crate::blind::through_readers(&mut c).unwrap();
-        let d = diagnose(Context::project(), &c.tests, &DiagnoseOptions::default()).unwrap();
+        let opts = DiagnoseOptions {
+            holdout: HoldoutPolicy::LastCycleWithinReach,
+            ..DiagnoseOptions::default()
+        };
+        let d = diagnose(Context::project(), &c.tests, &opts).unwrap();
         let v = &d.verdict;
         assert_eq!(v.effects, c.truths, "{}", c.name);
         assert!(

@@ -198,15 +198,10 @@ fn ladder_climbs_from_linear_elasticity_to_the_noise_floor() {
         "{:?}",
         d.verdict
     );
-    // The laws stack, so kinematic hardening follows the first rung (plasticity here; friction
-    // elements when the held-out cycle was the largest, 3.6 × the yield, past what the fit saw)
-    // and the ladder ends at the noise floor, from 73× it at the linear rung (the held-out cycle
-    // reaches 2.6 × the yield elongation).
-    assert!(
-        l[0].gap_before_rel > 50.0 * d.verdict.noise_rel,
-        "{l:?} noise {}",
-        d.verdict.noise_rel
-    );
+    // The greedy path here takes friction elements first (they close most of the linear law's
+    // gap), then plasticity; the laws stack, so kinematic hardening follows and the ladder ends
+    // at the noise floor, from 100× it at the linear rung.
+    assert!(l[0].gap_before_rel > 100.0 * d.verdict.noise_rel, "{l:?}");
     let last = l.last().unwrap();
     assert!(
         last.gap_after_rel <= cablab_diagnose::diagnose::NOISE_FLOOR_FIT * d.verdict.noise_rel,

@@ -38,13 +38,26 @@ pub fn split(tests: &[DiagTest], policy: &HoldoutPolicy) -> Result<Split, DiagEr
                 let cut = ((1.0 - f.clamp(0.05, 0.95)) * n as f64) as usize;
                 ((0..cut).collect(), (cut..n).collect())
             }
-            HoldoutPolicy::LastCycle => match held_cycle(&t.control, &t.labels_or_derived()) {
-                Some(r) => ((0..r.start).chain(r.end..n).collect(), r.collect()),
-                None => {
+            HoldoutPolicy::LastCycle => {
+                let labels = t.labels_or_derived();
+                let last = labels.iter().map(|l| l.cycle).max().unwrap_or(0);
+                let first_of_last = labels.iter().position(|l| l.cycle == last).unwrap_or(n);
+                if first_of_last > 0 && first_of_last >= n / 5 && n - first_of_last >= 10 {
+                    ((0..first_of_last).collect(), (first_of_last..n).collect())
+                } else {
                     let cut = (0.7 * n as f64) as usize;
                     ((0..cut).collect(), (cut..n).collect())
                 }
-            },
+            }
+            HoldoutPolicy::LastCycleWithinReach => {
+                match held_cycle(&t.control, &t.labels_or_derived()) {
+                    Some(r) => ((0..r.start).chain(r.end..n).collect(), r.collect()),
+                    None => {
+                        let cut = (0.7 * n as f64) as usize;
+                        ((0..cut).collect(), (cut..n).collect())
+                    }
+                }
+            }
         };
         train.push(tr);
         held.push(he);
@@ -64,7 +77,7 @@ pub fn split(tests: &[DiagTest], policy: &HoldoutPolicy) -> Result<Split, DiagEr
 /// a new amplitude (a growing-amplitude protocol's levels differ by 20 % or more).
 pub const WITHIN_REACH: f64 = 0.05;
 
-/// The cycle [`HoldoutPolicy::LastCycle`] holds out of a test, as a sample range: the last cycle
+/// The cycle [`HoldoutPolicy::LastCycleWithinReach`] holds out of a test, as a sample range: the last cycle
 /// when its control stays within the range the other cycles reach ([`WITHIN_REACH`]); otherwise
 /// (a growing-amplitude protocol whose largest level is one cycle) the latest earlier cycle
 /// that does. A held-out cycle past everything the fit saw scores the models' extrapolation,

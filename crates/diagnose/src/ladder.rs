@@ -50,10 +50,10 @@ pub(crate) fn ladder(
         None,
         opts,
     )?;
-    let (rungs, last, _) = climb(
+    let (rungs, _, _) = climb(
         ctx,
         tests,
-        start.clone(),
+        start,
         vec![],
         6,
         None,
@@ -63,53 +63,7 @@ pub(crate) fn ladder(
         opts,
         scale,
     );
-    let gap = |s: &Scored| (s.rss_noise / s.n_held.max(1) as f64).sqrt();
-    if gap(&last) <= NOISE_FLOOR_FIT {
-        return Ok(rungs);
-    }
-    // A greedy climb is path-dependent: from linear elasticity, friction elements can stand in
-    // for plasticity plus part of another effect and win the first rung, and the climb then
-    // stops above the floor without the plasticity it needed (a growing-amplitude tension log
-    // with a degradation and a Maxwell branch). When the first climb ends above the floor, the
-    // next-best first rungs ([`crate::diagnose::ALT_STARTS`] of them, by held-out fit) start a
-    // climb too; the ladder kept is the one the information criterion prefers beyond its
-    // tolerance (the first otherwise).
-    let taken = rungs.first().map(|r| r.effect);
-    let cands = applicable(ctx, tests[0].kind, &start.model);
-    let (scored, _) = compare(ctx, tests, &start, &cands, train, held, noise, opts);
-    let mut alts: Vec<Scored> = scored
-        .into_iter()
-        .filter(|s| Some(s.effect) != taken && fit_failure(&start, s).is_none())
-        .collect();
-    alts.sort_by(|a, b| a.rss_noise.total_cmp(&b.rss_noise));
-    alts.truncate(crate::diagnose::ALT_STARTS);
-    let mut best = (rungs, last);
-    for first in alts {
-        let prior = vec![Rung {
-            step: "add",
-            effect: first.effect,
-            model: first.model.label(),
-            gap_before_rel: Scored::held_rms(&start) / scale,
-            gap_after_rel: Scored::held_rms(&first) / scale,
-        }];
-        let from = Scored {
-            effect: Effect::None,
-            ..first
-        };
-        let (r, l, _) = climb(
-            ctx, tests, from, prior, 5, None, train, held, noise, opts, scale,
-        );
-        let better = if l.rss_noise <= best.1.rss_noise {
-            &l
-        } else {
-            &best.1
-        };
-        let n_eff = n_eff_of(better);
-        if ic(&l, n_eff, l.n_held) + ic_tolerance(n_eff) < ic(&best.1, n_eff, best.1.n_held) {
-            best = (r, l);
-        }
-    }
-    Ok(best.0)
+    Ok(rungs)
 }
 
 /// Forward selection from `start`, adding at most `max_add` effects (each the best by the
