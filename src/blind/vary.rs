@@ -818,4 +818,37 @@ mod tests {
             }
         }
     }
+
+    /// A one-sided growing-amplitude log with holds at zero whose largest level is a single
+    /// cycle (pure bending, kinematic hardening alone, 0.12 % noise): that cycle is the first
+    /// whose unloading yields in reverse, so held out it left the fit unable to tell kinematic
+    /// from isotropic hardening, and the true model 14.9 × the floor (the verdict: three effects,
+    /// 2.8 ×, with the default [`HoldoutPolicy::LastCycle`]). Holding out the cycle before it,
+    /// within what the fit saw ([`HoldoutPolicy::LastCycleWithinReach`]): the truth alone, at
+    /// the floor.
+    #[test]
+    fn a_step_up_log_whose_largest_level_is_one_cycle_names_its_effect() {
+        use cablab_diagnose::{diagnose, Context, DiagnoseOptions, HoldoutPolicy};
+        let mut c = vary_case(&UNIFORM, 257).unwrap().case;
+        assert_eq!(c.truths, vec![Effect::KinematicHardening], "{}", c.name);
+        assert!(
+            c.name.contains("step-up") && c.name.contains("hold-zero"),
+            "{}",
+            c.name
+        );
+        crate::blind::through_readers(&mut c).unwrap();
+        let opts = DiagnoseOptions {
+            holdout: HoldoutPolicy::LastCycleWithinReach,
+            ..DiagnoseOptions::default()
+        };
+        let d = diagnose(Context::project(), &c.tests, &opts).unwrap();
+        let v = &d.verdict;
+        assert_eq!(v.effects, c.truths, "{}", c.name);
+        assert!(
+            v.gap_after_rel <= 1.5 * v.noise_rel,
+            "{}: {} × the floor",
+            c.name,
+            v.gap_after_rel / v.noise_rel
+        );
+    }
 }

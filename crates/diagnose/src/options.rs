@@ -11,6 +11,15 @@ use serde::Serialize;
 pub enum HoldoutPolicy {
     /// The last cycle of every test (the last 30 % of samples of a test without cycles).
     LastCycle,
+    /// The last cycle of every test when it stays within the control range of the others; when
+    /// it reaches past them (a growing amplitude whose largest level is one cycle), the latest
+    /// cycle within that range ([`crate::holdout::held_cycle`]), so the score is not an
+    /// extrapolation. Not the default: it fixes the varied family's step-up cases (issue 13)
+    /// but, on the standard protocol (0.6/1.6/2.6/3.6 × yield, one cycle each), moves the
+    /// held-out cycle to the 2.6 × one and the friction family's few-slip-level fits lose their
+    /// parameters (`few_slip_levels_are_fitted_and_closed_to_the_floor`) and the ladder's
+    /// greedy first rung changes.
+    LastCycleWithinReach,
     /// The last fraction of samples of every test.
     LastFraction(f64),
     /// Whole tests (indices), e.g. a second specimen length; the fits see the others.
