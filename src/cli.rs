@@ -23,6 +23,18 @@ pub enum KindArg {
     PureBending,
 }
 
+/// Which cycle the diagnosis holds out of the fits and scores on.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum HoldoutArg {
+    /// The last cycle of every test (default).
+    #[value(alias = "last_cycle")]
+    LastCycle,
+    /// The latest cycle within the other cycles' control range: for growing amplitudes whose
+    /// largest level is a single cycle, which the fit would otherwise have to extrapolate to.
+    #[value(alias = "within_reach")]
+    WithinReach,
+}
+
 /// The one place a kind from the command line enters the commands: clap has already checked
 /// the spelling (`three-point` and `three_point` alike), so this cannot fail.
 impl From<KindArg> for TestKind {
@@ -394,6 +406,9 @@ pub struct DiagnoseArgs {
     /// until the held-out gap reaches the noise floor, then drop any the final model does not need.
     #[arg(long)]
     pub ladder: bool,
+    /// The cycle held out of the fits and scored on.
+    #[arg(long, value_enum, default_value = "last-cycle")]
+    pub holdout: HoldoutArg,
     /// Print JSON (the keys of the scripted contract).
     #[arg(long)]
     pub json: bool,

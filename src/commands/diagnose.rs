@@ -76,6 +76,12 @@ pub fn run(a: DiagnoseArgs) -> CmdResult {
         // them, even where the baseline fits to the noise floor (a campaign skips them there:
         // `[diagnosis] all_candidates`).
         all_candidates: true,
+        holdout: match a.holdout {
+            crate::cli::HoldoutArg::LastCycle => cablab_diagnose::HoldoutPolicy::LastCycle,
+            crate::cli::HoldoutArg::WithinReach => {
+                cablab_diagnose::HoldoutPolicy::LastCycleWithinReach
+            }
+        },
         ..Default::default()
     };
     let d = cablab_diagnose::diagnose(ctx, &tests, &opts).map_err(CliError::failed)?;

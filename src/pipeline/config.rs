@@ -294,6 +294,11 @@ pub struct DiagnosisSettings {
     /// cache keys written before it existed stay the same.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub all_candidates: bool,
+    /// The held-out cycle: `last_cycle` (default) or `within_reach` (the latest cycle within
+    /// the others' control range, for growing amplitudes whose largest level is one cycle). Not
+    /// serialised when absent, so pipelines and cache keys written before it stay the same.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub holdout: Option<String>,
 }
 
 impl Default for DiagnosisSettings {
@@ -304,6 +309,7 @@ impl Default for DiagnosisSettings {
             ladder: false,
             kinds: None,
             all_candidates: false,
+            holdout: None,
         }
     }
 }
@@ -873,6 +879,14 @@ fn validate(file: PipelineFile, path: &Path, bytes: Vec<u8>, root: PathBuf) -> R
                 .collect::<Result<Vec<_>>>()?,
         ),
     };
+    if let Some(h) = &file.diagnosis.holdout {
+        if holdout_policy(h).is_none() {
+            bail!(
+                "{}: expected \"last_cycle\" or \"within_reach\", got {h:?}",
+                lines.at(&ctx, "diagnosis", 0, "holdout")
+            );
+        }
+    }
     if file.inputs.is_empty() {
         bail!("{ctx}: no [[input]] groups: a campaign needs at least one");
     }
@@ -1373,6 +1387,10 @@ compliance = 2e-7
                 format!("{GOOD}format = \"mts9999\"\n"),
                 "t.toml:14: [input.overrides.b.csv] format",
             ),
+            (
+                format!("{GOOD}[diagnosis]\nholdout = \"first_cycle\"\n"),
+                "t.toml:15: [diagnosis] holdout: expected \"last_cycle\" or \"within_reach\", got \"first_cycle\"",
+            ),
         ] {
             let e = load_err(d.path(), &text);
             assert!(e.contains(want), "want {want:?} in:\n{e}");
@@ -1385,6 +1403,16 @@ compliance = 2e-7
             &format!("{ok}\n[kinds.tension]\ncompliance = 1e-3\n"),
         );
         load(&p).unwrap();
+        for h in ["last_cycle", "within_reach"] {
+            let p = write(
+                d.path(),
+                "pipelines/t.toml",
+                &format!("{GOOD}[diagnosis]\nholdout = \"{h}\"\n"),
+            );
+            let c = load(&p).unwrap();
+            assert_eq!(c.file.diagnosis.holdout.as_deref(), Some(h));
+            assert!(holdout_policy(h).is_some());
+        }
     }
 
     #[test]
@@ -1518,5 +1546,14 @@ compliance = 2e-7
                 );
             }
         }
+    }
+}
+
+/// The held-out policy a `[diagnosis] holdout` value names (`None`: not a policy's name).
+pub fn holdout_policy(name: &str) -> Option<cablab_diagnose::HoldoutPolicy> {
+    match name {
+        "last_cycle" => Some(cablab_diagnose::HoldoutPolicy::LastCycle),
+        "within_reach" => Some(cablab_diagnose::HoldoutPolicy::LastCycleWithinReach),
+        _ => None,
     }
 }

@@ -698,6 +698,13 @@ fn model_part(
             candidates: c.candidates.clone(),
             ladder: c.file.diagnosis.ladder,
             all_candidates: c.file.diagnosis.all_candidates,
+            holdout: c
+                .file
+                .diagnosis
+                .holdout
+                .as_deref()
+                .and_then(crate::pipeline::config::holdout_policy)
+                .unwrap_or(cablab_diagnose::HoldoutPolicy::LastCycle),
             ..Default::default()
         };
         let d = cablab_diagnose::diagnose(ctx, tests, &dopts).context("diagnosing the gap")?;

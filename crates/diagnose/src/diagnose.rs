@@ -339,7 +339,7 @@ pub fn diagnose(
             "the baseline fits the held-out data to the noise floor ({base_gap_noise:.2} × the \
              noise, ≤ {NOISE_FLOOR_FIT}): no effect can explain a gap that is not there, so the \
              candidates were not calibrated (all_candidates = true under [diagnosis] \
-             calibrates them anyway; `cablab diagnose` always does)"
+             calibrates them anyway; cablab diagnose always does)"
         )
         });
     let cands: Vec<Effect> = match &opts.candidates {

@@ -97,8 +97,8 @@ pub fn diagnosis_words(s: &DiagnosisSummary) -> String {
             if s.candidates_skipped {
                 paras.push(
                     "The candidate effects were not calibrated: none could be told from the \
-                     noise (`all_candidates = true` under [diagnosis] calibrates them anyway; \
-                     `cablab diagnose` always does)."
+                     noise (all_candidates = true under [diagnosis] calibrates them anyway; \
+                     cablab diagnose always does)."
                         .to_string(),
                 );
             }
@@ -254,8 +254,8 @@ mod tests {
         assert!(
             w.ends_with(
                 "The candidate effects were not calibrated: none could be told from the noise \
-                 (`all_candidates = true` under [diagnosis] calibrates them anyway; `cablab \
-                 diagnose` always does)."
+                 (all_candidates = true under [diagnosis] calibrates them anyway; cablab \
+                 diagnose always does)."
             ),
             "{w}"
         );
