@@ -1020,6 +1020,26 @@ mod tests {
         }
     }
 
+    /// `m`'s response at `truth` plus white noise of `sigma` (seeded).
+    fn noisy(m: &Relax, truth: &[f64], sigma: f64, seed: u64) -> Vec<f64> {
+        let mut y = vec![0.0; m.t.len()];
+        m.simulate(truth, 0, &mut y).unwrap();
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+        let nd = Normal::new(0.0, sigma).unwrap();
+        y.iter_mut().for_each(|v| *v += nd.sample(&mut rng));
+        y
+    }
+
+    /// Every sample of one record in the fit, weighted by 1/`sigma`, no free offset.
+    fn all_samples(y: &[f64], sigma: f64) -> FitData<'_> {
+        FitData {
+            measured: vec![y],
+            weight: vec![1.0 / sigma],
+            fit_idx: vec![(0..y.len()).collect()],
+            free_offset: false,
+        }
+    }
+
     fn relax() -> Relax {
         Relax {
             t: (0..2000).map(|i| i as f64 * 0.005).collect(),
@@ -1057,18 +1077,8 @@ mod tests {
     fn the_nested_start_is_a_floor_even_when_the_coarse_model_ranks_it_low() {
         let m = relax();
         let truth = [3.0, 0.7, 0.2];
-        let mut clean = vec![0.0; m.t.len()];
-        m.simulate(&truth, 0, &mut clean).unwrap();
-        let sigma = 0.003;
-        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
-        let nd = Normal::new(0.0, sigma).unwrap();
-        let y: Vec<f64> = clean.iter().map(|c| c + nd.sample(&mut rng)).collect();
-        let data = FitData {
-            measured: vec![&y],
-            weight: vec![1.0 / sigma],
-            fit_idx: vec![(0..y.len()).collect()],
-            free_offset: false,
-        };
+        let y = noisy(&m, &truth, 0.003, 7);
+        let data = all_samples(&y, 0.003);
         let coarse = Distorted(relax(), 1.3);
         let nested = truth.to_vec();
         let at_nested = residuals(&m, &data, &nested).unwrap().norm_squared();
@@ -1099,18 +1109,8 @@ mod tests {
         // b's range starts at the truth's value: the floor sits on its lower bound.
         m.specs[2] = ParamSpec::linear("b", 0.2, 10.0, 1.0);
         let truth = [3.0, 0.7, 0.2];
-        let mut clean = vec![0.0; m.t.len()];
-        m.simulate(&truth, 0, &mut clean).unwrap();
-        let sigma = 0.003;
-        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
-        let nd = Normal::new(0.0, sigma).unwrap();
-        let y: Vec<f64> = clean.iter().map(|c| c + nd.sample(&mut rng)).collect();
-        let data = FitData {
-            measured: vec![&y],
-            weight: vec![1.0 / sigma],
-            fit_idx: vec![(0..y.len()).collect()],
-            free_offset: false,
-        };
+        let y = noisy(&m, &truth, 0.003, 11);
+        let data = all_samples(&y, 0.003);
         let mut coarse = Distorted(relax(), 1.3);
         coarse.0.specs = m.specs.clone();
         let at_floor = residuals(&m, &data, &truth).unwrap().norm_squared();
@@ -1332,17 +1332,8 @@ mod tests {
             }
         }
         let m = relax();
-        let mut y = vec![0.0; m.t.len()];
-        m.simulate(&[3.0, 0.7, 0.2], 0, &mut y).unwrap();
-        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
-        let nd = Normal::new(0.0, 0.03).unwrap();
-        y.iter_mut().for_each(|v| *v += nd.sample(&mut rng));
-        let data = FitData {
-            measured: vec![&y],
-            weight: vec![1.0 / 0.03],
-            fit_idx: vec![(0..y.len()).collect()],
-            free_offset: false,
-        };
+        let y = noisy(&m, &[3.0, 0.7, 0.2], 0.03, 7);
+        let data = all_samples(&y, 0.03);
         let run = |secant| {
             let c = Counted(&m, AtomicUsize::new(0));
             let opts = FitOptions {
