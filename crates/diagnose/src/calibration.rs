@@ -873,53 +873,21 @@ mod tests {
                 s.name
             );
         }
-        for (t, test) in tests.iter().enumerate() {
-            let n = test.control.len();
-            let mut out = vec![0.0; n];
-            let mut jac = vec![vec![0.0; n]; p.len()];
-            assert!(fwd.simulate_jacobian(&p, t, &mut out, &mut jac).unwrap());
-            let mut plain = vec![0.0; n];
-            fwd.simulate(&p, t, &mut plain).unwrap();
-            let gap = out
+        for t in 0..tests.len() {
+            for (j, c) in columns_against_central_differences(&fwd, &p, t)
                 .iter()
-                .zip(&plain)
-                .map(|(x, y)| (x - y).abs())
-                .fold(0.0, f64::max);
-            assert!(gap < 1e-9, "test {t}: response off by {gap}");
-            for (j, col) in jac.iter().enumerate() {
-                let h = 1e-6 * p[j].abs();
-                let at = |x: f64| {
-                    let mut q = p.clone();
-                    q[j] = x;
-                    let mut o = vec![0.0; n];
-                    fwd.simulate(&q, t, &mut o).unwrap();
-                    o
-                };
-                let (up, down) = (at(p[j] + h), at(p[j] - h));
-                let fd: Vec<f64> = up
-                    .iter()
-                    .zip(&down)
-                    .map(|(x, y)| (x - y) / (2.0 * h))
-                    .collect();
-                let err = col
-                    .iter()
-                    .zip(&fd)
-                    .map(|(x, y)| (x - y).powi(2))
-                    .sum::<f64>()
-                    .sqrt();
-                let norm = fd.iter().map(|v| v * v).sum::<f64>().sqrt();
-                // Floor: the replay's own rounding (and the compliance Newton's tolerance) in
-                // a central difference, 10⁻⁹ of the response's size per unit relative change.
-                let size = out.iter().map(|v| v * v).sum::<f64>().sqrt();
-                let floor = 1e-9 * size / p[j].abs();
+                .enumerate()
+            {
                 let other_factor = t == 0 && names[j].ends_with("factor_2");
                 if other_factor {
-                    assert!(col.iter().all(|&v| v == 0.0) && norm == 0.0, "{}", names[j]);
+                    assert!(c.all_zero && c.norm == 0.0, "{}", names[j]);
                 } else {
                     assert!(
-                        norm > 0.0 && err <= 1e-5 * norm + floor,
-                        "test {t} ∂/∂{}: error {err:e} of {norm:e}",
-                        names[j]
+                        c.norm > 0.0 && c.err <= 1e-5 * c.norm + c.floor,
+                        "test {t} ∂/∂{}: error {:e} of {:e}",
+                        names[j],
+                        c.err,
+                        c.norm
                     );
                 }
             }
@@ -958,42 +926,75 @@ mod tests {
         for n in ["EA_f", "F_f", "n_f", "chi_f", "compliance"] {
             assert!(names.contains(&n), "{names:?}");
         }
-        let n = tests[0].control.len();
+        for (j, c) in columns_against_central_differences(&fwd, &p, 0)
+            .iter()
+            .enumerate()
+        {
+            assert!(
+                c.norm > 0.0 && c.err <= 1e-5 * c.norm + c.floor,
+                "∂/∂{}: error {:e} of {:e}",
+                names[j],
+                c.err,
+                c.norm
+            );
+        }
+    }
+
+    /// One sensitivity column of [`Forward::simulate_jacobian`] against a central difference.
+    struct Column {
+        /// RMS-norm of (column − difference).
+        err: f64,
+        /// Norm of the difference.
+        norm: f64,
+        /// The replay's own rounding (and the compliance Newton's tolerance) in a central
+        /// difference: 10⁻⁹ of the response's size per unit relative change of the parameter.
+        floor: f64,
+        /// Every entry of the column is exactly 0.
+        all_zero: bool,
+    }
+
+    /// Test `t` replayed with sensitivities at `p`: the response equals the plain replay's (to
+    /// 10⁻⁹), and each column is compared with a central difference of step 10⁻⁶ |p_j|.
+    fn columns_against_central_differences(fwd: &ModelForward, p: &[f64], t: usize) -> Vec<Column> {
+        let n = fwd.n_samples(t);
         let mut out = vec![0.0; n];
         let mut jac = vec![vec![0.0; n]; p.len()];
-        assert!(fwd.simulate_jacobian(&p, 0, &mut out, &mut jac).unwrap());
+        assert!(fwd.simulate_jacobian(p, t, &mut out, &mut jac).unwrap());
         let mut plain = vec![0.0; n];
-        fwd.simulate(&p, 0, &mut plain).unwrap();
+        fwd.simulate(p, t, &mut plain).unwrap();
         let gap = out
             .iter()
             .zip(&plain)
             .map(|(x, y)| (x - y).abs())
             .fold(0.0, f64::max);
-        assert!(gap < 1e-9, "response off by {gap}");
+        assert!(gap < 1e-9, "test {t}: response off by {gap}");
         let size = out.iter().map(|v| v * v).sum::<f64>().sqrt();
-        for (j, col) in jac.iter().enumerate() {
-            let h = 1e-6 * p[j].abs();
-            let at = |x: f64| {
-                let mut q = p.clone();
-                q[j] = x;
-                let mut o = vec![0.0; n];
-                fwd.simulate(&q, 0, &mut o).unwrap();
-                o
-            };
-            let (up, down) = (at(p[j] + h), at(p[j] - h));
-            let (mut err, mut norm) = (0.0f64, 0.0f64);
-            for ((c, u), d) in col.iter().zip(&up).zip(&down) {
-                let fd = (u - d) / (2.0 * h);
-                err += (c - fd).powi(2);
-                norm += fd * fd;
-            }
-            let (err, norm) = (err.sqrt(), norm.sqrt());
-            assert!(
-                norm > 0.0 && err <= 1e-5 * norm + 1e-9 * size / p[j].abs(),
-                "∂/∂{}: error {err:e} of {norm:e}",
-                names[j]
-            );
-        }
+        jac.iter()
+            .enumerate()
+            .map(|(j, col)| {
+                let h = 1e-6 * p[j].abs();
+                let at = |x: f64| {
+                    let mut q = p.to_vec();
+                    q[j] = x;
+                    let mut o = vec![0.0; n];
+                    fwd.simulate(&q, t, &mut o).unwrap();
+                    o
+                };
+                let (up, down) = (at(p[j] + h), at(p[j] - h));
+                let (mut err, mut norm) = (0.0f64, 0.0f64);
+                for ((c, u), d) in col.iter().zip(&up).zip(&down) {
+                    let fd = (u - d) / (2.0 * h);
+                    err += (c - fd).powi(2);
+                    norm += fd * fd;
+                }
+                Column {
+                    err: err.sqrt(),
+                    norm: norm.sqrt(),
+                    floor: 1e-9 * size / p[j].abs(),
+                    all_zero: col.iter().all(|&v| v == 0.0),
+                }
+            })
+            .collect()
     }
 
     #[test]
