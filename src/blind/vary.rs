@@ -819,6 +819,63 @@ mod tests {
         }
     }
 
+    /// A short white-noise tension log (vary32: kinematic hardening and machine compliance,
+    /// 0.10 % noise) whose held-out cycle, 276 samples, leaves every single effect tens of noise
+    /// units of sharp misfit: the first differences of the residuals read ρ = 0.99, which made
+    /// the effective sample size 1.4, no model could be preferred to the baseline, and the
+    /// verdict was `unexplained` at 29 × the floor. With the noise's correlation read from the
+    /// second differences at several lags as well, the comparison keeps most of the samples
+    /// and the set search closes the gap with both true effects in the set.
+    #[test]
+    fn a_sharp_misfit_on_a_short_held_out_cycle_keeps_its_effective_samples() {
+        use cablab_diagnose::{diagnose, Context, DiagnoseOptions};
+        let mut c = vary_case(&UNIFORM, 32).unwrap().case;
+        assert_eq!(
+            c.truths,
+            vec![Effect::KinematicHardening, Effect::MachineCompliance],
+            "{}",
+            c.name
+        );
+        crate::blind::through_readers(&mut c).unwrap();
+        let d = diagnose(Context::project(), &c.tests, &DiagnoseOptions::default()).unwrap();
+        let v = &d.verdict;
+        assert!(
+            v.n_eff > 0.25 * d.holdout.n_heldout as f64,
+            "n_eff {} of {}",
+            v.n_eff,
+            d.holdout.n_heldout
+        );
+        assert!(v.unexplained.is_none(), "{:?}", v.unexplained);
+        assert!(
+            c.truths.iter().all(|e| v.effects.contains(e)),
+            "{:?}",
+            v.effects
+        );
+        assert!(
+            v.gap_after_rel <= 1.1 * v.noise_rel,
+            "{}",
+            v.gap_after_rel / v.noise_rel
+        );
+    }
+
+    /// The same log as below (vary257, kinematic hardening alone) with the default hold-out:
+    /// the climb took a drift and a degradation on its way from another first effect, the
+    /// exchange then swapped kinematic hardening in, and the set kept three members although
+    /// the swapped-in hardening made the other two redundant. Backward elimination runs again
+    /// after a swap: kinematic hardening alone. (Its held-out gap is not asserted: the
+    /// held-out cycle's reverse yield is beyond what the training cycles show, so fits of the
+    /// same model with the same training cost predict it differently — 1.2 × the floor from
+    /// the set's parameters, 14.9 × from the baseline's; see the within-reach hold-out below.)
+    #[test]
+    fn a_member_a_swap_made_redundant_is_dropped() {
+        use cablab_diagnose::{diagnose, Context, DiagnoseOptions};
+        let mut c = vary_case(&UNIFORM, 257).unwrap().case;
+        assert_eq!(c.truths, vec![Effect::KinematicHardening], "{}", c.name);
+        crate::blind::through_readers(&mut c).unwrap();
+        let d = diagnose(Context::project(), &c.tests, &DiagnoseOptions::default()).unwrap();
+        assert_eq!(d.verdict.effects, c.truths, "{:?}", d.verdict.steps);
+    }
+
     /// A one-sided growing-amplitude log with holds at zero whose largest level is a single
     /// cycle (pure bending, kinematic hardening alone, 0.12 % noise): that cycle is the first
     /// whose unloading yields in reverse, so held out it left the fit unable to tell kinematic

@@ -641,7 +641,8 @@ struct SetFound {
 
 /// The set search from the single effect `first` (scored on the baseline `base`): forward
 /// selection of up to two more effects with backward elimination ([`climb`]), then, for two or
-/// more members, sequential replacement ([`exchange`]). A member whose effect the final model no
+/// more members, sequential replacement ([`exchange`]) and, after a swap, backward elimination
+/// again over the swapped set. A member whose effect the final model no
 /// longer has is dropped from the set with a `drop` rung: piecewise elasticity replaces the
 /// baseline's law and sheds the hardening rules of its yield (a stiffness degradation found
 /// first is not in a piecewise-linear model, whatever the rungs say).
@@ -727,6 +728,43 @@ fn set_search(
         last = ex.model;
         alternatives = ex.equivalent;
         if ex.swapped.is_some() {
+            // The member swapped in can make another redundant that the climb needed on its way
+            // (a Maxwell branch taken first for a hardening, then a drift for the rest: once the
+            // hardening is swapped in, the drift may be a stand-in too). Backward elimination
+            // again, by the climb's own rule, over the swapped set.
+            let members: Vec<Rung> = set
+                .iter()
+                .map(|&e| Rung {
+                    step: "add",
+                    effect: e,
+                    model: last.model.label(),
+                    gap_before_rel: f64::NAN,
+                    gap_after_rel: f64::NAN,
+                })
+                .collect();
+            let (rungs, reduced, _) = climb(
+                ctx,
+                tests,
+                last,
+                members,
+                0,
+                opts.candidates.as_deref(),
+                train,
+                held,
+                noise,
+                opts,
+                scale,
+            );
+            last = reduced;
+            let dropped: Vec<Effect> = rungs
+                .iter()
+                .filter(|r| r.step == "drop")
+                .map(|r| r.effect)
+                .collect();
+            if !dropped.is_empty() {
+                set.retain(|e| !dropped.contains(e));
+                alternatives.clear();
+            }
             steps = waterfall(
                 ctx, tests, base, singles, &set, &last, train, held, noise, opts, scale,
             );

@@ -298,10 +298,15 @@ impl Choice {
 
 /// The effective held-out sample size for comparisons among models, read from `best` (the
 /// best-fitting model's residuals, closest to white noise) with the noise's lag-1 correlation
-/// from their differences (`stats::noise_lag1_from_differences`).
+/// the smaller of what their first differences read (`stats::noise_lag1_from_differences`)
+/// and what their second differences at several lags read (`stats::noise_lag1_from_lags`):
+/// each is blind to a different misfit (a slow one barely reaches the differences; a sharp one
+/// on a short held-out cycle drives them to ρ → 1), and the residual's correlation that counts
+/// here is the noise's, never the misfit's.
 pub(crate) fn n_eff_of(best: &Scored) -> f64 {
     let series: Vec<&[f64]> = best.held_resid.iter().map(Vec::as_slice).collect();
-    let rho = stats::noise_lag1_from_differences(&series);
+    let rho = stats::noise_lag1_from_differences(&series)
+        .min(stats::noise_lag1_from_lags(&series).unwrap_or(1.0));
     stats::effective_sample_size(best.n_held, rho)
 }
 
