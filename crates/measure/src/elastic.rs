@@ -2,8 +2,8 @@
 //!
 //! The automatic elastic window on a first loading branch (x = sectional control, increasing;
 //! y = response):
-//! 1. Noise: σ = [`noise_level`] of the residuals of one straight line through the whole branch
-//!    (in time order, so control noise seen through the slope is included).
+//! 1. Noise: σ = [`noise_level`](crate::condition::noise_level) of the residuals of one straight
+//!    line through the whole branch (in time order, so control noise seen through the slope is included).
 //! 2. Breaks: the best fits by 1, 2 and 3 independent straight segments (exhaustive search over
 //!    break positions on a grid of at most 300 candidates, each segment at least 2% of the
 //!    branch and 5 samples; prefix sums make each candidate O(1)). An extra segment is kept only
@@ -30,7 +30,6 @@
 //! What it does not do: decide whether a bend is yield or reversible (that needs the unloading,
 //! see [`crate::hysteresis`]), or convert slopes to stiffnesses (see [`crate::sectional`]).
 
-use crate::condition::noise_level;
 use crate::stats::{line_fit, linear_fit, Fit, Line};
 use crate::MeasureError;
 use nalgebra::{Matrix3, Vector3};
@@ -181,14 +180,12 @@ pub fn residual_noise(x: &[f64], y: &[f64]) -> f64 {
     // quarter of the truth at φ = 0.9, and every wiggle a "break"). The largest estimate over
     // lags 1, 2, 4, … 32 recovers σ; on white noise they agree. A lag k is used only on
     // ≥ 20k samples, so the ≤ 2k differences a bend spoils stay a tenth (the MAD ignores them).
-    let mut sigma = noise_level(&r);
+    let mut keys = Vec::with_capacity(r.len());
+    let mut sigma = crate::condition::mad_sigma_at_lag(&r, 1, &mut keys);
     let mut k = 2;
     while r.len() >= 20 * k && k <= 32 {
-        let sub: Vec<f64> = (0..r.len() - 2 * k)
-            .map(|i| r[i + 2 * k] - 2.0 * r[i + k] + r[i])
-            .collect();
-        // noise_level of a series whose first differences are `sub` (scale: √6 as at lag 1).
-        sigma = sigma.max(crate::condition::mad_sigma_of_second_differences(&sub));
+        // The MAD σ of the lag-k second differences (scale: √6 as at lag 1).
+        sigma = sigma.max(crate::condition::mad_sigma_at_lag(&r, k, &mut keys));
         k *= 2;
     }
     sigma.max(1e-5 * (hi - lo).abs()).max(f64::MIN_POSITIVE)
