@@ -105,6 +105,11 @@ impl Calibration {
     pub fn values(&self) -> &[f64] {
         &self.values
     }
+    /// The fitted model's simulated response per test over every sample, without the offset
+    /// ([`Calibration::response_offset`]): the replay of [`Calibration::values`].
+    pub fn simulated(&self) -> &[Vec<f64>] {
+        &self.simulated
+    }
     /// Value of a named parameter.
     pub fn get(&self, name: &str) -> Option<f64> {
         self.params.0.iter().find(|(n, _)| n == name).map(|p| p.1)
@@ -311,7 +316,17 @@ pub fn calibrate(
         f.std_err = std_err;
         f.at_bound = at_bound;
     }
-    let sims = full.simulate_all(&f.params)?;
+    // The fit's own simulation of its end when it covers every sample of every test (it
+    // replayed the same histories up to the last fitted sample), else a replay of them.
+    let sims = match f.simulated.take() {
+        Some(s)
+            if s.len() == tests.len()
+                && s.iter().zip(tests).all(|(s, t)| s.len() == t.control.len()) =>
+        {
+            s
+        }
+        _ => full.simulate_all(&f.params)?,
+    };
     let response_offset = calibrate::offsets(&data, &sims);
     let gap_rms = tests
         .iter()
