@@ -1141,6 +1141,33 @@ mod tests {
     /// noise units above the floor on the full problem. With the floor the fit ends at or below
     /// it, polished or not (the polish starts on the bound, where the map of the bounds has no
     /// gradient in that parameter); without it, above.
+    /// The simulation a fit hands on is the forward model's at the fitted parameters, bit for
+    /// bit: without a coarse problem, with one (a different model, whose own simulations must
+    /// never be handed on) and with a floor.
+    #[test]
+    fn the_simulation_handed_on_is_the_models_at_the_end() {
+        let m = relax();
+        let truth = [3.0, 0.7, 0.2];
+        let y = noisy(&m, &truth, 0.003, 11);
+        let data = all_samples(&y, 0.003);
+        let mut coarse = Distorted(relax(), 1.3);
+        coarse.0.specs = m.specs.clone();
+        let starts = [vec![1.0, 5.0, 1.0], vec![50.0, 0.01, 5.0]];
+        let opts = FitOptions::default();
+        let c: Option<(&dyn Forward, &FitData)> = Some((&coarse, &data));
+        for (coarse, floor) in [(None, None), (c, None), (c, Some(&truth[..]))] {
+            let f = fit_coarse(&m, &data, coarse, &starts, floor, &opts);
+            let sims = f.simulated.expect("the end was simulated on the way");
+            let mut again = vec![0.0; y.len()];
+            m.simulate(&f.params, 0, &mut again).unwrap();
+            assert_eq!(sims.len(), 1);
+            assert_eq!(
+                sims[0].iter().map(|v| v.to_bits()).collect::<Vec<_>>(),
+                again.iter().map(|v| v.to_bits()).collect::<Vec<_>>()
+            );
+        }
+    }
+
     #[test]
     fn a_fit_never_ends_above_its_floor() {
         let mut m = relax();
