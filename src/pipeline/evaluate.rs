@@ -399,7 +399,8 @@ fn stages(
         kind: Some(t.kind),
         ..Default::default()
     };
-    let mut rec = cablab_ingest::read_bytes(bytes, &t.id, &opts)?;
+    // The runner hashed these bytes for the cache key: the provenance takes that hash.
+    let mut rec = cablab_ingest::read_bytes_hashed(bytes, out.input_sha256.clone(), &t.id, &opts)?;
     out.format = Some(rec.provenance.format.as_str().to_string());
     out.header = TestHeader::from_metadata(rec.specimen.label.as_deref(), &rec.metadata);
     // The reader's warnings, the declared kind against the file's own evidence, and the
