@@ -238,91 +238,22 @@ pub fn median(values: &[f64]) -> f64 {
     median_of_keys(&mut k)
 }
 
-/// [`median`] of numbers given as their [`total_key`]s (NaN for none); reorders `k` when it is
-/// short. The middle key(s) are the same whatever finds them (equal keys are the same number):
-/// short slices by a comparison selection, long ones ([`RADIX_SELECT_MIN`]) by
-/// [`middle_pair_by_radix`], which reads the keys' leading bits instead of comparing them.
+/// [`median`] of numbers given as their [`total_key`]s (NaN for none); reorders `k`.
 pub(crate) fn median_of_keys(k: &mut [u64]) -> f64 {
     if k.is_empty() {
         return f64::NAN;
     }
     let m = k.len() / 2;
     let odd = k.len() % 2 == 1;
-    let (below, mid) = if k.len() < RADIX_SELECT_MIN {
-        let (lower, mid, _) = k.select_nth_unstable(m);
-        let mid = *mid;
-        // The element just below the middle of the sorted order: the largest of the lower part.
-        (lower.iter().copied().max().unwrap_or(mid), mid)
-    } else {
-        middle_pair_by_radix(k, m, !odd)
-    };
+    let (lower, mid, _) = k.select_nth_unstable(m);
+    let mid = *mid;
     if odd {
         from_total_key(mid)
     } else {
+        // The element just below the middle of the sorted order: the largest of the lower part.
+        let below = lower.iter().copied().max().unwrap_or(mid);
         0.5 * (from_total_key(below) + from_total_key(mid))
     }
-}
-
-/// Shortest slice [`median_of_keys`] selects by radix: below it the histogram's fixed cost is
-/// not repaid.
-pub(crate) const RADIX_SELECT_MIN: usize = 2048;
-
-/// The keys of rank `m − 1` (when `below`; else rank `m` again) and `m` in ascending order of
-/// `k` (`m < k.len()`), without reordering `k`: a histogram of the keys' leading 12 bits finds
-/// the bucket holding rank m, its keys are copied out, and the next 12 bits narrow them in turn
-/// until a few hundred are left (or all are one key) for a comparison selection. Two passes
-/// over `k` where a quickselect partitions it several times (the noise scales take medians of
-/// 20,000 second differences some seventy times per test). Rank m − 1 is in the same bucket
-/// unless rank m is its smallest key; then it is the largest key of `k` below it (one more pass).
-pub(crate) fn middle_pair_by_radix(k: &[u64], m: usize, below: bool) -> (u64, u64) {
-    const BITS: u32 = 12;
-    const MASK: u64 = (1 << BITS) - 1;
-    const FEW: usize = 256;
-    let mut counts = [0u32; 1 << BITS];
-    // The bucket of `rank` and the number of keys in the buckets before it.
-    let bucket_of = |counts: &[u32], rank: usize| {
-        let mut before = 0usize;
-        for (b, &c) in counts.iter().enumerate() {
-            if before + c as usize > rank {
-                return (b, before);
-            }
-            before += c as usize;
-        }
-        unreachable!("rank {rank} beyond {before} keys")
-    };
-    let mut shift = 64 - BITS;
-    for &x in k {
-        counts[(x >> shift) as usize] += 1;
-    }
-    let (b, before) = bucket_of(&counts, m);
-    let mut rank = m - before;
-    let mut cand: Vec<u64> = Vec::with_capacity(counts[b] as usize);
-    cand.extend(k.iter().copied().filter(|&x| (x >> shift) as usize == b));
-    // Candidates share the bits above `shift`; the next digit is the 12 bits below them (the
-    // last one overlaps bits already shared, which orders nothing differently).
-    while cand.len() > FEW && shift > 0 && cand.iter().any(|&x| x != cand[0]) {
-        shift = shift.saturating_sub(BITS);
-        counts.fill(0);
-        for &x in &cand {
-            counts[((x >> shift) & MASK) as usize] += 1;
-        }
-        let (b, before) = bucket_of(&counts, rank);
-        rank -= before;
-        if counts[b] as usize != cand.len() {
-            cand.retain(|&x| ((x >> shift) & MASK) as usize == b);
-        }
-    }
-    let (lower, mid, _) = cand.select_nth_unstable(rank);
-    let mid = *mid;
-    let low = if !below {
-        mid
-    } else if let Some(&l) = lower.iter().max() {
-        l
-    } else {
-        // Rank m is the smallest of its bucket: rank m − 1 is the largest key below it.
-        k.iter().copied().filter(|&x| x < mid).max().unwrap_or(mid)
-    };
-    (low, mid)
 }
 
 /// `x` as an unsigned integer whose order is [`f64::total_cmp`]'s (−NaN < −∞ < … < −0 < +0 < … <
@@ -843,96 +774,6 @@ pub(crate) mod tests {
             );
         }
         assert!(median(&[f64::NAN]).is_nan());
-    }
-
-    /// The radix selection finds the keys of ranks m − 1 and m that sorting puts there, without
-    /// reordering its input: on long samples of wide and narrow spread, with many ties (a
-    /// quantised channel's differences: most exactly 0), all one value, signed zeros and
-    /// infinities, positive values only (absolute deviations), rank m the smallest of its
-    /// leading-bits bucket (half the keys 1.0, half 2.0) and lengths about its threshold.
-    #[test]
-    fn radix_selection_equals_sorted_ranks() {
-        let mut next = xorshift(0x9e37_79b9_7f4a_7c15);
-        let mut samples: Vec<Vec<f64>> = Vec::new();
-        for len in [
-            RADIX_SELECT_MIN - 1,
-            RADIX_SELECT_MIN,
-            RADIX_SELECT_MIN + 1,
-            5000,
-            19_999,
-            20_000,
-        ] {
-            let mut uniform = |scale: f64| -> Vec<f64> {
-                (0..len)
-                    .map(|_| ((next() >> 11) as f64 / (1u64 << 53) as f64 - 0.5) * scale)
-                    .collect()
-            };
-            let wide = uniform(2e3);
-            let narrow: Vec<f64> = uniform(1e-9).iter().map(|v| 1.0 + v).collect();
-            let quantised: Vec<f64> = uniform(1.0)
-                .iter()
-                .map(|v| {
-                    if v.abs() < 0.35 {
-                        0.0
-                    } else {
-                        (v * 8.0).round()
-                    }
-                })
-                .collect();
-            let positive: Vec<f64> = wide.iter().map(|v| v.abs()).collect();
-            let mut odd = uniform(3.0);
-            for (i, v) in odd.iter_mut().enumerate() {
-                match i % 17 {
-                    0 => *v = -0.0,
-                    1 => *v = 0.0,
-                    2 => *v = f64::INFINITY,
-                    3 => *v = f64::NEG_INFINITY,
-                    _ => {}
-                }
-            }
-            let halves: Vec<f64> = (0..len)
-                .map(|i| if i % 2 == 0 { 1.0 } else { 2.0 })
-                .collect();
-            samples.extend([
-                wide,
-                narrow,
-                quantised,
-                positive,
-                odd,
-                halves,
-                vec![0.25; len],
-            ]);
-        }
-        for v in &samples {
-            let keys: Vec<u64> = v.iter().map(|&x| total_key(x)).collect();
-            let mut sorted = keys.clone();
-            sorted.sort_unstable();
-            for m in [1, keys.len() / 2, keys.len() - 1] {
-                let before = keys.clone();
-                assert_eq!(
-                    middle_pair_by_radix(&keys, m, true),
-                    (sorted[m - 1], sorted[m]),
-                    "len {} rank {m}",
-                    keys.len()
-                );
-                assert_eq!(
-                    middle_pair_by_radix(&keys, m, false),
-                    (sorted[m], sorted[m])
-                );
-                assert_eq!(keys, before);
-            }
-            let n = sorted.len();
-            let by_sorting = if n % 2 == 1 {
-                from_total_key(sorted[n / 2])
-            } else {
-                0.5 * (from_total_key(sorted[n / 2 - 1]) + from_total_key(sorted[n / 2]))
-            };
-            let a = median_of_keys(&mut keys.clone());
-            assert!(
-                a.to_bits() == by_sorting.to_bits() || (a.is_nan() && by_sorting.is_nan()),
-                "len {n}: {a} vs {by_sorting}"
-            );
-        }
     }
 
     /// The radix sort gives the comparison sort's slice bit for bit (ties, signed zeros, NaNs
