@@ -399,7 +399,8 @@ fn stages(
         kind: Some(t.kind),
         ..Default::default()
     };
-    let mut rec = cablab_ingest::read_bytes(bytes, &t.id, &opts)?;
+    // The runner hashed these bytes for the cache key: the provenance takes that hash.
+    let mut rec = cablab_ingest::read_bytes_hashed(bytes, out.input_sha256.clone(), &t.id, &opts)?;
     out.format = Some(rec.provenance.format.as_str().to_string());
     out.header = TestHeader::from_metadata(rec.specimen.label.as_deref(), &rec.metadata);
     // The reader's warnings, the declared kind against the file's own evidence, and the
@@ -662,15 +663,11 @@ fn model_part(
         };
         let cal = cablab_diagnose::calibrate(ctx, tests, &model, &copts)
             .context("calibrating the baseline")?;
-        let fwd = cablab_diagnose::model::ModelForward::new(tests, &model, &Registry, Some(&rod))?;
-        // The model of the measurement: the simulated response plus the offset taken off.
-        let sim: Vec<f64> = fwd
-            .simulate_all(cal.values())?
-            .pop()
-            .unwrap_or_default()
-            .into_iter()
-            .map(|v| v + offsets.response)
-            .collect();
+        // The model of the measurement: the simulated response (the calibration's replay of
+        // its parameters) plus the offset taken off.
+        let sim: Vec<f64> = cal.simulated().last().map_or_else(Vec::new, |s| {
+            s.iter().map(|v| v + offsets.response).collect()
+        });
         let scale = curve.response.iter().fold(0.0f64, |m, v| m.max(v.abs()));
         let rms = (sim
             .iter()

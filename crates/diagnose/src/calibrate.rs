@@ -159,6 +159,10 @@ pub struct Fit {
     pub starts: usize,
     /// Residual evaluations over all starts.
     pub evaluations: usize,
+    /// The forward model's response per test at `params` (every sample), when the fit
+    /// simulated that very point on the way (the residuals of the end it kept): what a caller
+    /// would get simulating `params` again, without the replay.
+    pub simulated: Option<Vec<Vec<f64>>>,
 }
 
 /// A forward model with some parameters held at given values (a profile: the fit moves only the
@@ -274,6 +278,15 @@ pub fn offsets(data: &FitData, sims: &[Vec<f64>]) -> Vec<f64> {
 
 /// Weighted residuals at physical parameters `p` (simulated − measured, fitted samples only).
 pub fn residuals(fwd: &dyn Forward, data: &FitData, p: &[f64]) -> Option<DVector<f64>> {
+    simulated_residuals(fwd, data, p).map(|(r, _)| r)
+}
+
+/// [`residuals`], and the simulations they come from (per test, every sample).
+fn simulated_residuals(
+    fwd: &dyn Forward,
+    data: &FitData,
+    p: &[f64],
+) -> Option<(DVector<f64>, Vec<Vec<f64>>)> {
     let sims: Vec<Option<Vec<f64>>> = (0..fwd.n_tests())
         .into_par_iter()
         .map(|t| {
@@ -281,10 +294,10 @@ pub fn residuals(fwd: &dyn Forward, data: &FitData, p: &[f64]) -> Option<DVector
             fwd.simulate(p, t, &mut out).ok().map(|_| out)
         })
         .collect();
+    let sims: Vec<Vec<f64>> = sims.into_iter().collect::<Option<_>>()?;
     let mut r = DVector::zeros(data.n());
     let mut k = 0;
     for (t, sim) in sims.iter().enumerate() {
-        let sim = sim.as_ref()?;
         let c = if data.free_offset {
             offset_of(data.measured[t], sim, &data.fit_idx[t])
         } else {
@@ -296,7 +309,7 @@ pub fn residuals(fwd: &dyn Forward, data: &FitData, p: &[f64]) -> Option<DVector
         }
     }
     if r.iter().all(|v| v.is_finite()) {
-        Some(r)
+        Some((r, sims))
     } else {
         None
     }
@@ -307,6 +320,8 @@ struct Problem<'a> {
     data: &'a FitData<'a>,
     z: DVector<f64>,
     r: DVector<f64>,
+    /// The simulations `r` comes from (`None`: not kept, or infeasible).
+    sims: Option<Vec<Vec<f64>>>,
     fd_step: f64,
     /// Cost at the last Jacobian (bits of an f64), and the least decrease since then worth
     /// another one: below it the descent has converged and Levenberg–Marquardt stops at its last
@@ -449,7 +464,10 @@ impl LeastSquaresProblem<f64, Dyn, Dyn> for Problem<'_> {
     fn set_params(&mut self, z: &DVector<f64>) {
         self.z.copy_from(z);
         self.trials.fetch_add(1, Ordering::Relaxed);
-        self.r = self.eval(z);
+        (self.r, self.sims) = match simulated_residuals(self.fwd, self.data, &self.phys(z)) {
+            Some((r, sims)) => (r, Some(sims)),
+            None => (DVector::from_element(self.data.n(), INFEASIBLE), None),
+        };
     }
     fn params(&self) -> DVector<f64> {
         self.z.clone()
@@ -707,6 +725,7 @@ pub fn fit_coarse(
             cost: d.1,
             evaluations: 0,
             residuals: None,
+            sims: None,
         }));
         runs = runs
             .into_par_iter()
@@ -716,14 +735,16 @@ pub fn fit_coarse(
                     return Run {
                         cost: f64::INFINITY,
                         residuals: None,
+                        sims: None,
                         ..run
                     };
                 }
-                let r = residuals(fwd, data, &run.params);
+                let (r, sims) = simulated_residuals(fwd, data, &run.params).unzip();
                 Run {
                     cost: r.as_ref().map_or(f64::INFINITY, |r| r.norm_squared()),
                     evaluations: run.evaluations + 1,
                     residuals: r,
+                    sims,
                     ..run
                 }
             })
@@ -731,12 +752,13 @@ pub fn fit_coarse(
     }
     if let Some(p) = floor {
         // After every end and start: ties go to them.
-        let r = residuals(fwd, data, p);
+        let (r, sims) = simulated_residuals(fwd, data, p).unzip();
         runs.push(Run {
             params: p.to_vec(),
             cost: r.as_ref().map_or(f64::INFINITY, |r| r.norm_squared()),
             evaluations: 1,
             residuals: r,
+            sims,
         });
     }
     let mut evaluations = runs.iter().map(|r| r.evaluations).sum();
@@ -749,14 +771,16 @@ pub fn fit_coarse(
             cost: f64::INFINITY,
             evaluations: 0,
             residuals: None,
+            sims: None,
         });
-    let (mut params, mut cost, mut r) = (best.params, best.cost, best.residuals);
+    let (mut params, mut cost, mut r, mut sims) =
+        (best.params, best.cost, best.residuals, best.sims);
     if coarse.is_some() && cost.is_finite() {
         let polished = descend(
             fwd,
             data,
             &params,
-            r.clone(),
+            r.clone().map(|r| (r, sims.clone())),
             POLISH_ITERATIONS,
             Stop {
                 converged_below: POLISH_CONVERGED,
@@ -769,18 +793,26 @@ pub fn fit_coarse(
         .0;
         evaluations += polished.evaluations;
         if polished.cost < cost {
-            (params, cost, r) = (polished.params, polished.cost, polished.residuals);
+            (params, cost, r, sims) = (
+                polished.params,
+                polished.cost,
+                polished.residuals,
+                polished.sims,
+            );
         }
     }
-    finish(
-        fwd,
-        data,
-        params,
-        r,
-        cost,
-        (starts.len(), evaluations),
-        opts.sensitivities,
-    )
+    Fit {
+        simulated: sims,
+        ..finish(
+            fwd,
+            data,
+            params,
+            r,
+            cost,
+            (starts.len(), evaluations),
+            opts.sensitivities,
+        )
+    }
 }
 
 /// The end of a descent, or a point scored on every fitted sample.
@@ -794,10 +826,12 @@ struct Run {
     evaluations: usize,
     /// The weighted residuals there, when computed on the problem the caller scores on.
     residuals: Option<DVector<f64>>,
+    /// The simulations those residuals come from (per test, every sample), when kept.
+    sims: Option<Vec<Vec<f64>>>,
 }
 
-/// One Levenberg–Marquardt descent from physical parameters `p0` (residuals `r0` there when
-/// already known) with a patience of `iterations` (at most `iterations · (k + 1)` residual
+/// One Levenberg–Marquardt descent from physical parameters `p0` (residuals `r0` there, and
+/// the simulations they come from, when already known) with a patience of `iterations` (at most `iterations · (k + 1)` residual
 /// evaluations, k parameters) or until `stop` says so: the end (physical), its cost, the residual
 /// evaluations spent and the residuals there; and the cost at `p0`. At most `secant` secant
 /// Jacobian updates in a row ([`FitOptions::secant`]).
@@ -806,7 +840,7 @@ fn descend(
     fwd: &dyn Forward,
     data: &FitData,
     p0: &[f64],
-    r0: Option<DVector<f64>>,
+    r0: Option<(DVector<f64>, Option<Vec<Vec<f64>>>)>,
     iterations: usize,
     stop: Stop,
     secant: usize,
@@ -822,6 +856,7 @@ fn descend(
         data,
         z: z0.clone(),
         r: DVector::zeros(0),
+        sims: None,
         fd_step: opts.fd_step,
         last_cost: AtomicU64::new(f64::INFINITY.to_bits()),
         jacobians: AtomicUsize::new(0),
@@ -832,8 +867,9 @@ fn descend(
         sensitivities: opts.sensitivities,
     };
     match r0 {
-        Some(r) => {
+        Some((r, sims)) => {
             prob.r = r;
+            prob.sims = sims;
             prob.trials.fetch_add(1, Ordering::Relaxed);
         }
         None => prob.set_params(&z0),
@@ -855,6 +891,7 @@ fn descend(
             cost,
             evaluations: report.map_or(1, |r| r.number_of_evaluations),
             residuals: Some(prob.r),
+            sims: prob.sims,
         },
         cost0,
     )
@@ -988,6 +1025,7 @@ fn finish(
         k_eff,
         starts,
         evaluations,
+        simulated: None,
     }
 }
 
@@ -1103,6 +1141,33 @@ mod tests {
     /// noise units above the floor on the full problem. With the floor the fit ends at or below
     /// it, polished or not (the polish starts on the bound, where the map of the bounds has no
     /// gradient in that parameter); without it, above.
+    /// The simulation a fit hands on is the forward model's at the fitted parameters, bit for
+    /// bit: without a coarse problem, with one (a different model, whose own simulations must
+    /// never be handed on) and with a floor.
+    #[test]
+    fn the_simulation_handed_on_is_the_models_at_the_end() {
+        let m = relax();
+        let truth = [3.0, 0.7, 0.2];
+        let y = noisy(&m, &truth, 0.003, 11);
+        let data = all_samples(&y, 0.003);
+        let mut coarse = Distorted(relax(), 1.3);
+        coarse.0.specs = m.specs.clone();
+        let starts = [vec![1.0, 5.0, 1.0], vec![50.0, 0.01, 5.0]];
+        let opts = FitOptions::default();
+        let c: Option<(&dyn Forward, &FitData)> = Some((&coarse, &data));
+        for (coarse, floor) in [(None, None), (c, None), (c, Some(&truth[..]))] {
+            let f = fit_coarse(&m, &data, coarse, &starts, floor, &opts);
+            let sims = f.simulated.expect("the end was simulated on the way");
+            let mut again = vec![0.0; y.len()];
+            m.simulate(&f.params, 0, &mut again).unwrap();
+            assert_eq!(sims.len(), 1);
+            assert_eq!(
+                sims[0].iter().map(|v| v.to_bits()).collect::<Vec<_>>(),
+                again.iter().map(|v| v.to_bits()).collect::<Vec<_>>()
+            );
+        }
+    }
+
     #[test]
     fn a_fit_never_ends_above_its_floor() {
         let mut m = relax();

@@ -105,6 +105,11 @@ impl Calibration {
     pub fn values(&self) -> &[f64] {
         &self.values
     }
+    /// The fitted model's simulated response per test over every sample, without the offset
+    /// ([`Calibration::response_offset`]): the replay of [`Calibration::values`].
+    pub fn simulated(&self) -> &[Vec<f64>] {
+        &self.simulated
+    }
     /// Value of a named parameter.
     pub fn get(&self, name: &str) -> Option<f64> {
         self.params.0.iter().find(|(n, _)| n == name).map(|p| p.1)
@@ -194,13 +199,22 @@ pub fn calibrate(
             .map(|t| (0..t.control.len()).collect())
             .collect()
     });
-    // The fit replays each uniform history only up to its last fitted sample (`up_to_fitted`).
-    let upto: Vec<DiagTest> = tests
+    // The fit replays each uniform history only up to its last fitted sample (`up_to_fitted`);
+    // the tests themselves, not copies, when that is all of every history.
+    let cut: Vec<Option<DiagTest>> = tests
         .iter()
         .zip(&fit_idx)
         .map(|(t, idx)| up_to_fitted(t, idx))
         .collect();
-    let fitted = full.replaying(&upto);
+    let upto: Vec<DiagTest> = if cut.iter().all(Option::is_none) {
+        vec![]
+    } else {
+        cut.into_iter()
+            .zip(tests)
+            .map(|(c, t)| c.unwrap_or_else(|| t.clone()))
+            .collect()
+    };
+    let fitted = full.replaying(if upto.is_empty() { tests } else { &upto });
     let pinned = pinned_on(&fitted, opts.pinned.as_ref(), model)?;
     let fwd: &dyn Forward = match &pinned {
         Some(p) => p,
@@ -311,7 +325,17 @@ pub fn calibrate(
         f.std_err = std_err;
         f.at_bound = at_bound;
     }
-    let sims = full.simulate_all(&f.params)?;
+    // The fit's own simulation of its end when it covers every sample of every test (it
+    // replayed the same histories up to the last fitted sample), else a replay of them.
+    let sims = match f.simulated.take() {
+        Some(s)
+            if s.len() == tests.len()
+                && s.iter().zip(tests).all(|(s, t)| s.len() == t.control.len()) =>
+        {
+            s
+        }
+        _ => full.simulate_all(&f.params)?,
+    };
     let response_offset = calibrate::offsets(&data, &sims);
     let gap_rms = tests
         .iter()
@@ -441,13 +465,14 @@ pub(crate) fn decimation(
 /// is causal (a sample's response depends only on the history up to it; only the
 /// machine-compliance solve's tolerance, 10⁻¹² of the largest control, follows the part
 /// replayed), so the held-out samples after it cost a fit nothing. A rod-driven test (its replay spreads a bounded number of points over the whole
-/// history) and a test without fitted samples are kept whole.
-fn up_to_fitted(test: &DiagTest, fit_idx: &[usize]) -> DiagTest {
+/// history) and a test without fitted samples are kept whole: `None`, as is a test whose last
+/// sample is fitted.
+fn up_to_fitted(test: &DiagTest, fit_idx: &[usize]) -> Option<DiagTest> {
     let end = fit_idx.iter().max().map_or(0, |&m| m + 1);
     if !cablab_rod::uniform::is_uniform(test.kind) || end == 0 || end >= test.control.len() {
-        return test.clone();
+        return None;
     }
-    pick(test, &(0..end).collect::<Vec<usize>>())
+    Some(pick(test, &(0..end).collect::<Vec<usize>>()))
 }
 
 /// `test` restricted to the samples `idx` (increasing).
@@ -698,6 +723,48 @@ mod tests {
             "noise of 1/3 σ rms: {}",
             whole.chi2
         );
+    }
+
+    /// What a calibration hands on as its simulation (the fit's own replay of its end when that
+    /// covers every sample, else a replay) is the replay of its values, bit for bit: with the
+    /// whole history fitted and with its last samples held out.
+    #[test]
+    fn the_simulation_handed_on_is_the_replay_of_the_fitted_values() {
+        let mut t = triangle();
+        let ctx = Context::project();
+        let model = ModelSpec::law("elastoplastic");
+        let tests = [t.clone()];
+        let fwd = ModelForward::new(&tests, &model, ctx.catalog, ctx.rod).unwrap();
+        let p: Vec<f64> = fwd
+            .specs()
+            .iter()
+            .map(|s| match s.name.as_str() {
+                "EA" => 7.96e4,
+                "F_y" => 54.0,
+                _ => 2400.0,
+            })
+            .collect();
+        t.response = fwd.simulate_all(&p).unwrap().remove(0);
+        for (i, r) in t.response.iter_mut().enumerate() {
+            *r += 0.05 * ((i * 7919 % 13) as f64 - 6.0) / 6.0;
+        }
+        let tests = [t];
+        for fit_idx in [None, Some(vec![(0..300).collect()])] {
+            let opts = CalibrateOptions {
+                noise: Some(vec![0.05]),
+                fit_idx,
+                ..CalibrateOptions::default()
+            };
+            let cal = calibrate(ctx, &tests, &model, &opts).unwrap();
+            let again = fwd.simulate_all(cal.values()).unwrap();
+            let bits = |v: &[Vec<f64>]| -> Vec<Vec<u64>> {
+                v.iter()
+                    .map(|s| s.iter().map(|x| x.to_bits()).collect())
+                    .collect()
+            };
+            assert_eq!(bits(cal.simulated()), bits(&again));
+            assert_eq!(cal.simulated()[0].len(), 450);
+        }
     }
 
     #[test]

@@ -38,8 +38,8 @@ pub fn noise_floor(tests: &[DiagTest]) -> Vec<f64> {
     tests
         .iter()
         .map(|t| {
-            let white = cablab_measure::noise_level(&t.response);
-            let serial = cablab_measure::condition::serial_noise(&t.response);
+            // `noise_level` and `serial_noise` of the response: its lag-1 scale is the former.
+            let (serial, white) = cablab_measure::condition::serial_noise_and_level(&t.response);
             // φ at the top of its grid is a smooth signal read as a random walk, not noise.
             let serial_ok = serial.phi < SERIAL_PHI_MAX;
             let s = if serial_ok && (serial.phi >= SERIAL_PHI || white < 0.5 * serial.sigma) {

@@ -159,10 +159,21 @@ pub fn read_bytes(
     source: &str,
     opts: &ReadOptions,
 ) -> Result<TestRecord, IngestError> {
-    let sha = sha256_hex(bytes);
+    read_bytes_hashed(bytes, sha256_hex(bytes), source, opts)
+}
+
+/// [`read_bytes`] for bytes whose SHA-256 (lowercase hex, the provenance's `sha256`) the caller
+/// has already computed: the campaign runner hashes each input for its cache key, and a file of
+/// 20,000 rows is not hashed twice.
+pub fn read_bytes_hashed(
+    bytes: &[u8],
+    sha256: String,
+    source: &str,
+    opts: &ReadOptions,
+) -> Result<TestRecord, IngestError> {
     let enc = decode::detect_assess(bytes);
     let text = decode::decode(bytes, enc.0);
-    parse(&text, enc, sha, source, opts)
+    parse(&text, enc, sha256, source, opts)
 }
 
 fn sha256_hex(bytes: &[u8]) -> String {

@@ -56,7 +56,9 @@ use crate::condition::{
     correct_compliance, glitches_with, noise_level, reversal_threshold_with, segment_with,
     zero_offsets_with, Branch, ChannelNoise, Offsets, Segment,
 };
-use crate::elastic::{auto_elastic_range_ar1, user_elastic_range, ElasticRange, Hinge};
+use crate::elastic::{
+    auto_elastic_range_ar1, auto_elastic_range_searched, user_elastic_range, ElasticRange, Hinge,
+};
 use crate::elastica::ThreePointElastica;
 use crate::hysteresis::{cycles, CycleInputs, CycleResult};
 use crate::sectional::{
@@ -814,8 +816,11 @@ pub fn analyze(
     // at higher loads), is the prior σ of the stiffness interval, with the degrees of freedom
     // of a MAD of second differences (about 0.37 as efficient as a standard deviation, over
     // differences with Σρ² = 1.94, and fewer independent samples by the long-run factor).
+    // The first loading's break search serves both segmentations of it (white here, with the
+    // record's φ for the elastic window below).
+    let breaks = crate::elastic::BreakSearch::new(&fx, &fy);
     let serial = {
-        let seg = crate::elastic::segment_lines(&fx, &fy, 3);
+        let seg = breaks.segment(3, 0.0);
         let k = seg.slopes.iter().copied().fold(0.0f64, f64::max);
         let z: Vec<f64> = xs.iter().zip(&rm).map(|(x, y)| y - k * x).collect();
         let (sn, lr) = crate::condition::serial_noise_and_level(&z);
@@ -843,7 +848,7 @@ pub fn analyze(
             e.window = [ma.min(mb), ma.max(mb)];
             Some(e)
         }
-        None => match auto_elastic_range_ar1(&fx, &fy, serial.0.phi) {
+        None => match auto_elastic_range_searched(&fx, &fy, serial.0.phi, Some(&breaks)) {
             Ok(e) => Some(e),
             Err(e) => {
                 why.insert(

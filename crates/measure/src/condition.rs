@@ -35,38 +35,54 @@ use serde::Serialize;
 /// Robust Gaussian noise σ of a signal: MAD of the second differences / (0.6745·√6).
 /// Returns 0 for fewer than 3 samples.
 pub fn noise_level(signal: &[f64]) -> f64 {
-    if signal.len() < 3 {
-        return 0.0;
-    }
-    let d2: Vec<f64> = signal
-        .windows(3)
-        .map(|w| w[2] - 2.0 * w[1] + w[0])
-        .collect();
-    mad_sigma_of_second_differences(&d2)
+    mad_sigma_at_lag(signal, 1, &mut Vec::new())
 }
 
-/// σ of white noise from its second differences (at any lag): MAD / (0.6745·√6).
-pub(crate) fn mad_sigma_of_second_differences(d2: &[f64]) -> f64 {
-    if d2.is_empty() {
+/// σ of white noise from the lag-k second differences of `signal`, `s[i + 2k] − 2 s[i + k] +
+/// s[i]`: MAD / (0.6745·√6) of the finite ones (0 when there are none). The differences go
+/// straight into `keys` (a buffer reused across lags) as [`total_key`]s, without a vector of
+/// their own.
+pub(crate) fn mad_sigma_at_lag(signal: &[f64], k: usize, keys: &mut Vec<u64>) -> f64 {
+    let n = signal.len();
+    if n <= 2 * k {
         return 0.0;
     }
-    // `median` twice, on one buffer of keys: the finite differences, then their finite
-    // absolute deviations from the first median.
-    let mut k: Vec<u64> = d2
-        .iter()
-        .filter(|x| x.is_finite())
-        .map(|&x| total_key(x))
-        .collect();
-    let med = median_of_keys(&mut k);
-    let mut m = 0;
-    for i in 0..k.len() {
-        let a = (from_total_key(k[i]) - med).abs();
-        if a.is_finite() {
-            k[m] = total_key(a);
-            m += 1;
-        }
+    let m = n - 2 * k;
+    keys.clear();
+    let mut finite = true;
+    keys.extend(
+        signal[..m]
+            .iter()
+            .zip(&signal[k..k + m])
+            .zip(&signal[2 * k..])
+            .map(|((&s0, &s1), &s2)| {
+                let d = s2 - 2.0 * s1 + s0;
+                finite &= d.is_finite();
+                total_key(d)
+            }),
+    );
+    if !finite {
+        keys.retain(|&x| from_total_key(x).is_finite());
     }
-    median_of_keys(&mut k[..m]) / (0.674_489_750_196_081_7 * 6f64.sqrt())
+    mad_sigma_of_keys(keys)
+}
+
+/// The MAD σ of the numbers whose [`total_key`]s are `k` (finite; reordered and overwritten).
+fn mad_sigma_of_keys(k: &mut Vec<u64>) -> f64 {
+    // `median` twice, on one buffer of keys: the finite differences, then their finite
+    // absolute deviations from the first median (a non-finite one only where the first median
+    // or a difference is huge: then they are dropped after the pass).
+    let med = median_of_keys(k);
+    let mut finite = true;
+    for x in k.iter_mut() {
+        let a = (from_total_key(*x) - med).abs();
+        finite &= a.is_finite();
+        *x = total_key(a);
+    }
+    if !finite {
+        k.retain(|&x| from_total_key(x).is_finite());
+    }
+    median_of_keys(k) / (0.674_489_750_196_081_7 * 6f64.sqrt())
 }
 
 /// Gaussian AR(1) model of a channel's noise: marginal σ and the lag-1 correlation φ between
@@ -107,8 +123,8 @@ pub fn serial_noise(signal: &[f64]) -> SerialNoise {
 }
 
 /// [`serial_noise`] and the signal's [`noise_level`], which is its scale at lag 1 (computed
-/// once for both).
-pub(crate) fn serial_noise_and_level(signal: &[f64]) -> (SerialNoise, f64) {
+/// once for both): exactly the two numbers the two functions return.
+pub fn serial_noise_and_level(signal: &[f64]) -> (SerialNoise, f64) {
     let n = signal.len();
     let mut lags = Vec::new();
     let mut k = 1usize;
@@ -124,14 +140,10 @@ pub(crate) fn serial_noise_and_level(signal: &[f64]) -> (SerialNoise, f64) {
         return white(noise_level(signal));
     }
     // The lag-1 scale is `noise_level`: the same differences in the same order.
+    let mut keys = Vec::with_capacity(n);
     let scales: Vec<(usize, f64)> = lags
         .iter()
-        .map(|&k| {
-            let d: Vec<f64> = (0..n - 2 * k)
-                .map(|i| signal[i + 2 * k] - 2.0 * signal[i + k] + signal[i])
-                .collect();
-            (k, mad_sigma_of_second_differences(&d))
-        })
+        .map(|&k| (k, mad_sigma_at_lag(signal, k, &mut keys)))
         .collect();
     let level = scales[0].1;
     let v2: Vec<(f64, f64)> = scales
@@ -390,17 +402,18 @@ impl ChannelNoise {
         let mut noise = f64::NAN;
         let mut sigma = f64::NAN;
         let mut k = 1;
+        let mut keys = Vec::with_capacity(signal.len());
         while k <= JITTER_MAX_LAG && signal.len() >= 20 * k {
-            let d2: Vec<f64> = (0..signal.len() - 2 * k)
-                .map(|i| signal[i + 2 * k] - 2.0 * signal[i + k] + signal[i])
-                .collect();
-            let mad = mad_sigma_of_second_differences(&d2);
+            let mad = mad_sigma_at_lag(signal, k, &mut keys);
             if k == 1 {
                 noise = mad;
             }
             // `NaN.max(x)` is x: the first lag starts the maximum.
             sigma = sigma.max(mad);
             if k <= 2 {
+                let d2: Vec<f64> = (0..signal.len() - 2 * k)
+                    .map(|i| signal[i + 2 * k] - 2.0 * signal[i + k] + signal[i])
+                    .collect();
                 sigma = sigma.max(trimmed_rms(&d2, JITTER_TRIM) / 6f64.sqrt());
             }
             k *= 2;
@@ -1226,17 +1239,60 @@ mod tests {
         assert!(noise_level(&clean) < 1e-4);
     }
 
+    /// The MAD σ by its definition: two medians of sorted copies (no selection, no keys).
+    fn mad_by_definition(d2: &[f64]) -> f64 {
+        fn sorted_median(v: &[f64]) -> f64 {
+            let mut v: Vec<f64> = v.iter().copied().filter(|x| x.is_finite()).collect();
+            if v.is_empty() {
+                return f64::NAN;
+            }
+            v.sort_by(f64::total_cmp);
+            let m = v.len() / 2;
+            if v.len() % 2 == 1 {
+                v[m]
+            } else {
+                0.5 * (v[m - 1] + v[m])
+            }
+        }
+        if d2.is_empty() {
+            return 0.0;
+        }
+        let med = sorted_median(d2);
+        let abs_dev: Vec<f64> = d2.iter().map(|d| (d - med).abs()).collect();
+        sorted_median(&abs_dev) / (0.674_489_750_196_081_7 * 6f64.sqrt())
+    }
+
+    /// The lag-k second differences of `signal` (a test's own copy of the formula).
+    fn lag_differences(signal: &[f64], k: usize) -> Vec<f64> {
+        (0..signal.len().saturating_sub(2 * k))
+            .map(|i| signal[i + 2 * k] - 2.0 * signal[i + k] + signal[i])
+            .collect()
+    }
+
     /// The MAD σ on one key buffer is the two medians of its definition, bit for bit, with
-    /// infinities and NaNs among the differences, odd and even counts, and an infinite median.
+    /// infinities and NaNs among the differences, odd and even counts, an infinite median, and
+    /// a test's length of differences.
     #[test]
     fn mad_sigma_is_its_definition_bit_for_bit() {
-        use crate::stats::median;
-        fn by_definition(d2: &[f64]) -> f64 {
-            let med = median(d2);
-            let abs_dev: Vec<f64> = d2.iter().map(|d| (d - med).abs()).collect();
-            median(&abs_dev) / (0.674_489_750_196_081_7 * 6f64.sqrt())
-        }
-        for (seed, n) in [(1u64, 1usize), (2, 2), (3, 3), (4, 10), (5, 101), (6, 4000)] {
+        let of_keys = |d2: &[f64]| {
+            let mut k: Vec<u64> = d2
+                .iter()
+                .filter(|x| x.is_finite())
+                .map(|&x| total_key(x))
+                .collect();
+            mad_sigma_of_keys(&mut k)
+        };
+        for (seed, n) in [
+            (1u64, 1usize),
+            (2, 2),
+            (3, 3),
+            (4, 10),
+            (5, 101),
+            (6, 4000),
+            (7, 2047),
+            (8, 2048),
+            (10, 20_001),
+        ] {
             let mut d = noisy(&vec![0.0; n], 0.2, seed);
             for (i, v) in d.iter_mut().enumerate() {
                 match (i * 7 + seed as usize) % 23 {
@@ -1246,14 +1302,56 @@ mod tests {
                     _ => {}
                 }
             }
-            let (a, b) = (mad_sigma_of_second_differences(&d), by_definition(&d));
+            let (a, b) = (of_keys(&d), mad_by_definition(&d));
             assert!(
                 a.to_bits() == b.to_bits() || (a.is_nan() && b.is_nan()),
                 "n {n}: {a} {b}"
             );
         }
         let huge = [f64::MAX, f64::MAX, 1.0, f64::MAX];
-        assert!(mad_sigma_of_second_differences(&huge).is_nan() && by_definition(&huge).is_nan());
+        assert!(of_keys(&huge).is_nan() && mad_by_definition(&huge).is_nan());
+    }
+
+    /// The MAD σ at a lag, its differences taken straight into keys, is the definition's on the
+    /// differences bit for bit at every lag the noise scales use, over a family of signals:
+    /// white noise, AR(1) noise (φ = 0.9), a quantised staircase (most differences exactly 0),
+    /// a noisy triangle with turning points and dwells, and all of them short and long.
+    #[test]
+    fn mad_sigma_at_lag_is_its_definition_bit_for_bit() {
+        let mut family: Vec<Vec<f64>> = Vec::new();
+        for (seed, n) in [(11u64, 7usize), (12, 150), (13, 2100), (14, 20_000)] {
+            let white = noisy(&vec![0.0; n], 0.3, seed);
+            let mut ar = vec![0.0; n];
+            for i in 1..n {
+                ar[i] = 0.9 * ar[i - 1] + white[i];
+            }
+            let ramp: Vec<f64> = (0..n).map(|i| 1e-4 * i as f64).collect();
+            let stairs: Vec<f64> = noisy(&ramp, 2e-4, seed + 100)
+                .iter()
+                .map(|v| (v / 1e-3).round() * 1e-3)
+                .collect();
+            let tri: Vec<f64> = (0..n)
+                .map(|i| {
+                    let p = (i % 1000) as f64 / 1000.0;
+                    if p < 0.4 {
+                        p
+                    } else if p < 0.5 {
+                        0.4
+                    } else {
+                        0.9 - p
+                    }
+                })
+                .collect();
+            family.extend([white, ar, stairs, noisy(&tri, 0.002, seed + 200)]);
+        }
+        let mut keys = Vec::new();
+        for s in &family {
+            for k in [1, 2, 3, 4, 6, 9, 13, 28, 94, 316, 1000] {
+                let a = mad_sigma_at_lag(s, k, &mut keys);
+                let b = mad_by_definition(&lag_differences(s, k));
+                assert_eq!(a.to_bits(), b.to_bits(), "n {} lag {k}: {a} {b}", s.len());
+            }
+        }
     }
 
     /// `jitter_level` is its definition to the last bit (the lag-1 scale computed once, the
@@ -1278,15 +1376,13 @@ mod tests {
                 }
                 (a[..keep].iter().map(|x| x * x).sum::<f64>() / keep as f64).sqrt()
             };
-            let mut sigma = noise_level(signal);
+            let mut sigma = mad_by_definition(&lag_differences(signal, 1));
             for k in [1, 2, 4] {
                 if signal.len() < 20 * k {
                     break;
                 }
-                let d2: Vec<f64> = (0..signal.len() - 2 * k)
-                    .map(|i| signal[i + 2 * k] - 2.0 * signal[i + k] + signal[i])
-                    .collect();
-                sigma = sigma.max(mad_sigma_of_second_differences(&d2));
+                let d2 = lag_differences(signal, k);
+                sigma = sigma.max(mad_by_definition(&d2));
                 if k <= 2 {
                     sigma = sigma.max(trimmed(&d2) / 6f64.sqrt());
                 }

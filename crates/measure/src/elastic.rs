@@ -2,8 +2,8 @@
 //!
 //! The automatic elastic window on a first loading branch (x = sectional control, increasing;
 //! y = response):
-//! 1. Noise: σ = [`noise_level`] of the residuals of one straight line through the whole branch
-//!    (in time order, so control noise seen through the slope is included).
+//! 1. Noise: σ = [`noise_level`](crate::condition::noise_level) of the residuals of one straight
+//!    line through the whole branch (in time order, so control noise seen through the slope is included).
 //! 2. Breaks: the best fits by 1, 2 and 3 independent straight segments (exhaustive search over
 //!    break positions on a grid of at most 300 candidates, each segment at least 2% of the
 //!    branch and 5 samples; prefix sums make each candidate O(1)). An extra segment is kept only
@@ -30,11 +30,11 @@
 //! What it does not do: decide whether a bend is yield or reversible (that needs the unloading,
 //! see [`crate::hysteresis`]), or convert slopes to stiffnesses (see [`crate::sectional`]).
 
-use crate::condition::noise_level;
 use crate::stats::{line_fit, linear_fit, Fit, Line};
 use crate::MeasureError;
 use nalgebra::{Matrix3, Vector3};
 use serde::Serialize;
+use std::cell::OnceCell;
 
 /// False-detection rate of a break in pure noise.
 const BREAK_ALPHA: f64 = 1e-3;
@@ -95,57 +95,107 @@ pub fn segment_lines(x: &[f64], y: &[f64], max_segments: usize) -> Segmentation 
 /// SSE a break must remove is scaled by the long-run variance factor (1 + φ)/(1 − φ) (a break
 /// fitted to correlated noise removes that much more of it than of white noise).
 pub fn segment_lines_ar1(x: &[f64], y: &[f64], max_segments: usize, phi: f64) -> Segmentation {
-    let n = x.len();
-    let sigma = residual_noise(x, y);
-    let (mx, my) = (mean(x), mean(y));
-    let xs: Vec<f64> = x.iter().map(|v| v - mx).collect();
-    let ys: Vec<f64> = y.iter().map(|v| v - my).collect();
-    let p = Prefix::new(&xs, &ys);
-    let min_len = (n / 50).max(5);
-    let (sse1, s1) = p.fit(0, n);
-    let mut best = Segmentation {
-        breaks: vec![],
-        slopes: vec![s1],
-        sigma,
-    };
-    if max_segments < 2 || n < 2 * min_len {
-        return best;
-    }
-    let step = ((n - 2 * min_len) / 300).max(1);
-    let cands: Vec<usize> = (min_len..=n - min_len).step_by(step).collect();
-    let k = cands.len().max(1) as f64;
-    let thr = sigma * sigma * 2.0 * (k / BREAK_ALPHA).ln() * long_run_factor(phi);
+    BreakSearch::new(x, y).segment(max_segments, phi)
+}
 
-    let mut b2 = (f64::INFINITY, 0usize);
-    for &c in &cands {
-        let sse = p.fit(0, c).0 + p.fit(c, n).0;
-        if sse < b2.0 {
-            b2 = (sse, c);
+/// The search of [`segment_lines_ar1`] on one branch: its noise, the one-line fit and the best
+/// fits with one and with two breaks, none of which depends on φ (only the SSE a break must
+/// remove does). The characterisation segments the same first loading twice (white, for the
+/// record's residual series, and with the record's φ, for the elastic window): searched once,
+/// the break searches run when a segmentation first asks for them.
+pub(crate) struct BreakSearch {
+    n: usize,
+    sigma: f64,
+    p: Prefix,
+    min_len: usize,
+    /// The one-line fit's (SSE, slope).
+    one: (f64, f64),
+    /// The best single break (SSE, index), then the best pair (SSE, first, second).
+    two: OnceCell<(f64, usize)>,
+    three: OnceCell<(f64, usize, usize)>,
+}
+
+impl BreakSearch {
+    /// The noise and the prefix sums of the branch (x, y); no break searched yet.
+    pub(crate) fn new(x: &[f64], y: &[f64]) -> BreakSearch {
+        let n = x.len();
+        let sigma = residual_noise(x, y);
+        let (mx, my) = (mean(x), mean(y));
+        let xs: Vec<f64> = x.iter().map(|v| v - mx).collect();
+        let ys: Vec<f64> = y.iter().map(|v| v - my).collect();
+        let p = Prefix::new(&xs, &ys);
+        let one = p.fit(0, n);
+        BreakSearch {
+            n,
+            sigma,
+            p,
+            min_len: (n / 50).max(5),
+            one,
+            two: OnceCell::new(),
+            three: OnceCell::new(),
         }
     }
-    if sse1 - b2.0 <= thr || b2.0.is_nan() {
-        return best;
+
+    /// The candidate break positions (a grid of at most about 300).
+    fn candidates(&self) -> Vec<usize> {
+        let (n, min_len) = (self.n, self.min_len);
+        let step = ((n - 2 * min_len) / 300).max(1);
+        (min_len..=n - min_len).step_by(step).collect()
     }
-    best.breaks = vec![b2.1];
-    best.slopes = vec![p.fit(0, b2.1).1, p.fit(b2.1, n).1];
-    if max_segments < 3 || n < 3 * min_len {
-        return best;
-    }
-    let mut b3 = (f64::INFINITY, 0usize, 0usize);
-    for (i, &c1) in cands.iter().enumerate() {
-        let left = p.fit(0, c1).0;
-        for &c2 in cands[i..].iter().filter(|&&c2| c2 >= c1 + min_len) {
-            let sse = left + p.fit(c1, c2).0 + p.fit(c2, n).0;
-            if sse < b3.0 {
-                b3 = (sse, c1, c2);
+
+    /// [`segment_lines_ar1`] of the branch with at most `max_segments` pieces under `phi`.
+    pub(crate) fn segment(&self, max_segments: usize, phi: f64) -> Segmentation {
+        let (n, min_len, p) = (self.n, self.min_len, &self.p);
+        let (sse1, s1) = self.one;
+        let mut best = Segmentation {
+            breaks: vec![],
+            slopes: vec![s1],
+            sigma: self.sigma,
+        };
+        if max_segments < 2 || n < 2 * min_len {
+            return best;
+        }
+        let cands = self.candidates();
+        let k = cands.len().max(1) as f64;
+        let thr = self.sigma * self.sigma * 2.0 * (k / BREAK_ALPHA).ln() * long_run_factor(phi);
+
+        let b2 = *self.two.get_or_init(|| {
+            let mut b2 = (f64::INFINITY, 0usize);
+            for &c in &cands {
+                let sse = p.fit(0, c).0 + p.fit(c, n).0;
+                if sse < b2.0 {
+                    b2 = (sse, c);
+                }
             }
+            b2
+        });
+        if sse1 - b2.0 <= thr || b2.0.is_nan() {
+            return best;
         }
+        best.breaks = vec![b2.1];
+        best.slopes = vec![p.fit(0, b2.1).1, p.fit(b2.1, n).1];
+        if max_segments < 3 || n < 3 * min_len {
+            return best;
+        }
+        let b3 = *self.three.get_or_init(|| {
+            let mut b3 = (f64::INFINITY, 0usize, 0usize);
+            for (i, &c1) in cands.iter().enumerate() {
+                let left = p.fit(0, c1).0;
+                for &c2 in cands[i..].iter().filter(|&&c2| c2 >= c1 + min_len) {
+                    let sse = left + p.fit(c1, c2).0 + p.fit(c2, n).0;
+                    if sse < b3.0 {
+                        b3 = (sse, c1, c2);
+                    }
+                }
+            }
+            b3
+        });
+        if b2.0 - b3.0 > thr {
+            best.breaks = vec![b3.1, b3.2];
+            best.slopes = vec![p.fit(0, b3.1).1, p.fit(b3.1, b3.2).1, p.fit(b3.2, n).1];
+        }
+        best
     }
-    if b2.0 - b3.0 > thr {
-        best.breaks = vec![b3.1, b3.2];
-        best.slopes = vec![p.fit(0, b3.1).1, p.fit(b3.1, b3.2).1, p.fit(b3.2, n).1];
-    }
-    best
 }
 
 /// (1 + φ)/(1 − φ), φ clamped to [0, 0.999].
@@ -181,14 +231,12 @@ pub fn residual_noise(x: &[f64], y: &[f64]) -> f64 {
     // quarter of the truth at φ = 0.9, and every wiggle a "break"). The largest estimate over
     // lags 1, 2, 4, … 32 recovers σ; on white noise they agree. A lag k is used only on
     // ≥ 20k samples, so the ≤ 2k differences a bend spoils stay a tenth (the MAD ignores them).
-    let mut sigma = noise_level(&r);
+    let mut keys = Vec::with_capacity(r.len());
+    let mut sigma = crate::condition::mad_sigma_at_lag(&r, 1, &mut keys);
     let mut k = 2;
     while r.len() >= 20 * k && k <= 32 {
-        let sub: Vec<f64> = (0..r.len() - 2 * k)
-            .map(|i| r[i + 2 * k] - 2.0 * r[i + k] + r[i])
-            .collect();
-        // noise_level of a series whose first differences are `sub` (scale: √6 as at lag 1).
-        sigma = sigma.max(crate::condition::mad_sigma_of_second_differences(&sub));
+        // The MAD σ of the lag-k second differences (scale: √6 as at lag 1).
+        sigma = sigma.max(crate::condition::mad_sigma_at_lag(&r, k, &mut keys));
         k *= 2;
     }
     sigma.max(1e-5 * (hi - lo).abs()).max(f64::MIN_POSITIVE)
@@ -345,13 +393,18 @@ fn x_span(x: &[f64], a: usize, b: usize) -> (f64, f64) {
 
 /// Locates toe and bend on a loading branch (x increasing) without fitting a window.
 pub fn find_toe_and_bend(x: &[f64], y: &[f64]) -> (Option<Hinge>, Option<Hinge>, f64) {
-    find_toe_and_bend_ar1(x, y, 0.0)
+    find_toe_and_bend_ar1(x, y, 0.0, &BreakSearch::new(x, y))
 }
 
-/// [`find_toe_and_bend`] for noise with lag-1 correlation `phi`.
-fn find_toe_and_bend_ar1(x: &[f64], y: &[f64], phi: f64) -> (Option<Hinge>, Option<Hinge>, f64) {
+/// [`find_toe_and_bend`] for noise with lag-1 correlation `phi`, on the branch's `search`.
+fn find_toe_and_bend_ar1(
+    x: &[f64],
+    y: &[f64],
+    phi: f64,
+    search: &BreakSearch,
+) -> (Option<Hinge>, Option<Hinge>, f64) {
     let n = x.len();
-    let seg = segment_lines_ar1(x, y, 3, phi);
+    let seg = search.segment(3, phi);
     let mut bounds = vec![0];
     bounds.extend(seg.breaks.iter().copied());
     bounds.push(n);
@@ -390,6 +443,16 @@ pub fn auto_elastic_range_ar1(
     y: &[f64],
     phi: f64,
 ) -> Result<ElasticRange, MeasureError> {
+    auto_elastic_range_searched(x, y, phi, None)
+}
+
+/// [`auto_elastic_range_ar1`], on the branch's [`BreakSearch`] when the caller has one.
+pub(crate) fn auto_elastic_range_searched(
+    x: &[f64],
+    y: &[f64],
+    phi: f64,
+    search: Option<&BreakSearch>,
+) -> Result<ElasticRange, MeasureError> {
     let n = x.len();
     if n < 10 {
         return Err(MeasureError::TooFewSamples {
@@ -398,7 +461,15 @@ pub fn auto_elastic_range_ar1(
             got: n,
         });
     }
-    let (toe, bend, sigma) = find_toe_and_bend_ar1(x, y, phi);
+    let own;
+    let search = match search {
+        Some(s) => s,
+        None => {
+            own = BreakSearch::new(x, y);
+            &own
+        }
+    };
+    let (toe, bend, sigma) = find_toe_and_bend_ar1(x, y, phi, search);
     let lo = toe.map_or(f64::NEG_INFINITY, |t| t.knee_x_ci95[1]);
     let hi = bend.map_or(f64::INFINITY, |b| b.knee_x_ci95[0]);
     let (mut a, mut b) = index_range(x, lo, hi);
@@ -675,5 +746,54 @@ mod tests {
         assert!((bend.knee_x - 0.5).abs() < 0.01, "{bend:?}");
         assert!((r.fit.slope / 5.0 - 1.0).abs() < 0.01, "{:?}", r.fit);
         assert!(r.window[0] >= 0.1 && r.window[1] <= 0.5, "{:?}", r.window);
+    }
+
+    /// One break search segmented for several φ and piece counts, in any order, gives what a
+    /// search of its own gives each time (its one- and two-break searches are read, not
+    /// redone); and the elastic window on a shared search is the one on its own search. Over a
+    /// noisy line, a toe and bend, and a bend under AR(1) noise (φ = 0.9), where φ decides
+    /// whether the breaks count.
+    #[test]
+    fn a_break_search_serves_every_segmentation_of_its_branch() {
+        let x: Vec<f64> = (0..900).map(|i| i as f64 / 900.0).collect();
+        let mut rng = ChaCha8Rng::seed_from_u64(5);
+        let d = Normal::new(0.0, 0.01).unwrap();
+        let mut ar = 0.0;
+        let noise: Vec<(f64, f64)> = (0..x.len())
+            .map(|_| {
+                let e = d.sample(&mut rng);
+                ar = 0.9 * ar + e;
+                (e, ar)
+            })
+            .collect();
+        let line: Vec<f64> = x.iter().zip(&noise).map(|(v, n)| 1.5 * v + n.0).collect();
+        let toe_bend: Vec<f64> = x
+            .iter()
+            .zip(&noise)
+            .map(|(&v, n)| bilinear((v - 0.1).max(0.0), 5.0, 1.0, 0.4) + n.0)
+            .collect();
+        let bend_ar: Vec<f64> = x
+            .iter()
+            .zip(&noise)
+            .map(|(&v, n)| bilinear(v, 4.0, 1.5, 0.6) + 0.5 * n.1)
+            .collect();
+        let asks = [(3, 0.0), (3, 0.9), (2, 0.5), (1, 0.0), (3, 0.95), (2, 0.0)];
+        for y in [&line, &toe_bend, &bend_ar] {
+            for order in [asks.to_vec(), asks.iter().rev().copied().collect()] {
+                let shared = BreakSearch::new(&x, y);
+                for &(m, phi) in &order {
+                    let own = BreakSearch::new(&x, y).segment(m, phi);
+                    assert_eq!(shared.segment(m, phi), own, "{m} pieces, φ {phi}");
+                }
+            }
+            let shared = BreakSearch::new(&x, y);
+            let _ = shared.segment(3, 0.0);
+            for phi in [0.0, 0.9] {
+                assert_eq!(
+                    auto_elastic_range_searched(&x, y, phi, Some(&shared)).ok(),
+                    auto_elastic_range_ar1(&x, y, phi).ok()
+                );
+            }
+        }
     }
 }
