@@ -877,6 +877,7 @@ pub fn words(d: &cablab_diagnose::Diagnosis) -> String {
         noise_rel: d.verdict.noise_rel,
         top_location: top,
         candidates_skipped: d.candidates_skipped.is_some(),
+        gap_all_rel: Some(d.baseline.gap_rel),
     })
 }
 

@@ -830,6 +830,9 @@ struct Run {
     sims: Option<Vec<Vec<f64>>>,
 }
 
+/// Weighted residuals at a point and, when kept, the per-test simulations they come from.
+type Evaluated = (DVector<f64>, Option<Vec<Vec<f64>>>);
+
 /// One Levenberg–Marquardt descent from physical parameters `p0` (residuals `r0` there, and
 /// the simulations they come from, when already known) with a patience of `iterations` (at most `iterations · (k + 1)` residual
 /// evaluations, k parameters) or until `stop` says so: the end (physical), its cost, the residual
@@ -840,7 +843,7 @@ fn descend(
     fwd: &dyn Forward,
     data: &FitData,
     p0: &[f64],
-    r0: Option<(DVector<f64>, Option<Vec<Vec<f64>>>)>,
+    r0: Option<Evaluated>,
     iterations: usize,
     stop: Stop,
     secant: usize,

@@ -189,6 +189,7 @@ pub fn kinematic_hardening_verdict() -> DiagnosisSummary {
         noise_rel: 0.009,
         top_location: Some(("cycle 3 unloading".into(), 0.41)),
         candidates_skipped: false,
+        gap_all_rel: None,
     }
 }
 
