@@ -680,24 +680,9 @@ mod tests {
     fn samples_after_the_last_fitted_one_do_not_change_the_fit() {
         // Elastoplastic tension past yield (labelled branches), the last 150 samples held out:
         // the fit equals the fit of the history cut after its last fitted sample.
-        let mut t = triangle();
         let ctx = Context::project();
         let model = ModelSpec::law("elastoplastic");
-        let tests = [t.clone()];
-        let fwd = ModelForward::new(&tests, &model, ctx.catalog, ctx.rod).unwrap();
-        let p: Vec<f64> = fwd
-            .specs()
-            .iter()
-            .map(|s| match s.name.as_str() {
-                "EA" => 7.96e4,
-                "F_y" => 54.0,
-                _ => 2400.0,
-            })
-            .collect();
-        t.response = fwd.simulate_all(&p).unwrap().remove(0);
-        for (i, r) in t.response.iter_mut().enumerate() {
-            *r += 0.05 * ((i * 7919 % 13) as f64 - 6.0) / 6.0;
-        }
+        let t = noisy_elastoplastic(ctx);
         let cut = 300;
         let short = pick(&t, &(0..cut).collect::<Vec<usize>>());
         let opts = |fit_idx| CalibrateOptions {
@@ -730,25 +715,10 @@ mod tests {
     /// whole history fitted and with its last samples held out.
     #[test]
     fn the_simulation_handed_on_is_the_replay_of_the_fitted_values() {
-        let mut t = triangle();
         let ctx = Context::project();
         let model = ModelSpec::law("elastoplastic");
-        let tests = [t.clone()];
+        let tests = [noisy_elastoplastic(ctx)];
         let fwd = ModelForward::new(&tests, &model, ctx.catalog, ctx.rod).unwrap();
-        let p: Vec<f64> = fwd
-            .specs()
-            .iter()
-            .map(|s| match s.name.as_str() {
-                "EA" => 7.96e4,
-                "F_y" => 54.0,
-                _ => 2400.0,
-            })
-            .collect();
-        t.response = fwd.simulate_all(&p).unwrap().remove(0);
-        for (i, r) in t.response.iter_mut().enumerate() {
-            *r += 0.05 * ((i * 7919 % 13) as f64 - 6.0) / 6.0;
-        }
-        let tests = [t];
         for fit_idx in [None, Some(vec![(0..300).collect()])] {
             let opts = CalibrateOptions {
                 noise: Some(vec![0.05]),
@@ -824,9 +794,35 @@ mod tests {
             .map(|s| example.get(&s.name).copied().unwrap_or(s.initial))
             .collect();
         t.response = fwd.simulate_all(&truth).unwrap().remove(0);
-        for (i, r) in t.response.iter_mut().enumerate() {
+        add_pseudo_noise(&mut t.response);
+        t
+    }
+
+    /// A deterministic pseudo-noise of ±0.05 N (1/3 of that rms) added to `response`.
+    fn add_pseudo_noise(response: &mut [f64]) {
+        for (i, r) in response.iter_mut().enumerate() {
             *r += 0.05 * ((i * 7919 % 13) as f64 - 6.0) / 6.0;
         }
+    }
+
+    /// The labelled triangle history in tension past yield, an elastoplastic law (EA 7.96·10⁴ N,
+    /// F_y 54 N, H 2400 N) as the truth, plus [`add_pseudo_noise`].
+    fn noisy_elastoplastic(ctx: Context) -> DiagTest {
+        let mut t = triangle();
+        let model = ModelSpec::law("elastoplastic");
+        let one = [t.clone()];
+        let fwd = ModelForward::new(&one, &model, ctx.catalog, ctx.rod).unwrap();
+        let p: Vec<f64> = fwd
+            .specs()
+            .iter()
+            .map(|s| match s.name.as_str() {
+                "EA" => 7.96e4,
+                "F_y" => 54.0,
+                _ => 2400.0,
+            })
+            .collect();
+        t.response = fwd.simulate_all(&p).unwrap().remove(0);
+        add_pseudo_noise(&mut t.response);
         t
     }
 
