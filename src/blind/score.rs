@@ -41,6 +41,12 @@ pub struct CaseOutcome {
     pub gap_before_over_noise: f64,
     /// Held-out gap after the true effect / estimated noise floor (when it was scored).
     pub gap_after_over_noise: Option<f64>,
+    /// The baseline's gap over every sample (its fit to the training cycles and its prediction
+    /// of the held-out ones, `baseline.gap_rel`) / estimated noise floor.
+    pub whole_over_noise: f64,
+    /// The verdict's model on its training samples (`verdict.gap_train_rel`) / estimated noise
+    /// floor.
+    pub verdict_train_over_noise: f64,
     /// Held-out gap the verdict's model leaves / estimated noise floor (`verdict.gap_after_rel`
     /// over `verdict.noise_rel`), whatever the verdict.
     pub verdict_gap_over_noise: f64,
@@ -158,6 +164,8 @@ pub fn run_matrix_observed(
                 noise_rel: c.noise_rel,
                 gap_before_over_noise: f64::NAN,
                 gap_after_over_noise: None,
+                whole_over_noise: f64::NAN,
+                verdict_train_over_noise: f64::NAN,
                 verdict_gap_over_noise: f64::NAN,
                 member_gaps_over_noise: vec![],
                 equivalent_sets: vec![],
@@ -192,6 +200,10 @@ pub fn run_matrix_observed(
                         / noise;
                     o.verdict_gap_over_noise =
                         d.verdict.gap_after_rel / d.verdict.noise_rel.max(f64::MIN_POSITIVE);
+                    o.whole_over_noise =
+                        d.baseline.gap_rel / d.verdict.noise_rel.max(f64::MIN_POSITIVE);
+                    o.verdict_train_over_noise =
+                        d.verdict.gap_train_rel / d.verdict.noise_rel.max(f64::MIN_POSITIVE);
                     o.member_gaps_over_noise = c
                         .truths
                         .iter()

@@ -878,6 +878,7 @@ pub fn words(d: &cablab_diagnose::Diagnosis) -> String {
         top_location: top,
         candidates_skipped: d.candidates_skipped.is_some(),
         gap_all_rel: Some(d.baseline.gap_rel),
+        on_training: d.verdict.on_training.clone(),
     })
 }
 

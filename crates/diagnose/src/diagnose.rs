@@ -193,6 +193,9 @@ pub struct Verdict {
     /// The held-out gap left by the verdict's model, same units (= `gap_rel` for `none` and
     /// `unexplained`).
     pub gap_after_rel: f64,
+    /// The verdict's model (the baseline for `none` and `unexplained`) on the training samples,
+    /// the ones it was fitted to: RMS of its residual / largest |measured response|.
+    pub gap_train_rel: f64,
     /// For `unexplained`: in plain words, how far above the noise floor the gap is, where the
     /// residual lies and what was tried.
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -202,6 +205,12 @@ pub struct Verdict {
     /// unexplained (the named set explains some of it, not all). Absent otherwise.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub remainder: Option<String>,
+    /// When the held-out cycle fits the baseline to the noise floor but the training cycles do
+    /// not (≥ [`TRAINING_GAP_CHECK`] × the floor) and the effect was named on the training
+    /// cycles ([`TRAINING_GAP_CHECK`]'s rule): in plain words, that the held-out cycle cannot
+    /// tell it from the baseline and what the training cycles show. Absent otherwise.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub on_training: Option<String>,
     /// Noise floor / largest |measured response|.
     pub noise_rel: f64,
     /// Noise floor (response units, RMS over tests).
@@ -217,6 +226,21 @@ pub struct Verdict {
 /// beyond what the noise estimate's uncertainty or a readings' rounding leave (the blind check's
 /// null cases reach 1.38 at most).
 pub const UNEXPLAINED_GAP: f64 = 1.5;
+
+/// The baseline's gap on the training cycles (RMS in noise units) at or above which a held-out
+/// fit to the noise floor is not yet `none`. The held-out cycle is one cycle: an effect that
+/// shows in the earlier cycles and has settled by the last (a degradation that saturates, a
+/// drift or a hardening that has run its course) leaves the baseline's compromise fit to the
+/// training cycles at the floor on the held-out one. Then the candidates are calibrated anyway
+/// and chosen by the same rules (information criterion on the effective sample size,
+/// materiality, resolution) on the training residuals, with one guard the training cycles
+/// cannot give: the effect must predict the held-out cycle as well as the baseline does (to the
+/// floor, [`NOISE_FLOOR_FIT`], or no worse than the baseline). In-sample the information
+/// criterion pays for every parameter, and the materiality rule asks for a quarter of the
+/// excess; a baseline at 1.25 × the floor has a systematic part of 0.75 × the noise, three
+/// times what the noise estimate's uncertainty leaves. The blind check's null cases reach 1.39
+/// (spikes and mains hum the floor does not count), which no candidate closes.
+pub const TRAINING_GAP_CHECK: f64 = 1.25;
 
 /// How many of the next-best single effects (after the verdict's) also start a set search when
 /// the search from the best leaves at least [`UNEXPLAINED_GAP`] × the noise: a bounded cost,
@@ -333,8 +357,12 @@ pub fn diagnose(
     // The baseline already fits the held-out data to the noise floor: the verdict is `none`
     // whatever a candidate gives (`choose`), so the candidates are not calibrated unless asked.
     let base_gap_noise = (base.rss_noise / base.n_held.max(1) as f64).sqrt();
-    let candidates_skipped =
-        (!opts.all_candidates && base_gap_noise <= NOISE_FLOOR_FIT).then(|| {
+    let base_train = on_training(&base, &train, &noise);
+    let base_train_gap = gap_over_noise(&base_train);
+    let candidates_skipped = (!opts.all_candidates
+        && base_gap_noise <= NOISE_FLOOR_FIT
+        && base_train_gap < TRAINING_GAP_CHECK)
+        .then(|| {
             format!(
             "the baseline fits the held-out data to the noise floor ({base_gap_noise:.2} × the \
              noise, ≤ {NOISE_FLOOR_FIT}): no effect can explain a gap that is not there, so the \
@@ -367,6 +395,39 @@ pub fn diagnose(
         .map(|(&r, f)| r && f.is_none())
         .collect();
     let choice = choose(&base, &scored, &usable);
+    let g0 = (base.rss_noise / base.n_held.max(1) as f64).sqrt();
+    // The held-out cycle fits (or nearly) while the training cycles do not: the same rules on
+    // the training residuals ([`TRAINING_GAP_CHECK`]).
+    let mut on_training_words = None;
+    let mut training_choice = None;
+    if choice.effect == Effect::None && g0 < UNEXPLAINED_GAP && base_train_gap >= TRAINING_GAP_CHECK
+    {
+        let scored_train: Vec<Scored> = scored
+            .iter()
+            .map(|s| on_training(s, &train, &noise))
+            .collect();
+        let usable_train: Vec<bool> = scored
+            .iter()
+            .zip(&usable)
+            .map(|(s, &u)| {
+                u && gap_over_noise(s) <= g0.max(NOISE_FLOOR_FIT)
+                    && !rounding_like(tests, &base.all_resid, &s.all_resid, &train, &resolution)
+            })
+            .collect();
+        let t = choose(&base_train, &scored_train, &usable_train);
+        if t.effect != Effect::None {
+            if let Some(s) = scored_train.iter().find(|s| s.effect == t.effect) {
+                on_training_words = Some(on_training_words_for(
+                    t.effect,
+                    g0,
+                    base_train_gap,
+                    gap_over_noise(s),
+                    s.cal.effective_params() as i64 - base.cal.effective_params() as i64,
+                ));
+            }
+            training_choice = Some(t);
+        }
+    }
 
     let abs_rms = |r: &[Vec<f64>]| {
         let n: usize = r.iter().map(Vec::len).sum();
@@ -402,6 +463,9 @@ pub fn diagnose(
             }
         })
         .collect();
+    // The effects' ΔIC stay on the held-out data; the verdict takes the training cycles' choice
+    // when their rule named an effect.
+    let choice = training_choice.unwrap_or(choice);
     effects.sort_by(|a, b| {
         (a.fit_failed.is_some(), a.below_resolution)
             .cmp(&(b.fit_failed.is_some(), b.below_resolution))
@@ -422,7 +486,6 @@ pub fn diagnose(
         located.sort_by(|a, b| b.share.total_cmp(&a.share));
     }
     let all_gap = abs_rms(&base.all_resid);
-    let g0 = (base.rss_noise / base.n_held.max(1) as f64).sqrt();
     let unexplained = (choice.effect == Effect::None && g0 >= UNEXPLAINED_GAP)
         .then(|| unexplained_words(g0, &located, &effects, &failed));
     let verdict_effect = if unexplained.is_some() {
@@ -462,6 +525,14 @@ pub fn diagnose(
     };
     let mut found: Option<SetFound> = None;
     let mut unexplained = unexplained;
+    // The verdict's model on the training samples (the set's, once a set is found).
+    let mut gap_train = train_rms(
+        scored
+            .iter()
+            .find(|s| s.effect == verdict_effect)
+            .unwrap_or(&base),
+        &train,
+    );
     if let Some(first) = scored.iter().find(|s| s.effect == verdict_effect) {
         set.push(verdict_effect);
         steps.push(Rung {
@@ -528,6 +599,7 @@ pub fn diagnose(
         set = found_set;
         steps = found_steps;
         gap_after = abs_rms(&last.held_resid);
+        gap_train = train_rms(&last, &train);
         if set.len() > 1 {
             equivalent_sets = alternatives
                 .iter()
@@ -596,8 +668,10 @@ pub fn diagnose(
             equivalent_sets,
             gap_rel: gap_before / scale,
             gap_after_rel: gap_after / scale,
+            gap_train_rel: gap_train / scale,
             unexplained,
             remainder,
+            on_training: on_training_words,
             noise_rel: noise_rms / scale,
             noise: noise_rms,
             n_eff: choice.n_eff,
@@ -612,6 +686,46 @@ pub fn diagnose(
         failed,
         candidates_skipped,
     })
+}
+
+/// RMS of `s`'s residual on the training samples (response units).
+fn train_rms(s: &Scored, train: &[Vec<usize>]) -> f64 {
+    let (mut ss, mut n) = (0.0, 0usize);
+    for (r, idx) in s.all_resid.iter().zip(train) {
+        ss += idx.iter().map(|&i| r[i] * r[i]).sum::<f64>();
+        n += idx.len();
+    }
+    (ss / n.max(1) as f64).sqrt()
+}
+
+/// `s` scored on the training samples instead of the held-out ones (its fitted residuals):
+/// the view [`TRAINING_GAP_CHECK`]'s rule chooses on.
+fn on_training(s: &Scored, train: &[Vec<usize>], noise: &[f64]) -> Scored {
+    Scored::on(
+        s.effect,
+        s.model.clone(),
+        s.cal.clone(),
+        s.all_resid.clone(),
+        train,
+        noise,
+    )
+}
+
+/// [`Verdict::on_training`] in plain words.
+fn on_training_words_for(effect: Effect, held: f64, train: f64, after: f64, more: i64) -> String {
+    let params = match more {
+        1 => "one more parameter".to_string(),
+        k if k > 1 => format!("{k} more parameters"),
+        _ => "no more effective parameters".to_string(),
+    };
+    format!(
+        "The held-out cycle fits the baseline ({held:.2} times the noise floor), so it cannot \
+         tell {e} from the baseline; the earlier cycles can: the baseline leaves {train:.2} \
+         times the noise floor on them, {e} {after:.2} with {params}, and it predicts the \
+         held-out cycle as well. Named on the training cycles: a test whose last cycle engages \
+         the effect would confirm it on data the fit did not see.",
+        e = effect.as_str().replace('_', " ")
+    )
 }
 
 /// A model's held-out gap in noise units (RMS of the residual over the noise floor).

@@ -112,6 +112,37 @@ pub(crate) struct Scored {
 }
 
 impl Scored {
+    /// A model fitted with residuals `all_resid` on every sample, scored on the samples `idx`
+    /// of each test (in noise units, `noise` per test).
+    pub(crate) fn on(
+        effect: Effect,
+        model: ModelSpec,
+        cal: Calibration,
+        all_resid: Vec<Vec<f64>>,
+        idx: &[Vec<usize>],
+        noise: &[f64],
+    ) -> Scored {
+        let held_resid: Vec<Vec<f64>> = all_resid
+            .iter()
+            .zip(idx)
+            .map(|(r, idx)| idx.iter().map(|&i| r[i]).collect())
+            .collect();
+        let rss_noise = held_resid
+            .iter()
+            .zip(noise)
+            .map(|(r, s)| r.iter().map(|v| (v / s).powi(2)).sum::<f64>())
+            .sum();
+        Scored {
+            effect,
+            model,
+            cal,
+            held_resid,
+            all_resid,
+            rss_noise,
+            n_held: idx.iter().map(Vec::len).sum(),
+        }
+    }
+
     /// RMS of the held-out residual, response units.
     pub(crate) fn held_rms(&self) -> f64 {
         let ss: f64 = self.held_resid.iter().flatten().map(|v| v * v).sum();
@@ -164,26 +195,7 @@ pub(crate) fn score(
         .zip(&cal.response_offset)
         .map(|((t, s), c)| t.response.iter().zip(s).map(|(m, s)| m - s - c).collect())
         .collect();
-    let held_resid: Vec<Vec<f64>> = all_resid
-        .iter()
-        .zip(held)
-        .map(|(r, idx)| idx.iter().map(|&i| r[i]).collect())
-        .collect();
-    let rss_noise = held_resid
-        .iter()
-        .zip(noise)
-        .map(|(r, s)| r.iter().map(|v| (v / s).powi(2)).sum::<f64>())
-        .sum();
-    let n_held = held.iter().map(Vec::len).sum();
-    Ok(Scored {
-        effect,
-        model: model.clone(),
-        cal,
-        held_resid,
-        all_resid,
-        rss_noise,
-        n_held,
-    })
+    Ok(Scored::on(effect, model.clone(), cal, all_resid, held, noise))
 }
 
 /// Effects that apply to `kind` on top of `base` (law extensions from the catalog, test-level

@@ -34,6 +34,11 @@ pub struct DiagnosisSummary {
     /// says so.
     #[serde(default)]
     pub gap_all_rel: Option<f64>,
+    /// The verdict was named on the training cycles because the held-out one fits the baseline
+    /// (`verdict.on_training`): those words replace the held-out "How far", which does not
+    /// move.
+    #[serde(default)]
+    pub on_training: Option<String>,
 }
 
 /// A held-out gap within this factor of the noise floor counts as "at the noise floor" in words.
@@ -154,7 +159,10 @@ pub fn diagnosis_words(s: &DiagnosisSummary) -> String {
         )),
         (effect, after) => {
             let mut p = format!("Which: {} explains the gap best.", effect_words(effect));
-            if let Some(after) = after {
+            if let Some(w) = &s.on_training {
+                p.push(' ');
+                p.push_str(w);
+            } else if let Some(after) = after {
                 let reached = after <= 1.25 * s.noise_rel;
                 p.push_str(&format!(
                     " How far: adding it to the {baseline} brings the held-out gap from {} to {} \
@@ -209,6 +217,28 @@ pub fn diagnosis_words(s: &DiagnosisSummary) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// An effect named on the training cycles (the held-out one fits the baseline) says so
+    /// instead of a held-out "How far" that does not move.
+    #[test]
+    fn an_effect_named_on_the_training_cycles_says_so_instead_of_how_far() {
+        let mut s = DiagnosisSummary {
+            baseline_law: "elastoplastic".into(),
+            gap_before_rel: 0.0029,
+            verdict_effect: "stiffness_degradation".into(),
+            gap_after_rel: Some(0.0028),
+            noise_rel: 0.0032,
+            ..Default::default()
+        };
+        assert!(diagnosis_words(&s).contains("How far"));
+        s.on_training = Some("Named on the training cycles.".into());
+        let w = diagnosis_words(&s);
+        assert!(!w.contains("How far"), "{w}");
+        assert!(
+            w.contains("explains the gap best. Named on the training cycles."),
+            "{w}"
+        );
+    }
 
     #[test]
     fn equivalent_sets_are_named_with_their_members_and_one_experiment_each() {
@@ -336,6 +366,7 @@ mod tests {
             top_location: None,
             candidates_skipped: false,
             gap_all_rel: None,
+            on_training: None,
         };
         let w = diagnosis_words(&s);
         assert!(

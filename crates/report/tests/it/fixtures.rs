@@ -190,6 +190,7 @@ pub fn kinematic_hardening_verdict() -> DiagnosisSummary {
         top_location: Some(("cycle 3 unloading".into(), 0.41)),
         candidates_skipped: false,
         gap_all_rel: None,
+        on_training: None,
     }
 }
 
