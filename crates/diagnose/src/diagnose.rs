@@ -211,6 +211,9 @@ pub struct Verdict {
     /// tell it from the baseline and what the training cycles show. Absent otherwise.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub on_training: Option<String>,
+    /// The members of `effects` named on the training cycles (`on_training`), `[]` when the
+    /// held-out cycle named them all.
+    pub named_on_training: Vec<Effect>,
     /// Noise floor / largest |measured response|.
     pub noise_rel: f64,
     /// Noise floor (response units, RMS over tests).
@@ -399,6 +402,7 @@ pub fn diagnose(
     // The held-out cycle fits (or nearly) while the training cycles do not: the same rules on
     // the training residuals ([`TRAINING_GAP_CHECK`]).
     let mut on_training_words = None;
+    let mut named_on_training: Vec<Effect> = vec![];
     let mut training_choice = None;
     if choice.effect == Effect::None && g0 < UNEXPLAINED_GAP && base_train_gap >= TRAINING_GAP_CHECK
     {
@@ -425,6 +429,7 @@ pub fn diagnose(
                     s.cal.effective_params() as i64 - base.cal.effective_params() as i64,
                 ));
             }
+            named_on_training.push(t.effect);
             training_choice = Some(t);
         }
     }
@@ -525,14 +530,10 @@ pub fn diagnose(
     };
     let mut found: Option<SetFound> = None;
     let mut unexplained = unexplained;
-    // The verdict's model on the training samples (the set's, once a set is found).
-    let mut gap_train = train_rms(
-        scored
-            .iter()
-            .find(|s| s.effect == verdict_effect)
-            .unwrap_or(&base),
-        &train,
-    );
+    // The verdict's model (the set's, once a set is found) and its gap on the training samples.
+    let mut verdict_model: Option<Scored> =
+        scored.iter().find(|s| s.effect == verdict_effect).cloned();
+    let mut gap_train = train_rms(verdict_model.as_ref().unwrap_or(&base), &train);
     if let Some(first) = scored.iter().find(|s| s.effect == verdict_effect) {
         set.push(verdict_effect);
         steps.push(Rung {
@@ -600,6 +601,7 @@ pub fn diagnose(
         steps = found_steps;
         gap_after = abs_rms(&last.held_resid);
         gap_train = train_rms(&last, &train);
+        verdict_model = Some(last);
         if set.len() > 1 {
             equivalent_sets = alternatives
                 .iter()
@@ -628,6 +630,82 @@ pub fn diagnose(
             g(a).total_cmp(&g(b))
         });
         verdict_effect = set.first().copied().unwrap_or(verdict_effect);
+    }
+    // The set closes the held-out cycle but not the training cycles (`TRAINING_GAP_CHECK`):
+    // forward selection on the training residuals from the set, by the same rules, the
+    // held-out-named members kept; the larger set is taken only when it predicts the held-out
+    // cycle as well as the set does.
+    if let Some(vm) = verdict_model.filter(|_| !set.is_empty() && set.len() < MAX_SET) {
+        let vm_train = on_training(&vm, &train, &noise);
+        let (g_held, g_train) = (gap_over_noise(&vm), gap_over_noise(&vm_train));
+        if g_train >= TRAINING_GAP_CHECK && g_held < UNEXPLAINED_GAP {
+            let start = Scored {
+                effect: Effect::None,
+                ..vm_train
+            };
+            let (rungs, bigger, _) = climb(
+                ctx,
+                tests,
+                start,
+                vec![],
+                MAX_SET - set.len(),
+                opts.candidates.as_deref(),
+                &train,
+                &train,
+                &noise,
+                opts,
+                scale,
+            );
+            let added: Vec<Effect> = rungs
+                .iter()
+                .filter(|r| r.step == "add" && bigger.model.has(r.effect) && !set.contains(&r.effect))
+                .map(|r| r.effect)
+                .collect();
+            let bigger_held = Scored::on(
+                Effect::None,
+                bigger.model.clone(),
+                bigger.cal.clone(),
+                bigger.all_resid.clone(),
+                &held,
+                &noise,
+            );
+            if !added.is_empty()
+                && set.iter().all(|e| bigger.model.has(*e))
+                && gap_over_noise(&bigger_held) <= g_held.max(NOISE_FLOOR_FIT)
+            {
+                let words = on_training_set_words(
+                    &set,
+                    &added,
+                    g_held,
+                    g_train,
+                    gap_over_noise(&bigger),
+                    bigger.cal.effective_params() as i64 - vm.cal.effective_params() as i64,
+                );
+                on_training_words = Some(match on_training_words {
+                    Some(w) => format!("{w} {words}"),
+                    None => words,
+                });
+                named_on_training.extend(&added);
+                set.extend(added);
+                gap_after = abs_rms(&bigger_held.held_resid);
+                gap_train = train_rms(&bigger_held, &train);
+                // The sets one swap away were judged for the smaller set.
+                equivalent_sets.clear();
+                steps = waterfall(
+                    ctx,
+                    tests,
+                    &base,
+                    &scored,
+                    &set,
+                    &bigger_held,
+                    &train,
+                    &held,
+                    &noise,
+                    opts,
+                    scale,
+                );
+            }
+        }
     }
     let remainder = remainder_words(&set, gap_after, noise_rms);
     let ladder = if opts.ladder {
@@ -672,6 +750,7 @@ pub fn diagnose(
             unexplained,
             remainder,
             on_training: on_training_words,
+            named_on_training,
             noise_rel: noise_rms / scale,
             noise: noise_rms,
             n_eff: choice.n_eff,
@@ -709,6 +788,50 @@ fn on_training(s: &Scored, train: &[Vec<usize>], noise: &[f64]) -> Scored {
         train,
         noise,
     )
+}
+
+/// The most effects a verdict's set holds (the set search adds up to two to the first).
+const MAX_SET: usize = 3;
+
+/// [`Verdict::on_training`] in plain words when the training cycles add `added` to the set
+/// the held-out cycle named.
+fn on_training_set_words(
+    set: &[Effect],
+    added: &[Effect],
+    held: f64,
+    train: f64,
+    after: f64,
+    more: i64,
+) -> String {
+    let names = |v: &[Effect]| {
+        v.iter()
+            .map(|e| e.as_str().replace('_', " "))
+            .collect::<Vec<_>>()
+            .join(" + ")
+    };
+    let params = match more {
+        1 => "one more parameter".to_string(),
+        k if k > 1 => format!("{k} more parameters"),
+        _ => "no more effective parameters".to_string(),
+    };
+    format!(
+        "With {s} the held-out cycle fits ({held:.2} times the noise floor), but the earlier \
+         cycles do not ({train:.2} times): adding {a} brings them to {after:.2} times with \
+         {params}, and the larger set predicts the held-out cycle as well. {cap} named on the \
+         training cycles: a test whose last cycle engages {it} would confirm {it} on data the \
+         fit did not see.",
+        s = names(set),
+        a = names(added),
+        cap = capitalised(&names(added)),
+        it = if added.len() == 1 { "it" } else { "them" },
+    )
+}
+
+/// `s` with its first letter in upper case.
+fn capitalised(s: &str) -> String {
+    let mut c = s.chars();
+    c.next()
+        .map_or_else(String::new, |f| f.to_uppercase().chain(c).collect())
 }
 
 /// [`Verdict::on_training`] in plain words.

@@ -34,11 +34,13 @@ pub struct DiagnosisSummary {
     /// says so.
     #[serde(default)]
     pub gap_all_rel: Option<f64>,
-    /// The verdict was named on the training cycles because the held-out one fits the baseline
-    /// (`verdict.on_training`): those words replace the held-out "How far", which does not
-    /// move.
+    /// What the training cycles named that the held-out one could not (`verdict.on_training`).
     #[serde(default)]
     pub on_training: Option<String>,
+    /// The verdict's effect itself was named on the training cycles: the words above replace
+    /// the held-out "How far", which does not move. Otherwise they follow it.
+    #[serde(default)]
+    pub effect_on_training: bool,
 }
 
 /// A held-out gap within this factor of the noise floor counts as "at the noise floor" in words.
@@ -159,7 +161,7 @@ pub fn diagnosis_words(s: &DiagnosisSummary) -> String {
         )),
         (effect, after) => {
             let mut p = format!("Which: {} explains the gap best.", effect_words(effect));
-            if let Some(w) = &s.on_training {
+            if let Some(w) = s.on_training.as_ref().filter(|_| s.effect_on_training) {
                 p.push(' ');
                 p.push_str(w);
             } else if let Some(after) = after {
@@ -183,6 +185,10 @@ pub fn diagnosis_words(s: &DiagnosisSummary) -> String {
                         fmt_percent(s.noise_rel, 1)
                     ));
                 }
+            }
+            if let Some(w) = s.on_training.as_ref().filter(|_| !s.effect_on_training) {
+                p.push(' ');
+                p.push_str(w);
             }
             paras.push(p);
         }
@@ -232,6 +238,14 @@ mod tests {
         };
         assert!(diagnosis_words(&s).contains("How far"));
         s.on_training = Some("Named on the training cycles.".into());
+        // A second member named on the training cycles: after the held-out "How far".
+        let w = diagnosis_words(&s);
+        assert!(
+            w.contains("How far") && w.ends_with("floor (0.3\u{a0}%). Named on the training cycles."),
+            "{w}"
+        );
+        // The verdict's effect itself: instead of it.
+        s.effect_on_training = true;
         let w = diagnosis_words(&s);
         assert!(!w.contains("How far"), "{w}");
         assert!(
@@ -367,6 +381,7 @@ mod tests {
             candidates_skipped: false,
             gap_all_rel: None,
             on_training: None,
+            effect_on_training: false,
         };
         let w = diagnosis_words(&s);
         assert!(

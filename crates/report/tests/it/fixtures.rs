@@ -191,6 +191,7 @@ pub fn kinematic_hardening_verdict() -> DiagnosisSummary {
         candidates_skipped: false,
         gap_all_rel: None,
         on_training: None,
+        effect_on_training: false,
     }
 }
 
