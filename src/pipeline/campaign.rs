@@ -61,6 +61,9 @@ struct SummaryTest<'a> {
     cycles: usize,
     baseline_gap_rel: Option<f64>,
     verdict: Option<&'a str>,
+    /// The set the verdict names, when it names effects.
+    #[serde(skip_serializing_if = "<[String]>::is_empty")]
+    verdict_effects: &'a [String],
     why: &'a [String],
     report: String,
     /// Why calibration, simulation or diagnosis failed (the measurement above is kept).
@@ -237,6 +240,7 @@ pub fn write_campaign_outputs(
             cycles: o.cycles,
             baseline_gap_rel: o.baseline_gap_rel,
             verdict: o.verdict.as_deref(),
+            verdict_effects: &o.verdict_effects,
             why: &o.why,
             report: format!("tests/{}/result.json", o.slug),
             model_error: o.model_error.as_deref(),

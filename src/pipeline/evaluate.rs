@@ -71,6 +71,10 @@ pub struct TestOutcome {
     pub baseline_gap_rel: Option<f64>,
     /// Verdict effect of the diagnosis, with the held-out gaps.
     pub verdict: Option<String>,
+    /// The set of effects the verdict names (`verdict.effects`; `[]` for none, unexplained or
+    /// no diagnosis).
+    #[serde(default)]
+    pub verdict_effects: Vec<String>,
     /// Diagnosis in plain words.
     pub diagnosis_words: Option<String>,
     /// Why a stage was skipped (`diagnose: disabled for this kind`).
@@ -288,6 +292,7 @@ impl TestOutcome {
             calibration: None,
             baseline_gap_rel: None,
             verdict: None,
+            verdict_effects: vec![],
             diagnosis_words: None,
             why: vec![],
             warnings: vec![],
@@ -706,6 +711,12 @@ fn model_part(
         };
         let d = cablab_diagnose::diagnose(ctx, tests, &dopts).context("diagnosing the gap")?;
         out.verdict = Some(d.verdict.effect.as_str().to_string());
+        out.verdict_effects = d
+            .verdict
+            .effects
+            .iter()
+            .map(|e| e.as_str().to_string())
+            .collect();
         // One gap figure per test (issue 13): once the diagnosis ran, the baseline's gap is the
         // verdict's held-out gap, the number its charts and words use; the calibration's
         // all-sample misfit stays inside `calibration`.

@@ -227,6 +227,16 @@ pub fn table1(groups: &[GroupStats]) -> Grid {
     )
 }
 
+/// The verdict as the test's facts give it: a set of effects by its members (the verdict's
+/// effect, the one that explains most, first), a single effect, `none` or `unexplained` by name.
+fn verdict_named(verdict: &str, effects: &[String]) -> String {
+    if effects.len() > 1 {
+        effects.join(" + ")
+    } else {
+        verdict.to_string()
+    }
+}
+
 /// The model part's state in a table cell.
 fn model_state(o: &TestOutcome) -> String {
     match (&o.model_error, o.calibration.is_some()) {
@@ -650,7 +660,7 @@ fn section(out_dir: &Path, o: &TestOutcome) -> TestSection {
             facts.push((what.into(), fmt_percent(g, 2)));
         }
         if let Some(v) = &o.verdict {
-            facts.push(("diagnosis verdict".into(), v.clone()));
+            facts.push(("diagnosis verdict".into(), verdict_named(v, &o.verdict_effects)));
         }
         if let Some(e) = &o.model_error {
             facts.push(("model".into(), format!("failed: {e}")));
@@ -691,5 +701,24 @@ fn section(out_dir: &Path, o: &TestOutcome) -> TestSection {
         facts,
         svgs,
         diagnosis_text: o.diagnosis_words.clone().unwrap_or_default(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_verdict_that_names_a_set_is_given_by_its_members() {
+        let set = ["friction_hysteresis".to_string(), "stiffness_degradation".into()];
+        assert_eq!(
+            verdict_named("friction_hysteresis", &set),
+            "friction_hysteresis + stiffness_degradation"
+        );
+        assert_eq!(
+            verdict_named("friction_hysteresis", &set[..1]),
+            "friction_hysteresis"
+        );
+        assert_eq!(verdict_named("none", &[]), "none");
     }
 }
