@@ -105,6 +105,19 @@ pub struct Support {
     pub friction_force_n: f64,
     /// Whether the support lay beyond the rod's free end at the last evaluation.
     pub off_end: bool,
+    /// What the contact's tangent needs from the last evaluation (None: no contact force).
+    tangent: Option<SupportTangent>,
+}
+
+/// The part of a support's evaluation its tangent needs ([`PlanarRod::build_tangent`]): the
+/// element in contact, the anchor (the material point in contact at the last converged step: its
+/// element and ξ) and the friction branch of the residual.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct SupportTangent {
+    e: usize,
+    e_anchor: usize,
+    xi_anchor: f64,
+    branch: FrictionBranch,
 }
 
 impl Support {
@@ -135,6 +148,7 @@ impl Support {
             normal_force_n: 0.0,
             friction_force_n: 0.0,
             off_end: false,
+            tangent: None,
         }
     }
 }
@@ -216,9 +230,15 @@ pub struct PlanarRod<'a> {
     /// The Newton correction, and the configuration it starts from.
     rhs: Vec<Vector3<f64>>,
     q0: Vec<Vector3<f64>>,
+    /// Per element, what its tangent needs from the last evaluation: the kinematics and the
+    /// section's tangent (the stress is in `stress`).
+    element_eval: Vec<(Kinematics, Matrix3<f64>)>,
+    /// Whether `diag`, `upper` and `lower` hold the tangent of the last evaluation.
+    tangent_built: bool,
 }
 
 /// Kinematics of one element: strains (γ, Γ₃, K), B = ∂ε/∂q (3×6) and the midpoint directors.
+#[derive(Debug, Clone, Copy)]
 struct Kinematics {
     strain: Vector3<f64>,
     b: SMatrix<f64, 3, 6>,
@@ -392,6 +412,23 @@ fn support_forces(
     })
 }
 
+/// Where the anchor (the material point in contact at the last converged step, at `xi_anchor`
+/// of element `e_anchor`) is when the element in contact, `e`, has its ends at `pa` and `pb`.
+fn anchor_of(
+    e: usize,
+    e_anchor: usize,
+    xi_anchor: f64,
+    pa: Vector2<f64>,
+    pb: Vector2<f64>,
+    q: &[Vector3<f64>],
+) -> Vector2<f64> {
+    if e_anchor == e {
+        pa + (pb - pa) * xi_anchor
+    } else {
+        q[e_anchor].xy() + (q[e_anchor + 1].xy() - q[e_anchor].xy()) * xi_anchor
+    }
+}
+
 impl<'a> PlanarRod<'a> {
     /// A straight rod along +x from the origin, `elements` elements of equal length over
     /// `length_m`, unloaded, unconstrained. `bending_stiffness_nm2` sets the force scale of the
@@ -463,6 +500,8 @@ impl<'a> PlanarRod<'a> {
             work: Vec::with_capacity(nodes),
             rhs: vec![Vector3::zeros(); nodes],
             q0: Vec::with_capacity(nodes),
+            element_eval: Vec::with_capacity(elements),
+            tangent_built: false,
         })
     }
 
@@ -482,18 +521,19 @@ impl<'a> PlanarRod<'a> {
         self.res[i]
     }
 
-    /// Evaluate residual and (if `tangent`) the block-tridiagonal tangent at the current `q`,
-    /// writing trial law states. `dt` goes to rate-dependent laws.
-    fn assemble(&mut self, dt: f64, tangent: bool) {
+    /// Evaluate the residual at the current `q`, writing trial law states, and keep what the
+    /// block-tridiagonal tangent there needs; [`PlanarRod::build_tangent`] builds it when a
+    /// Newton correction asks for it. About 40 % of the evaluations are never followed by a
+    /// correction (the last one of every converged solve, rejected line-search trials), and
+    /// the tangent is most of an evaluation's cost after the law. `dt` goes to rate-dependent
+    /// laws.
+    fn assemble(&mut self, dt: f64) {
         let ne = self.l0.len();
         for r in self.res.iter_mut() {
             *r = Vector3::zeros();
         }
-        if tangent {
-            self.diag.iter_mut().for_each(|m| *m = Matrix3::zeros());
-            self.upper.iter_mut().for_each(|m| *m = Matrix3::zeros());
-            self.lower.iter_mut().for_each(|m| *m = Matrix3::zeros());
-        }
+        self.tangent_built = false;
+        self.element_eval.clear();
         let ns = self.n_state;
         for e in 0..ne {
             let l0 = self.l0[e];
@@ -532,21 +572,37 @@ impl<'a> PlanarRod<'a> {
                 self.res[e][d] += f[d];
                 self.res[e + 1][d] += f[3 + d];
             }
-            if tangent {
-                let k: Mat6 = (kin.b.transpose() * cm * kin.b
-                    + geometric_stiffness(&kin, sig[0], sig[1]))
-                    * l0;
-                self.diag[e] += k.fixed_view::<3, 3>(0, 0);
-                self.diag[e + 1] += k.fixed_view::<3, 3>(3, 3);
-                self.upper[e] += k.fixed_view::<3, 3>(0, 3);
-                self.lower[e] += k.fixed_view::<3, 3>(3, 0);
-            }
+            self.element_eval.push((kin, cm));
         }
         for (r, f) in self.res.iter_mut().zip(&self.f_ext) {
             *r -= f;
         }
-        self.assemble_punch(tangent);
-        self.assemble_supports(tangent);
+        self.assemble_punch();
+        self.assemble_supports();
+    }
+
+    /// The block-tridiagonal tangent at the configuration of the last [`PlanarRod::assemble`],
+    /// from what it kept: the elements, then the punch, then the supports, by the operations
+    /// and in the order the evaluation once built it alongside the residual (the same bits).
+    fn build_tangent(&mut self) {
+        if self.tangent_built {
+            return;
+        }
+        self.tangent_built = true;
+        self.diag.iter_mut().for_each(|m| *m = Matrix3::zeros());
+        self.upper.iter_mut().for_each(|m| *m = Matrix3::zeros());
+        self.lower.iter_mut().for_each(|m| *m = Matrix3::zeros());
+        for (e, (kin, cm)) in self.element_eval.iter().enumerate() {
+            let (l0, sig) = (self.l0[e], self.stress[e]);
+            let k: Mat6 =
+                (kin.b.transpose() * cm * kin.b + geometric_stiffness(kin, sig[0], sig[1])) * l0;
+            self.diag[e] += k.fixed_view::<3, 3>(0, 0);
+            self.diag[e + 1] += k.fixed_view::<3, 3>(3, 3);
+            self.upper[e] += k.fixed_view::<3, 3>(0, 3);
+            self.lower[e] += k.fixed_view::<3, 3>(3, 0);
+        }
+        self.punch_tangent();
+        self.support_tangents();
     }
 
     /// Signed gap of node `i` to the punch (negative = penetration) and the outward normal, or
@@ -564,7 +620,7 @@ impl<'a> PlanarRod<'a> {
         (dist > 0.0).then(|| (dist - p.radius_eff_m, d / dist, dist))
     }
 
-    fn assemble_punch(&mut self, tangent: bool) {
+    fn assemble_punch(&mut self) {
         let Some(p) = self.punch.as_mut() else { return };
         p.force_n = 0.0;
         if p.active.len() != self.q.len() {
@@ -575,22 +631,35 @@ impl<'a> PlanarRod<'a> {
             if !p.active[i] {
                 continue;
             }
-            let Some((gap, n, dist)) = Self::punch_gap(p, i, self.q[i].xy()) else {
+            let Some((gap, n, _)) = Self::punch_gap(p, i, self.q[i].xy()) else {
                 continue;
             };
             // Active nodes are held bilaterally (energy ½ k g²): residual k g n, tangent
-            // k (n nᵀ + g (I − n nᵀ)/dist); the active set decides unilaterality.
+            // k (n nᵀ + g (I − n nᵀ)/dist) (`punch_tangent`); the active set decides
+            // unilaterality.
             let rv = p.k * gap * n;
             self.res[i][0] += rv.x;
             self.res[i][1] += rv.y;
             p.force_n += rv.y;
-            if tangent {
-                let nn = n * n.transpose();
-                let kk = (nn + (Matrix2::identity() - nn) * (gap / dist)) * p.k;
-                for a in 0..2 {
-                    for b in 0..2 {
-                        self.diag[i][(a, b)] += kk[(a, b)];
-                    }
+        }
+    }
+
+    /// The punch's part of the tangent at the configuration of the last evaluation (the nodes
+    /// [`PlanarRod::assemble_punch`] held).
+    fn punch_tangent(&mut self) {
+        let Some(p) = self.punch.as_ref() else { return };
+        for i in 0..self.q.len() {
+            if !p.active[i] {
+                continue;
+            }
+            let Some((gap, n, dist)) = Self::punch_gap(p, i, self.q[i].xy()) else {
+                continue;
+            };
+            let nn = n * n.transpose();
+            let kk = (nn + (Matrix2::identity() - nn) * (gap / dist)) * p.k;
+            for a in 0..2 {
+                for b in 0..2 {
+                    self.diag[i][(a, b)] += kk[(a, b)];
                 }
             }
         }
@@ -623,9 +692,10 @@ impl<'a> PlanarRod<'a> {
         changed
     }
 
-    fn assemble_supports(&mut self, tangent: bool) {
+    fn assemble_supports(&mut self) {
         let ne = self.l0.len();
         for si in 0..self.supports.len() {
+            self.supports[si].tangent = None;
             // Find the element the support projects onto, searching outward from the last one.
             let hint = self.supports[si].hint.min(ne - 1);
             let mut found = None;
@@ -677,14 +747,7 @@ impl<'a> PlanarRod<'a> {
                 .min(ne - 1);
             let xi_anchor =
                 ((sup.contact_s_m - self.s_ref[e_anchor]) / self.l0[e_anchor]).clamp(0.0, 1.0);
-            let anchor_of = |pa: Vector2<f64>, pb: Vector2<f64>, q: &[Vector3<f64>]| {
-                if e_anchor == e {
-                    pa + (pb - pa) * xi_anchor
-                } else {
-                    q[e_anchor].xy() + (q[e_anchor + 1].xy() - q[e_anchor].xy()) * xi_anchor
-                }
-            };
-            let anchor = anchor_of(pa, pb, &self.q);
+            let anchor = anchor_of(e, e_anchor, xi_anchor, pa, pb, &self.q);
             let Some(ev) = support_forces(sup, pa, pb, s_a, l0, true, anchor, sup.frozen) else {
                 continue;
             };
@@ -698,59 +761,82 @@ impl<'a> PlanarRod<'a> {
                 self.res[e][d] -= ev.fa[d];
                 self.res[e + 1][d] -= ev.fb[d];
             }
-            if tangent {
-                // Central differences of the contact forces w.r.t. (xa, ya, xb, yb), on the
-                // friction branch of the residual (see `support_forces`).
-                let h = 1e-7 * l0;
-                let mut jac = SMatrix::<f64, 4, 4>::zeros();
-                for j in 0..4 {
-                    let mut p_plus = [pa, pb];
-                    let mut p_minus = [pa, pb];
-                    p_plus[j / 2][j % 2] += h;
-                    p_minus[j / 2][j % 2] -= h;
-                    let fp = support_forces(
-                        sup,
-                        p_plus[0],
-                        p_plus[1],
-                        s_a,
-                        l0,
-                        true,
-                        anchor_of(p_plus[0], p_plus[1], &self.q),
-                        Some(ev.branch),
-                    );
-                    let fm = support_forces(
-                        sup,
-                        p_minus[0],
-                        p_minus[1],
-                        s_a,
-                        l0,
-                        true,
-                        anchor_of(p_minus[0], p_minus[1], &self.q),
-                        Some(ev.branch),
-                    );
-                    if let (Some(fp), Some(fm)) = (fp, fm) {
-                        for d in 0..2 {
-                            jac[(d, j)] = (fp.fa[d] - fm.fa[d]) / (2.0 * h);
-                            jac[(2 + d, j)] = (fp.fb[d] - fm.fb[d]) / (2.0 * h);
-                        }
-                    }
-                }
-                // Residual = −forces, so its tangent is −jac.
-                for a in 0..2 {
-                    for b in 0..2 {
-                        self.diag[e][(a, b)] -= jac[(a, b)];
-                        self.diag[e + 1][(a, b)] -= jac[(2 + a, 2 + b)];
-                        self.upper[e][(a, b)] -= jac[(a, 2 + b)];
-                        self.lower[e][(a, b)] -= jac[(2 + a, b)];
-                    }
-                }
-            }
             let sup = &mut self.supports[si];
             sup.hint = e;
             sup.normal_force_n = ev.normal;
             sup.friction_force_n = ev.friction;
             sup.trial = (ev.s_c, ev.p_c, ev.friction);
             sup.decided = decided;
+            sup.tangent = Some(SupportTangent {
+                e,
+                e_anchor,
+                xi_anchor,
+                branch: ev.branch,
+            });
+        }
+    }
+
+    /// The supports' part of the tangent at the configuration of the last evaluation: central
+    /// differences of the contact forces w.r.t. (xa, ya, xb, yb) of the element in contact, on
+    /// the friction branch of the residual (see `support_forces`). None of the fields the
+    /// evaluation wrote after the residual enter the forces.
+    fn support_tangents(&mut self) {
+        for si in 0..self.supports.len() {
+            let sup = &self.supports[si];
+            let Some(SupportTangent {
+                e,
+                e_anchor,
+                xi_anchor,
+                branch,
+            }) = sup.tangent
+            else {
+                continue;
+            };
+            let (pa, pb) = (self.q[e].xy(), self.q[e + 1].xy());
+            let (s_a, l0) = (self.s_ref[e], self.l0[e]);
+            let h = 1e-7 * l0;
+            let mut jac = SMatrix::<f64, 4, 4>::zeros();
+            for j in 0..4 {
+                let mut p_plus = [pa, pb];
+                let mut p_minus = [pa, pb];
+                p_plus[j / 2][j % 2] += h;
+                p_minus[j / 2][j % 2] -= h;
+                let fp = support_forces(
+                    sup,
+                    p_plus[0],
+                    p_plus[1],
+                    s_a,
+                    l0,
+                    true,
+                    anchor_of(e, e_anchor, xi_anchor, p_plus[0], p_plus[1], &self.q),
+                    Some(branch),
+                );
+                let fm = support_forces(
+                    sup,
+                    p_minus[0],
+                    p_minus[1],
+                    s_a,
+                    l0,
+                    true,
+                    anchor_of(e, e_anchor, xi_anchor, p_minus[0], p_minus[1], &self.q),
+                    Some(branch),
+                );
+                if let (Some(fp), Some(fm)) = (fp, fm) {
+                    for d in 0..2 {
+                        jac[(d, j)] = (fp.fa[d] - fm.fa[d]) / (2.0 * h);
+                        jac[(2 + d, j)] = (fp.fb[d] - fm.fb[d]) / (2.0 * h);
+                    }
+                }
+            }
+            // Residual = −forces, so its tangent is −jac.
+            for a in 0..2 {
+                for b in 0..2 {
+                    self.diag[e][(a, b)] -= jac[(a, b)];
+                    self.diag[e + 1][(a, b)] -= jac[(2 + a, 2 + b)];
+                    self.upper[e][(a, b)] -= jac[(a, 2 + b)];
+                    self.lower[e][(a, b)] -= jac[(2 + a, b)];
+                }
+            }
         }
     }
 
@@ -930,7 +1016,7 @@ impl NewtonSystem for PlanarRod<'_> {
     }
 
     fn assemble(&mut self, dt: f64) -> Result<(), String> {
-        PlanarRod::assemble(self, dt, true);
+        PlanarRod::assemble(self, dt);
         Ok(())
     }
 
@@ -945,6 +1031,7 @@ impl NewtonSystem for PlanarRod<'_> {
     /// Right-hand side: −R on free dofs; the prescribed increment on the constrained ones (moved
     /// to the right-hand side through the tangent's columns, then rows/cols zeroed).
     fn correction(&mut self, pending: bool) -> Result<(), usize> {
+        self.build_tangent();
         let n = self.nodes();
         for i in 0..n {
             self.rhs[i] = -self.res[i];
@@ -1070,6 +1157,138 @@ mod tests {
                 assert!((fd1 - h1[(i, j)]).abs() < 1e-6, "H1[{i},{j}]");
                 assert!((fd3 - h3[(i, j)]).abs() < 1e-6, "H3[{i},{j}]");
             }
+        }
+    }
+
+    /// The tangent built on demand after an evaluation is, bit for bit, the one the
+    /// evaluation's own data define: every element's ((Bᵀ C) B + G) l₀ from its law's response at
+    /// that configuration, the held punch nodes and the central differences of the support's
+    /// contact forces on the residual's friction branch, added in that order. A three-point rod
+    /// (elastoplastic, rough support, punch) after a few committed steps, evaluated at a
+    /// configuration off equilibrium, and once more at another (so that the evaluation's later
+    /// writes to the support are in place).
+    #[test]
+    fn deferred_tangent_is_the_evaluations_tangent_bit_for_bit() {
+        use cablab_laws::{Channel, Elastoplastic, SectionStiffness};
+        let law = Elastoplastic::isotropic(
+            SectionStiffness::CHAPTER_CABLE,
+            Channel::Bending,
+            4e-3,
+            1e-4,
+        );
+        let (span, overhang) = (0.056, 0.0084);
+        let mut rod = PlanarRod::straight(&law, 0.5 * span + overhang, 12).unwrap();
+        rod.prescribed[0] = [Some(0.0), None, Some(0.0)];
+        let k = 1e7 * 1.37e-3 / span.powi(3);
+        let mut sup = Support::new(
+            Vector2::new(0.5 * span, -0.002),
+            0.002,
+            k,
+            0.3,
+            0.5 * span,
+            Vector2::new(0.5 * span, 0.0),
+        );
+        sup.k_tangent = k;
+        rod.supports.push(sup);
+        rod.punch = Some(Punch::new(0.0, 0.0, k));
+        for step in 1..=12 {
+            rod.punch.as_mut().unwrap().tip_y_m = -0.00025 * step as f64;
+            rod.solve(0.1, step).unwrap();
+            rod.commit();
+        }
+        let same = |a: &[Matrix3<f64>], b: &[Matrix3<f64>]| {
+            a.len() == b.len()
+                && a.iter().zip(b).all(|(x, y)| {
+                    x.iter()
+                        .zip(y.iter())
+                        .all(|(u, v)| u.to_bits() == v.to_bits())
+                })
+        };
+        for shift in [3e-5, -2e-5] {
+            for (i, q) in rod.q.iter_mut().enumerate().skip(1) {
+                q.y += shift * (i as f64).sqrt();
+                q[2] += 0.1 * shift;
+            }
+            PlanarRod::assemble(&mut rod, 0.1);
+            let ne = rod.l0.len();
+            let ns = rod.n_state;
+            let mut diag = vec![Matrix3::zeros(); ne + 1];
+            let mut upper = vec![Matrix3::zeros(); ne];
+            let mut lower = vec![Matrix3::zeros(); ne];
+            let mut scratch = vec![0.0; ns];
+            for e in 0..ne {
+                let kin = kinematics(&rod.q[e], &rod.q[e + 1], rod.l0[e]);
+                let eps = Vector6::new(0.0, -kin.strain[0], kin.strain[1], kin.strain[2], 0.0, 0.0);
+                let resp = law.update(&eps, 0.1, &rod.state[e * ns..(e + 1) * ns], &mut scratch);
+                let sig = Vector3::new(-resp.stress[1], resp.stress[2], resp.stress[3]);
+                let cm = Matrix3::from_fn(|i, j| {
+                    LAW_SIGN[i] * LAW_SIGN[j] * resp.tangent[(LAW_INDEX[i], LAW_INDEX[j])]
+                });
+                let k: Mat6 = (kin.b.transpose() * cm * kin.b
+                    + geometric_stiffness(&kin, sig[0], sig[1]))
+                    * rod.l0[e];
+                diag[e] += k.fixed_view::<3, 3>(0, 0);
+                diag[e + 1] += k.fixed_view::<3, 3>(3, 3);
+                upper[e] += k.fixed_view::<3, 3>(0, 3);
+                lower[e] += k.fixed_view::<3, 3>(3, 0);
+            }
+            let p = rod.punch.as_ref().unwrap();
+            assert!(p.active[0], "the punch holds node 0");
+            let (gap, n, dist) = PlanarRod::punch_gap(p, 0, rod.q[0].xy()).unwrap();
+            let nn = n * n.transpose();
+            let kk = (nn + (Matrix2::identity() - nn) * (gap / dist)) * p.k;
+            for a in 0..2 {
+                for b in 0..2 {
+                    diag[0][(a, b)] += kk[(a, b)];
+                }
+            }
+            let sup = &rod.supports[0];
+            let e = sup.hint;
+            let e_anchor = rod
+                .s_ref
+                .partition_point(|&s| s <= sup.contact_s_m)
+                .saturating_sub(1)
+                .min(ne - 1);
+            let xi = ((sup.contact_s_m - rod.s_ref[e_anchor]) / rod.l0[e_anchor]).clamp(0.0, 1.0);
+            let branch = sup.frozen.unwrap_or(sup.decided);
+            let (pa, pb) = (rod.q[e].xy(), rod.q[e + 1].xy());
+            let h = 1e-7 * rod.l0[e];
+            for j in 0..4 {
+                let mut plus = [pa, pb];
+                let mut minus = [pa, pb];
+                plus[j / 2][j % 2] += h;
+                minus[j / 2][j % 2] -= h;
+                let at = |p: [Vector2<f64>; 2]| {
+                    support_forces(
+                        sup,
+                        p[0],
+                        p[1],
+                        rod.s_ref[e],
+                        rod.l0[e],
+                        true,
+                        anchor_of(e, e_anchor, xi, p[0], p[1], &rod.q),
+                        Some(branch),
+                    )
+                    .unwrap()
+                };
+                let (fp, fm) = (at(plus), at(minus));
+                for d in 0..2 {
+                    let (col, row) = (j % 2, d);
+                    let (da, db) = (
+                        (fp.fa[d] - fm.fa[d]) / (2.0 * h),
+                        (fp.fb[d] - fm.fb[d]) / (2.0 * h),
+                    );
+                    if j < 2 {
+                        diag[e][(row, col)] -= da;
+                        lower[e][(row, col)] -= db;
+                    } else {
+                        upper[e][(row, col)] -= da;
+                        diag[e + 1][(row, col)] -= db;
+                    }
+                }
+            }
+            rod.build_tangent();
+            assert!(same(&rod.diag, &diag) && same(&rod.upper, &upper) && same(&rod.lower, &lower));
         }
     }
 
