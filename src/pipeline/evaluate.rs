@@ -75,6 +75,10 @@ pub struct TestOutcome {
     /// no diagnosis).
     #[serde(default)]
     pub verdict_effects: Vec<String>,
+    /// The members of `verdict_effects` named on the training cycles
+    /// (`verdict.named_on_training`).
+    #[serde(default)]
+    pub named_on_training: Vec<String>,
     /// Diagnosis in plain words.
     pub diagnosis_words: Option<String>,
     /// Why a stage was skipped (`diagnose: disabled for this kind`).
@@ -293,6 +297,7 @@ impl TestOutcome {
             baseline_gap_rel: None,
             verdict: None,
             verdict_effects: vec![],
+            named_on_training: vec![],
             diagnosis_words: None,
             why: vec![],
             warnings: vec![],
@@ -714,6 +719,12 @@ fn model_part(
         out.verdict_effects = d
             .verdict
             .effects
+            .iter()
+            .map(|e| e.as_str().to_string())
+            .collect();
+        out.named_on_training = d
+            .verdict
+            .named_on_training
             .iter()
             .map(|e| e.as_str().to_string())
             .collect();

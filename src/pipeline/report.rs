@@ -237,6 +237,20 @@ fn verdict_named(verdict: &str, effects: &[String]) -> String {
     }
 }
 
+/// The caption of the "which effect" chart. Its bars are held-out gaps; an effect named on the
+/// training cycles barely moves them, so the caption says where to read why it was named.
+fn gap_which_caption(named_on_training: &[String]) -> String {
+    let mut c = "which effect: held-out gap before and after adding each candidate".to_string();
+    if !named_on_training.is_empty() {
+        c.push_str(&format!(
+            " ({} named on the training cycles, which the held-out cycle cannot separate from \
+             the baseline: see the diagnosis' words)",
+            named_on_training.join(" + ")
+        ));
+    }
+    c
+}
+
 /// The model part's state in a table cell.
 fn model_state(o: &TestOutcome) -> String {
     match (&o.model_error, o.calibration.is_some()) {
@@ -678,7 +692,7 @@ fn section(out_dir: &Path, o: &TestOutcome) -> TestSection {
         match n {
         "curve.svg" => "measured curve by cycle, elastic fit, yield point, loops; simulated baseline and residual".to_string(),
         "gap_where.svg" => "where the gap lies: share of the squared residual".to_string(),
-        "gap_which.svg" => "which effect: held-out gap before and after adding each candidate".to_string(),
+        "gap_which.svg" => gap_which_caption(&o.named_on_training),
         "gap_waterfall.svg" => "how far the gap shrinks, down to the noise floor".to_string(),
         "gap_span.svg" => "where along the span: share of the squared residual (three-point)".to_string(),
         other => other.to_string(),
@@ -720,5 +734,16 @@ mod tests {
             "friction_hysteresis"
         );
         assert_eq!(verdict_named("none", &[]), "none");
+    }
+
+    #[test]
+    fn the_which_chart_says_when_an_effect_was_named_on_the_training_cycles() {
+        let plain = gap_which_caption(&[]);
+        assert!(!plain.contains("training"), "{plain}");
+        let c = gap_which_caption(&["stiffness_degradation".to_string()]);
+        assert!(
+            c.starts_with(&plain) && c.contains("stiffness_degradation named on the training"),
+            "{c}"
+        );
     }
 }
