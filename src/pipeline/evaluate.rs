@@ -716,18 +716,9 @@ fn model_part(
         };
         let d = cablab_diagnose::diagnose(ctx, tests, &dopts).context("diagnosing the gap")?;
         out.verdict = Some(d.verdict.effect.as_str().to_string());
-        out.verdict_effects = d
-            .verdict
-            .effects
-            .iter()
-            .map(|e| e.as_str().to_string())
-            .collect();
-        out.named_on_training = d
-            .verdict
-            .named_on_training
-            .iter()
-            .map(|e| e.as_str().to_string())
-            .collect();
+        let names = |v: &[Effect]| v.iter().map(|e| e.as_str().to_string()).collect();
+        out.verdict_effects = names(&d.verdict.effects);
+        out.named_on_training = names(&d.verdict.named_on_training);
         // One gap figure per test (issue 13): once the diagnosis ran, the baseline's gap is the
         // verdict's held-out gap, the number its charts and words use; the calibration's
         // all-sample misfit stays inside `calibration`.
