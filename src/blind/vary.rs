@@ -896,7 +896,11 @@ mod tests {
             let v = &d.verdict;
             assert_eq!(v.effects, c.truths, "{}", c.name);
             let words = v.on_training.as_deref().unwrap_or("");
-            assert!(words.contains("the earlier cycles can"), "{}: {words:?}", c.name);
+            assert!(
+                words.contains("the earlier cycles can"),
+                "{}: {words:?}",
+                c.name
+            );
             let held = d.baseline.gap_heldout_rel / v.noise_rel;
             assert!(
                 v.gap_after_rel / v.noise_rel <= held.max(NOISE_FLOOR_FIT) + 1e-9,
@@ -929,10 +933,15 @@ mod tests {
             truths.sort();
             assert_eq!(named, truths, "{}", c.name);
             let words = v.on_training.as_deref().unwrap_or("");
-            assert!(words.contains("named on the training cycles"), "{}: {words:?}", c.name);
+            assert!(
+                words.contains("named on the training cycles"),
+                "{}: {words:?}",
+                c.name
+            );
             assert!(
                 v.gap_after_rel <= NOISE_FLOOR_FIT * v.noise_rel
-                    && v.gap_train_rel < cablab_diagnose::diagnose::TRAINING_GAP_CHECK * v.noise_rel,
+                    && v.gap_train_rel
+                        < cablab_diagnose::diagnose::TRAINING_GAP_CHECK * v.noise_rel,
                 "{}: {} × held out, {} × training",
                 c.name,
                 v.gap_after_rel / v.noise_rel,
@@ -954,7 +963,8 @@ mod tests {
             crate::blind::through_readers(&mut c).unwrap();
             let d = diagnose(Context::project(), &c.tests, &DiagnoseOptions::default()).unwrap();
             assert!(
-                d.baseline.gap_rel >= cablab_diagnose::diagnose::TRAINING_GAP_CHECK * d.verdict.noise_rel,
+                d.baseline.gap_rel
+                    >= cablab_diagnose::diagnose::TRAINING_GAP_CHECK * d.verdict.noise_rel,
                 "{}: the case no longer exercises the rule",
                 c.name
             );
@@ -996,4 +1006,3 @@ mod tests {
         );
     }
 }
-

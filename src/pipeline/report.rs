@@ -674,7 +674,10 @@ fn section(out_dir: &Path, o: &TestOutcome) -> TestSection {
             facts.push((what.into(), fmt_percent(g, 2)));
         }
         if let Some(v) = &o.verdict {
-            facts.push(("diagnosis verdict".into(), verdict_named(v, &o.verdict_effects)));
+            facts.push((
+                "diagnosis verdict".into(),
+                verdict_named(v, &o.verdict_effects),
+            ));
         }
         if let Some(e) = &o.model_error {
             facts.push(("model".into(), format!("failed: {e}")));
@@ -724,7 +727,10 @@ mod tests {
 
     #[test]
     fn a_verdict_that_names_a_set_is_given_by_its_members() {
-        let set = ["friction_hysteresis".to_string(), "stiffness_degradation".into()];
+        let set = [
+            "friction_hysteresis".to_string(),
+            "stiffness_degradation".into(),
+        ];
         assert_eq!(
             verdict_named("friction_hysteresis", &set),
             "friction_hysteresis + stiffness_degradation"

@@ -658,7 +658,9 @@ pub fn diagnose(
             );
             let added: Vec<Effect> = rungs
                 .iter()
-                .filter(|r| r.step == "add" && bigger.model.has(r.effect) && !set.contains(&r.effect))
+                .filter(|r| {
+                    r.step == "add" && bigger.model.has(r.effect) && !set.contains(&r.effect)
+                })
                 .map(|r| r.effect)
                 .collect();
             let bigger_held = Scored::on(

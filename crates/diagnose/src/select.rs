@@ -195,7 +195,14 @@ pub(crate) fn score(
         .zip(&cal.response_offset)
         .map(|((t, s), c)| t.response.iter().zip(s).map(|(m, s)| m - s - c).collect())
         .collect();
-    Ok(Scored::on(effect, model.clone(), cal, all_resid, held, noise))
+    Ok(Scored::on(
+        effect,
+        model.clone(),
+        cal,
+        all_resid,
+        held,
+        noise,
+    ))
 }
 
 /// Effects that apply to `kind` on top of `base` (law extensions from the catalog, test-level

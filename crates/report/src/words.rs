@@ -241,7 +241,8 @@ mod tests {
         // A second member named on the training cycles: after the held-out "How far".
         let w = diagnosis_words(&s);
         assert!(
-            w.contains("How far") && w.ends_with("floor (0.3\u{a0}%). Named on the training cycles."),
+            w.contains("How far")
+                && w.ends_with("floor (0.3\u{a0}%). Named on the training cycles."),
             "{w}"
         );
         // The verdict's effect itself: instead of it.
