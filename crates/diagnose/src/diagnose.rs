@@ -218,7 +218,9 @@ pub struct Verdict {
     pub noise_rel: f64,
     /// Noise floor (response units, RMS over tests).
     pub noise: f64,
-    /// Effective held-out sample size used for the comparison.
+    /// Effective sample size used for the comparison that named the verdict: of the held-out
+    /// samples, or of the training samples when the verdict's effect was named on them
+    /// ([`Verdict::named_on_training`]).
     pub n_eff: f64,
     /// Experiments that would separate the verdict from its equivalents.
     pub separating: Vec<Separation>,

@@ -1063,6 +1063,9 @@ impl NewtonSystem for PlanarRod<'_> {
                 self.rhs[i][d] = v - self.q[i][d];
             }
         }
+        // The constraints overwrote rows and columns of the tangent: a later correction at the
+        // same evaluation builds it again rather than take the constrained one.
+        self.tangent_built = false;
         solve_block_tridiagonal(
             &self.diag,
             &self.upper,
