@@ -55,6 +55,9 @@ pub struct CaseOutcome {
     pub member_gaps_over_noise: Vec<Option<f64>>,
     /// The equivalent sets the verdict reported (`verdict.equivalent_sets`), members joined by `+`.
     pub equivalent_sets: Vec<String>,
+    /// Three-point: the rod-numerics check's error of the baseline (`diagnosis.mesh`), in units
+    /// of the noise floor.
+    pub rod_numerics_over_noise: Option<f64>,
     /// Wall time of the diagnosis, s.
     pub seconds: f64,
     /// Why the diagnosis failed, if it did.
@@ -169,6 +172,7 @@ pub fn run_matrix_observed(
                 verdict_gap_over_noise: f64::NAN,
                 member_gaps_over_noise: vec![],
                 equivalent_sets: vec![],
+                rod_numerics_over_noise: None,
                 seconds: 0.0,
                 error: None,
             };
@@ -179,6 +183,7 @@ pub fn run_matrix_observed(
                     o.right = same_set(&d.verdict.effects, &c.truths)
                         && (c.truths.contains(&v) || (c.truths.is_empty() && v == Effect::None));
                     o.effects = d.verdict.effects.clone();
+                    o.rod_numerics_over_noise = d.mesh.as_ref().map(|m| m.error_over_noise);
                     o.equivalent_sets = d
                         .verdict
                         .equivalent_sets

@@ -761,6 +761,7 @@ mod tests {
             verdict_gap_over_noise: 1.0,
             member_gaps_over_noise: vec![],
             equivalent_sets: vec![],
+            rod_numerics_over_noise: None,
             seconds: 0.0,
             error: None,
         }

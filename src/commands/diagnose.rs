@@ -103,6 +103,15 @@ pub fn run(a: DiagnoseArgs) -> CmdResult {
             "held-out gap of the baseline {:.3}% of the largest response",
             100.0 * d.verdict.gap_rel
         );
+        if let Some(m) = &d.mesh {
+            println!(
+                "rod numerics: the baseline on {} elements differs from {} elements by {:.2} × the noise floor",
+                m.elements, m.reference_elements, m.error_over_noise
+            );
+            if let Some(w) = &m.warning {
+                println!("warning: {w}");
+            }
+        }
         if let Some(why) = &d.candidates_skipped {
             println!("candidates not calibrated: {why}");
         } else {

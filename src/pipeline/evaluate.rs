@@ -715,6 +715,10 @@ fn model_part(
             ..Default::default()
         };
         let d = cablab_diagnose::diagnose(ctx, tests, &dopts).context("diagnosing the gap")?;
+        if let Some(m) = &d.mesh {
+            out.warnings
+                .extend(m.warning.iter().map(|w| format!("diagnosis: {w}")));
+        }
         out.verdict = Some(d.verdict.effect.as_str().to_string());
         let names = |v: &[Effect]| v.iter().map(|e| e.as_str().to_string()).collect();
         out.verdict_effects = names(&d.verdict.effects);

@@ -46,6 +46,7 @@
 use crate::error::DiagError;
 use crate::ladder::{climb, exchange, ladder, refit};
 use crate::locate::span_of_baseline;
+use crate::mesh::MeshCheck;
 use crate::model::{DiagTest, ModelSpec};
 use crate::select::{
     choose, compare, elastic_limit, fit_failure, ic, ic_tolerance, n_eff_of, score, Scored,
@@ -276,6 +277,10 @@ pub struct Diagnosis {
     /// the noise floor ([`DiagnoseOptions::all_candidates`]). Absent when they were.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub candidates_skipped: Option<String>,
+    /// How far the rod's numerics may move the comparisons with the noise floor (three-point;
+    /// absent for the uniform kinds, which replay one section exactly): `crate::mesh`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub mesh: Option<MeshCheck>,
 }
 
 /// A candidate that could not be scored, and why.
@@ -359,6 +364,14 @@ pub fn diagnose(
         &resolution,
         &base_opts,
     );
+    // How far the rod's numerics may move the comparisons with the floor (`crate::mesh`).
+    let own: Vec<Vec<f64>> = tests
+        .iter()
+        .zip(&base.all_resid)
+        .zip(&base.cal.response_offset)
+        .map(|((t, r), c)| t.response.iter().zip(r).map(|(m, r)| m - r - c).collect())
+        .collect();
+    let mesh = crate::mesh::check(ctx, tests, &base.model, base.cal.values(), &own, &noise)?;
     // The baseline already fits the held-out data to the noise floor: the verdict is `none`
     // whatever a candidate gives (`choose`), so the candidates are not calibrated unless asked.
     let base_gap_noise = (base.rss_noise / base.n_held.max(1) as f64).sqrt();
@@ -768,6 +781,7 @@ pub fn diagnose(
         },
         failed,
         candidates_skipped,
+        mesh,
     })
 }
 

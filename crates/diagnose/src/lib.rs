@@ -27,6 +27,7 @@ pub mod floors;
 pub mod holdout;
 pub mod ladder;
 pub mod locate;
+pub mod mesh;
 pub mod model;
 pub mod options;
 pub mod params;

@@ -1018,3 +1018,106 @@ fn candidates_are_skipped_where_the_baseline_fits_to_the_noise_floor_and_nothing
     assert!(d.candidates_skipped.is_none());
     assert_eq!(d.verdict.effect, Effect::KinematicHardening);
 }
+
+/// The rod-numerics check (`crate::mesh`) on the cable taken past yield in three-point bending
+/// (56 mm span), at the truth's parameters. Linear elasticity: 40 and 160 elements differ by
+/// 2.1·10⁻⁴ of the peak (RMS), nearly all a stiffness factor, which the check absorbs: 5·10⁻⁶
+/// is left. Elastoplastic: the plastic zone under the punch keeps a part no scale absorbs
+/// (5.6·10⁻⁵ of the peak measured), 0.008 × this record's noise floor: no warning.
+/// Uniform kinds have no mesh: `None`.
+#[test]
+fn the_rod_numerics_check_absorbs_a_stiffness_factor_and_measures_the_rest() {
+    use crate::mesh::{check, replay_for_test, MESH_TOLERANCE};
+    let ctx = ctx();
+    let t = [cable_past_yield(TestKind::ThreePoint)];
+    let noise = crate::floors::noise_floor(&t);
+    let peak = t[0].response.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    let mut found = vec![];
+    for (law, params) in [
+        ("linear", vec![1.37e-3]),
+        ("elastoplastic", vec![1.37e-3, 0.012, 2.0e-4]),
+    ] {
+        let model = ModelSpec::law(law);
+        let own = replay_for_test(ctx, &t, &model, &params, 40);
+        let fine = replay_for_test(ctx, &t, &model, &params, 160);
+        let raw = (own[0]
+            .iter()
+            .zip(&fine[0])
+            .map(|(a, b)| (a - b).powi(2))
+            .sum::<f64>()
+            / own[0].len() as f64)
+            .sqrt()
+            / peak;
+        let m = check(ctx, &t, &model, &params, &own, &noise)
+            .unwrap()
+            .expect("a rod test");
+        assert_eq!((m.elements, m.reference_elements), (40, 160));
+        found.push((raw, m));
+    }
+    let (raw, m) = &found[0];
+    assert!(
+        *raw > 1.5e-4 && m.error_rel < 1e-5,
+        "linear: raw {raw:e}, {m:?}"
+    );
+    let (_, m) = &found[1];
+    assert!(m.error_rel > 2e-5 && m.error_rel < 2e-4, "{m:?}");
+    assert!(
+        m.error_over_noise < MESH_TOLERANCE && m.warning.is_none(),
+        "{m:?}"
+    );
+    let u = [cable_past_yield(TestKind::Tension)];
+    let own = vec![u[0].response.clone()];
+    let none = check(ctx, &u, &ModelSpec::law("linear"), &[7.96e4], &own, &[1.0]).unwrap();
+    assert!(none.is_none());
+}
+
+/// The check on localised plasticity at large deflection (60 mm span, punch 0 → 8 → 2 → 12 →
+/// 0 mm, EI 0.002 N m², M_y 0.03 N m; README, "rod numerics": 0.040 % of the peak at 40
+/// elements after scale and offset, against 320 and 640 alike): against a 0.1 % noise floor
+/// that is 0.4 × the floor, above the tolerance, and the check says so.
+#[test]
+fn localised_plasticity_at_a_low_noise_floor_is_warned() {
+    use crate::mesh::{check, replay_for_test};
+    let ctx = ctx();
+    let mut control = vec![0.0];
+    for w in [0.0, 0.008, 0.002, 0.012, 0.0f64].windows(2) {
+        let n = ((w[1] - w[0]).abs() / 1e-4).round() as usize;
+        control.extend((1..=n).map(|i| w[0] + (w[1] - w[0]) * i as f64 / n as f64));
+    }
+    let n = control.len();
+    // The elastic response (k = 48 EI / l³) until the replay replaces it: the model's ranges
+    // come from the data.
+    let response = control
+        .iter()
+        .map(|w| 48.0 * 0.002 / 0.06f64.powi(3) * w)
+        .collect();
+    let mut t = DiagTest {
+        kind: TestKind::ThreePoint,
+        free_length_m: 0.06,
+        diameter_m: None,
+        time_s: (0..n).map(|i| i as f64).collect(),
+        control,
+        response,
+        labels: vec![],
+        specimen: None,
+        rod_setup: None,
+    };
+    let model = ModelSpec::law("elastoplastic");
+    let params = [0.002, 0.03, 5e-5];
+    let own = replay_for_test(ctx, std::slice::from_ref(&t), &model, &params, 40);
+    t.response = own[0].clone();
+    let peak = t.response.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    let m = check(ctx, &[t], &model, &params, &own, &[1e-3 * peak])
+        .unwrap()
+        .unwrap();
+    assert!(
+        m.error_rel > 3.0e-4 && m.error_rel < 5.0e-4,
+        "0.040 % measured: {m:?}"
+    );
+    assert!(
+        m.error_over_noise > 0.3 && m.error_over_noise < 0.5,
+        "{m:?}"
+    );
+    let w = m.warning.expect("above a quarter of the floor");
+    assert!(w.contains("40 elements against 160"), "{w}");
+}
