@@ -104,8 +104,11 @@ pub fn run(a: DiagnoseArgs) -> CmdResult {
             100.0 * d.verdict.gap_rel
         );
         if let Some(m) = &d.mesh {
+            let refined = m
+                .refined_from
+                .map_or(String::new(), |f| format!(" (refined from {f})"));
             println!(
-                "rod numerics: the baseline on {} elements differs from {} elements by {:.2} × the noise floor",
+                "rod numerics: the baseline on {} elements{refined} differs from {} elements by {:.2} × the noise floor",
                 m.elements, m.reference_elements, m.error_over_noise
             );
             if let Some(w) = &m.warning {

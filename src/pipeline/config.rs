@@ -251,6 +251,10 @@ pub struct ModelSettings {
     /// Rod elements for three-point simulations.
     #[serde(default = "default_elements")]
     pub elements: usize,
+    /// Let the diagnosis refit on a finer rod mesh where the baseline's numerical error is not
+    /// small against the noise floor and more elements reduce it (`cablab_diagnose::mesh`).
+    #[serde(default = "yes")]
+    pub refine_mesh: bool,
 }
 
 impl Default for ModelSettings {
@@ -259,6 +263,7 @@ impl Default for ModelSettings {
             calibrate: true,
             baseline: default_baseline(),
             elements: default_elements(),
+            refine_mesh: true,
         }
     }
 }

@@ -712,10 +712,18 @@ fn model_part(
                 .as_deref()
                 .and_then(crate::pipeline::config::holdout_policy)
                 .unwrap_or(cablab_diagnose::HoldoutPolicy::LastCycle),
+            refine_mesh: c.file.model.refine_mesh,
             ..Default::default()
         };
         let d = cablab_diagnose::diagnose(ctx, tests, &dopts).context("diagnosing the gap")?;
         if let Some(m) = &d.mesh {
+            if let Some(from) = m.refined_from {
+                out.notes.push(format!(
+                    "diagnosis: on {} rod elements, refined from {from}: the baseline's numerical \
+                     error there is {:.2} × the noise floor (model.refine_mesh)",
+                    m.elements, m.error_over_noise
+                ));
+            }
             out.warnings
                 .extend(m.warning.iter().map(|w| format!("diagnosis: {w}")));
         }

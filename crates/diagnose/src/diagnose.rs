@@ -353,6 +353,17 @@ pub fn diagnose(
         None,
         &base_opts,
     )?;
+    // How far the rod's numerics may move the comparisons with the floor, and the mesh they are
+    // made on (`crate::mesh`).
+    let (refined, base, mesh) = check_mesh(
+        ctx,
+        tests,
+        base,
+        (&train, &held, &noise),
+        opts.refine_mesh,
+        &base_opts,
+    )?;
+    let tests: &[DiagTest] = refined.as_deref().unwrap_or(tests);
     let resolution = resolution_floor(tests);
     let (base, yield_out_of_reach) = elastic_limit(
         ctx,
@@ -364,14 +375,6 @@ pub fn diagnose(
         &resolution,
         &base_opts,
     );
-    // How far the rod's numerics may move the comparisons with the floor (`crate::mesh`).
-    let own: Vec<Vec<f64>> = tests
-        .iter()
-        .zip(&base.all_resid)
-        .zip(&base.cal.response_offset)
-        .map(|((t, r), c)| t.response.iter().zip(r).map(|(m, r)| m - r - c).collect())
-        .collect();
-    let mesh = crate::mesh::check(ctx, tests, &base.model, base.cal.values(), &own, &noise)?;
     // The baseline already fits the held-out data to the noise floor: the verdict is `none`
     // whatever a candidate gives (`choose`), so the candidates are not calibrated unless asked.
     let base_gap_noise = (base.rss_noise / base.n_held.max(1) as f64).sqrt();
@@ -783,6 +786,69 @@ pub fn diagnose(
         candidates_skipped,
         mesh,
     })
+}
+
+/// The check of [`crate::mesh`] on the fitted baseline `base` of rod tests, and, where it finds
+/// a numerical error above [`crate::mesh::MESH_TOLERANCE`] × the floor that twice the elements
+/// reduce ([`crate::mesh::refinement`]) and `refine` is set, the tests on the refined mesh with
+/// the baseline fitted again there (from its fit on the coarser mesh, with the same starts as
+/// well) and checked again. Uniform tests pass through unchanged (`None`, `base`, `None`).
+#[allow(clippy::type_complexity)]
+fn check_mesh(
+    ctx: Context,
+    tests: &[DiagTest],
+    base: Scored,
+    (train, held, noise): (&[Vec<usize>], &[Vec<usize>], &[f64]),
+    refine: bool,
+    base_opts: &DiagnoseOptions,
+) -> Result<(Option<Vec<DiagTest>>, Scored, Option<MeshCheck>), DiagError> {
+    // The fit's own replay on its mesh (residuals are measured − simulated − offset).
+    let own = |tests: &[DiagTest], s: &Scored| -> Vec<Vec<f64>> {
+        tests
+            .iter()
+            .zip(&s.all_resid)
+            .zip(&s.cal.response_offset)
+            .map(|((t, r), c)| t.response.iter().zip(r).map(|(m, r)| m - r - c).collect())
+            .collect()
+    };
+    let first = crate::mesh::check(
+        ctx,
+        tests,
+        &base.model,
+        base.cal.values(),
+        &own(tests, &base),
+        noise,
+        refine,
+    )?;
+    let Some((m, elements)) = first
+        .as_ref()
+        .and_then(|m| crate::mesh::refinement(m).map(|e| (m, e)))
+    else {
+        return Ok((None, base, first));
+    };
+    let finer = crate::mesh::with_elements(tests, elements);
+    let b = score(
+        ctx,
+        &finer,
+        &base.model,
+        Effect::None,
+        train,
+        held,
+        noise,
+        Some(&base.cal.params),
+        None,
+        base_opts,
+    )?;
+    let again = crate::mesh::check_refined(
+        ctx,
+        &finer,
+        &b.model,
+        b.cal.values(),
+        &own(&finer, &b),
+        noise,
+        m.elements,
+    )?;
+    Ok((Some(finer), b, again))
 }
 
 /// RMS of `s`'s residual on the training samples (response units).

@@ -15,11 +15,13 @@
 //! - plasticity over a long zone (three cycles to 20 % of a 60 mm span) keeps 0.03–0.046 %
 //!   between any two meshes from 40 to 640 elements: no refinement reduces it.
 //!
-//! So the check reports and warns above [`MESH_TOLERANCE`]; it refines nothing (a refinement
-//! that knows which of the last two cases a test is in is the next step).
+//! So the check tells the two apart before it refines: where the error exceeds
+//! [`MESH_TOLERANCE`] × the floor it replays twice the elements against the same reference, and
+//! the diagnosis refits on twice (or [`REFERENCE_FACTOR`] times) the elements only when that
+//! halves the error ([`refinement`]); otherwise it keeps the mesh and warns.
 //!
-//! Does not: refine or coarsen the mesh, or check the uniform kinds (tension, torsion, pure
-//! bending replay one section exactly).
+//! Does not: coarsen a mesh, or check the uniform kinds (tension, torsion, pure bending replay
+//! one section exactly).
 
 use serde::Serialize;
 
@@ -32,8 +34,14 @@ use crate::DiagError;
 /// (√(1 + 0.25²) = 1.03).
 pub const MESH_TOLERANCE: f64 = 0.25;
 
-/// The reference replay has this many times the elements of the tests' own.
+/// The reference replay has this many times the elements of the tests' own; a refinement goes
+/// at most this far.
 pub const REFERENCE_FACTOR: usize = 4;
+
+/// A refinement is taken only when twice the elements leave at most this share of the error
+/// (second-order convergence leaves a quarter, plus the reference's own error): where they do
+/// not, the difference is not the element size's (a long plastic zone, module doc).
+pub const CONVERGING: f64 = 0.5;
 
 /// What the check found on the tests of a diagnosis (absent for the uniform kinds, which have no
 /// mesh).
@@ -49,8 +57,55 @@ pub struct MeshCheck {
     pub error_over_noise: f64,
     /// The same as a share of the largest |response|.
     pub error_rel: f64,
-    /// Set when `error_over_noise` exceeds [`MESH_TOLERANCE`].
+    /// The elements the tests asked for, when the diagnosis refined the mesh.
+    pub refined_from: Option<usize>,
+    /// Twice the elements against the same reference, in units of the noise floor: replayed
+    /// when the error exceeds [`MESH_TOLERANCE`] and refining is allowed.
+    pub twice_over_noise: Option<f64>,
+    /// Set when `error_over_noise` exceeds [`MESH_TOLERANCE`] on the mesh used.
     pub warning: Option<String>,
+}
+
+impl MeshCheck {
+    fn with_warning(mut self, refine: bool) -> Self {
+        self.warning = (self.error_over_noise > MESH_TOLERANCE).then(|| {
+            let why = match (self.refined_from, self.twice_over_noise) {
+                (Some(from), _) => format!(" (refined from {from} elements)"),
+                (None, Some(t)) => format!(
+                    "; {} elements leave {t:.2} × the floor, so refining the mesh does not reduce it",
+                    2 * self.elements
+                ),
+                (None, None) if !refine => " (refinement is off)".to_string(),
+                (None, None) => String::new(),
+            };
+            format!(
+                "the rod's numerical error is about {:.2} × the noise floor ({:.3} % of the peak \
+                 response: the fitted baseline on {} elements against {}{why}): a gap within \
+                 about that of the floor is not resolved by the model",
+                self.error_over_noise,
+                100.0 * self.error_rel,
+                self.elements,
+                self.reference_elements
+            )
+        });
+        self
+    }
+}
+
+/// The mesh a diagnosis refits on after `check`: `None` to keep it; twice the elements when
+/// those are within [`MESH_TOLERANCE`] and halve the error ([`CONVERGING`]), [`REFERENCE_FACTOR`]
+/// times when they halve it but stay above the tolerance.
+pub fn refinement(check: &MeshCheck) -> Option<usize> {
+    let twice = check.twice_over_noise?;
+    if !(check.error_over_noise > MESH_TOLERANCE) || !(twice <= CONVERGING * check.error_over_noise)
+    {
+        return None;
+    }
+    Some(if twice <= MESH_TOLERANCE {
+        2 * check.elements
+    } else {
+        REFERENCE_FACTOR * check.elements
+    })
 }
 
 /// The rod elements of the tests that replay the rod (the first such test's; a test without
@@ -100,7 +155,8 @@ pub fn replay_for_test(
 
 /// The check of `model` fitted at `params` to rod `tests`, whose replay on their own meshes is
 /// `own` (one response per test, every sample), against the noise floor `noise` per test;
-/// `None` when no test replays the rod.
+/// `None` when no test replays the rod. With `refine`, an error above the tolerance is also
+/// measured on twice the elements (`twice_over_noise`, for [`refinement`]).
 pub fn check(
     ctx: Context,
     tests: &[DiagTest],
@@ -108,30 +164,53 @@ pub fn check(
     params: &[f64],
     own: &[Vec<f64>],
     noise: &[f64],
+    refine: bool,
 ) -> Result<Option<MeshCheck>, DiagError> {
     let Some(elements) = elements_of(tests) else {
         return Ok(None);
     };
+    let replay = |n: usize| {
+        let t = with_elements(tests, n);
+        ModelForward::new(&t, model, ctx.catalog, ctx.rod)?.simulate_all(params)
+    };
     let reference_elements = REFERENCE_FACTOR * elements;
-    let fine = with_elements(tests, reference_elements);
-    let reference = ModelForward::new(&fine, model, ctx.catalog, ctx.rod)?.simulate_all(params)?;
+    let reference = replay(reference_elements)?;
     let (error_over_noise, error_rel) = unabsorbed(tests, own, &reference, noise);
-    let warning = (error_over_noise > MESH_TOLERANCE).then(|| {
-        format!(
-            "the rod's numerical error is about {error_over_noise:.2} × the noise floor \
-             ({:.3} % of the peak response: the fitted baseline on {elements} elements against \
-             {reference_elements}): a gap within about that of the floor is not resolved by \
-             the model",
-            100.0 * error_rel
-        )
-    });
-    Ok(Some(MeshCheck {
-        elements,
-        reference_elements,
-        error_over_noise,
-        error_rel,
-        warning,
-    }))
+    let twice_over_noise = if refine && error_over_noise > MESH_TOLERANCE {
+        Some(unabsorbed(tests, &replay(2 * elements)?, &reference, noise).0)
+    } else {
+        None
+    };
+    Ok(Some(
+        MeshCheck {
+            elements,
+            reference_elements,
+            error_over_noise,
+            error_rel,
+            refined_from: None,
+            twice_over_noise,
+            warning: None,
+        }
+        .with_warning(refine),
+    ))
+}
+
+/// [`check`] on a mesh the diagnosis refined from `from` elements (no further refinement).
+pub fn check_refined(
+    ctx: Context,
+    tests: &[DiagTest],
+    model: &ModelSpec,
+    params: &[f64],
+    own: &[Vec<f64>],
+    noise: &[f64],
+    from: usize,
+) -> Result<Option<MeshCheck>, DiagError> {
+    Ok(
+        check(ctx, tests, model, params, own, noise, false)?.map(|mut m| {
+            m.refined_from = Some(from);
+            m.with_warning(true)
+        }),
+    )
 }
 
 /// RMS over every sample of `a − (s·b + c)`, with the least-squares scale s and offset c of each
@@ -215,6 +294,32 @@ mod tests {
             (rel - 0.01 / peak).abs() < 2e-4 * 0.01 / peak * 100.0,
             "{rel}"
         );
+    }
+
+    fn checked(error: f64, twice: Option<f64>) -> MeshCheck {
+        MeshCheck {
+            elements: 40,
+            reference_elements: 160,
+            error_over_noise: error,
+            error_rel: 0.0,
+            refined_from: None,
+            twice_over_noise: twice,
+            warning: None,
+        }
+    }
+
+    /// Within the tolerance: kept. Above it: twice the elements when they are within it and
+    /// halve the error, four times when they halve it but stay above, kept when they do not
+    /// halve it (or were not replayed: refinement off).
+    #[test]
+    fn refinement_only_where_twice_the_elements_halve_the_error() {
+        assert_eq!(refinement(&checked(0.2, None)), None);
+        assert_eq!(refinement(&checked(0.2, Some(0.01))), None);
+        assert_eq!(refinement(&checked(0.4, Some(0.06))), Some(80));
+        assert_eq!(refinement(&checked(0.8, Some(0.3))), Some(160));
+        assert_eq!(refinement(&checked(0.4, Some(0.3))), None);
+        assert_eq!(refinement(&checked(0.4, None)), None);
+        assert_eq!(refinement(&checked(f64::NAN, Some(0.0))), None);
     }
 
     #[test]

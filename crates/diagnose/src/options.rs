@@ -84,6 +84,10 @@ pub struct DiagnoseOptions {
     /// calibrations (most of a diagnosis' cost) would only fill the table of candidates.
     /// Campaigns use the default (`[diagnosis] all_candidates`); `cablab diagnose` sets it.
     pub all_candidates: bool,
+    /// Refit on a finer rod mesh (three-point) where the baseline's numerical error exceeds
+    /// [`crate::mesh::MESH_TOLERANCE`] × the noise floor and twice the elements reduce it
+    /// ([`crate::mesh::refinement`]); off: the tests' own elements, the check only reports.
+    pub refine_mesh: bool,
 }
 
 impl Default for DiagnoseOptions {
@@ -101,6 +105,7 @@ impl Default for DiagnoseOptions {
             free_offset: true,
             elastic_limit: true,
             all_candidates: false,
+            refine_mesh: true,
         }
     }
 }
