@@ -108,8 +108,9 @@ pub struct TestOutcome {
     /// Largest |response| and the machine control there, SI (`[control, response]`).
     #[serde(default)]
     pub max_response: Option<[f64; 2]>,
-    /// Where the specimen broke: machine control and response just before the drop, SI; null
-    /// when the response never fell below half its maximum while the control still advanced.
+    /// Where the specimen broke (the characterisation's break): machine control and response
+    /// just before the drop, SI; null when the response never fell below half its maximum to
+    /// stay there while the control advanced.
     #[serde(default)]
     pub break_at: Option<[f64; 2]>,
     /// Loop area ∮ response d(control) of the last cycle that has one, J.
@@ -250,23 +251,29 @@ pub fn level_from_name(id: &str) -> Option<String> {
     })
 }
 
-/// Largest |response| with its control, and where the specimen broke: the first sample after
-/// the maximum whose |response| is below half the maximum while the control has not gone back
-/// below its value at the maximum (an unloading goes back; a break does not). Returns
-/// `(max, break)`, each `[control, response]` (the break as the last sample before the drop).
-pub fn max_and_break(control: &[f64], response: &[f64]) -> (Option<[f64; 2]>, Option<[f64; 2]>) {
-    let imax = response
+/// Largest |response| with its control (`[control, response]`).
+pub fn max_response(control: &[f64], response: &[f64]) -> Option<[f64; 2]> {
+    response
         .iter()
         .enumerate()
         .filter(|(_, r)| r.is_finite())
         .max_by(|a, b| a.1.abs().total_cmp(&b.1.abs()))
-        .map(|(i, _)| i);
-    let Some(i) = imax else { return (None, None) };
-    let (cm, rm) = (control[i], response[i]);
-    let brk = (i + 1..response.len())
-        .find(|&k| response[k].abs() < 0.5 * rm.abs() && (control[k] - cm) * cm.signum() >= 0.0)
-        .map(|k| [control[k - 1], response[k - 1]]);
-    (Some([cm, rm]), brk)
+        .map(|(i, &r)| [control[i], r])
+}
+
+/// Where the specimen broke, as the characterisation found it (`cablab_measure`'s break: the
+/// response stays below half its maximum from a sample on, and from the maximum to there the
+/// control never went back from the furthest value it reached): `[control, response]` at the last sample before the drop.
+/// The characterisation is the one break detector: a cycle to a larger deflection than the
+/// maximum's (a three-point rod softening geometrically peaks early) unloads below half the
+/// maximum at a control beyond it, which is no break.
+pub fn break_at(
+    control: &[f64],
+    response: &[f64],
+    an: &cablab_measure::Analysis,
+) -> Option<[f64; 2]> {
+    an.break_point
+        .map(|b| [control[b.sample - 1], response[b.sample - 1]])
 }
 
 impl TestOutcome {
@@ -539,7 +546,8 @@ fn stages(
     if machine_level {
         to_machine_level(out, t.kind, &geom, &an);
     }
-    (out.max_response, out.break_at) = max_and_break(&curve.control, &curve.response);
+    out.max_response = max_response(&curve.control, &curve.response);
+    out.break_at = break_at(&curve.control, &curve.response, &an);
     out.overlay = super::views::overlay_points(t.kind, &geom, &curve);
     done(1);
 
@@ -991,23 +999,58 @@ mod tests {
     }
 
     #[test]
-    fn maximum_and_break() {
-        // Loading to 10 at x = 1, unloading back: no break.
+    fn maximum_response() {
         let x = [0.0, 0.5, 1.0, 0.5, 0.0];
         let y = [0.0, 5.0, 10.0, 5.0, 0.0];
-        assert_eq!(max_and_break(&x, &y), (Some([1.0, 10.0]), None));
-        // The force collapses while the crosshead keeps going: a break after x = 1.1.
-        let x = [0.0, 0.5, 1.0, 1.1, 1.2, 1.3];
-        let y = [0.0, 5.0, 10.0, 9.0, 0.4, 0.1];
-        assert_eq!(max_and_break(&x, &y), (Some([1.0, 10.0]), Some([1.1, 9.0])));
-        // Negative direction (compression-like): the same by magnitude.
-        let x = [0.0, -1.0, -1.2];
-        let y = [0.0, -8.0, -1.0];
+        assert_eq!(max_response(&x, &y), Some([1.0, 10.0]));
+        // Negative direction (compression-like): by magnitude.
         assert_eq!(
-            max_and_break(&x, &y),
-            (Some([-1.0, -8.0]), Some([-1.0, -8.0]))
+            max_response(&[0.0, -1.0, -1.2], &[0.0, -8.0, -1.0]),
+            Some([-1.0, -8.0])
         );
-        assert_eq!(max_and_break(&[], &[]), (None, None));
+        assert_eq!(max_response(&[], &[]), None);
+    }
+
+    /// The break is the characterisation's. Control along `legs` in steps of 0.01 from 0,
+    /// response `f(x, leg)` plus a deterministic wiggle of ±0.05.
+    fn break_of(legs: &[f64], f: impl Fn(f64, usize) -> f64) -> Option<[f64; 2]> {
+        let (mut x, mut y, mut at) = (vec![0.0], vec![f(0.0, 0)], 0.0);
+        for (leg, &to) in legs.iter().enumerate() {
+            let n = ((to - at) / 0.01f64).abs().round() as usize;
+            for i in 1..=n {
+                let v = at + (to - at) * i as f64 / n as f64;
+                x.push(v);
+                y.push(f(v, leg) + 0.05 * (x.len() as f64 * 0.7).sin());
+            }
+            at = to;
+        }
+        let geom = cablab_measure::Geometry {
+            free_length_m: 1.0,
+            diameter_m: None,
+        };
+        let an =
+            cablab_measure::analyze(TestKind::Tension, &geom, None, &x, &y, &Default::default())
+                .unwrap();
+        break_at(&x, &y, &an)
+    }
+
+    #[test]
+    fn a_break_is_a_sustained_drop_on_the_way_out() {
+        // Loading to 10 at x = 1, then the force collapses while the crosshead keeps going.
+        let brk = break_of(&[1.5], |x, _| if x <= 1.0 { 10.0 * x } else { 0.1 });
+        let [c, r] = brk.expect("a break");
+        assert!((c - 1.0).abs() < 0.015 && r > 9.0, "{c} {r}");
+        // The maximum (10 at x = 1) comes before a reloading to x = 2 that softens to 9, whose
+        // unloading falls below half the maximum at x = 1.5, beyond the maximum's control: an
+        // unloading, no break (the pipeline's own detector took it for one).
+        let brk = break_of(&[1.0, 0.5, 2.0, 0.0], |x, leg| match leg {
+            0 => 10.0 * x,
+            1 => 10.0 - 10.0 * (1.0 - x),
+            2 if x <= 1.0 => 10.0 - 10.0 * (1.0 - x),
+            2 => 10.0 - (x - 1.0),
+            _ => (9.0 - 10.0 * (2.0 - x)).max(0.0),
+        });
+        assert_eq!(brk, None);
     }
 
     #[test]

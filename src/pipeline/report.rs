@@ -649,7 +649,7 @@ fn section(out_dir: &Path, o: &TestOutcome) -> TestSection {
                     };
                     format!("at {cs} = {}", on_x(x))
                 }
-                None => "none (the response never dropped below half its maximum)".into(),
+                None => "none (the response never fell below half its maximum to stay there while the control advanced)".into(),
             },
         ));
         facts.push(("cycles".into(), o.cycles.to_string()));

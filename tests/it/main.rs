@@ -12,4 +12,5 @@ mod real_exports;
 mod real_shapes;
 mod sections;
 mod shards;
+mod three_point_history;
 mod trust;

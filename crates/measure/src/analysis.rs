@@ -389,6 +389,10 @@ pub struct BreakPoint {
 /// maximum for a break ([`BreakPoint`]).
 pub const BREAK_DROP: f64 = 0.5;
 
+/// Three-point: the punch is taken as off the rod where the force is within this many
+/// standard deviations of the response noise of zero (the rate comparison, [`crate::rate`]).
+const CONTACT_FLOOR_SIGMA: f64 = 5.0;
+
 /// The largest response (in magnitude) of the test and where it occurs.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct MaxResponse {
@@ -1333,16 +1337,21 @@ pub fn analyze(
     // the stroke's rate (`crate::rate`), for a test whose loops do not close (`other`:
     // friction, viscosity or drift; `elastoplastic`: a viscous first loading bends and its
     // unloading ends at a positive control, as plasticity's does).
-    // In `fit_xs` (three-point: strokes reversing at different deflections would otherwise
-    // differ by geometry alone).
-    let rate_effect = crate::rate::rate_effect(
-        &segments,
+    // Slopes in `fit_xs` (three-point: strokes reversing at different deflections would
+    // otherwise differ by geometry alone), rates in the sectional control (linear in the
+    // machine's: `fit_xs` would turn one machine speed into rates that fall with the
+    // deflection). Three-point: in contact only, and strokes from the same deflection only
+    // (`crate::rate`; the punch is off the rod where the force is within 5 σ of zero).
+    let rate_effect = crate::rate::rate_effect(&crate::rate::RateInputs {
+        segments: &segments,
         time_s,
-        &fit_xs,
-        &rm,
-        serial.0.phi,
-        (serial.1, serial.2),
-    );
+        control: &fit_xs,
+        rate_control: &xs,
+        response: &rm,
+        contact_floor: three.then_some(CONTACT_FLOOR_SIGMA * serial.0.sigma),
+        phi: serial.0.phi,
+        prior: (serial.1, serial.2),
+    });
     let by_rate = !rate_dependent
         && matches!(behaviour, Behaviour::Other | Behaviour::Elastoplastic)
         && rate_effect.as_ref().is_some_and(|e| e.rate_dependent);
@@ -1798,9 +1807,12 @@ fn offset_yield(
 /// * the drop is sustained: from the break sample on, the median over the next
 ///   max(5, 1 % of the record) samples (or all that remain, at least 3) is below
 ///   [`BREAK_DROP`] of the maximum, and below it by 10 σ;
-/// * the response never comes back above 0.8 of the maximum, and the control has not gone
-///   back below its value at the maximum by more than its reversal threshold `h` (an
-///   unloading is no break).
+/// * the response never comes back above 0.8 of the maximum, and from the maximum to the
+///   drop the control only advances: it never goes back from the furthest value it reached
+///   by more than its reversal threshold `h` (an unloading is no break, also one from beyond
+///   the maximum: a three-point rod bent plastically softens by geometry, so its force peaks
+///   early and a cycle to a larger deflection unloads below half that peak while the
+///   deflection is still beyond the peak's).
 ///
 /// The break sample is the first sample of that sustained stretch below the drop level.
 /// Returns it and the work ∫ rm d(cm) up to it.
@@ -1823,7 +1835,11 @@ fn find_break(cm: &[f64], rm: &[f64], sigma: f64, h: f64) -> Option<(usize, f64)
     };
     let j = (k + 1..n).find(|&j| rm[j] < level && sustained(j))?;
     let stays = rm[j..].iter().all(|&v| v < 0.8 * top);
-    let onward = cm[k..=j].iter().all(|&v| v >= cm[k] - h);
+    let mut furthest = cm[k];
+    let onward = cm[k..=j].iter().all(|&v| {
+        furthest = furthest.max(v);
+        v >= furthest - h
+    });
     if !(stays && onward) {
         return None;
     }
