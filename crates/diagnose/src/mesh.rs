@@ -71,6 +71,11 @@ impl MeshCheck {
         self.warning = (self.error_over_noise > MESH_TOLERANCE).then(|| {
             let why = match (self.refined_from, self.twice_over_noise) {
                 (Some(from), _) => format!(" (refined from {from} elements)"),
+                // Twice the elements halve it: the diagnosis refits there (`refinement`).
+                (None, Some(t)) if refinement(&self).is_some() => format!(
+                    "; {} elements leave {t:.2} × the floor, so the diagnosis refines the mesh",
+                    2 * self.elements
+                ),
                 (None, Some(t)) => format!(
                     "; {} elements leave {t:.2} × the floor, so refining the mesh does not reduce it",
                     2 * self.elements
@@ -140,17 +145,15 @@ pub fn with_elements(tests: &[DiagTest], elements: usize) -> Vec<DiagTest> {
 }
 
 /// `model` at `params` replayed on every sample of `tests` with `elements` rod elements.
-pub fn replay_for_test(
+pub fn replay(
     ctx: Context,
     tests: &[DiagTest],
     model: &ModelSpec,
     params: &[f64],
     elements: usize,
-) -> Vec<Vec<f64>> {
+) -> Result<Vec<Vec<f64>>, DiagError> {
     let t = with_elements(tests, elements);
-    ModelForward::new(&t, model, ctx.catalog, ctx.rod)
-        .and_then(|f| f.simulate_all(params))
-        .expect("a replay of a valid model")
+    ModelForward::new(&t, model, ctx.catalog, ctx.rod)?.simulate_all(params)
 }
 
 /// The check of `model` fitted at `params` to rod `tests`, whose replay on their own meshes is
@@ -169,10 +172,7 @@ pub fn check(
     let Some(elements) = elements_of(tests) else {
         return Ok(None);
     };
-    let replay = |n: usize| {
-        let t = with_elements(tests, n);
-        ModelForward::new(&t, model, ctx.catalog, ctx.rod)?.simulate_all(params)
-    };
+    let replay = |n: usize| replay(ctx, tests, model, params, n);
     let reference_elements = REFERENCE_FACTOR * elements;
     let reference = replay(reference_elements)?;
     let (error_over_noise, error_rel) = unabsorbed(tests, own, &reference, noise);

@@ -1027,7 +1027,7 @@ fn candidates_are_skipped_where_the_baseline_fits_to_the_noise_floor_and_nothing
 /// Uniform kinds have no mesh: `None`.
 #[test]
 fn the_rod_numerics_check_absorbs_a_stiffness_factor_and_measures_the_rest() {
-    use crate::mesh::{check, replay_for_test, MESH_TOLERANCE};
+    use crate::mesh::{check, replay, MESH_TOLERANCE};
     let ctx = ctx();
     let t = [cable_past_yield(TestKind::ThreePoint)];
     let noise = crate::floors::noise_floor(&t);
@@ -1038,8 +1038,8 @@ fn the_rod_numerics_check_absorbs_a_stiffness_factor_and_measures_the_rest() {
         ("elastoplastic", vec![1.37e-3, 0.012, 2.0e-4]),
     ] {
         let model = ModelSpec::law(law);
-        let own = replay_for_test(ctx, &t, &model, &params, 40);
-        let fine = replay_for_test(ctx, &t, &model, &params, 160);
+        let own = replay(ctx, &t, &model, &params, 40).unwrap();
+        let fine = replay(ctx, &t, &model, &params, 160).unwrap();
         let raw = (own[0]
             .iter()
             .zip(&fine[0])
@@ -1110,7 +1110,7 @@ fn replayed_three_point(
         specimen: None,
         rod_setup: None,
     };
-    let own = crate::mesh::replay_for_test(ctx(), std::slice::from_ref(&t), model, params, 40);
+    let own = crate::mesh::replay(ctx(), std::slice::from_ref(&t), model, params, 40).unwrap();
     t.response = own[0].clone();
     (t, own)
 }
@@ -1161,6 +1161,8 @@ fn localised_plasticity_at_a_low_noise_floor_is_refined_to_twice_the_elements() 
     let twice = on.twice_over_noise.expect("replayed on 80 elements");
     assert!(twice < 0.1, "0.007 % measured against 320: {on:?}");
     assert_eq!(refinement(&on), Some(80));
+    let w = on.warning.expect("still above the floor on 40 elements");
+    assert!(w.contains("so the diagnosis refines the mesh"), "{w}");
 }
 
 /// Plasticity over a long zone (60 mm span, three cycles to 4, 8 and 12 mm, EI 2 N m², M_y
