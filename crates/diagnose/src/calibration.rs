@@ -298,9 +298,12 @@ pub fn calibrate(
     // basins more often (the `friction_levels` family, 144 truths: 7 above 1.5× the floor,
     // worst 2.02×, against 4 and 1.83× this way and 4 and 1.90× with finite differences
     // throughout); the polish, on every sample, is where the sensitivities save the most.
+    let rod = tests
+        .iter()
+        .any(|t| !cablab_rod::uniform::is_uniform(t.kind));
     let fit = FitOptions {
         descent_sensitivities: opts.fit.descent_sensitivities
-            && !model.has(cablab_core::Effect::FrictionHysteresis),
+            && (rod || !model.has(cablab_core::Effect::FrictionHysteresis)),
         ..opts.fit
     };
     // The exact special case of a warm-started (nested) model: a floor the fit cannot end above.
@@ -1003,6 +1006,150 @@ mod tests {
         }
     }
 
+    /// A three-point history through `corners` (deflections, m) in 0.1 mm steps on `span_m`, 1 s
+    /// per step, with an elastic stand-in response (for the model's data-scaled bounds).
+    fn three_point(corners: &[f64], span_m: f64, ei: f64) -> DiagTest {
+        let mut control = vec![corners[0]];
+        for w in corners.windows(2) {
+            let n = ((w[1] - w[0]).abs() / 1e-4).round() as usize;
+            control.extend((1..=n).map(|i| w[0] + (w[1] - w[0]) * i as f64 / n as f64));
+        }
+        let n = control.len();
+        DiagTest {
+            kind: TestKind::ThreePoint,
+            free_length_m: span_m,
+            diameter_m: None,
+            time_s: (0..n).map(|i| i as f64).collect(),
+            response: control
+                .iter()
+                .map(|w| 48.0 * ei / span_m.powi(3) * w)
+                .collect(),
+            control,
+            labels: vec![],
+            specimen: None,
+            rod_setup: None,
+        }
+    }
+
+    /// The rod's tangent-linear sensitivities (`cablab_rod::simulate_history_sens`): three-point
+    /// bending past yield and back (60 mm span, 0 → 8 → 2 → 12 → 4 mm, 40 elements, point
+    /// punch), elastoplastic with kinematic hardening and viscoelasticity, machine compliance
+    /// (folded into the punch) and sensor drift, and the friction candidate (elastoplastic ∥
+    /// Iwan elements at a fractional number of slip levels): the model takes the sensitivity
+    /// path, its response is the plain replay's, and every column agrees with a central
+    /// difference of step 10⁻⁵ |p| of the replay to 10⁻⁴ of its norm (10⁻³ for friction, whose
+    /// slip events make the difference itself rougher: its error falls tenfold from a step of
+    /// 10⁻⁶ to 10⁻⁵, so it is the difference's, not the column's; at 10⁻⁶ the replay's Newton
+    /// tolerance dominates the difference). The same with a round punch (5 mm) that holds
+    /// several nodes. With support friction, or a round punch with compliance, the rod cannot
+    /// differentiate: finite differences (`Ok(false)`).
+    #[test]
+    fn three_point_rod_sensitivities_match_central_differences() {
+        use cablab_core::Effect;
+        let ctx = Context::project();
+        let t = three_point(&[0.0, 0.008, 0.002, 0.012, 0.004], 0.06, 0.002);
+        let tests = [t];
+        let check = |model: &ModelSpec, values: &[(&str, f64)], tol: f64| {
+            let fwd = ModelForward::new(&tests, model, ctx.catalog, ctx.rod).unwrap();
+            let specs = fwd.specs();
+            let names: Vec<&str> = specs.iter().map(|s| s.name.as_str()).collect();
+            let p: Vec<f64> = specs
+                .iter()
+                .map(|s| match s.name.as_str() {
+                    "drift_per_s" => 0.1 * s.upper,
+                    n => values
+                        .iter()
+                        .find(|(v, _)| *v == n)
+                        .map_or(s.initial, |(_, v)| *v),
+                })
+                .collect();
+            for (s, &v) in specs.iter().zip(&p) {
+                assert!(v > s.lower && v < s.upper, "{} = {v} outside", s.name);
+            }
+            for (j, c) in columns_against_central_differences_at(&fwd, &p, 0, 1e-5)
+                .iter()
+                .enumerate()
+            {
+                assert!(
+                    c.norm > 0.0 && c.err <= tol * c.norm + c.floor,
+                    "{}: ∂/∂{}: error {:e} of {:e}",
+                    model.label(),
+                    names[j],
+                    c.err,
+                    c.norm
+                );
+            }
+            names.iter().map(|n| n.to_string()).collect::<Vec<_>>()
+        };
+        let model = ModelSpec::law("elastoplastic")
+            .with(Effect::KinematicHardening)
+            .with(Effect::Viscoelasticity)
+            .with(Effect::MachineCompliance)
+            .with(Effect::SensorDrift);
+        let names = check(
+            &model,
+            &[
+                ("EI", 0.002),
+                ("M_y", 0.03),
+                ("HI", 5e-5),
+                ("compliance", 2e-4),
+            ],
+            1e-4,
+        );
+        assert!(names.len() >= 7, "{names:?}");
+        let names = check(
+            &ModelSpec::law("friction_hysteresis"),
+            &[
+                ("EI", 0.0015),
+                ("HI", 5e-5),
+                ("EI_f", 5e-4),
+                ("M_f", 0.02),
+                ("n_f", 3.4),
+                ("chi_f", -0.3),
+            ],
+            1e-3,
+        );
+        assert!(names.contains(&"n_f".to_string()), "{names:?}");
+        // Where the rod cannot differentiate: the fit's finite differences.
+        let n = tests[0].control.len();
+        let (mut out, mut jac) = (vec![0.0; n], vec![vec![0.0; n]; 5]);
+        let rough = ModelSpec::law("elastoplastic").with(Effect::SupportFriction);
+        let fwd = ModelForward::new(&tests, &rough, ctx.catalog, ctx.rod).unwrap();
+        let p: Vec<f64> = fwd.specs().iter().map(|s| s.initial).collect();
+        jac.truncate(p.len());
+        assert!(!fwd.simulate_jacobian(&p, 0, &mut out, &mut jac).unwrap());
+        let mut round = tests[0].clone();
+        let mut setup = cablab_rod::TestSetup::new(TestKind::ThreePoint, 0.06);
+        setup.punch_radius_m = 0.005;
+        round.rod_setup = Some(setup);
+        let round = [round];
+        // A round punch holds several nodes (its gap's curvature enters the force's derivative).
+        let fwd = ModelForward::new(
+            &round,
+            &ModelSpec::law("elastoplastic"),
+            ctx.catalog,
+            ctx.rod,
+        )
+        .unwrap();
+        let p = [0.002, 0.03, 5e-5];
+        for (j, c) in columns_against_central_differences_at(&fwd, &p, 0, 1e-5)
+            .iter()
+            .enumerate()
+        {
+            assert!(
+                c.norm > 0.0 && c.err <= 1e-4 * c.norm + c.floor,
+                "round punch: ∂/∂p{j}: error {:e} of {:e}",
+                c.err,
+                c.norm
+            );
+        }
+        let compliant = ModelSpec::law("elastoplastic").with(Effect::MachineCompliance);
+        let fwd = ModelForward::new(&round, &compliant, ctx.catalog, ctx.rod).unwrap();
+        let p: Vec<f64> = fwd.specs().iter().map(|s| s.initial).collect();
+        let mut jac = vec![vec![0.0; n]; p.len()];
+        assert!(!fwd.simulate_jacobian(&p, 0, &mut out, &mut jac).unwrap());
+    }
+
     /// One sensitivity column of [`Forward::simulate_jacobian`] against a central difference.
     struct Column {
         /// RMS-norm of (column − difference).
@@ -1019,6 +1166,16 @@ mod tests {
     /// Test `t` replayed with sensitivities at `p`: the response equals the plain replay's (to
     /// 10⁻⁹), and each column is compared with a central difference of step 10⁻⁶ |p_j|.
     fn columns_against_central_differences(fwd: &ModelForward, p: &[f64], t: usize) -> Vec<Column> {
+        columns_against_central_differences_at(fwd, p, t, 1e-6)
+    }
+
+    /// [`columns_against_central_differences`] with a step of `step` |p_j|.
+    fn columns_against_central_differences_at(
+        fwd: &ModelForward,
+        p: &[f64],
+        t: usize,
+        step: f64,
+    ) -> Vec<Column> {
         let n = fwd.n_samples(t);
         let mut out = vec![0.0; n];
         let mut jac = vec![vec![0.0; n]; p.len()];
@@ -1035,7 +1192,7 @@ mod tests {
         jac.iter()
             .enumerate()
             .map(|(j, col)| {
-                let h = 1e-6 * p[j].abs();
+                let h = step * p[j].abs();
                 let at = |x: f64| {
                     let mut q = p.to_vec();
                     q[j] = x;

@@ -336,6 +336,25 @@ pub trait RodSimulator: Sync {
         out: &mut [f64],
     ) -> Result<(), String>;
 
+    /// [`RodSimulator::simulate`] without support friction, with the derivatives of the
+    /// response to the law's parameters (`Law::sens_params` of the bending component, `d_ei[j]`
+    /// = ∂EI/∂p_j of its elastic bending stiffness) and, with `compliance_column`, to the
+    /// compliance, one column per sample each; `Ok(None)` (the default) where the simulator
+    /// cannot differentiate the replay.
+    #[allow(clippy::too_many_arguments)]
+    fn simulate_sens(
+        &self,
+        _test: &DiagTest,
+        _law: &dyn Law,
+        _control: &[f64],
+        _compliance: f64,
+        _d_ei: &[f64],
+        _compliance_column: bool,
+        _out: &mut [f64],
+    ) -> Result<Option<cablab_rod::uniform::ReplaySens>, String> {
+        Ok(None)
+    }
+
     /// The bending curvature along the span over `test`'s measured control history with `law`
     /// and support friction `mu`, at the samples the rod replays; `Ok(None)` when the simulator
     /// does not record it.
@@ -672,10 +691,12 @@ impl Forward for ModelForward<'_> {
         Ok(())
     }
 
-    /// Uniform tests whose law has sensitivities for every law parameter of the model
-    /// ([`cablab_rod::uniform::replay_uniform_sens`]): the law's columns (a replicate's factors
-    /// by the chain rule through k = f·k₀, σ_y = g·σ_y0), the compliance's, and the drift's
-    /// (t − t₀); other tests' factors are 0. Three-point tests and laws without: `Ok(false)`.
+    /// Tests whose law has sensitivities for every law parameter of the model: uniform ones
+    /// ([`cablab_rod::uniform::replay_uniform_sens`]) and three-point ones without support
+    /// friction where the rod differentiates the replay ([`RodSimulator::simulate_sens`]): the
+    /// law's columns (a replicate's factors by the chain rule through k = f·k₀, σ_y = g·σ_y0),
+    /// the compliance's, and the drift's (t − t₀); other tests' factors are 0. Otherwise
+    /// `Ok(false)`.
     fn simulate_jacobian(
         &self,
         p: &[f64],
@@ -684,23 +705,31 @@ impl Forward for ModelForward<'_> {
         jac: &mut [Vec<f64>],
     ) -> Result<bool, String> {
         let t = &self.tests[test];
-        if !cablab_rod::uniform::is_uniform(t.kind) {
-            return Ok(false);
-        }
         let law = self.law_of(p, test)?;
-        let mut setup = cablab_rod::TestSetup::new(t.kind, t.free_length_m);
-        setup.machine_compliance = self.i_compliance.map_or(0.0, |i| p[i]);
+        let c = self.i_compliance.map_or(0.0, |i| p[i]);
         let with_c = self.i_compliance.is_some();
-        let Some(sens) = cablab_rod::uniform::replay_uniform_sens(
-            &setup,
-            law.as_ref(),
-            &t.control,
-            &t.time_s,
-            out,
-            with_c,
-        )
-        .map_err(|e| e.to_string())?
-        else {
+        let sens = if cablab_rod::uniform::is_uniform(t.kind) {
+            let mut setup = cablab_rod::TestSetup::new(t.kind, t.free_length_m);
+            setup.machine_compliance = c;
+            cablab_rod::uniform::replay_uniform_sens(
+                &setup,
+                law.as_ref(),
+                &t.control,
+                &t.time_s,
+                out,
+                with_c,
+            )
+            .map_err(|e| e.to_string())?
+        } else {
+            let (Some(rod), None) = (self.rod, self.i_friction) else {
+                return Ok(false);
+            };
+            let Some(d_ei) = self.elastic_bending_rates(p, test, law.as_ref())? else {
+                return Ok(false);
+            };
+            rod.simulate_sens(t, law.as_ref(), &t.control, c, &d_ei, with_c, out)?
+        };
+        let Some(sens) = sens else {
             return Ok(false);
         };
         jac.iter_mut()
@@ -748,33 +777,73 @@ impl ModelForward<'_> {
     /// The sectional law of test `test` at parameters `p`: a replicate's own stiffness and
     /// strength (see `specimen_factor_specs`).
     fn law_of(&self, p: &[f64], test: usize) -> Result<Box<dyn Law>, String> {
-        let own;
-        let law_values: &[f64] = match self.i_factor[test] {
-            Some(i) => {
-                own = self.names[..self.n_law]
-                    .iter()
-                    .zip(&p[..self.n_law])
-                    .map(|(n, &v)| {
-                        if is_elastic_stiffness(n) {
-                            v * p[i]
-                        } else if is_yield_strength(n) {
-                            v * p[i + 1]
-                        } else {
-                            v
-                        }
-                    })
-                    .collect::<Vec<f64>>();
-                &own
-            }
-            None => &p[..self.n_law],
-        };
+        self.build_law(test, &self.law_values(p, test))
+    }
+
+    /// The law's parameter values of test `test` at `p` (a replicate's factors applied).
+    fn law_values(&self, p: &[f64], test: usize) -> Vec<f64> {
+        match self.i_factor[test] {
+            Some(i) => self.names[..self.n_law]
+                .iter()
+                .zip(&p[..self.n_law])
+                .map(|(n, &v)| {
+                    if is_elastic_stiffness(n) {
+                        v * p[i]
+                    } else if is_yield_strength(n) {
+                        v * p[i + 1]
+                    } else {
+                        v
+                    }
+                })
+                .collect(),
+            None => p[..self.n_law].to_vec(),
+        }
+    }
+
+    fn build_law(&self, test: usize, values: &[f64]) -> Result<Box<dyn Law>, String> {
         self.catalog
             .build(
                 self.tests[test].kind,
                 &self.model,
                 &self.names[..self.n_law],
-                law_values,
+                values,
             )
             .map_err(|e| e.to_string())
+    }
+
+    /// ∂EI/∂p of `law`'s elastic bending stiffness (which scales the rod's contact penalties)
+    /// per parameter of its bending sensitivities (`Law::sens_params`, in that order), by
+    /// central differences of the law built at neighbouring values (exact to rounding where EI
+    /// is linear in them, as every law's is); 0 for a parameter the model does not fit. `None`
+    /// when a fitted parameter moves the section's shear or axial stiffness, which the rod's
+    /// sensitivities do not follow.
+    fn elastic_bending_rates(
+        &self,
+        p: &[f64],
+        test: usize,
+        law: &dyn Law,
+    ) -> Result<Option<Vec<f64>>, String> {
+        let Some(params) = law.sens_params(3) else {
+            return Ok(Some(Vec::new()));
+        };
+        let values = self.law_values(p, test);
+        let mut rates = vec![0.0; params.len()];
+        for (r, name) in rates.iter_mut().zip(&params) {
+            let Some(j) = self.names[..self.n_law].iter().position(|n| n == name) else {
+                continue;
+            };
+            let h = 1e-6 * values[j].abs().max(f64::MIN_POSITIVE);
+            let at = |v: f64| -> Result<nalgebra::Matrix6<f64>, String> {
+                let mut w = values.clone();
+                w[j] = v;
+                Ok(self.build_law(test, &w)?.elastic_tangent())
+            };
+            let (hi, lo) = (at(values[j] + h)?, at(values[j] - h)?);
+            if hi[(1, 1)] != lo[(1, 1)] || hi[(2, 2)] != lo[(2, 2)] {
+                return Ok(None);
+            }
+            *r = (hi[(3, 3)] - lo[(3, 3)]) / (2.0 * h);
+        }
+        Ok(Some(rates))
     }
 }

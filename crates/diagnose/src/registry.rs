@@ -334,6 +334,40 @@ impl RodSimulator for Rod {
         Ok(())
     }
 
+    fn simulate_sens(
+        &self,
+        test: &DiagTest,
+        law: &dyn Law,
+        control: &[f64],
+        compliance: f64,
+        d_ei: &[f64],
+        compliance_column: bool,
+        out: &mut [f64],
+    ) -> Result<Option<cablab_rod::uniform::ReplaySens>, String> {
+        let mut setup = test
+            .rod_setup
+            .clone()
+            .unwrap_or_else(|| cablab_rod::TestSetup::new(test.kind, test.free_length_m));
+        setup.support_friction = 0.0;
+        setup.machine_compliance = compliance;
+        let idx = decimate(&test.control, self.max_points);
+        let c: Vec<f64> = idx.iter().map(|&i| control[i]).collect();
+        let t: Vec<f64> = idx.iter().map(|&i| test.time_s[i]).collect();
+        let Some((curve, mut sens)) =
+            cablab_rod::simulate_history_sens(&setup, law, &c, &t, d_ei, compliance_column)
+                .map_err(|e| e.to_string())?
+        else {
+            return Ok(None);
+        };
+        interpolate(&idx, &curve.response, out);
+        for col in sens.columns.iter_mut() {
+            let mut full = vec![0.0; out.len()];
+            interpolate(&idx, col, &mut full);
+            *col = full;
+        }
+        Ok(Some(sens))
+    }
+
     fn span_history(
         &self,
         test: &DiagTest,

@@ -362,6 +362,11 @@ impl<'a> Driver<'a> {
                     match solved {
                         Ok((it, w)) => {
                             *iterations += it;
+                            if rod.punch_force_sens().is_some() {
+                                // Dropped (None from then on) where the step cannot be
+                                // differentiated; the caller sees it.
+                                rod.sens_step(dt * frac);
+                            }
                             rod.commit();
                             let r = Self::response(rod, *kind);
                             if (w - *specimen).abs() > 1e-12 * max_substep.abs() {
@@ -651,6 +656,102 @@ pub fn simulate_history(
     }
     curve.newton_iterations = iterations;
     Ok(curve)
+}
+
+/// [`simulate_history`] of a three-point test with forward sensitivities of the response
+/// (the punch force) to the law's parameters ([`Law::sens_params`] of the bending component, in
+/// that order, `d_ei[j]` = ∂EI/∂p_j of the law's elastic bending stiffness, which scales the
+/// contact penalties) and, with `compliance_column`, to the machine compliance: tangent-linear
+/// through each converged step ([`PlanarRod::sens_step`]), one replay instead of one per
+/// parameter. `Ok(None)` where the rod cannot differentiate the replay (another kind, a law
+/// without sensitivities or with shear or axial channels that are not plain linear ones, support
+/// friction, a round punch with machine compliance in series, a state a law does not
+/// differentiate); the caller then differentiates numerically. Errors as [`simulate_history`]'s.
+pub fn simulate_history_sens(
+    setup: &TestSetup,
+    law: &dyn Law,
+    control: &[f64],
+    time_s: &[f64],
+    d_ei: &[f64],
+    compliance_column: bool,
+) -> Result<Option<(SimCurve, crate::uniform::ReplaySens)>, RodError> {
+    setup.validate()?;
+    check_values("control", control)?;
+    check_values("time_s", time_s)?;
+    if setup.kind != TestKind::ThreePoint {
+        return Ok(None);
+    }
+    let Some(params) = law.sens_params(3) else {
+        return Ok(None);
+    };
+    if control.len() != time_s.len() || d_ei.len() != params.len() {
+        return Err(RodError::InvalidInput(format!(
+            "control has {} samples, time_s {}; the law has {} sensitivity parameters, d_ei {}",
+            control.len(),
+            time_s.len(),
+            params.len(),
+            d_ei.len()
+        )));
+    }
+    // The penalties as `Driver::rod` sets them: k = f·EI/L³ at the supports; at a point punch
+    // with compliance C in series, k/(1 + 2Ck).
+    let l = setup.free_length_m;
+    let ei = law.elastic_tangent()[(3, 3)];
+    let k_per_ei = setup.penalty_factor / (l * l * l);
+    let k = k_per_ei * ei;
+    let c = setup.machine_compliance;
+    let point_punch = setup.punch_radius_m + setup.rod_radius_m == 0.0;
+    if !point_punch && (c > 0.0 || compliance_column) {
+        return Ok(None);
+    }
+    let g = 1.0 + 2.0 * c * k;
+    let mut d_k_support: Vec<f64> = d_ei.iter().map(|d| k_per_ei * d).collect();
+    let mut d_k_punch: Vec<f64> = d_k_support.iter().map(|d| d / (g * g)).collect();
+    if compliance_column {
+        d_k_support.push(0.0);
+        d_k_punch.push(-2.0 * k * k / (g * g));
+    }
+    let ncol = d_k_punch.len();
+    let mut driver = Driver::rod(setup, law, None)?;
+    let Driver::Rod { rod, .. } = &mut driver else {
+        return Ok(None);
+    };
+    if !rod.enable_sens(&d_k_punch, &d_k_support) {
+        return Ok(None);
+    }
+    let mut curve = SimCurve::new(setup.kind);
+    let mut columns = vec![vec![0.0; control.len()]; ncol];
+    let mut iterations = 0usize;
+    for (i, (&u, &t)) in control.iter().zip(time_s).enumerate() {
+        let dt = if i == 0 {
+            0.0
+        } else {
+            (t - time_s[i - 1]).max(0.0)
+        };
+        let r = driver.step_to(u, dt, i, &mut iterations)?;
+        curve.control.push(u);
+        curve.response.push(r);
+        curve.time_s.push(t);
+        let Driver::Rod { rod, .. } = &driver else {
+            return Ok(None);
+        };
+        // A point that needed no step (the control did not move) keeps the last derivatives.
+        let Some(d) = rod.punch_force_sens() else {
+            return Ok(None);
+        };
+        for (col, &v) in columns.iter_mut().zip(d) {
+            col[i] = 2.0 * v;
+        }
+    }
+    curve.newton_iterations = iterations;
+    let mut params = params;
+    if compliance_column {
+        params.push("compliance".into());
+    }
+    Ok(Some((
+        curve,
+        crate::uniform::ReplaySens { params, columns },
+    )))
 }
 
 /// Node positions (x m, y m, θ rad) of the deformed rod after replaying `path` in a rod-driven test

@@ -44,7 +44,9 @@ mod test_laws;
 #[cfg(test)]
 mod verification;
 
-pub use drivers::{deformed_shape, simulate_history, simulate_path, SimCurve, TestSetup};
+pub use drivers::{
+    deformed_shape, simulate_history, simulate_history_sens, simulate_path, SimCurve, TestSetup,
+};
 pub use planar::{PlanarRod, Punch, SolverOptions, Support};
 pub use uniform::replay_uniform;
 

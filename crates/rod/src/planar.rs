@@ -26,7 +26,9 @@
 //!
 //! Does not: 3D loading (torsion coupled with bending), dynamics, distributed loads.
 
-use crate::blocktri::{constrain, solve_block_tridiagonal, subtract_column};
+use crate::blocktri::{
+    constrain, solve_block_tridiagonal, solve_block_tridiagonal_many, subtract_column,
+};
 use crate::newton::NewtonSystem;
 use crate::RodError;
 use cablab_laws::Law;
@@ -235,6 +237,35 @@ pub struct PlanarRod<'a> {
     element_eval: Vec<(Kinematics, Matrix3<f64>)>,
     /// Whether `diag`, `upper` and `lower` hold the tangent of the last evaluation.
     tangent_built: bool,
+    /// Forward sensitivities of the equilibrium path, when asked for ([`PlanarRod::enable_sens`]).
+    sens: Option<PlanarSens>,
+}
+
+/// Forward (tangent-linear) sensitivities of a rod's equilibrium path to the parameters of its
+/// law and to the penalties that scale with them ([`PlanarRod::enable_sens`]).
+///
+/// At a converged step R(q, s_old; p) = 0, so K ∂q/∂p = −∂R/∂p|_q, where ∂R/∂p|_q holds the law's
+/// ∂σ/∂p at fixed strain (through the committed state's own derivative, [`Law::update_component_sens`]
+/// with ∂ε/∂p = 0) and the contact penalties' ∂k/∂p; K is the converged step's own tangent. The
+/// law is then stepped again with ∂ε/∂p = B ∂q/∂p for the new state's derivative (the law is linear
+/// in both). Holds for the bending component only: the law's shear and axial channels must be
+/// linear, uncoupled from bending and free of the parameters, which each step checks (the
+/// section's tangent, and the component update against the full one, state included).
+#[derive(Debug)]
+struct PlanarSens {
+    ncol: usize,
+    /// ∂k/∂p of the punch penalty and of the supports' normal penalty, per column.
+    d_k_punch: Vec<f64>,
+    d_k_support: Vec<f64>,
+    /// ∂(state)/∂p per element, committed and trial (`n_state · ncol` per element, row-major).
+    d_state: Vec<f64>,
+    d_trial: Vec<f64>,
+    /// ∂q/∂p per column (nodes each), and ∂(response)/∂p of the last step per column.
+    dq: Vec<Vec<Vector3<f64>>>,
+    d_punch_force: Vec<f64>,
+    scratch: Vec<f64>,
+    de: Vec<f64>,
+    ds: Vec<f64>,
 }
 
 /// Kinematics of one element: strains (γ, Γ₃, K), B = ∂ε/∂q (3×6) and the midpoint directors.
@@ -502,6 +533,7 @@ impl<'a> PlanarRod<'a> {
             q0: Vec::with_capacity(nodes),
             element_eval: Vec::with_capacity(elements),
             tangent_built: false,
+            sens: None,
         })
     }
 
@@ -997,6 +1029,9 @@ impl<'a> PlanarRod<'a> {
     /// Accept the converged step: trial law states and friction stick points become committed.
     pub fn commit(&mut self) {
         self.state.copy_from_slice(&self.trial);
+        if let Some(s) = self.sens.as_mut() {
+            std::mem::swap(&mut s.d_state, &mut s.d_trial);
+        }
         if let Some(p) = self.punch.as_mut() {
             p.active_committed.clone_from(&p.active);
         }
@@ -1004,6 +1039,230 @@ impl<'a> PlanarRod<'a> {
             (s.contact_s_m, s.contact_point, s.tangential_force_n) = s.trial;
             s.committed_branch = s.decided;
         }
+    }
+}
+
+impl PlanarRod<'_> {
+    /// Carry forward sensitivities from here on (the rod unloaded and virgin: the state's
+    /// derivatives start at 0) over `d_k_punch.len()` columns: the law's
+    /// ([`Law::sens_params`] of the bending component, in that order) and any that act only
+    /// through the penalties (the machine compliance folded into the punch). `d_k_punch` and
+    /// `d_k_support` are ∂k/∂p of the punch's and the supports' penalties per column. `false`
+    /// (nothing enabled) where the rod cannot: a law without bending sensitivities or without
+    /// its own shear and axial stiffness, or a rough support.
+    pub fn enable_sens(&mut self, d_k_punch: &[f64], d_k_support: &[f64]) -> bool {
+        let ncol = d_k_punch.len();
+        let Some(n_law) = self.law.sens_count(3) else {
+            return false;
+        };
+        if n_law > ncol
+            || d_k_support.len() != ncol
+            || self.axial_fallback.is_some()
+            || self.shear_fallback.is_some()
+            || self.supports.iter().any(|s| s.mu > 0.0)
+        {
+            return false;
+        }
+        let (ne, nodes) = (self.l0.len(), self.nodes());
+        self.sens = Some(PlanarSens {
+            ncol,
+            d_k_punch: d_k_punch.to_vec(),
+            d_k_support: d_k_support.to_vec(),
+            d_state: vec![0.0; ne * self.n_state * ncol],
+            d_trial: vec![0.0; ne * self.n_state * ncol],
+            dq: vec![vec![Vector3::zeros(); nodes]; ncol],
+            d_punch_force: vec![0.0; ncol],
+            scratch: vec![0.0; self.n_state],
+            de: vec![0.0; ncol],
+            ds: vec![0.0; ncol],
+        });
+        true
+    }
+
+    /// ∂(punch force)/∂p per column at the last step [`PlanarRod::sens_step`] took, if
+    /// sensitivities are on.
+    pub fn punch_force_sens(&self) -> Option<&[f64]> {
+        self.sens.as_ref().map(|s| s.d_punch_force.as_slice())
+    }
+
+    /// Propagate the sensitivities over the step just solved (before [`PlanarRod::commit`]), of
+    /// duration `dt`; `false` when this step cannot be differentiated (the caller drops them).
+    pub fn sens_step(&mut self, dt: f64) -> bool {
+        let Some(mut sens) = self.sens.take() else {
+            return false;
+        };
+        let ok = self.propagate_sens(&mut sens, dt).is_some();
+        if ok {
+            self.sens = Some(sens);
+        }
+        ok
+    }
+
+    /// Element `e`'s section at bending strain `k` over `dt` with sensitivities: ∂σ/∂p into
+    /// `sens.ds` given ∂ε/∂p in `sens.de`, the new state's derivatives into `sens.d_trial`, the
+    /// new state into `sens.scratch`; the stress, or None where the law cannot differentiate.
+    fn section_sens(&self, sens: &mut PlanarSens, e: usize, k: f64, dt: f64) -> Option<f64> {
+        let (ns, ncol) = (self.n_state, sens.ncol);
+        sens.ds.iter_mut().for_each(|v| *v = 0.0);
+        let block = e * ns * ncol..(e + 1) * ns * ncol;
+        let step = cablab_laws::ComponentStep {
+            component: 3,
+            strain: k,
+            dt,
+        };
+        let (sigma, _) = self.law.update_component_sens(
+            step,
+            &self.state[e * ns..(e + 1) * ns],
+            &mut sens.scratch,
+            cablab_laws::SensStep {
+                first: 0,
+                d_old: &sens.d_state[block.clone()],
+                d_new: &mut sens.d_trial[block],
+                de: &sens.de,
+                ds: &mut sens.ds,
+            },
+        )?;
+        Some(sigma)
+    }
+
+    fn propagate_sens(&mut self, sens: &mut PlanarSens, dt: f64) -> Option<()> {
+        let (ne, ns, ncol, nodes) = (self.l0.len(), self.n_state, sens.ncol, self.nodes());
+        // The converged step's tangent, constrained as a correction constrains it.
+        self.build_tangent();
+        for i in 0..nodes {
+            for d in 0..3 {
+                if self.prescribed[i][d].is_some() {
+                    constrain(&mut self.diag, &mut self.upper, &mut self.lower, (i, d));
+                }
+            }
+        }
+        self.tangent_built = false;
+        for col in sens.dq.iter_mut() {
+            col.iter_mut().for_each(|v| *v = Vector3::zeros());
+        }
+        // −∂R/∂p at fixed q: the sections' ∂σ/∂p at fixed strain, then the penalties'.
+        let tol = 1e-9;
+        for e in 0..ne {
+            let (kin, cm) = &self.element_eval[e];
+            // Bending must stand alone in the section's tangent.
+            if cm[(2, 0)] != 0.0 || cm[(2, 1)] != 0.0 || cm[(0, 2)] != 0.0 || cm[(1, 2)] != 0.0 {
+                return None;
+            }
+            sens.de.iter_mut().for_each(|v| *v = 0.0);
+            let sigma = self.section_sens(sens, e, kin.strain[2], dt)?;
+            // The component update is the full one (no state or stress off the bending axis).
+            let m = self.stress[e][2];
+            if (sigma - m).abs() > tol * (m.abs() + self.force_scale * self.length_scale) {
+                return None;
+            }
+            let trial = &self.trial[e * ns..(e + 1) * ns];
+            if trial
+                .iter()
+                .zip(&sens.scratch)
+                .any(|(a, b)| (a - b).abs() > tol * (a.abs() + b.abs()) + 1e-300)
+            {
+                return None;
+            }
+            let l0 = self.l0[e];
+            for j in 0..ncol {
+                let f = kin.b.row(2).transpose() * (sens.ds[j] * l0);
+                for d in 0..3 {
+                    sens.dq[j][e][d] -= f[d];
+                    sens.dq[j][e + 1][d] -= f[3 + d];
+                }
+            }
+        }
+        if let Some(p) = self.punch.as_ref() {
+            for i in 0..nodes {
+                if !p.active.get(i).copied().unwrap_or(false) {
+                    continue;
+                }
+                let Some((gap, n, _)) = Self::punch_gap(p, i, self.q[i].xy()) else {
+                    continue;
+                };
+                for j in 0..ncol {
+                    let f = n * (gap * sens.d_k_punch[j]);
+                    sens.dq[j][i][0] -= f.x;
+                    sens.dq[j][i][1] -= f.y;
+                }
+            }
+        }
+        for sup in &self.supports {
+            let Some(st) = sup.tangent else { continue };
+            let e = st.e;
+            let (pa, pb) = (self.q[e].xy(), self.q[e + 1].xy());
+            let anchor = anchor_of(e, st.e_anchor, st.xi_anchor, pa, pb, &self.q);
+            let ev = support_forces(
+                sup,
+                pa,
+                pb,
+                self.s_ref[e],
+                self.l0[e],
+                true,
+                anchor,
+                Some(st.branch),
+            )?;
+            // Frictionless: the forces are the normal penalty's, linear in k.
+            for j in 0..ncol {
+                let r = sens.d_k_support[j] / sup.k_normal;
+                for d in 0..2 {
+                    sens.dq[j][e][d] += ev.fa[d] * r;
+                    sens.dq[j][e + 1][d] += ev.fb[d] * r;
+                }
+            }
+        }
+        for j in 0..ncol {
+            for i in 0..nodes {
+                for d in 0..3 {
+                    if self.prescribed[i][d].is_some() {
+                        sens.dq[j][i][d] = 0.0;
+                    }
+                }
+            }
+        }
+        solve_block_tridiagonal_many(
+            &self.diag,
+            &self.upper,
+            &self.lower,
+            &mut sens.dq,
+            &mut self.work,
+        )
+        .ok()?;
+        // The sections' new state derivatives, with ∂ε/∂p = B ∂q/∂p.
+        for e in 0..ne {
+            let kin = &self.element_eval[e].0;
+            for j in 0..ncol {
+                let (a, b) = (sens.dq[j][e], sens.dq[j][e + 1]);
+                let dqe = Vec6::new(a[0], a[1], a[2], b[0], b[1], b[2]);
+                sens.de[j] = kin.b.row(2).dot(&dqe.transpose());
+            }
+            self.section_sens(sens, e, kin.strain[2], dt)?;
+        }
+        // The punch force: Σ k g n_y over the held nodes.
+        sens.d_punch_force.iter_mut().for_each(|v| *v = 0.0);
+        if let Some(p) = self.punch.as_ref() {
+            for i in 0..nodes {
+                if !p.active.get(i).copied().unwrap_or(false) {
+                    continue;
+                }
+                let Some((gap, n, dist)) = Self::punch_gap(p, i, self.q[i].xy()) else {
+                    continue;
+                };
+                let nn = n * n.transpose();
+                let m = nn + (Matrix2::identity() - nn) * (gap / dist);
+                for j in 0..ncol {
+                    let dr = sens.dq[j][i].xy();
+                    sens.d_punch_force[j] += (n * (gap * sens.d_k_punch[j]) + m * dr * p.k).y;
+                }
+            }
+        }
+        let finite = sens.d_punch_force.iter().all(|v| v.is_finite())
+            && sens
+                .dq
+                .iter()
+                .flatten()
+                .all(|v| v.iter().all(|x| x.is_finite()));
+        finite.then_some(())
     }
 }
 
