@@ -474,6 +474,12 @@ impl Law for Elastoplastic {
         &self.label
     }
 
+    fn off_channel_linear(&self, component: usize) -> bool {
+        self.plastic
+            .iter()
+            .all(|p| p.channel.position(component).is_some())
+    }
+
     fn n_state(&self) -> usize {
         self.plastic.iter().map(|p| p.n_state()).sum()
     }

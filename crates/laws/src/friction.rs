@@ -257,6 +257,10 @@ fn element_rates(
 }
 
 impl Law for IwanElements {
+    fn off_channel_linear(&self, component: usize) -> bool {
+        self.channel.position(component).is_some()
+    }
+
     fn name(&self) -> &str {
         "iwan"
     }

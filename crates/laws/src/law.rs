@@ -66,6 +66,17 @@ pub trait Law: Send + Sync + std::fmt::Debug {
         update_component_via_full(self, step, old, new)
     }
 
+    /// Whether every component outside the channel of `component` is linear elastic (its stress
+    /// the elastic tangent's diagonal times its strain), stateless and uncoupled from
+    /// `component`'s channel, so that a solver loading those components too (the planar rod:
+    /// shear and axial strain beside the bending curvature) may take their stresses from
+    /// [`Law::elastic_tangent`] and `component`'s, with the whole state, from
+    /// [`Law::update_component`]: the same response as [`Law::update`] with the channel on its
+    /// axis. `false` (the default) when the law does not say.
+    fn off_channel_linear(&self, _component: usize) -> bool {
+        false
+    }
+
     /// The parameters (registry names, [`crate::param_specs`]) whose forward sensitivities
     /// [`Law::update_component_sens`] propagates when `component` is loaded, in column order;
     /// `None` (the default) when the law has none, and the caller differentiates numerically.

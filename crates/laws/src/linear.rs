@@ -92,6 +92,10 @@ impl LinearElastic {
 }
 
 impl Law for LinearElastic {
+    fn off_channel_linear(&self, _component: usize) -> bool {
+        true
+    }
+
     fn name(&self) -> &str {
         "linear"
     }

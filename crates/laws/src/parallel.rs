@@ -31,6 +31,10 @@ impl Parallel {
 }
 
 impl Law for Parallel {
+    fn off_channel_linear(&self, component: usize) -> bool {
+        self.base.off_channel_linear(component) && self.extension.off_channel_linear(component)
+    }
+
     fn name(&self) -> &str {
         &self.label
     }

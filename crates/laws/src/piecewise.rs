@@ -50,6 +50,10 @@ impl PiecewiseLinear {
 }
 
 impl Law for PiecewiseLinear {
+    fn off_channel_linear(&self, component: usize) -> bool {
+        self.channel.position(component).is_some()
+    }
+
     fn name(&self) -> &str {
         "piecewise_linear"
     }

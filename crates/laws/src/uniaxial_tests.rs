@@ -358,3 +358,82 @@ fn full_update_equals_the_vector_code() {
         );
     }
 }
+
+/// [`Law::off_channel_linear`]: every law, every kind, where it says yes for the loaded
+/// component, the full update at a strain with random shear, axial and other strains beside the
+/// loaded one (the planar rod's sections: shear and axial strain beside bending) gives, at every
+/// step of a random history, the loaded component's stress, tangent and the whole state of the
+/// uniaxial update (to 1e-12) and, elsewhere, the elastic diagonal times the strain with no
+/// coupling. The registry's laws all say yes (their inelastic parts act on the loaded channel
+/// only); a law with a second plastic channel says no for either.
+#[test]
+fn off_channel_linear_laws_step_the_loaded_channel_alone() {
+    use crate::channel::Channel;
+    use crate::elastoplastic::{Elastoplastic, PlasticChannel};
+    use crate::linear::SectionStiffness;
+    for kind in TestKind::ALL
+        .into_iter()
+        .filter(|k| *k != TestKind::Unknown)
+    {
+        let (k, y) = example_scale(kind);
+        let comp = loaded_component(kind);
+        for name in LAWS {
+            let law = law(kind, name);
+            assert!(law.off_channel_linear(comp), "{kind} {name}");
+            let c0 = law.elastic_tangent();
+            let mut rng = ChaCha8Rng::seed_from_u64(5);
+            let (e, t) = history(y / k, 1500, 21);
+            let n = law.n_state();
+            let (mut fo, mut fnew) = (vec![0.0; n], vec![0.0; n]);
+            law.init_state(&mut fo);
+            let (mut uo, mut unew) = (fo.clone(), vec![0.0; n]);
+            let mut t_prev = t[0];
+            for (&ei, &ti) in e.iter().zip(&t) {
+                let dt = (ti - t_prev).max(0.0);
+                t_prev = ti;
+                let mut eps = Strain6::from_fn(|_, _| rng.random_range(-1e-3..1e-3));
+                // The loaded channel's other axis stays 0 (a planar state).
+                for c in [3usize, 4] {
+                    if comp == 3 || comp == 4 {
+                        eps[c] = 0.0;
+                    }
+                }
+                eps[comp] = ei;
+                let r = law.update(&eps, dt, &fo, &mut fnew);
+                let step = ComponentStep {
+                    component: comp,
+                    strain: ei,
+                    dt,
+                };
+                let (s, kk) = law.update_component(step, &uo, &mut unew);
+                assert!(rel(r.stress[comp], s) < 1e-12, "{kind} {name}: stress");
+                assert!(rel(r.tangent[(comp, comp)], kk) < 1e-12, "{kind} {name}");
+                for (a, b) in fnew.iter().zip(&unew) {
+                    assert!(rel(*a, *b) < 1e-12, "{kind} {name}: state");
+                }
+                let same_channel = |i: usize| (3..=4).contains(&comp) && (3..=4).contains(&i);
+                for i in (0..6).filter(|&i| i != comp && !same_channel(i)) {
+                    assert_eq!(r.stress[i], c0[(i, i)] * eps[i], "{kind} {name}: {i}");
+                    assert_eq!(r.tangent[(i, comp)], 0.0, "{kind} {name}");
+                    assert_eq!(r.tangent[(comp, i)], 0.0, "{kind} {name}");
+                }
+                std::mem::swap(&mut fo, &mut fnew);
+                std::mem::swap(&mut uo, &mut unew);
+            }
+        }
+    }
+    // Yield in bending and in tension: neither channel is linear beside the other.
+    let mut both = Elastoplastic::isotropic(
+        SectionStiffness::CHAPTER_CABLE,
+        Channel::Bending,
+        0.012,
+        2e-4,
+    );
+    both.plastic.push(PlasticChannel {
+        channel: Channel::Axial,
+        yield_strength: 54.0,
+        iso_hardening: 2400.0,
+        ..both.plastic[0]
+    });
+    assert!(!both.off_channel_linear(3) && !both.off_channel_linear(2));
+}

@@ -61,6 +61,10 @@ pub struct MaxwellBranches {
 }
 
 impl Law for MaxwellBranches {
+    fn off_channel_linear(&self, component: usize) -> bool {
+        self.channel.position(component).is_some()
+    }
+
     fn name(&self) -> &str {
         "maxwell"
     }

@@ -239,6 +239,11 @@ pub struct PlanarRod<'a> {
     tangent_built: bool,
     /// Forward sensitivities of the equilibrium path, when asked for ([`PlanarRod::enable_sens`]).
     sens: Option<PlanarSens>,
+    /// The section's shear–axial block (signs of the rod's strains) when the law's shear and
+    /// axial channels are plain linear ones ([`Law::off_channel_linear`] of bending, no
+    /// coupling in the elastic tangent): the sections then step the bending curvature alone
+    /// ([`Law::update_component`]) and take shear and axial force from this block.
+    off_channel: Option<Matrix2<f64>>,
 }
 
 /// Forward (tangent-linear) sensitivities of a rod's equilibrium path to the parameters of its
@@ -497,6 +502,16 @@ impl<'a> PlanarRod<'a> {
         } else {
             Some(fallback)
         };
+        let coupled = (0..6).any(|i| {
+            (0..6).any(|j| i != j && c[(i, j)] != 0.0 && (i == 3 || j == 3) && (i < 3 || j < 3))
+        });
+        let off_channel = (law.off_channel_linear(3)
+            && !coupled
+            && axial_fallback.is_none()
+            && shear_fallback.is_none())
+        .then(|| {
+            Matrix2::from_fn(|i, j| LAW_SIGN[i] * LAW_SIGN[j] * c[(LAW_INDEX[i], LAW_INDEX[j])])
+        });
         let n_state = law.n_state();
         let mut state = vec![0.0; n_state * elements];
         for e in 0..elements {
@@ -534,6 +549,7 @@ impl<'a> PlanarRod<'a> {
             element_eval: Vec::with_capacity(elements),
             tangent_built: false,
             sens: None,
+            off_channel,
         })
     }
 
@@ -576,11 +592,26 @@ impl<'a> PlanarRod<'a> {
                 &self.state[e * ns..(e + 1) * ns],
                 &mut self.trial[e * ns..(e + 1) * ns],
             );
-            let resp = self.law.update(&eps, dt, old, new);
-            let mut sig = Vector3::new(-resp.stress[1], resp.stress[2], resp.stress[3]);
-            let mut cm = Matrix3::from_fn(|i, j| {
-                LAW_SIGN[i] * LAW_SIGN[j] * resp.tangent[(LAW_INDEX[i], LAW_INDEX[j])]
-            });
+            let (mut sig, mut cm);
+            if let Some(block) = self.off_channel {
+                let step = cablab_laws::ComponentStep {
+                    component: 3,
+                    strain: kin.strain[2],
+                    dt,
+                };
+                let (m, k) = self.law.update_component(step, old, new);
+                let f = block * kin.strain.xy();
+                sig = Vector3::new(f.x, f.y, m);
+                cm = Matrix3::zeros();
+                cm.fixed_view_mut::<2, 2>(0, 0).copy_from(&block);
+                cm[(2, 2)] = k;
+            } else {
+                let resp = self.law.update(&eps, dt, old, new);
+                sig = Vector3::new(-resp.stress[1], resp.stress[2], resp.stress[3]);
+                cm = Matrix3::from_fn(|i, j| {
+                    LAW_SIGN[i] * LAW_SIGN[j] * resp.tangent[(LAW_INDEX[i], LAW_INDEX[j])]
+                });
+            }
             if let Some(ga) = self.shear_fallback {
                 sig[0] = ga * kin.strain[0];
                 for j in 0..3 {
