@@ -9,8 +9,8 @@
 //! ([`Forward::simulate_jacobian`]: ∂σ/∂p propagated through the law's state recursion in the same
 //! replay, one replay with k derivative columns instead of k + 1 replays;
 //! [`FitOptions::sensitivities`]), chained through dp/dz of the bounds' map and centred like the
-//! residuals when the offset is profiled out; otherwise (laws without sensitivities, the rod with
-//! support friction) by forward differences, one parameter per rayon task. In the polish by
+//! residuals when the offset is profiled out; otherwise (laws without sensitivities, a rod
+//! replay the rod cannot differentiate) by forward differences, one parameter per rayon task. In the polish by
 //! default Broyden's secant update replaces some of them after a step that went as predicted
 //! ([`FitOptions::polish_secant`]). Uncertainties come from the Gauss–Newton covariance
 //! s²(JᵀJ)⁻¹ at the optimum (physical parameters, a fresh Jacobian: sensitivities or finite

@@ -1040,9 +1040,10 @@ mod tests {
     /// difference of step 10⁻⁵ |p| of the replay to 10⁻⁴ of its norm (10⁻³ for friction, whose
     /// slip events make the difference itself rougher: its error falls tenfold from a step of
     /// 10⁻⁶ to 10⁻⁵, so it is the difference's, not the column's; at 10⁻⁶ the replay's Newton
-    /// tolerance dominates the difference). The same with a round punch (5 mm) that holds
-    /// several nodes. With support friction, or a round punch with compliance, the rod cannot
-    /// differentiate: finite differences (`Ok(false)`).
+    /// tolerance dominates the difference). The same with rough supports (μ = 0.3, the stick
+    /// spring's history carried) and compliance, and with a round punch (5 mm) that holds
+    /// several nodes. With a round punch and compliance the rod cannot differentiate: finite
+    /// differences (`Ok(false)`).
     #[test]
     fn three_point_rod_sensitivities_match_central_differences() {
         use cablab_core::Effect;
@@ -1110,14 +1111,46 @@ mod tests {
             1e-3,
         );
         assert!(names.contains(&"n_f".to_string()), "{names:?}");
-        // Where the rod cannot differentiate: the fit's finite differences.
-        let n = tests[0].control.len();
-        let (mut out, mut jac) = (vec![0.0; n], vec![vec![0.0; n]; 5]);
+        // Rough supports (the stick spring's history carried) with compliance.
+        let names = check(
+            &ModelSpec::law("elastoplastic")
+                .with(Effect::SupportFriction)
+                .with(Effect::MachineCompliance),
+            &[
+                ("EI", 0.002),
+                ("M_y", 0.03),
+                ("HI", 5e-5),
+                ("support_friction", 0.3),
+                ("compliance", 2e-4),
+            ],
+            1e-3,
+        );
+        assert!(names.contains(&"support_friction".to_string()), "{names:?}");
+        // Rough round supports: a test on them, elastoplastic with support friction.
+        let on_supports = |t: &DiagTest, support_radius_m: f64, rod_radius_m: f64| {
+            let mut t = t.clone();
+            let mut setup = cablab_rod::TestSetup::new(TestKind::ThreePoint, 0.06);
+            setup.support_radius_m = support_radius_m;
+            setup.rod_radius_m = rod_radius_m;
+            t.rod_setup = Some(setup);
+            [t]
+        };
         let rough = ModelSpec::law("elastoplastic").with(Effect::SupportFriction);
-        let fwd = ModelForward::new(&tests, &rough, ctx.catalog, ctx.rod).unwrap();
-        let p: Vec<f64> = fwd.specs().iter().map(|s| s.initial).collect();
-        jac.truncate(p.len());
-        assert!(!fwd.simulate_jacobian(&p, 0, &mut out, &mut jac).unwrap());
+        // 20 mm, μ = 1, that the rod rolls and slides over: the contact moves through 8
+        // elements (where it crosses a node the support slides).
+        let rolled = on_supports(&tests[0], 0.02, 0.0);
+        let fwd = ModelForward::new(&rolled, &rough, ctx.catalog, ctx.rod).unwrap();
+        let p = [0.002, 0.03, 5e-5, 1.0];
+        assert_columns_match(&fwd, &p, 1e-3, "rolling over round supports");
+        // Small cycles past yield, 5 mm supports touching the rod's surface (1.5 mm from the
+        // centreline).
+        let small = three_point(&[0.0, 0.002, 0.0005, 0.003, 0.001, 0.003], 0.06, 0.002);
+        let small = on_supports(&small, 0.005, 0.0015);
+        let fwd = ModelForward::new(&small, &rough, ctx.catalog, ctx.rod).unwrap();
+        let p = [0.002, 0.01, 5e-5, 1.0];
+        assert_columns_match(&fwd, &p, 1e-3, "small cycles on rough supports");
+        let n = tests[0].control.len();
+        let mut out = vec![0.0; n];
         let mut round = tests[0].clone();
         let mut setup = cablab_rod::TestSetup::new(TestKind::ThreePoint, 0.06);
         setup.punch_radius_m = 0.005;
@@ -1132,22 +1165,29 @@ mod tests {
         )
         .unwrap();
         let p = [0.002, 0.03, 5e-5];
-        for (j, c) in columns_against_central_differences_at(&fwd, &p, 0, 1e-5)
-            .iter()
-            .enumerate()
-        {
-            assert!(
-                c.norm > 0.0 && c.err <= 1e-4 * c.norm + c.floor,
-                "round punch: ∂/∂p{j}: error {:e} of {:e}",
-                c.err,
-                c.norm
-            );
-        }
+        assert_columns_match(&fwd, &p, 1e-4, "round punch");
+        // A round punch with compliance (the series solve): the fit's finite differences.
         let compliant = ModelSpec::law("elastoplastic").with(Effect::MachineCompliance);
         let fwd = ModelForward::new(&round, &compliant, ctx.catalog, ctx.rod).unwrap();
         let p: Vec<f64> = fwd.specs().iter().map(|s| s.initial).collect();
         let mut jac = vec![vec![0.0; n]; p.len()];
         assert!(!fwd.simulate_jacobian(&p, 0, &mut out, &mut jac).unwrap());
+    }
+
+    /// Every column of test 0's sensitivities at `p` agrees with a central difference of step
+    /// 10⁻⁵ |p_j| to `tol` of its norm (plus the difference's rounding floor).
+    fn assert_columns_match(fwd: &ModelForward, p: &[f64], tol: f64, what: &str) {
+        for (j, c) in columns_against_central_differences_at(fwd, p, 0, 1e-5)
+            .iter()
+            .enumerate()
+        {
+            assert!(
+                c.norm > 0.0 && c.err <= tol * c.norm + c.floor,
+                "{what}: ∂/∂p{j}: error {:e} of {:e}",
+                c.err,
+                c.norm
+            );
+        }
     }
 
     /// One sensitivity column of [`Forward::simulate_jacobian`] against a central difference.

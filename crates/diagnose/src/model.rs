@@ -336,18 +336,19 @@ pub trait RodSimulator: Sync {
         out: &mut [f64],
     ) -> Result<(), String>;
 
-    /// [`RodSimulator::simulate`] without support friction, with the derivatives of the
-    /// response to the law's parameters (`Law::sens_params` of the bending component, `d_ei[j]`
-    /// = ∂EI/∂p_j of its elastic bending stiffness) and, with `compliance_column`, to the
-    /// compliance, one column per sample each; `Ok(None)` (the default) where the simulator
-    /// cannot differentiate the replay.
+    /// [`RodSimulator::simulate`] with support friction `mu` (`None`: frictionless and no
+    /// column for it) and compliance, with the derivatives of the response to the law's
+    /// parameters (`Law::sens_params` of the bending component, `d_ei[j]` = ∂EI/∂p_j of its
+    /// elastic bending stiffness), then, with `compliance_column`, to the compliance, then,
+    /// with `mu`, to the friction coefficient, one column per sample each; `Ok(None)` (the
+    /// default) where the simulator cannot differentiate the replay.
     #[allow(clippy::too_many_arguments)]
     fn simulate_sens(
         &self,
         _test: &DiagTest,
         _law: &dyn Law,
         _control: &[f64],
-        _compliance: f64,
+        _mu_compliance: (Option<f64>, f64),
         _d_ei: &[f64],
         _compliance_column: bool,
         _out: &mut [f64],
@@ -721,13 +722,14 @@ impl Forward for ModelForward<'_> {
             )
             .map_err(|e| e.to_string())?
         } else {
-            let (Some(rod), None) = (self.rod, self.i_friction) else {
+            let Some(rod) = self.rod else {
                 return Ok(false);
             };
             let Some(d_ei) = self.elastic_bending_rates(p, test, law.as_ref())? else {
                 return Ok(false);
             };
-            rod.simulate_sens(t, law.as_ref(), &t.control, c, &d_ei, with_c, out)?
+            let mu = self.i_friction.map(|i| p[i]);
+            rod.simulate_sens(t, law.as_ref(), &t.control, (mu, c), &d_ei, with_c, out)?
         };
         let Some(sens) = sens else {
             return Ok(false);
@@ -759,8 +761,20 @@ impl Forward for ModelForward<'_> {
                 }
             }
         }
-        if let (Some(i), Some(col)) = (self.i_compliance, sens.columns.last()) {
-            jac[i].copy_from_slice(col);
+        // The compliance's column: named by the rod, the one after the law's otherwise.
+        let named = |n: &str| sens.params.iter().position(|p| p == n);
+        let compliance_col = named("compliance")
+            .or((sens.columns.len() > sens.params.len()).then_some(sens.columns.len() - 1));
+        for (i, col) in [
+            (self.i_compliance, compliance_col),
+            (self.i_friction, named("support_friction")),
+        ] {
+            if let Some(i) = i {
+                let Some(col) = col.and_then(|c| sens.columns.get(c)) else {
+                    return Ok(false);
+                };
+                jac[i].copy_from_slice(col);
+            }
         }
         if let Some(i) = self.i_drift {
             let t0 = t.time_s[0];

@@ -339,7 +339,7 @@ impl RodSimulator for Rod {
         test: &DiagTest,
         law: &dyn Law,
         control: &[f64],
-        compliance: f64,
+        (mu, compliance): (Option<f64>, f64),
         d_ei: &[f64],
         compliance_column: bool,
         out: &mut [f64],
@@ -348,14 +348,20 @@ impl RodSimulator for Rod {
             .rod_setup
             .clone()
             .unwrap_or_else(|| cablab_rod::TestSetup::new(test.kind, test.free_length_m));
-        setup.support_friction = 0.0;
+        setup.support_friction = mu.unwrap_or(0.0);
         setup.machine_compliance = compliance;
         let idx = decimate(&test.control, self.max_points);
         let c: Vec<f64> = idx.iter().map(|&i| control[i]).collect();
         let t: Vec<f64> = idx.iter().map(|&i| test.time_s[i]).collect();
-        let Some((curve, mut sens)) =
-            cablab_rod::simulate_history_sens(&setup, law, &c, &t, d_ei, compliance_column)
-                .map_err(|e| e.to_string())?
+        let Some((curve, mut sens)) = cablab_rod::simulate_history_sens(
+            &setup,
+            law,
+            &c,
+            &t,
+            d_ei,
+            (compliance_column, mu.is_some()),
+        )
+        .map_err(|e| e.to_string())?
         else {
             return Ok(None);
         };

@@ -661,19 +661,22 @@ pub fn simulate_history(
 /// [`simulate_history`] of a three-point test with forward sensitivities of the response
 /// (the punch force) to the law's parameters ([`Law::sens_params`] of the bending component, in
 /// that order, `d_ei[j]` = ∂EI/∂p_j of the law's elastic bending stiffness, which scales the
-/// contact penalties) and, with `compliance_column`, to the machine compliance: tangent-linear
+/// contact penalties) and, with `compliance_column`, to the machine compliance, and with
+/// `friction_column` to the supports' friction coefficient (after the compliance's), each
+/// named as the diagnosis names it (`compliance`, `support_friction`): tangent-linear
 /// through each converged step ([`PlanarRod::sens_step`]), one replay instead of one per
 /// parameter. `Ok(None)` where the rod cannot differentiate the replay (another kind, a law
-/// without sensitivities or with shear or axial channels that are not plain linear ones, support
-/// friction, a round punch with machine compliance in series, a state a law does not
-/// differentiate); the caller then differentiates numerically. Errors as [`simulate_history`]'s.
+/// without sensitivities or with shear or axial channels that are not plain linear ones, a
+/// round punch with machine compliance in series, a rough support whose anchor left the
+/// element in contact during a step, a state a law does not differentiate); the caller then
+/// differentiates numerically. Errors as [`simulate_history`]'s.
 pub fn simulate_history_sens(
     setup: &TestSetup,
     law: &dyn Law,
     control: &[f64],
     time_s: &[f64],
     d_ei: &[f64],
-    compliance_column: bool,
+    (compliance_column, friction_column): (bool, bool),
 ) -> Result<Option<(SimCurve, crate::uniform::ReplaySens)>, RodError> {
     setup.validate()?;
     check_values("control", control)?;
@@ -711,12 +714,18 @@ pub fn simulate_history_sens(
         d_k_support.push(0.0);
         d_k_punch.push(-2.0 * k * k / (g * g));
     }
+    let mut d_mu = vec![0.0; d_k_punch.len()];
+    if friction_column {
+        d_k_support.push(0.0);
+        d_k_punch.push(0.0);
+        d_mu.push(1.0);
+    }
     let ncol = d_k_punch.len();
     let mut driver = Driver::rod(setup, law, None)?;
     let Driver::Rod { rod, .. } = &mut driver else {
         return Ok(None);
     };
-    if !rod.enable_sens(&d_k_punch, &d_k_support) {
+    if !rod.enable_sens(&d_k_punch, &d_k_support, &d_mu) {
         return Ok(None);
     }
     let mut curve = SimCurve::new(setup.kind);
@@ -747,6 +756,9 @@ pub fn simulate_history_sens(
     let mut params = params;
     if compliance_column {
         params.push("compliance".into());
+    }
+    if friction_column {
+        params.push("support_friction".into());
     }
     Ok(Some((
         curve,

@@ -251,7 +251,9 @@ pub struct PlanarRod<'a> {
 ///
 /// At a converged step R(q, s_old; p) = 0, so K ∂q/∂p = −∂R/∂p|_q, where ∂R/∂p|_q holds the law's
 /// ∂σ/∂p at fixed strain (through the committed state's own derivative, [`Law::update_component_sens`]
-/// with ∂ε/∂p = 0) and the contact penalties' ∂k/∂p; K is the converged step's own tangent. The
+/// with ∂ε/∂p = 0), the contact penalties' ∂k/∂p and the supports' forces' derivatives in their
+/// committed contact state and μ (central differences of the force law on the residual's branch,
+/// as the tangent takes its position derivatives); K is the converged step's own tangent. The
 /// law is then stepped again with ∂ε/∂p = B ∂q/∂p for the new state's derivative (the law is linear
 /// in both). Holds for the bending component only: the law's shear and axial channels must be
 /// linear, uncoupled from bending and free of the parameters, which each step checks (the
@@ -262,6 +264,12 @@ struct PlanarSens {
     /// ∂k/∂p of the punch penalty and of the supports' normal penalty, per column.
     d_k_punch: Vec<f64>,
     d_k_support: Vec<f64>,
+    /// ∂μ/∂p of the supports' friction coefficient per column.
+    d_mu: Vec<f64>,
+    /// ∂/∂p of each support's committed contact state (arc length, contact point x and y,
+    /// tangential force), committed and trial, `4 · ncol` per support, row-major.
+    d_support: Vec<f64>,
+    d_support_trial: Vec<f64>,
     /// ∂(state)/∂p per element, committed and trial (`n_state · ncol` per element, row-major).
     d_state: Vec<f64>,
     d_trial: Vec<f64>,
@@ -1062,6 +1070,7 @@ impl<'a> PlanarRod<'a> {
         self.state.copy_from_slice(&self.trial);
         if let Some(s) = self.sens.as_mut() {
             std::mem::swap(&mut s.d_state, &mut s.d_trial);
+            std::mem::swap(&mut s.d_support, &mut s.d_support_trial);
         }
         if let Some(p) = self.punch.as_mut() {
             p.active_committed.clone_from(&p.active);
@@ -1077,28 +1086,33 @@ impl PlanarRod<'_> {
     /// Carry forward sensitivities from here on (the rod unloaded and virgin: the state's
     /// derivatives start at 0) over `d_k_punch.len()` columns: the law's
     /// ([`Law::sens_params`] of the bending component, in that order) and any that act only
-    /// through the penalties (the machine compliance folded into the punch). `d_k_punch` and
-    /// `d_k_support` are ∂k/∂p of the punch's and the supports' penalties per column. `false`
-    /// (nothing enabled) where the rod cannot: a law without bending sensitivities or without
-    /// its own shear and axial stiffness, or a rough support.
-    pub fn enable_sens(&mut self, d_k_punch: &[f64], d_k_support: &[f64]) -> bool {
+    /// through the penalties (the machine compliance folded into the punch) or the supports'
+    /// friction coefficient. `d_k_punch` and `d_k_support` are ∂k/∂p of the punch's and the
+    /// supports' penalties (normal and stick alike) per column, `d_mu` ∂μ/∂p. `false` (nothing
+    /// enabled) where the rod cannot: a law without bending sensitivities or without its own
+    /// shear and axial stiffness.
+    pub fn enable_sens(&mut self, d_k_punch: &[f64], d_k_support: &[f64], d_mu: &[f64]) -> bool {
         let ncol = d_k_punch.len();
         let Some(n_law) = self.law.sens_count(3) else {
             return false;
         };
         if n_law > ncol
             || d_k_support.len() != ncol
+            || d_mu.len() != ncol
             || self.axial_fallback.is_some()
             || self.shear_fallback.is_some()
-            || self.supports.iter().any(|s| s.mu > 0.0)
         {
             return false;
         }
+        let n_sup = self.supports.len();
         let (ne, nodes) = (self.l0.len(), self.nodes());
         self.sens = Some(PlanarSens {
             ncol,
             d_k_punch: d_k_punch.to_vec(),
             d_k_support: d_k_support.to_vec(),
+            d_mu: d_mu.to_vec(),
+            d_support: vec![0.0; 4 * ncol * n_sup],
+            d_support_trial: vec![0.0; 4 * ncol * n_sup],
             d_state: vec![0.0; ne * self.n_state * ncol],
             d_trial: vec![0.0; ne * self.n_state * ncol],
             dq: vec![vec![Vector3::zeros(); nodes]; ncol],
@@ -1154,6 +1168,81 @@ impl PlanarRod<'_> {
             },
         )?;
         Some(sigma)
+    }
+
+    /// The derivatives of support `sup`'s forces on its element's ends (rows 0–3: fa, fb) and
+    /// of its new contact state (rows 4–7: arc length, contact point, tangential force) with
+    /// respect to the element's end positions (columns 0–3: pa, pb), the anchor element's end
+    /// positions (4–7; zero when the anchor lies in the element in contact, where it moves with
+    /// pa and pb), the committed contact state, the normal and stick penalties and μ (8–14),
+    /// by central differences on the residual's friction branch.
+    fn support_rates(&self, sup: &Support, st: &SupportTangent) -> Option<SMatrix<f64, 8, 15>> {
+        let e = st.e;
+        let (s_a, l0) = (self.s_ref[e], self.l0[e]);
+        let (ea, la, sa) = (st.e_anchor, self.l0[st.e_anchor], self.s_ref[st.e_anchor]);
+        let x0 = [
+            self.q[e][0],
+            self.q[e][1],
+            self.q[e + 1][0],
+            self.q[e + 1][1],
+            self.q[ea][0],
+            self.q[ea][1],
+            self.q[ea + 1][0],
+            self.q[ea + 1][1],
+            sup.contact_s_m,
+            sup.contact_point.x,
+            sup.contact_point.y,
+            sup.tangential_force_n,
+            sup.k_normal,
+            sup.k_tangent,
+            sup.mu,
+        ];
+        let eval = |x: &[f64; 15]| -> Option<[f64; 8]> {
+            let mut s = sup.clone();
+            (s.contact_s_m, s.contact_point) = (x[8], Vector2::new(x[9], x[10]));
+            (s.tangential_force_n, s.k_normal, s.k_tangent, s.mu) = (x[11], x[12], x[13], x[14]);
+            let (pa, pb) = (Vector2::new(x[0], x[1]), Vector2::new(x[2], x[3]));
+            let xi = ((x[8] - sa) / la).clamp(0.0, 1.0);
+            let anchor = if ea == e {
+                pa + (pb - pa) * xi
+            } else {
+                let (aa, ab) = (Vector2::new(x[4], x[5]), Vector2::new(x[6], x[7]));
+                aa + (ab - aa) * xi
+            };
+            let ev = support_forces(&s, pa, pb, s_a, l0, true, anchor, Some(st.branch))?;
+            Some([
+                ev.fa.x,
+                ev.fa.y,
+                ev.fb.x,
+                ev.fb.y,
+                ev.s_c,
+                ev.p_c.x,
+                ev.p_c.y,
+                ev.friction,
+            ])
+        };
+        let force = sup.normal_force_n.abs().max(sup.tangential_force_n.abs());
+        let force = force.max(1e-9 * sup.k_normal * l0);
+        let mut jac = SMatrix::<f64, 8, 15>::zeros();
+        for k in 0..15 {
+            if (4..8).contains(&k) && ea == e {
+                continue;
+            }
+            let h = match k {
+                0..=10 => 1e-7 * l0,
+                11 => 1e-7 * force,
+                12 | 13 => 1e-6 * x0[k].abs().max(f64::MIN_POSITIVE),
+                _ => 1e-6 * x0[k].abs().max(1e-6),
+            };
+            let (mut up, mut down) = (x0, x0);
+            up[k] += h;
+            down[k] -= h;
+            let (fu, fd) = (eval(&up)?, eval(&down)?);
+            for r in 0..8 {
+                jac[(r, k)] = (fu[r] - fd[r]) / (2.0 * h);
+            }
+        }
+        Some(jac)
     }
 
     fn propagate_sens(&mut self, sens: &mut PlanarSens, dt: f64) -> Option<()> {
@@ -1218,35 +1307,38 @@ impl PlanarRod<'_> {
                 }
             }
         }
-        for sup in &self.supports {
-            let Some(st) = sup.tangent else { continue };
-            let e = st.e;
-            let (pa, pb) = (self.q[e].xy(), self.q[e + 1].xy());
-            let anchor = anchor_of(e, st.e_anchor, st.xi_anchor, pa, pb, &self.q);
-            let ev = support_forces(
-                sup,
-                pa,
-                pb,
-                self.s_ref[e],
-                self.l0[e],
-                true,
-                anchor,
-                Some(st.branch),
-            )?;
-            // Frictionless: the forces are the normal penalty's, linear in k.
-            for j in 0..ncol {
-                let r = sens.d_k_support[j] / sup.k_normal;
-                for d in 0..2 {
-                    sens.dq[j][e][d] += ev.fa[d] * r;
-                    sens.dq[j][e + 1][d] += ev.fb[d] * r;
+        // The supports: their forces' and new contact state's derivatives in the element's ends,
+        // the committed contact state, the penalties and μ (central differences of the force
+        // law on the residual's branch, as the tangent takes them).
+        let mut local = Vec::with_capacity(self.supports.len());
+        for (si, sup) in self.supports.iter().enumerate() {
+            let Some(st) = sup.tangent else {
+                local.push(None);
+                continue;
+            };
+            let j = self.support_rates(sup, &st)?;
+            let (e, ea) = (st.e, st.e_anchor);
+            // A sticking support whose anchor lies in another element than the contact couples
+            // nodes the block-tridiagonal tangent does not hold (the Newton tangent omits them
+            // too): not differentiated. (Measured: where the contact crosses a node the
+            // support slides, and the anchor does not enter the forces.)
+            if ea != e && (0..4).any(|r| (4..8).any(|k| j[(r, k)] != 0.0)) {
+                return None;
+            }
+            for c in 0..ncol {
+                let dx = support_input_rates(sens, si, c);
+                for r in 0..4 {
+                    let v: f64 = (0..7).map(|k| j[(r, 8 + k)] * dx[k]).sum();
+                    sens.dq[c][e + r / 2][r % 2] += v;
                 }
             }
+            local.push(Some((e, ea, j)));
         }
-        for j in 0..ncol {
+        for col in sens.dq.iter_mut() {
             for i in 0..nodes {
                 for d in 0..3 {
                     if self.prescribed[i][d].is_some() {
-                        sens.dq[j][i][d] = 0.0;
+                        col[i][d] = 0.0;
                     }
                 }
             }
@@ -1259,6 +1351,36 @@ impl PlanarRod<'_> {
             &mut self.work,
         )
         .ok()?;
+        for (si, entry) in local.iter().enumerate() {
+            let at = si * 4 * ncol;
+            match entry {
+                Some((e, ea, j)) => {
+                    for c in 0..ncol {
+                        let dx = support_input_rates(sens, si, c);
+                        let dqc = &sens.dq[c];
+                        let dpos = [
+                            dqc[*e].x,
+                            dqc[*e].y,
+                            dqc[e + 1].x,
+                            dqc[e + 1].y,
+                            dqc[*ea].x,
+                            dqc[*ea].y,
+                            dqc[ea + 1].x,
+                            dqc[ea + 1].y,
+                        ];
+                        for r in 0..4 {
+                            let v: f64 = (0..8).map(|k| j[(4 + r, k)] * dpos[k]).sum::<f64>()
+                                + (0..7).map(|k| j[(4 + r, 8 + k)] * dx[k]).sum::<f64>();
+                            sens.d_support_trial[at + r * ncol + c] = v;
+                        }
+                    }
+                }
+                None => {
+                    let (old, new) = (&sens.d_support, &mut sens.d_support_trial);
+                    new[at..at + 4 * ncol].copy_from_slice(&old[at..at + 4 * ncol]);
+                }
+            }
+        }
         // The sections' new state derivatives, with ∂ε/∂p = B ∂q/∂p.
         for e in 0..ne {
             let kin = &self.element_eval[e].0;
@@ -1295,6 +1417,15 @@ impl PlanarRod<'_> {
                 .all(|v| v.iter().all(|x| x.is_finite()));
         finite.then_some(())
     }
+}
+
+/// ∂/∂p along column `c` of support `si`'s committed contact state, penalties and μ (the inputs
+/// 8–14 of [`PlanarRod::support_rates`]).
+fn support_input_rates(sens: &PlanarSens, si: usize, c: usize) -> [f64; 7] {
+    let (ncol, at) = (sens.ncol, si * 4 * sens.ncol);
+    let d = |r: usize| sens.d_support[at + r * ncol + c];
+    let dk = sens.d_k_support[c];
+    [d(0), d(1), d(2), d(3), dk, dk, sens.d_mu[c]]
 }
 
 impl NewtonSystem for PlanarRod<'_> {
