@@ -1131,7 +1131,8 @@ impl PlanarRod<'_> {
     }
 
     /// Propagate the sensitivities over the step just solved (before [`PlanarRod::commit`]), of
-    /// duration `dt`; `false` when this step cannot be differentiated (the caller drops them).
+    /// duration `dt`; `false` when this step cannot be differentiated, and they are dropped
+    /// ([`PlanarRod::punch_force_sens`] gives `None` from then on).
     pub fn sens_step(&mut self, dt: f64) -> bool {
         let Some(mut sens) = self.sens.take() else {
             return false;
