@@ -65,7 +65,8 @@ pub struct TestSetup {
     pub machine_compliance: f64,
     /// Rod (cable) radius, m: offsets the contact surfaces from the centreline (0 = centreline contact).
     pub rod_radius_m: f64,
-    /// Rod length beyond each support (three-point), m; None = 0.15 × span.
+    /// Rod length beyond each support (three-point), m; None = 0.15 × span, more where the
+    /// history's deflection would pull the rod off its supports ([`default_overhang`]).
     pub overhang_m: Option<f64>,
     /// Contact penalty stiffness in units of EI/span³.
     pub penalty_factor: f64,
@@ -210,10 +211,13 @@ enum Driver<'a> {
 }
 
 impl<'a> Driver<'a> {
+    /// The rod of a rod-driven test whose control reaches `reach` at most (three-point: the
+    /// overhang it needs, [`default_overhang`]).
     fn rod(
         setup: &TestSetup,
         law: &'a dyn Law,
         max_substep: Option<f64>,
+        reach: f64,
     ) -> Result<Self, RodError> {
         let l = setup.free_length_m;
         let ei = law.elastic_tangent()[(3, 3)];
@@ -239,7 +243,9 @@ impl<'a> Driver<'a> {
             }
             TestKind::ThreePoint => {
                 let half = 0.5 * l;
-                let overhang = setup.overhang_m.unwrap_or(0.15 * l);
+                let overhang = setup
+                    .overhang_m
+                    .unwrap_or_else(|| default_overhang(l, reach));
                 let mut rod = PlanarRod::straight(law, half + overhang, setup.elements)?;
                 rod.options = setup.solver;
                 rod.prescribed[0] = [Some(0.0), None, Some(0.0)];
@@ -527,6 +533,23 @@ impl Predictor {
     }
 }
 
+/// The largest |control| of a history.
+fn reach(control: &[f64]) -> f64 {
+    control.iter().fold(0.0f64, |m, v| m.max(v.abs()))
+}
+
+/// The rod beyond each support of a three-point test when the setup does not give it:
+/// 0.15 × the span `l`, or, where a deflection of `w_max` pulls more than that over the
+/// supports, 1.5 × the slide-in of a straight half-span at that deflection,
+/// √((l/2)² + w²) − l/2, plus 0.05 × the span (the bent rod's arc is longer than the chord).
+/// The same 0.15 × span up to w ≈ 0.27 × span, so histories within that reach are replayed
+/// on the same mesh as always; beyond it the rod no longer slides off its supports (a real
+/// specimen is longer than the span; its overhang carries no load).
+pub fn default_overhang(l: f64, w_max: f64) -> f64 {
+    let slide = (0.5 * l).hypot(w_max) - 0.5 * l;
+    (0.15 * l).max(1.5 * slide + 0.05 * l)
+}
+
 fn check_values(name: &str, v: &[f64]) -> Result<(), RodError> {
     if v.is_empty() {
         return Err(RodError::InvalidInput(format!("{name} is empty")));
@@ -569,7 +592,7 @@ pub fn simulate_path(
         TestKind::Tension | TestKind::Torsion => {
             Driver::Uniform(UniformDriver::new(setup, law, scale))
         }
-        _ => Driver::rod(setup, law, Some(inc))?,
+        _ => Driver::rod(setup, law, Some(inc), scale)?,
     };
     let mut curve = SimCurve::new(setup.kind);
     let mut c = 0.0;
@@ -636,7 +659,7 @@ pub fn simulate_history(
         let scale = control.iter().fold(0.0f64, |m, u| m.max(u.abs()));
         Driver::Uniform(UniformDriver::new(setup, law, scale))
     } else {
-        Driver::rod(setup, law, None)?
+        Driver::rod(setup, law, None, reach(control))?
     };
     let mut curve = SimCurve::new(setup.kind);
     curve.control.reserve(control.len());
@@ -721,7 +744,7 @@ pub fn simulate_history_sens(
         d_mu.push(1.0);
     }
     let ncol = d_k_punch.len();
-    let mut driver = Driver::rod(setup, law, None)?;
+    let mut driver = Driver::rod(setup, law, None, reach(control))?;
     let Driver::Rod { rod, .. } = &mut driver else {
         return Ok(None);
     };
@@ -775,7 +798,7 @@ pub fn deformed_shape(
 ) -> Result<Vec<Vector3<f64>>, RodError> {
     setup.validate()?;
     check_values("path", path)?;
-    let mut driver = Driver::rod(setup, law, setup.max_substep)?;
+    let mut driver = Driver::rod(setup, law, setup.max_substep, reach(path))?;
     let mut iterations = 0;
     for (i, &c) in path.iter().enumerate() {
         driver.step_to(c, 1.0, i, &mut iterations)?;

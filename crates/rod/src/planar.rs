@@ -1031,7 +1031,7 @@ impl<'a> PlanarRod<'a> {
                     iterations: total,
                     residual: f64::NAN,
                     reason: format!(
-                        "the rod slid off support {si}: the deflection is too large for the rod length (increase the overhang)"
+                        "the rod slid off support {si}: the deflection pulls more rod over the support than the model has beyond it (its overhang; by default it grows with the history's largest deflection)"
                     ),
                 });
             }

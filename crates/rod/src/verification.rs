@@ -1173,3 +1173,43 @@ fn three_point_sections_on_the_bending_channel_alone_equal_the_full_update() {
         assert_eq!(fast.newton_iterations, full.newton_iterations, "{name}");
     }
 }
+
+/// The three-point overhang when the setup gives none ([`crate::drivers::default_overhang`]):
+/// 0.15 × the span for every deflection up to a quarter of the span (the mesh of every history
+/// within that reach is the one it always had), more beyond. An elastoplastic cable pushed to
+/// 60 % of its span (56 mm) slides off supports 0.15 × the span long, and is replayed to the end
+/// with the default: its punch force stays positive and finite, and the rod has slid more than
+/// 0.15 × the span over the support.
+#[test]
+fn the_default_overhang_grows_with_the_deflection_the_rod_must_follow() {
+    use crate::drivers::default_overhang;
+    let l = 0.056;
+    for w in [0.0, 0.05, 0.1, 0.2, 0.25] {
+        assert_eq!(default_overhang(l, w * l), 0.15 * l, "w = {w} × span");
+    }
+    assert!(default_overhang(l, 0.6 * l) > 0.3 * l);
+    let law = chapter_cable(4e-3);
+    let control: Vec<f64> = (0..=120).map(|i| 0.6 * l * i as f64 / 120.0).collect();
+    let time: Vec<f64> = (0..=120).map(|i| i as f64).collect();
+    let mut setup = TestSetup::new(TestKind::ThreePoint, l);
+    setup.overhang_m = Some(0.15 * l);
+    let short = simulate_history(&setup, law.as_ref(), &control, &time);
+    assert!(
+        matches!(&short, Err(e) if e.to_string().contains("slid off")),
+        "{short:?}"
+    );
+    setup.overhang_m = None;
+    let curve = simulate_history(&setup, law.as_ref(), &control, &time).unwrap();
+    assert!(curve
+        .response
+        .iter()
+        .skip(1)
+        .all(|f| f.is_finite() && *f > 0.0));
+    let shape = deformed_shape(&setup, law.as_ref(), &[0.6 * l]).unwrap();
+    let end_x = shape.last().unwrap()[0];
+    // The rod's end lies inside the support at x = l/2 + overhang − slide.
+    assert!(
+        end_x < 0.5 * l + default_overhang(l, 0.6 * l) - 0.15 * l,
+        "end at {end_x}"
+    );
+}
