@@ -614,7 +614,7 @@ pub(crate) fn switched_off(s: &ParamSpec, warm: &ParamMap) -> f64 {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::model::{Branch, SegLabel};
     use cablab_core::TestKind;
@@ -1008,7 +1008,7 @@ mod tests {
 
     /// A three-point history through `corners` (deflections, m) in 0.1 mm steps on `span_m`, 1 s
     /// per step, with an elastic stand-in response (for the model's data-scaled bounds).
-    fn three_point(corners: &[f64], span_m: f64, ei: f64) -> DiagTest {
+    pub(crate) fn three_point(corners: &[f64], span_m: f64, ei: f64) -> DiagTest {
         let mut control = vec![corners[0]];
         for w in corners.windows(2) {
             let n = ((w[1] - w[0]).abs() / 1e-4).round() as usize;

@@ -1089,27 +1089,7 @@ fn replayed_three_point(
     model: &ModelSpec,
     params: &[f64],
 ) -> (DiagTest, Vec<Vec<f64>>) {
-    let mut control = vec![corners[0]];
-    for w in corners.windows(2) {
-        let n = ((w[1] - w[0]).abs() / 1e-4).round() as usize;
-        control.extend((1..=n).map(|i| w[0] + (w[1] - w[0]) * i as f64 / n as f64));
-    }
-    let n = control.len();
-    let response = control
-        .iter()
-        .map(|w| 48.0 * params[0] / span_m.powi(3) * w)
-        .collect();
-    let mut t = DiagTest {
-        kind: TestKind::ThreePoint,
-        free_length_m: span_m,
-        diameter_m: None,
-        time_s: (0..n).map(|i| i as f64).collect(),
-        control,
-        response,
-        labels: vec![],
-        specimen: None,
-        rod_setup: None,
-    };
+    let mut t = crate::calibration::tests::three_point(corners, span_m, params[0]);
     let own = crate::mesh::replay(ctx(), std::slice::from_ref(&t), model, params, 40).unwrap();
     t.response = own[0].clone();
     (t, own)
