@@ -472,7 +472,7 @@ pub fn diag_test(
     specimen: Option<String>,
     rod_setup: Option<cablab_rod::TestSetup>,
 ) -> Result<(cablab_diagnose::DiagTest, cablab_measure::Offsets)> {
-    diag_test_from(kind, geom, curve, specimen, rod_setup, None)
+    diag_test_from(kind, geom, curve, specimen, rod_setup, None).map(|(t, o, _)| (t, o))
 }
 
 /// The offsets and segments a characterisation found on a curve, for [`diag_test_from`].
@@ -512,8 +512,35 @@ impl<'a> Conditioned<'a> {
     }
 }
 
+/// The signs that bring a three-point test to the rod's convention, where the punch pushes
+/// into the rod and both the deflection and the force are positive: the sign of the control at
+/// its largest magnitude and of the response at its largest magnitude (offsets off). Machines
+/// differ: an MTS 793 export of a flexure fixture logs both negative (the crosshead moves down,
+/// the load cell is in compression); others log one of them negative. The rod's punch is
+/// one-sided, so a test replayed in a file's negative convention lifts off and simulates no
+/// force at all. (1, 1) for the other kinds, whose laws are odd.
+pub fn three_point_signs(kind: TestKind, control: &[f64], response: &[f64]) -> (f64, f64) {
+    if kind != TestKind::ThreePoint {
+        return (1.0, 1.0);
+    }
+    let sign_at_peak = |v: &[f64]| {
+        let peak = v
+            .iter()
+            .copied()
+            .fold(0.0f64, |m, x| if x.abs() > m.abs() { x } else { m });
+        if peak < 0.0 {
+            -1.0
+        } else {
+            1.0
+        }
+    };
+    (sign_at_peak(control), sign_at_peak(response))
+}
+
 /// [`diag_test`], with the offsets and segments of the characterisation when given (`cond`,
 /// see [`Conditioned::by`]): the same test, bit for bit, without conditioning the curve again.
+/// Also returns the signs applied to the control and the response ([`three_point_signs`]): the
+/// test's response times the second, plus the response offset, is the file's.
 pub fn diag_test_from(
     kind: TestKind,
     geom: &cablab_measure::Geometry,
@@ -521,7 +548,11 @@ pub fn diag_test_from(
     specimen: Option<String>,
     rod_setup: Option<cablab_rod::TestSetup>,
     cond: Option<Conditioned>,
-) -> Result<(cablab_diagnose::DiagTest, cablab_measure::Offsets)> {
+) -> Result<(
+    cablab_diagnose::DiagTest,
+    cablab_measure::Offsets,
+    (f64, f64),
+)> {
     let n = curve.control.len();
     let time_s = curve
         .time_s
@@ -556,6 +587,14 @@ pub fn diag_test_from(
             (control, response, offsets, labels)
         }
     };
+    let (mut control, mut response): (Vec<f64>, Vec<f64>) = (control, response);
+    let signs = three_point_signs(kind, &control, &response);
+    if signs.0 < 0.0 {
+        control.iter_mut().for_each(|v| *v = -*v);
+    }
+    if signs.1 < 0.0 {
+        response.iter_mut().for_each(|v| *v = -*v);
+    }
     let labels = labels
         .into_iter()
         .map(|l| cablab_diagnose::SegLabel {
@@ -576,6 +615,7 @@ pub fn diag_test_from(
             rod_setup,
         },
         offsets,
+        signs,
     ))
 }
 
@@ -955,7 +995,7 @@ mod tests {
             assert!(an.segments.len() > 6, "{name}: {:?}", an.segments);
             let cond = Conditioned::by(&an, &curve, compliance);
             assert_eq!(cond.is_some(), reused, "{name}");
-            let (a, oa) = diag_test_from(kind, &geom, &curve, None, None, cond).unwrap();
+            let (a, oa, _) = diag_test_from(kind, &geom, &curve, None, None, cond).unwrap();
             let (b, ob) = diag_test(kind, &geom, &curve, None, None).unwrap();
             let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
             assert_eq!(bits(&a.control), bits(&b.control), "{name}");
@@ -979,5 +1019,23 @@ mod tests {
                 assert!(oa.samples_at_rest > 0, "{name}: {oa:?}");
             }
         }
+    }
+
+    /// A three-point test in any sign convention is turned to the rod's (deflection and force
+    /// positive), each channel by the sign at its largest magnitude, so that a small opposite
+    /// excursion (a preload, a rebound) does not decide it; other kinds keep the file's signs.
+    #[test]
+    fn three_point_signs_follow_each_channels_peak() {
+        let up = [0.0, 0.1, 0.5, 1.0, 0.4, -0.05];
+        let down: Vec<f64> = up.iter().map(|v| -v).collect();
+        let k = TestKind::ThreePoint;
+        assert_eq!(three_point_signs(k, &up, &up), (1.0, 1.0));
+        assert_eq!(three_point_signs(k, &down, &down), (-1.0, -1.0));
+        assert_eq!(three_point_signs(k, &down, &up), (-1.0, 1.0));
+        assert_eq!(
+            three_point_signs(TestKind::PureBending, &down, &down),
+            (1.0, 1.0)
+        );
+        assert_eq!(three_point_signs(k, &[], &[0.0]), (1.0, 1.0));
     }
 }

@@ -406,6 +406,14 @@ pub struct DiagnoseArgs {
     /// until the held-out gap reaches the noise floor, then drop any the final model does not need.
     #[arg(long)]
     pub ladder: bool,
+    /// Support radius of the three-point fixture in mm (the files do not give it; default:
+    /// point supports, and a warning when rounded ones would move the comparison).
+    #[arg(long, value_name = "MM", allow_negative_numbers = true, value_parser = non_negative)]
+    pub support_radius_mm: Option<f64>,
+    /// Punch (loading nose) radius of the three-point fixture in mm (default: a point punch,
+    /// with the same warning).
+    #[arg(long, value_name = "MM", allow_negative_numbers = true, value_parser = non_negative)]
+    pub punch_radius_mm: Option<f64>,
     /// The cycle held out of the fits and scored on.
     #[arg(long, value_enum, default_value = "last-cycle")]
     pub holdout: HoldoutArg,

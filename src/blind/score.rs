@@ -58,6 +58,10 @@ pub struct CaseOutcome {
     /// Three-point: the rod-numerics check's error of the baseline (`diagnosis.mesh`), in units
     /// of the noise floor.
     pub rod_numerics_over_noise: Option<f64>,
+    /// Three-point on point contacts: how far rounded contacts move the baseline
+    /// (`diagnosis.contact`), in units of the noise floor.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub contact_over_noise: Option<f64>,
     /// Wall time of the diagnosis, s.
     pub seconds: f64,
     /// Why the diagnosis failed, if it did.
@@ -173,6 +177,7 @@ pub fn run_matrix_observed(
                 member_gaps_over_noise: vec![],
                 equivalent_sets: vec![],
                 rod_numerics_over_noise: None,
+                contact_over_noise: None,
                 seconds: 0.0,
                 error: None,
             };
@@ -184,6 +189,7 @@ pub fn run_matrix_observed(
                         && (c.truths.contains(&v) || (c.truths.is_empty() && v == Effect::None));
                     o.effects = d.verdict.effects.clone();
                     o.rod_numerics_over_noise = d.mesh.as_ref().map(|m| m.error_over_noise);
+                    o.contact_over_noise = d.contact.as_ref().and_then(|c| c.error_over_noise);
                     o.equivalent_sets = d
                         .verdict
                         .equivalent_sets

@@ -762,6 +762,7 @@ mod tests {
             member_gaps_over_noise: vec![],
             equivalent_sets: vec![],
             rod_numerics_over_noise: None,
+            contact_over_noise: None,
             seconds: 0.0,
             error: None,
         }

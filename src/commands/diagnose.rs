@@ -25,8 +25,28 @@ pub fn diag_test(path: &std::path::Path, a: &DiagnoseArgs) -> Result<DiagTest, C
         rec, geom, curve, ..
     } = read.map_err(CliError::input)?;
     let kind = TestKind::from(a.test.kind);
-    let (t, _) = crate::bridge::diag_test(kind, &geom, &curve, rec.specimen.label.clone(), None)
-        .map_err(|e| CliError::input(anyhow::anyhow!("{}: {e:#}", path.display())))?;
+    let (mut t, _) =
+        crate::bridge::diag_test(kind, &geom, &curve, rec.specimen.label.clone(), None)
+            .map_err(|e| CliError::input(anyhow::anyhow!("{}: {e:#}", path.display())))?;
+    if a.support_radius_mm.is_some() || a.punch_radius_mm.is_some() {
+        if kind != TestKind::ThreePoint {
+            return Err(CliError::input(anyhow::anyhow!(
+                "--support-radius-mm and --punch-radius-mm are for three-point tests ({} is {kind})",
+                path.display()
+            )));
+        }
+        let mut s = t
+            .rod_setup
+            .clone()
+            .unwrap_or_else(|| cablab_rod::TestSetup::new(kind, t.free_length_m));
+        s.support_radius_m = 1e-3 * a.support_radius_mm.unwrap_or(0.0);
+        s.punch_radius_m = 1e-3 * a.punch_radius_mm.unwrap_or(0.0);
+        // A rounded contact sits on the rod's surface; point contacts stay the rod's default.
+        if s.support_radius_m > 0.0 || s.punch_radius_m > 0.0 {
+            s.rod_radius_m = 0.5 * t.diameter_m.unwrap_or(0.0);
+        }
+        t.rod_setup = Some(s);
+    }
     // A log the diagnosis cannot use (a flat response, too few samples) is bad input: say which
     // file, before any fitting.
     t.validate(0).map_err(|e| {
@@ -82,6 +102,7 @@ pub fn run(a: DiagnoseArgs) -> CmdResult {
                 cablab_diagnose::HoldoutPolicy::LastCycleWithinReach
             }
         },
+        contact_radii_given: a.support_radius_mm.is_some() || a.punch_radius_mm.is_some(),
         ..Default::default()
     };
     let d = cablab_diagnose::diagnose(ctx, &tests, &opts).map_err(CliError::failed)?;
@@ -114,6 +135,9 @@ pub fn run(a: DiagnoseArgs) -> CmdResult {
             if let Some(w) = &m.warning {
                 println!("warning: {w}");
             }
+        }
+        if let Some(w) = d.contact.as_ref().and_then(|c| c.warning.as_ref()) {
+            println!("warning: {w}");
         }
         if let Some(why) = &d.candidates_skipped {
             println!("candidates not calibrated: {why}");

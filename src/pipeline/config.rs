@@ -255,6 +255,15 @@ pub struct ModelSettings {
     /// small against the noise floor and more elements reduce it (`cablab_diagnose::mesh`).
     #[serde(default = "yes")]
     pub refine_mesh: bool,
+    /// Support radius of the three-point fixture, mm (exports do not give it; 0: point
+    /// supports, and the diagnosis warns when rounded ones would move its comparison:
+    /// `cablab_diagnose::contact`). Not serialised when 0, so cache keys stay the same.
+    /// Stating either (0 for point contacts) turns the check off.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub support_radius_mm: Option<f64>,
+    /// Punch (loading nose) radius of the three-point fixture, mm (0: a point punch).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub punch_radius_mm: Option<f64>,
 }
 
 impl Default for ModelSettings {
@@ -264,6 +273,8 @@ impl Default for ModelSettings {
             baseline: default_baseline(),
             elements: default_elements(),
             refine_mesh: true,
+            support_radius_mm: None,
+            punch_radius_mm: None,
         }
     }
 }
@@ -860,6 +871,17 @@ fn validate(file: PipelineFile, path: &Path, bytes: Vec<u8>, root: PathBuf) -> R
             lines.at(&ctx, "model", 0, "elements"),
             file.model.elements
         );
+    }
+    for (key, r) in [
+        ("support_radius_mm", file.model.support_radius_mm),
+        ("punch_radius_mm", file.model.punch_radius_mm),
+    ] {
+        if let Some(r) = r.filter(|r| !(r.is_finite() && *r >= 0.0)) {
+            bail!(
+                "{}: a radius in mm, 0 or more (0: a point contact), got {r}",
+                lines.at(&ctx, "model", 0, key)
+            );
+        }
     }
     let candidates = match &file.diagnosis.candidates {
         None => None,

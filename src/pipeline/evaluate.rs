@@ -654,9 +654,20 @@ fn model_part(
     // 3. calibrate and simulate the baseline
     let mut rod_setup = cablab_rod::TestSetup::new(t.kind, geom.free_length_m);
     rod_setup.elements = c.file.model.elements;
+    let model = &c.file.model;
+    let radii_given = model.support_radius_mm.is_some() || model.punch_radius_mm.is_some();
+    if t.kind == TestKind::ThreePoint && radii_given {
+        rod_setup.support_radius_m = 1e-3 * model.support_radius_mm.unwrap_or(0.0);
+        rod_setup.punch_radius_m = 1e-3 * model.punch_radius_mm.unwrap_or(0.0);
+        // A rounded contact sits on the rod's surface; point contacts stay the rod's default
+        // (on its centreline), as the virtual lab's fixture without rollers.
+        if rod_setup.support_radius_m > 0.0 || rod_setup.punch_radius_m > 0.0 {
+            rod_setup.rod_radius_m = 0.5 * geom.diameter_m.unwrap_or(0.0);
+        }
+    }
     // The offsets and segments the characterisation found, when it conditioned these very
     // samples (not after a compliance or a glitch was taken out).
-    let (dtest, offsets) = crate::bridge::diag_test_from(
+    let (dtest, offsets, (_, response_sign)) = crate::bridge::diag_test_from(
         t.kind,
         geom,
         curve,
@@ -682,9 +693,11 @@ fn model_part(
         let cal = cablab_diagnose::calibrate(ctx, tests, &model, &copts)
             .context("calibrating the baseline")?;
         // The model of the measurement: the simulated response (the calibration's replay of
-        // its parameters) plus the offset taken off.
+        // its parameters) in the file's sign convention, plus the offset taken off.
         let sim: Vec<f64> = cal.simulated().last().map_or_else(Vec::new, |s| {
-            s.iter().map(|v| v + offsets.response).collect()
+            s.iter()
+                .map(|v| response_sign * v + offsets.response)
+                .collect()
         });
         let scale = curve.response.iter().fold(0.0f64, |m, v| m.max(v.abs()));
         let rms = (sim
@@ -721,6 +734,7 @@ fn model_part(
                 .and_then(crate::pipeline::config::holdout_policy)
                 .unwrap_or(cablab_diagnose::HoldoutPolicy::LastCycle),
             refine_mesh: c.file.model.refine_mesh,
+            contact_radii_given: radii_given,
             ..Default::default()
         };
         let d = cablab_diagnose::diagnose(ctx, tests, &dopts).context("diagnosing the gap")?;
@@ -734,6 +748,9 @@ fn model_part(
             }
             out.warnings
                 .extend(m.warning.iter().map(|w| format!("diagnosis: {w}")));
+        }
+        if let Some(w) = d.contact.as_ref().and_then(|c| c.warning.as_ref()) {
+            out.warnings.push(format!("diagnosis: {w}"));
         }
         out.verdict = Some(d.verdict.effect.as_str().to_string());
         let names = |v: &[Effect]| v.iter().map(|e| e.as_str().to_string()).collect();

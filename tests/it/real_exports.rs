@@ -526,6 +526,60 @@ fn mts_btw_three_point_beam_with_a_flat_section() {
     assert!(within(e, 2.05e9, 0.02), "{e:e}");
 }
 
+/// The same MTS 793 BTW beam diagnosed. The file logs deflection and force negative
+/// (compression); the rod's punch is one-sided, so replayed in the file's convention it lifted
+/// off and simulated no force: the baseline "fitted" a zero curve (34 % gap) and the verdict
+/// was built on it. Now the test is turned to the rod's convention: the baseline's EI is the
+/// beam's (E b h³/12 = 5.13·10⁻² N m², within 5 % on a curve that softens past 40 N), its gap is
+/// a few % of the peak, and a copy of the file with every sign turned positive is diagnosed to
+/// the same bits. At 6 % of the span the contact check warns that the fixture's radii, absent
+/// from the file, matter (4.03 mm: a tenth of the span).
+#[test]
+fn mts_btw_three_point_beam_is_diagnosed_in_the_rods_convention() {
+    let f = data("cablab__mts793_btw_three_point.dat");
+    let args = |f: &str| {
+        json(&[
+            "diagnose",
+            f,
+            "--kind",
+            "three-point",
+            "--length-mm",
+            "40.28",
+        ])
+    };
+    let d = args(&f);
+    let ei = d["baseline"]["params"]["EI"].as_f64().unwrap();
+    let i = 11.86e-3 * 2.937e-3f64.powi(3) / 12.0;
+    assert!(within(ei, 2.05e9 * i, 0.05), "EI {ei:e}");
+    let gap = d["baseline"]["gap_rel"].as_f64().unwrap();
+    assert!(gap < 0.05, "baseline gap {gap}");
+    let contact = &d["contact"];
+    assert!((contact["reference_radius_m"].as_f64().unwrap() - 4.028e-3).abs() < 1e-12);
+    assert!(
+        contact["error_over_noise"].as_f64().unwrap() > 0.25,
+        "{contact}"
+    );
+    assert!(contact["warning"].as_str().unwrap().contains("4.03 mm"));
+    // Every value of the data rows turned positive (displacement, force; time already is).
+    let text = std::fs::read_to_string(&f).unwrap();
+    let positive: String = text
+        .split_inclusive('\n')
+        .map(|l| {
+            let cells: Vec<&str> = l.split_whitespace().collect();
+            if cells.len() == 3 && cells.iter().all(|c| c.parse::<f64>().is_ok()) {
+                l.replace('-', "")
+            } else {
+                l.to_string()
+            }
+        })
+        .collect();
+    assert!(positive.len() < text.len(), "some rows were negative");
+    let (_dir, g) = temp_file("positive.dat", &positive);
+    let e = args(&g);
+    assert_eq!(d["baseline"], e["baseline"]);
+    assert_eq!(d["verdict"], e["verdict"]);
+}
+
 /// A crosshead beside a length called strain (MTS TestSuite's `_Strain1` in mm, the
 /// extensometer's elongation): the reader keeps the crosshead as the control (as the shared
 /// manifest's technician does), and the machine-travel flag names the specimen-mounted channel

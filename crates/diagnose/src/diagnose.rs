@@ -281,6 +281,11 @@ pub struct Diagnosis {
     /// absent for the uniform kinds, which replay one section exactly): `crate::mesh`.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub mesh: Option<MeshCheck>,
+    /// How far the fixture's contact radii, which the file does not give, may move the
+    /// comparisons with the noise floor (three-point tests on point contacts; absent otherwise):
+    /// `crate::contact`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub contact: Option<crate::contact::ContactCheck>,
 }
 
 /// A candidate that could not be scored, and why.
@@ -364,6 +369,19 @@ pub fn diagnose(
         &base_opts,
     )?;
     let tests: &[DiagTest] = refined.as_deref().unwrap_or(tests);
+    // How far the fixture's unknown contact radii may move them (`crate::contact`).
+    let contact = if opts.contact_radii_given {
+        None
+    } else {
+        crate::contact::check(
+            ctx,
+            tests,
+            &base.model,
+            base.cal.values(),
+            &own_replay(tests, &base),
+            &noise,
+        )?
+    };
     let resolution = resolution_floor(tests);
     let (base, yield_out_of_reach) = elastic_limit(
         ctx,
@@ -785,7 +803,18 @@ pub fn diagnose(
         failed,
         candidates_skipped,
         mesh,
+        contact,
     })
+}
+
+/// The fit `s`'s own replay of `tests` (its residuals are measured − simulated − offset).
+fn own_replay(tests: &[DiagTest], s: &Scored) -> Vec<Vec<f64>> {
+    tests
+        .iter()
+        .zip(&s.all_resid)
+        .zip(&s.cal.response_offset)
+        .map(|((t, r), c)| t.response.iter().zip(r).map(|(m, r)| m - r - c).collect())
+        .collect()
 }
 
 /// The check of [`crate::mesh`] on the fitted baseline `base` of rod tests, and, where it finds
@@ -802,15 +831,7 @@ fn check_mesh(
     refine: bool,
     base_opts: &DiagnoseOptions,
 ) -> Result<(Option<Vec<DiagTest>>, Scored, Option<MeshCheck>), DiagError> {
-    // The fit's own replay on its mesh (residuals are measured − simulated − offset).
-    let own = |tests: &[DiagTest], s: &Scored| -> Vec<Vec<f64>> {
-        tests
-            .iter()
-            .zip(&s.all_resid)
-            .zip(&s.cal.response_offset)
-            .map(|((t, r), c)| t.response.iter().zip(r).map(|(m, r)| m - r - c).collect())
-            .collect()
-    };
+    let own = own_replay;
     let first = crate::mesh::check(
         ctx,
         tests,

@@ -21,6 +21,7 @@
 
 pub mod calibrate;
 pub mod calibration;
+pub mod contact;
 pub mod diagnose;
 pub mod error;
 pub mod floors;

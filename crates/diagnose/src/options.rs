@@ -88,6 +88,10 @@ pub struct DiagnoseOptions {
     /// [`crate::mesh::MESH_TOLERANCE`] × the noise floor and twice the elements reduce it
     /// ([`crate::mesh::refinement`]); off: the tests' own elements, the check only reports.
     pub refine_mesh: bool,
+    /// The user stated the three-point fixture's contact radii (0 included: point contacts,
+    /// knowingly): the tests' setups carry them and the contact check (`crate::contact`) does
+    /// not run. Off: radii of 0 mean the file did not give them.
+    pub contact_radii_given: bool,
 }
 
 impl Default for DiagnoseOptions {
@@ -106,6 +110,7 @@ impl Default for DiagnoseOptions {
             elastic_limit: true,
             all_candidates: false,
             refine_mesh: true,
+            contact_radii_given: false,
         }
     }
 }
