@@ -413,14 +413,38 @@ fn support_forces(
     if len <= 0.0 || !len.is_finite() {
         return None;
     }
-    let t = d / len;
-    let n = Vector2::new(-t.y, t.x);
-    let xi = t.dot(&(sup.centre - pa)) / len;
+    let t_seg = d / len;
+    let n_seg = Vector2::new(-t_seg.y, t_seg.x);
+    let xi = t_seg.dot(&(sup.centre - pa)) / len;
     if !clamp && !(0.0..1.0).contains(&xi) {
         return None;
     }
+    // Past an end of the segment (the support in the wedge between two elements' normals, on
+    // the convex side of a kink): the contact is the node's, along the line from the support's
+    // centre to it, which turns from one element's normal to the next across the wedge, so the
+    // force is continuous where the contact passes a node. (The element's own normal there, as
+    // before, made the force jump by the kink's angle and Newton cycle between the two elements:
+    // a linear rod on point supports did not converge where a node crossed a support.)
+    let (t, n, gap) = if (0.0..=1.0).contains(&xi) {
+        (
+            t_seg,
+            n_seg,
+            n_seg.dot(&(pa - sup.centre)) - sup.radius_eff_m,
+        )
+    } else {
+        let node = if xi < 0.0 { pa } else { pb };
+        let r = node - sup.centre;
+        let dist = r.norm();
+        if dist > 0.0 && dist.is_finite() {
+            // Oriented as the element's normal (the rod's side of the support).
+            let side = if n_seg.dot(&r) < 0.0 { -1.0 } else { 1.0 };
+            let n = side * r / dist;
+            (Vector2::new(n.y, -n.x), n, side * dist - sup.radius_eff_m)
+        } else {
+            (t_seg, n_seg, -sup.radius_eff_m)
+        }
+    };
     let xi = xi.clamp(0.0, 1.0);
-    let gap = n.dot(&(pa - sup.centre)) - sup.radius_eff_m;
     let normal = -sup.k_normal * gap;
     let mut fa = (1.0 - xi) * normal * n;
     let mut fb = xi * normal * n;
