@@ -39,12 +39,11 @@ pub fn diag_test(path: &std::path::Path, a: &DiagnoseArgs) -> Result<DiagTest, C
             .rod_setup
             .clone()
             .unwrap_or_else(|| cablab_rod::TestSetup::new(kind, t.free_length_m));
-        s.support_radius_m = 1e-3 * a.support_radius_mm.unwrap_or(0.0);
-        s.punch_radius_m = 1e-3 * a.punch_radius_mm.unwrap_or(0.0);
-        // A rounded contact sits on the rod's surface; point contacts stay the rod's default.
-        if s.support_radius_m > 0.0 || s.punch_radius_m > 0.0 {
-            s.rod_radius_m = 0.5 * t.diameter_m.unwrap_or(0.0);
-        }
+        s.set_contact_radii(
+            1e-3 * a.support_radius_mm.unwrap_or(0.0),
+            1e-3 * a.punch_radius_mm.unwrap_or(0.0),
+            t.diameter_m,
+        );
         t.rod_setup = Some(s);
     }
     // A log the diagnosis cannot use (a flat response, too few samples) is bad input: say which

@@ -257,8 +257,8 @@ pub struct ModelSettings {
     pub refine_mesh: bool,
     /// Support radius of the three-point fixture, mm (exports do not give it; 0: point
     /// supports, and the diagnosis warns when rounded ones would move its comparison:
-    /// `cablab_diagnose::contact`). Not serialised when 0, so cache keys stay the same.
-    /// Stating either (0 for point contacts) turns the check off.
+    /// `cablab_diagnose::contact`). Stating either (0 for point contacts) turns the check off.
+    /// Not serialised when absent, so cache keys stay the same.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub support_radius_mm: Option<f64>,
     /// Punch (loading nose) radius of the three-point fixture, mm (0: a point punch).

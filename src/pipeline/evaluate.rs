@@ -657,13 +657,11 @@ fn model_part(
     let model = &c.file.model;
     let radii_given = model.support_radius_mm.is_some() || model.punch_radius_mm.is_some();
     if t.kind == TestKind::ThreePoint && radii_given {
-        rod_setup.support_radius_m = 1e-3 * model.support_radius_mm.unwrap_or(0.0);
-        rod_setup.punch_radius_m = 1e-3 * model.punch_radius_mm.unwrap_or(0.0);
-        // A rounded contact sits on the rod's surface; point contacts stay the rod's default
-        // (on its centreline), as the virtual lab's fixture without rollers.
-        if rod_setup.support_radius_m > 0.0 || rod_setup.punch_radius_m > 0.0 {
-            rod_setup.rod_radius_m = 0.5 * geom.diameter_m.unwrap_or(0.0);
-        }
+        rod_setup.set_contact_radii(
+            1e-3 * model.support_radius_mm.unwrap_or(0.0),
+            1e-3 * model.punch_radius_mm.unwrap_or(0.0),
+            geom.diameter_m,
+        );
     }
     // The offsets and segments the characterisation found, when it conditioned these very
     // samples (not after a compliance or a glitch was taken out).

@@ -86,10 +86,7 @@ fn with_radius(tests: &[DiagTest], r: f64) -> Vec<DiagTest> {
                 .rod_setup
                 .clone()
                 .unwrap_or_else(|| cablab_rod::TestSetup::new(t.kind, t.free_length_m));
-            s.support_radius_m = r;
-            if s.rod_radius_m == 0.0 {
-                s.rod_radius_m = 0.5 * t.diameter_m.unwrap_or(0.0);
-            }
+            s.set_contact_radii(r, s.punch_radius_m, t.diameter_m);
             t.rod_setup = Some(s);
             t
         })

@@ -81,6 +81,17 @@ pub struct TestSetup {
 }
 
 impl TestSetup {
+    /// The fixture's contact radii (m) for the supports and the punch. A rounded contact sits
+    /// on the rod's surface (half of `rod_diameter_m`, when known); point contacts stay on its
+    /// centreline, the default.
+    pub fn set_contact_radii(&mut self, support_m: f64, punch_m: f64, rod_diameter_m: Option<f64>) {
+        self.support_radius_m = support_m;
+        self.punch_radius_m = punch_m;
+        if support_m > 0.0 || punch_m > 0.0 {
+            self.rod_radius_m = 0.5 * rod_diameter_m.unwrap_or(0.0);
+        }
+    }
+
     /// Defaults: 40 elements, point punch and supports, frictionless, centreline contact,
     /// overhang 0.15 × span, penalty 10⁷ EI/span³, automatic sub-steps, no span records.
     pub fn new(kind: TestKind, free_length_m: f64) -> Self {

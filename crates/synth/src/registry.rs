@@ -68,9 +68,7 @@ pub fn build_truth(spec: &SynthSpec) -> Result<Box<dyn Truth>, SynthError> {
             let mut setup = TestSetup::new(TestKind::ThreePoint, l0);
             setup.support_friction = spec.rig.support_friction;
             if let Some(r) = spec.rig.roller_radius_m {
-                setup.punch_radius_m = r;
-                setup.support_radius_m = r;
-                setup.rod_radius_m = 0.5 * spec.specimen.diameter_m.unwrap_or(0.0);
+                setup.set_contact_radii(r, r, spec.specimen.diameter_m);
             }
             Ok(Box::new(RodTruth { law, setup }))
         }
