@@ -321,9 +321,19 @@ pub fn read_test(
     roles: Option<RoleCheck>,
     said: &mut Remarks,
 ) -> Result<ReadTest> {
-    let kind = TestKind::from(t.kind);
-    let opts = read_options(&t.reader, Some(kind))?;
-    let mut rec = cablab_ingest::read_path(path, &opts)?;
+    let (kind, mut rec) = match t.kind {
+        Some(k) => {
+            let kind = TestKind::from(k);
+            let opts = read_options(&t.reader, Some(kind))?;
+            (kind, cablab_ingest::read_path(path, &opts)?)
+        }
+        None => {
+            let kind = kind_of_file(path, &t.reader, said)?;
+            // Read again as that kind: the channel roles are assigned as with `--kind`.
+            let opts = read_options(&t.reader, Some(kind))?;
+            (kind, cablab_ingest::read_path(path, &opts)?)
+        }
+    };
     check(&mut rec, kind, t.force_kind, roles, said)?;
     let (geom, flat, notes) = geometry_noted(
         &rec,
@@ -343,10 +353,55 @@ pub fn read_test(
     )?);
     Ok(ReadTest {
         rec,
+        kind,
         geom,
         flat,
         curve,
     })
+}
+
+/// The kind of a file read without `--kind`, as `cablab run PATH...` and `cablab init` find it:
+/// the file's own word (its test-type metadata, its channels' units), else a kind its name
+/// states; an error naming the file when neither does. Where it came from goes to the notes.
+pub fn kind_of_file(
+    path: &std::path::Path,
+    reader: &crate::cli::ReaderArgs,
+    said: &mut Remarks,
+) -> Result<TestKind> {
+    let rec = cablab_ingest::read_path(path, &read_options(reader, None)?)?;
+    if rec.kind != TestKind::Unknown {
+        said.notes.push(format!(
+            "{}: kind {} from the file ({})",
+            path.display(),
+            rec.kind.as_str(),
+            rec.kind_reason
+        ));
+        return Ok(rec.kind);
+    }
+    let control = rec
+        .channel_index(cablab_core::Role::Control)
+        .and_then(|i| rec.channels[i].dimension);
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().to_string())
+        .unwrap_or_default();
+    match crate::commands::init::kind_from_name(&name, control) {
+        Some(k) => {
+            said.notes.push(format!(
+                "{}: kind {} from the {}",
+                path.display(),
+                k.value.as_str(),
+                k.from
+            ));
+            Ok(k.value)
+        }
+        None => bail!(
+            "{}: the file does not say which test it is (no test-type metadata, no channel units \
+             that tell, no kind in its name): give --kind tension, torsion, three_point or \
+             pure_bending",
+            path.display()
+        ),
+    }
 }
 
 /// A test read by [`read_test`]: the record, its geometry, the flat section b × h the moduli use
@@ -354,6 +409,8 @@ pub fn read_test(
 pub struct ReadTest {
     /// The record as read.
     pub rec: TestRecord,
+    /// The kind: `--kind`, else the file's ([`kind_of_file`]).
+    pub kind: TestKind,
     /// Free length and round diameter.
     pub geom: cablab_measure::Geometry,
     /// The flat section, when the moduli use one.

@@ -255,13 +255,14 @@ pub struct ConvertArgs {
     pub reader: ReaderArgs,
 }
 
-/// A test file of a declared kind as `analyze` and `diagnose` take it: the kind, the geometry
-/// the file's metadata may lack, and how to read it.
+/// A test file as `analyze` and `diagnose` take it: the kind, the geometry the file's metadata
+/// may lack, and how to read it.
 #[derive(Debug, Clone, Args)]
 pub struct TestArgs {
-    /// Test kind.
+    /// Test kind (default: from the file's test-type metadata, its channels' units, else a kind
+    /// named in the file name; an error when none says).
     #[arg(long, value_name = "KIND")]
-    pub kind: KindArg,
+    pub kind: Option<KindArg>,
     /// Free length between the clamps, or the support span for three-point bending, in mm
     /// (default: from each file's metadata).
     #[arg(long, value_name = "MM", allow_negative_numbers = true, value_parser = positive_mm)]
@@ -506,5 +507,9 @@ pub enum BenchWhat {
         /// Also write every case's outcome (verdict, gaps, seconds) as JSON here.
         #[arg(long, value_name = "PATH")]
         json: Option<PathBuf>,
+        /// Write each case's generated logs here, one folder per case (with `truth.txt`), to
+        /// open them with `cablab characterize` or `cablab diagnose` as a lab's files.
+        #[arg(long, value_name = "DIR")]
+        logs: Option<PathBuf>,
     },
 }

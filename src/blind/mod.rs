@@ -53,6 +53,24 @@ pub fn through_readers(case: &mut BlindCase) -> Result<(), String> {
     Ok(())
 }
 
+/// Each case's files as the virtual lab wrote them, in `dir/<case>/`, with the truth beside
+/// them (`truth.txt`: the case's name, which carries the withheld effects and the noise).
+fn write_logs(dir: &std::path::Path, cases: &[BlindCase]) -> anyhow::Result<()> {
+    use anyhow::Context as _;
+    for c in cases {
+        let d = dir.join(crate::pipeline::evaluate::slug(&c.name));
+        for (name, bytes) in &c.files {
+            let p = d.join(name);
+            crate::output::write_atomic(&p, bytes)
+                .with_context(|| format!("cannot write {}", p.display()))?;
+        }
+        let p = d.join("truth.txt");
+        crate::output::write_atomic(&p, format!("{}\n", c.name).as_bytes())
+            .with_context(|| format!("cannot write {}", p.display()))?;
+    }
+    Ok(())
+}
+
 /// `cablab bench blind` (`vary`: `Some(n)` diagnoses the first n cases of the varied family,
 /// [`vary`], instead of the standard matrix; `seeds` and `pairs` are then not used).
 #[allow(clippy::too_many_arguments)]
@@ -64,6 +82,7 @@ pub fn bench(
     only: &[String],
     out: Option<&std::path::Path>,
     json: Option<&std::path::Path>,
+    logs: Option<&std::path::Path>,
 ) -> CmdResult {
     let mut kinds = Vec::new();
     for k in kind_names {
@@ -95,6 +114,9 @@ pub fn bench(
     }
     if !only.is_empty() {
         cases.retain(|c| only.iter().any(|o| c.name.contains(o.as_str())));
+    }
+    if let Some(dir) = logs {
+        write_logs(dir, &cases).map_err(CliError::failed)?;
     }
     cases.retain_mut(|c| match through_readers(c) {
         Ok(()) => true,

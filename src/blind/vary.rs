@@ -880,18 +880,34 @@ mod tests {
         assert_eq!(d.verdict.effects, c.truths, "{:?}", d.verdict.steps);
     }
 
-    /// Effects the held-out cycle no longer shows: a stiffness degradation that has run its
-    /// course by the last cycle (pure bending, 0.17 % noise) and a kinematic hardening whose
-    /// last cycle stays inside the reach of the earlier ones (torsion, 0.23 %). The baseline's
-    /// compromise fit predicts the held-out cycle to the floor (0.88 ×, 1.08 ×) while it leaves
-    /// 1.45 × and 1.93 × over the whole record: the verdict was `none`. On the training cycles
-    /// the same rules name the truth, which predicts the held-out cycle as well as the
-    /// baseline does (the guard the training cycles cannot give).
+    /// Effects the held-out cycle no longer shows: a kinematic hardening whose last cycle stays
+    /// inside the reach of the earlier ones (torsion, 0.23 %). The baseline's compromise fit
+    /// predicts the held-out cycle to the floor (1.08 ×) while it leaves 1.93 × over the whole
+    /// record: the verdict was `none`. On the training cycles the same rules name the truth,
+    /// which predicts the held-out cycle as well as the baseline does (the guard the training
+    /// cycles cannot give).
+    ///
+    /// The second case this test had, a stiffness degradation that has run its course by the
+    /// last cycle (vary1: pure bending, 0.17 % noise, 0.88 × held out, 1.45 × over the record),
+    /// is `none` since the readers see its moment's ADC count (7.8·10⁻⁵ N·m, written to six
+    /// decimals: `condition::quantum` read the last decimal before): the degradation moves the
+    /// prediction by less than half a count, which the instrument cannot resolve
+    /// (`below_resolution`).
     #[test]
     fn an_effect_the_held_out_cycle_no_longer_shows_is_named_on_the_training_cycles() {
         use cablab_diagnose::diagnose::NOISE_FLOOR_FIT;
         use cablab_diagnose::{diagnose, Context, DiagnoseOptions};
-        for seed in [1, 266] {
+        let mut c = vary_case(&UNIFORM, 1).unwrap().case;
+        crate::blind::through_readers(&mut c).unwrap();
+        let d = diagnose(Context::project(), &c.tests, &DiagnoseOptions::default()).unwrap();
+        assert!(d.verdict.effects.is_empty(), "{}", c.name);
+        let sd = d
+            .effects
+            .iter()
+            .find(|e| e.effect == Effect::StiffnessDegradation)
+            .unwrap();
+        assert!(sd.below_resolution, "{}: {}", c.name, sd.shift_res);
+        for seed in [266] {
             let mut c = vary_case(&UNIFORM, seed).unwrap().case;
             crate::blind::through_readers(&mut c).unwrap();
             let d = diagnose(Context::project(), &c.tests, &DiagnoseOptions::default()).unwrap();
@@ -954,8 +970,10 @@ mod tests {
 
     /// The rule's null side: logs without an effect whose baseline leaves more than
     /// [`cablab_diagnose::diagnose::TRAINING_GAP_CHECK`] × the floor over the whole record because the
-    /// floor does not count what is not noise-like (spikes, 1.34 ×; spikes on a quantised
-    /// record, 1.39 ×). No candidate closes that, so the verdict stays `none`.
+    /// floor does not count what is not noise-like (spikes, 1.34 ×). No candidate closes that,
+    /// so the verdict stays `none`. The quantised spiky record this test also had (vary113,
+    /// 1.39 ×) no longer exercises the rule: its floor now counts the noise under its coarse
+    /// count (`floors::noise_floor`, `serial_noise_rms`); it stays `none`.
     #[test]
     fn a_null_log_whose_spikes_the_floor_does_not_count_stays_none() {
         use cablab_diagnose::{diagnose, Context, DiagnoseOptions};
@@ -965,8 +983,9 @@ mod tests {
             crate::blind::through_readers(&mut c).unwrap();
             let d = diagnose(Context::project(), &c.tests, &DiagnoseOptions::default()).unwrap();
             assert!(
-                d.baseline.gap_rel
-                    >= cablab_diagnose::diagnose::TRAINING_GAP_CHECK * d.verdict.noise_rel,
+                seed == 113
+                    || d.baseline.gap_rel
+                        >= cablab_diagnose::diagnose::TRAINING_GAP_CHECK * d.verdict.noise_rel,
                 "{}: the case no longer exercises the rule",
                 c.name
             );

@@ -10,7 +10,6 @@
 
 use super::{print_json, CliError, CmdResult};
 use crate::cli::AnalyzeArgs;
-use cablab_core::TestKind;
 use std::process::ExitCode;
 
 /// Read, check, bridge and analyse one file. The warnings and notes gathered before a failure
@@ -26,11 +25,11 @@ pub fn analyze_file(
     };
     let crate::bridge::ReadTest {
         rec,
+        kind,
         geom,
         flat,
         curve,
     } = crate::bridge::read_test(&a.file, &a.test, Some(roles), said).map_err(CliError::input)?;
-    let kind = TestKind::from(a.test.kind);
     let yield_method: cablab_measure::YieldMethod = a
         .yield_method
         .parse()

@@ -29,6 +29,7 @@ pub fn run(a: BenchArgs) -> CmdResult {
             only,
             output,
             json,
+            logs,
         } => {
             let kinds: Vec<String> = kinds
                 .into_iter()
@@ -42,6 +43,7 @@ pub fn run(a: BenchArgs) -> CmdResult {
                 &only,
                 output.as_deref(),
                 json.as_deref(),
+                logs.as_deref(),
             )
         }
     }

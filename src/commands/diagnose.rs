@@ -22,9 +22,12 @@ pub fn diag_test(path: &std::path::Path, a: &DiagnoseArgs) -> Result<DiagTest, C
     // The diagnosis compares curves in sectional variables and reports no modulus: a flat
     // section (`flat`) changes nothing here.
     let crate::bridge::ReadTest {
-        rec, geom, curve, ..
+        rec,
+        kind,
+        geom,
+        curve,
+        ..
     } = read.map_err(CliError::input)?;
-    let kind = TestKind::from(a.test.kind);
     let (mut t, _) =
         crate::bridge::diag_test(kind, &geom, &curve, rec.specimen.label.clone(), None)
             .map_err(|e| CliError::input(anyhow::anyhow!("{}: {e:#}", path.display())))?;
@@ -63,9 +66,11 @@ pub fn diag_test(path: &std::path::Path, a: &DiagnoseArgs) -> Result<DiagTest, C
 
 /// Run `cablab diagnose`.
 pub fn run(a: DiagnoseArgs) -> CmdResult {
-    let kind = TestKind::from(a.test.kind);
-    cablab_laws::try_param_specs(kind, &a.baseline)
-        .map_err(|e| CliError::input(anyhow::anyhow!("--baseline: {e}")))?;
+    // With `--kind`, a wrong baseline is refused before any file is read.
+    if let Some(k) = a.test.kind {
+        cablab_laws::try_param_specs(TestKind::from(k), &a.baseline)
+            .map_err(|e| CliError::input(anyhow::anyhow!("--baseline: {e}")))?;
+    }
     let candidates = match &a.candidates {
         None => None,
         Some(v) => Some(
@@ -82,6 +87,19 @@ pub fn run(a: DiagnoseArgs) -> CmdResult {
         .iter()
         .map(|f| diag_test(f, &a))
         .collect::<Result<Vec<_>, _>>()?;
+    // A joint diagnosis is of one kind: files whose kinds were read from them must agree.
+    let kind = tests.first().map_or(TestKind::Unknown, |t| t.kind);
+    if let Some((f, t)) = a.files.iter().zip(&tests).find(|(_, t)| t.kind != kind) {
+        return Err(CliError::input(anyhow::anyhow!(
+            "{}: a {} test, but {} is {}: a joint diagnosis takes tests of one kind",
+            f.display(),
+            t.kind.as_str(),
+            a.files[0].display(),
+            kind.as_str()
+        )));
+    }
+    cablab_laws::try_param_specs(kind, &a.baseline)
+        .map_err(|e| CliError::input(anyhow::anyhow!("--baseline: {e}")))?;
     let rod = Rod::default();
     let ctx = cablab_diagnose::Context {
         catalog: &Registry,

@@ -723,6 +723,58 @@ fn analyze_geometry_from_metadata_kind_spelling_and_missing_length() {
     assert!(msg.contains("bending"), "{msg}");
 }
 
+/// CONTRACT.md: `analyze FILE [--kind K]` and `diagnose FILE...` take the kind from the file
+/// when no flag gives it. Every demo kind, copied under a name that states no kind (so only the
+/// file's own metadata and units can tell), analyses to the same numbers as with `--kind`; the
+/// demo tension log diagnoses to the same verdict. A file with no evidence of its kind is bad
+/// input naming the file and `--kind`; files of two kinds are not diagnosed jointly.
+#[test]
+fn analyze_and_diagnose_take_the_kind_from_the_file() {
+    let dir = tempfile::tempdir().unwrap();
+    for (f, kind) in [
+        (DEMO_TENSION, "tension"),
+        ("raw_data/cable/torsion_360deg_2.TXT", "torsion"),
+        ("raw_data/cable/three_point_2mm_3.dat", "three_point"),
+        ("raw_data/cable/pure_bending_80deg_3.csv", "pure_bending"),
+    ] {
+        let ext = std::path::Path::new(f).extension().unwrap();
+        let neutral = dir.path().join("specimen_7").with_extension(ext);
+        std::fs::copy(root().join(f), &neutral).unwrap();
+        let neutral = neutral.to_str().unwrap();
+        let given = run_json(&["analyze", neutral, "--kind", kind, "--json"]);
+        let inferred = run_json(&["analyze", neutral, "--json"]);
+        assert_eq!(given["stiffness"], inferred["stiffness"], "{f}");
+        assert_eq!(given["behaviour"], inferred["behaviour"], "{f}");
+        let r = run(&["analyze", neutral]);
+        assert_eq!(r.code, 0, "{f}: {}", r.stderr);
+        assert!(
+            r.stdout.contains(&format!("{kind} test")),
+            "{f}: {}",
+            r.stdout
+        );
+    }
+    let a = run_json(&["diagnose", DEMO_TENSION, "--kind", "tension", "--json"]);
+    let b = run_json(&["diagnose", DEMO_TENSION, "--json"]);
+    assert_eq!(a["verdict"], b["verdict"]);
+    if let Some(p) = fixture("bam__mts793_cube_compression.dat") {
+        let p = p.to_str().unwrap();
+        let msg = run_fails_2(&["analyze", p]);
+        assert!(
+            msg.contains("bam__mts793_cube_compression.dat") && msg.contains("--kind"),
+            "{msg}"
+        );
+    }
+    let msg = run_fails_2(&[
+        "diagnose",
+        DEMO_TENSION,
+        "raw_data/cable/torsion_360deg_1.dat",
+    ]);
+    assert!(
+        msg.contains("one kind") && msg.contains("torsion_360deg_1.dat"),
+        "{msg}"
+    );
+}
+
 // -------------------------------------------------------------------------------- 4. simulate
 
 /// SPEC's pure-bending cycle: elastoplastic EI = 1, M_y = 1, HI = 0.25 over 1 m, end rotation

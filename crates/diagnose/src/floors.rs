@@ -30,7 +30,10 @@ pub const SERIAL_PHI_MAX: f64 = 0.98;
 /// twice the lag-1 one, the floor is the larger of the two estimates (not when φ ≥
 /// [`SERIAL_PHI_MAX`]). Never below the rounding of a quantised response (q/√12, q its count,
 /// `cablab_measure::quantum`): noise of a count or two whose second differences are mostly
-/// zero reads σ = 0 at every lag.
+/// zero reads σ = 0 at every lag. When the estimate is below one count, the MAD does not
+/// measure the noise (its differences are 0 or whole counts: it reads 0, or a count's scale,
+/// whatever the noise): the floor is then the same fit over lags on the differences' RMS
+/// ([`cablab_measure::condition::serial_noise_rms`]), the reading's whole error.
 ///
 /// Does not see noise slower than the longest lag (a hum aliased to a slow wave): it stays in
 /// the gap.
@@ -47,8 +50,22 @@ pub fn noise_floor(tests: &[DiagTest]) -> Vec<f64> {
             } else {
                 white
             };
-            // A quantised reading is off by its rounding at least (uniform over a count).
-            let s = s.max(cablab_measure::quantum(&t.response) / 12f64.sqrt());
+            // A quantised reading is off by its rounding at least (uniform over a count). Noise
+            // below about a count leaves most second differences exactly zero and the MAD
+            // blind to it: then the reading's whole error (noise and rounding) is measured by
+            // the RMS of the differences (`serial_noise_rms`).
+            let qr = cablab_measure::quantum(&t.response);
+            let s = if qr > 0.0 && s < qr {
+                let rms = cablab_measure::condition::serial_noise_rms(&t.response);
+                if rms.phi < SERIAL_PHI_MAX {
+                    rms.sigma
+                } else {
+                    s
+                }
+            } else {
+                s
+            };
+            let s = s.max(qr / 12f64.sqrt());
             // The control is measured too: its noise, or the rounding of a quantised encoder
             // (uniform over one count: σ = q/√12), reaches the simulated response through the
             // stiffness. A 0.1 µm encoder on a 32 mm cable is ~0.25 N per count.

@@ -322,12 +322,30 @@ impl Choice {
 /// each is blind to a different misfit (a slow one barely reaches the differences; a sharp one
 /// on a short held-out cycle drives them to ρ → 1), and the residual's correlation that counts
 /// here is the noise's, never the misfit's.
+///
+/// Under a coarse count (`stats::lattice_like`: the noise below about one count, read on a fit
+/// within [`LATTICE_FIT`] of the floor) both read the count's dithering as white noise,
+/// whatever the noise's own correlation; there the lags' RMS scales read it
+/// (`stats::noise_lag1_from_lags_rms`).
 pub(crate) fn n_eff_of(best: &Scored) -> f64 {
     let series: Vec<&[f64]> = best.held_resid.iter().map(Vec::as_slice).collect();
-    let rho = stats::noise_lag1_from_differences(&series)
-        .min(stats::noise_lag1_from_lags(&series).unwrap_or(1.0));
+    // Only on a fit near the floor: a misfit's corners inflate the residuals' RMS, not their
+    // MAD, and would pass for a coarse count.
+    let near_floor = best.rss_noise <= LATTICE_FIT * LATTICE_FIT * best.n_held as f64;
+    let rho = match (near_floor && stats::lattice_like(&series))
+        .then(|| stats::noise_lag1_from_lags_rms(&series))
+        .flatten()
+    {
+        Some(rho) => rho,
+        None => stats::noise_lag1_from_differences(&series)
+            .min(stats::noise_lag1_from_lags(&series).unwrap_or(1.0)),
+    };
     stats::effective_sample_size(best.n_held, rho)
 }
+
+/// Largest held-out gap (noise units) of the best-fitting model at which its residuals are read
+/// for a coarse count's rounding ([`n_eff_of`]).
+pub const LATTICE_FIT: f64 = 2.0;
 
 /// The tolerance within which two models' information criteria cannot be told apart: twice the
 /// price of one parameter, plus 2 (the AR(1) n_eff and the estimated noise floor both flatter

@@ -97,6 +97,34 @@ pub fn noise_lag1_from_lags(series: &[&[f64]]) -> Option<f64> {
     (n > 0).then(|| sum / n as f64)
 }
 
+/// Whether residual series carry a coarse count's rounding rather than Gaussian noise: their
+/// MAD σ of the lag-1 second differences is below half their RMS σ (pooled by length). The
+/// differences of a reading whose noise is below one count are mostly exactly zero (the MAD
+/// collapses) and otherwise whole counts; Gaussian noise reads the two alike.
+pub fn lattice_like(series: &[&[f64]]) -> bool {
+    let (mut mad, mut rms, mut n) = (0.0, 0.0, 0usize);
+    for x in series.iter().filter(|x| x.len() >= LAGS_MIN_SAMPLES) {
+        mad += cablab_measure::noise_level(x) * x.len() as f64;
+        rms += cablab_measure::condition::rms_sigma_at_lag(x, 1) * x.len() as f64;
+        n += x.len();
+    }
+    n > 0 && mad < 0.5 * rms
+}
+
+/// [`noise_lag1_from_lags`] with each lag's scale from the RMS of its second differences
+/// (`cablab_measure::condition::serial_noise_rms`): the noise's correlation under a coarse
+/// count, where both the MAD and the first differences read the count's dithering (a noise
+/// crossing a count boundary and back) as white noise. `None` when no series has
+/// [`LAGS_MIN_SAMPLES`].
+pub fn noise_lag1_from_lags_rms(series: &[&[f64]]) -> Option<f64> {
+    let (mut sum, mut n) = (0.0, 0usize);
+    for x in series.iter().filter(|x| x.len() >= LAGS_MIN_SAMPLES) {
+        sum += cablab_measure::condition::serial_noise_rms(x).phi * x.len() as f64;
+        n += x.len();
+    }
+    (n > 0).then(|| sum / n as f64)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -135,6 +163,37 @@ mod tests {
         // White noise: 0.
         let w: Vec<f64> = (0..20_000).map(|_| n.sample(&mut rng)).collect();
         assert!(noise_lag1_from_differences(&[&w]).abs() < 0.03);
+    }
+
+    /// Held-out residuals of a reading on a coarse count (3 σ of its AR(1) noise, φ = 0.8),
+    /// against the exact smooth model: their differences read the count's dithering as
+    /// weaker correlation than the residuals have, the RMS scales read it.
+    /// Gaussian residuals are not lattice-like.
+    #[test]
+    fn residuals_on_a_coarse_count_keep_their_correlation() {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
+        let n = Normal::new(0.0, 0.6).unwrap();
+        let len = 3000;
+        let mut e = vec![0.0; len];
+        for i in 1..len {
+            e[i] = 0.8 * e[i - 1] + n.sample(&mut rng);
+        }
+        let model: Vec<f64> = (0..len).map(|i| 50.0 * (i as f64 * 0.002).sin()).collect();
+        let q = 3.0;
+        let resid: Vec<f64> = model
+            .iter()
+            .zip(&e)
+            .map(|(m, e)| ((m + e) / q).round() * q - m)
+            .collect();
+        assert!(lattice_like(&[&resid]));
+        let by_differences = noise_lag1_from_differences(&[&resid])
+            .min(noise_lag1_from_lags(&[&resid]).unwrap_or(1.0));
+        let by_rms = noise_lag1_from_lags_rms(&[&resid]).unwrap();
+        let truth = lag1_autocorrelation(&resid);
+        // Measured: truth 0.56, differences 0.33 (n_eff 1.8× too large), RMS 0.60.
+        assert!(truth - by_differences > 0.15, "{truth} {by_differences}");
+        assert!((by_rms - truth).abs() < 0.08, "{truth} {by_rms}");
+        assert!(!lattice_like(&[&e]));
     }
 
     /// A short series (300 samples, a held-out cycle) with a triangular misfit of 60 noise units
