@@ -508,7 +508,7 @@ pub enum BenchWhat {
         #[arg(long, value_name = "PATH")]
         json: Option<PathBuf>,
         /// Write each case's generated logs here, one folder per case (with `truth.txt`), to
-        /// open them with `cablab characterize` or `cablab diagnose` as a lab's files.
+        /// open them with `cablab analyze` or `cablab diagnose` as a lab's files.
         #[arg(long, value_name = "DIR")]
         logs: Option<PathBuf>,
     },
