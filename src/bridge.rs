@@ -328,10 +328,13 @@ pub fn read_test(
             (kind, cablab_ingest::read_path(path, &opts)?)
         }
         None => {
-            let kind = kind_of_file(path, &t.reader, said)?;
-            // Read again as that kind: the channel roles are assigned as with `--kind`.
+            let (kind, reason) = kind_of_file(path, &t.reader, said)?;
+            // Read again as that kind: the channel roles are assigned as with `--kind` (the
+            // reader takes the kind into the role assignment), the reason kept the file's.
             let opts = read_options(&t.reader, Some(kind))?;
-            (kind, cablab_ingest::read_path(path, &opts)?)
+            let mut rec = cablab_ingest::read_path(path, &opts)?;
+            rec.kind_reason = reason;
+            (kind, rec)
         }
     };
     check(&mut rec, kind, t.force_kind, roles, said)?;
@@ -362,12 +365,13 @@ pub fn read_test(
 
 /// The kind of a file read without `--kind`, as `cablab run PATH...` and `cablab init` find it:
 /// the file's own word (its test-type metadata, its channels' units), else a kind its name
-/// states; an error naming the file when neither does. Where it came from goes to the notes.
+/// states; an error naming the file when neither does. Where it came from goes to the notes and
+/// is returned beside the kind.
 pub fn kind_of_file(
     path: &std::path::Path,
     reader: &crate::cli::ReaderArgs,
     said: &mut Remarks,
-) -> Result<TestKind> {
+) -> Result<(TestKind, String)> {
     let rec = cablab_ingest::read_path(path, &read_options(reader, None)?)?;
     if rec.kind != TestKind::Unknown {
         said.notes.push(format!(
@@ -376,7 +380,7 @@ pub fn kind_of_file(
             rec.kind.as_str(),
             rec.kind_reason
         ));
-        return Ok(rec.kind);
+        return Ok((rec.kind, rec.kind_reason));
     }
     let control = rec
         .channel_index(cablab_core::Role::Control)
@@ -393,7 +397,7 @@ pub fn kind_of_file(
                 k.value.as_str(),
                 k.from
             ));
-            Ok(k.value)
+            Ok((k.value, format!("the {}", k.from)))
         }
         None => bail!(
             "{}: the file does not say which test it is (no test-type metadata, no channel units \

@@ -38,10 +38,7 @@ pub fn diag_test(path: &std::path::Path, a: &DiagnoseArgs) -> Result<DiagTest, C
                 path.display()
             )));
         }
-        let mut s = t
-            .rod_setup
-            .clone()
-            .unwrap_or_else(|| cablab_rod::TestSetup::new(kind, t.free_length_m));
+        let mut s = t.setup();
         s.set_contact_radii(
             1e-3 * a.support_radius_mm.unwrap_or(0.0),
             1e-3 * a.punch_radius_mm.unwrap_or(0.0),

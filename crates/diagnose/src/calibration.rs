@@ -491,10 +491,7 @@ fn pick(test: &DiagTest, idx: &[usize]) -> DiagTest {
             vec![]
         },
         rod_setup: (!cablab_rod::uniform::is_uniform(test.kind)).then(|| {
-            let mut setup = test
-                .rod_setup
-                .clone()
-                .unwrap_or_else(|| cablab_rod::TestSetup::new(test.kind, test.free_length_m));
+            let mut setup = test.setup();
             setup.elements = (setup.elements / 4).max(ROD_COARSE_MIN_ELEMENTS);
             setup.max_substep =
                 Some(setup.max_substep.unwrap_or(0.005 * test.free_length_m) * ROD_COARSE_SUBSTEP);

@@ -82,10 +82,7 @@ fn with_radius(tests: &[DiagTest], r: f64) -> Vec<DiagTest> {
         .iter()
         .map(|t| {
             let mut t = t.clone();
-            let mut s = t
-                .rod_setup
-                .clone()
-                .unwrap_or_else(|| cablab_rod::TestSetup::new(t.kind, t.free_length_m));
+            let mut s = t.setup();
             s.set_contact_radii(r, s.punch_radius_m, t.diameter_m);
             t.rod_setup = Some(s);
             t

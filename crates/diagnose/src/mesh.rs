@@ -119,13 +119,7 @@ pub fn elements_of(tests: &[DiagTest]) -> Option<usize> {
     tests
         .iter()
         .find(|t| !cablab_rod::uniform::is_uniform(t.kind))
-        .map(|t| setup_of(t).elements)
-}
-
-fn setup_of(t: &DiagTest) -> cablab_rod::TestSetup {
-    t.rod_setup
-        .clone()
-        .unwrap_or_else(|| cablab_rod::TestSetup::new(t.kind, t.free_length_m))
+        .map(|t| t.setup().elements)
 }
 
 /// Copies of `tests` whose rods have `elements` elements.
@@ -135,7 +129,7 @@ pub fn with_elements(tests: &[DiagTest], elements: usize) -> Vec<DiagTest> {
         .map(|t| {
             let mut t = t.clone();
             if !cablab_rod::uniform::is_uniform(t.kind) {
-                let mut s = setup_of(&t);
+                let mut s = t.setup();
                 s.elements = elements;
                 t.rod_setup = Some(s);
             }

@@ -58,6 +58,13 @@ pub struct DiagTest {
 }
 
 impl DiagTest {
+    /// The rod setup this test is replayed on: its own, else the kind's default on its length.
+    pub fn setup(&self) -> cablab_rod::TestSetup {
+        self.rod_setup
+            .clone()
+            .unwrap_or_else(|| cablab_rod::TestSetup::new(self.kind, self.free_length_m))
+    }
+
     /// Checks lengths and finiteness; the error names the test and field.
     pub fn validate(&self, index: usize) -> Result<(), DiagError> {
         let bad = |why: String| DiagError::BadTest { test: index, why };

@@ -318,10 +318,7 @@ impl RodSimulator for Rod {
         compliance: f64,
         out: &mut [f64],
     ) -> Result<(), String> {
-        let mut setup = test
-            .rod_setup
-            .clone()
-            .unwrap_or_else(|| cablab_rod::TestSetup::new(test.kind, test.free_length_m));
+        let mut setup = test.setup();
         setup.support_friction = mu;
         setup.machine_compliance = compliance;
         // Indices from the measured history, so that replays of nearby histories (the machine
@@ -344,10 +341,7 @@ impl RodSimulator for Rod {
         compliance_column: bool,
         out: &mut [f64],
     ) -> Result<Option<cablab_rod::uniform::ReplaySens>, String> {
-        let mut setup = test
-            .rod_setup
-            .clone()
-            .unwrap_or_else(|| cablab_rod::TestSetup::new(test.kind, test.free_length_m));
+        let mut setup = test.setup();
         setup.support_friction = mu.unwrap_or(0.0);
         setup.machine_compliance = compliance;
         let idx = decimate(&test.control, self.max_points);
@@ -380,10 +374,7 @@ impl RodSimulator for Rod {
         law: &dyn Law,
         mu: f64,
     ) -> Result<Option<SpanHistory>, String> {
-        let mut setup = test
-            .rod_setup
-            .clone()
-            .unwrap_or_else(|| cablab_rod::TestSetup::new(test.kind, test.free_length_m));
+        let mut setup = test.setup();
         setup.support_friction = mu;
         setup.record_span = true;
         let idx = decimate(&test.control, self.max_points);

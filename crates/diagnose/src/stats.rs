@@ -89,9 +89,17 @@ pub const LAGS_MIN_SAMPLES: usize = 60;
 /// of 276, so that no model, however close, could be preferred to the baseline and the
 /// verdict was `unexplained`). The second differences at lags 1–6 still see the noise there.
 pub fn noise_lag1_from_lags(series: &[&[f64]]) -> Option<f64> {
+    lag1_by_length(series, cablab_measure::condition::serial_noise)
+}
+
+/// φ of `model` per series of at least [`LAGS_MIN_SAMPLES`], averaged weighted by length.
+fn lag1_by_length(
+    series: &[&[f64]],
+    model: fn(&[f64]) -> cablab_measure::condition::SerialNoise,
+) -> Option<f64> {
     let (mut sum, mut n) = (0.0, 0usize);
     for x in series.iter().filter(|x| x.len() >= LAGS_MIN_SAMPLES) {
-        sum += cablab_measure::condition::serial_noise(x).phi * x.len() as f64;
+        sum += model(x).phi * x.len() as f64;
         n += x.len();
     }
     (n > 0).then(|| sum / n as f64)
@@ -117,12 +125,7 @@ pub fn lattice_like(series: &[&[f64]]) -> bool {
 /// crossing a count boundary and back) as white noise. `None` when no series has
 /// [`LAGS_MIN_SAMPLES`].
 pub fn noise_lag1_from_lags_rms(series: &[&[f64]]) -> Option<f64> {
-    let (mut sum, mut n) = (0.0, 0usize);
-    for x in series.iter().filter(|x| x.len() >= LAGS_MIN_SAMPLES) {
-        sum += cablab_measure::condition::serial_noise_rms(x).phi * x.len() as f64;
-        n += x.len();
-    }
-    (n > 0).then(|| sum / n as f64)
+    lag1_by_length(series, cablab_measure::condition::serial_noise_rms)
 }
 
 #[cfg(test)]

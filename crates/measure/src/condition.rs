@@ -126,12 +126,7 @@ pub fn serial_noise(signal: &[f64]) -> SerialNoise {
 /// once for both): exactly the two numbers the two functions return.
 pub fn serial_noise_and_level(signal: &[f64]) -> (SerialNoise, f64) {
     let n = signal.len();
-    let mut lags = Vec::new();
-    let mut k = 1usize;
-    while n >= 20 * k.max(2) || (k == 1 && n >= 40) {
-        lags.push(k);
-        k = if k < 4 { k + 1 } else { k + k / 2 };
-    }
+    let lags = serial_lags(n);
     let white = |sigma: f64| {
         let w = SerialNoise { sigma, phi: 0.0 };
         (w, sigma)
@@ -155,6 +150,18 @@ pub fn serial_noise_and_level(signal: &[f64]) -> (SerialNoise, f64) {
         Some(sn) => (sn, level),
         None => white(level),
     }
+}
+
+/// The lags [`serial_noise_and_level`] and [`serial_noise_rms`] read a record of `n` samples
+/// at: 1, 2, 3, 4, 6, 9, 13, … while each has ≥ 20 k samples (lag 1 from 40).
+fn serial_lags(n: usize) -> Vec<usize> {
+    let mut lags = Vec::new();
+    let mut k = 1usize;
+    while n >= 20 * k.max(2) || (k == 1 && n >= 40) {
+        lags.push(k);
+        k = if k < 4 { k + 1 } else { k + k / 2 };
+    }
+    lags
 }
 
 /// The fit of [`serial_noise_and_level`]: σ and φ from the scales `v2` = (k, v_k²) at several
@@ -250,16 +257,12 @@ pub fn rms_sigma_at_lag(signal: &[f64], k: usize) -> f64 {
 /// this way). On unquantised Gaussian noise it agrees with [`serial_noise`] to within
 /// sampling.
 pub fn serial_noise_rms(signal: &[f64]) -> SerialNoise {
-    let n = signal.len();
-    let mut v2 = Vec::new();
-    let mut k = 1usize;
-    while n >= 20 * k.max(2) || (k == 1 && n >= 40) {
-        let v = rms_sigma_at_lag(signal, k);
-        if v > 0.0 {
-            v2.push((k as f64, v * v));
-        }
-        k = if k < 4 { k + 1 } else { k + k / 2 };
-    }
+    let v2: Vec<(f64, f64)> = serial_lags(signal.len())
+        .into_iter()
+        .map(|k| (k as f64, rms_sigma_at_lag(signal, k)))
+        .filter(|&(_, v)| v > 0.0)
+        .map(|(k, v)| (k, v * v))
+        .collect();
     fit_serial(&v2).unwrap_or(SerialNoise {
         sigma: v2.first().map_or(0.0, |&(_, v)| v.sqrt()),
         phi: 0.0,
