@@ -2,9 +2,9 @@
 //!
 //! - [`planar`]: the geometrically exact rod (Simo–Reissner finite elements, in-plane: an exact
 //!   reduction of the 3D rod for in-plane loading), penalty contact with rigid supports and punch
-//!   (the punch's contact and the supports' Coulomb friction branches — stick, slip ±, lifted —
-//!   as active sets around Newton), Newton with line search and step bisection, internal law
-//!   variables per integration point.
+//!   (the punch's contact, the supports' Coulomb friction branches — stick, slip ±, lifted — and
+//!   the element or node each support acts on as active sets around Newton), Newton with line
+//!   search and step bisection, internal law variables per integration point.
 //! - [`drivers`]: the tests as run — tension, torsion, pure bending, three-point bending —
 //!   replaying a control path ([`simulate_path`]) or a measured history ([`simulate_history`]),
 //!   machine compliance in series solved in one place (`series`).

@@ -42,6 +42,14 @@ pub(crate) const SMALL_CORRECTION: f64 = 1e-9;
 /// Friction branch switches per solve before the supports' branches are left to the state at
 /// every evaluation (the active-set loop of [`PlanarRod::solve`]).
 const MAX_FRICTION_SWITCHES: usize = 6;
+/// Switches of the part of the rod a support is held on ([`SupportHold`]) per solve before the
+/// supports are left to the element search at every evaluation (as before holds existed).
+const MAX_HOLD_SWITCHES: usize = 8;
+/// How far (in ξ, fractions of the element) a converged contact may lie beyond an end of the
+/// element it is held on and still count as on it: the converged configuration is exact to
+/// ~[`SMALL_CORRECTION`] × the rod length, ~10⁻⁷ of an element, and the forces of the element and
+/// of the node agree there to that order.
+const HOLD_TOLERANCE: f64 = 1e-6;
 /// Law 6-vector index of the planar (shear γ, axial Γ₃, bending K₁) components, and their sign.
 const LAW_INDEX: [usize; 3] = [1, 2, 3];
 const LAW_SIGN: [f64; 3] = [-1.0, 1.0, 1.0];
@@ -95,6 +103,9 @@ pub struct Support {
     pub tangential_force_n: f64,
     trial: (f64, Vector2<f64>, f64),
     hint: usize,
+    /// The part of the rod the contact is held on during a solve (None: searched at every
+    /// evaluation; see [`SupportHold`]).
+    held: Option<SupportHold>,
     /// The friction branch the residual is held on during a solve (None: decided from the state
     /// at every evaluation), the branch the state calls for at the last evaluation, and the one
     /// of the last committed step (see [`PlanarRod::solve`]).
@@ -117,6 +128,7 @@ pub struct Support {
 #[derive(Debug, Clone, Copy, PartialEq)]
 struct SupportTangent {
     e: usize,
+    at: ContactAt,
     e_anchor: usize,
     xi_anchor: f64,
     branch: FrictionBranch,
@@ -144,6 +156,7 @@ impl Support {
             tangential_force_n: 0.0,
             trial: (contact_s_m, contact_point, 0.0),
             hint: 0,
+            held: None,
             frozen: None,
             decided: FrictionBranch::Free,
             committed_branch: FrictionBranch::Stick,
@@ -382,14 +395,78 @@ struct SupportEval {
     branch: FrictionBranch,
 }
 
+/// Where on the segment a–b a support's force acts ([`support_forces`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum ContactAt {
+    /// The segment where the support projects onto it (0 ≤ ξ < 1), else no force: the element
+    /// search.
+    Within,
+    /// The segment where the support projects onto it, past its ends the node's contact: the
+    /// contact of a support searched at every evaluation.
+    Auto,
+    /// The segment's own line and normal, extended beyond its ends (the force split by the same
+    /// linear rule in ξ): a support held on the element.
+    Segment,
+    /// The node at end b (true) or a (false), along the line from the support's centre to it: a
+    /// support held on the node.
+    Node(bool),
+}
+
+/// The part of the rod a support's contact is held on during a Newton solve
+/// ([`PlanarRod::solve`]).
+///
+/// Why: a node-to-segment contact that picks its element anew at every iterate (the element it
+/// projects onto, the node's contact in the kink's wedge between two elements) has a force law
+/// whose pieces meet continuously but with different derivatives, and near a node the pieces
+/// are ~10⁻¹⁰ m apart (the penalty's penetration × the kink's angle) while a Newton iterate
+/// moves the contact by ~10⁻⁵ m: the iterates jumped from piece to piece and cycled with period
+/// four (a linear rod with EI = 2 N m² on a 40.28 mm span, whose shear strain of 0.044 kinks
+/// the centreline at the node in contact, did not converge at w = 2.38 mm, residual stuck at
+/// 10⁻²). Held on one piece, a solve's force law is smooth and Newton converges in a few
+/// iterations; the converged contact is then checked against the geometry and, where it lies
+/// on another part of the rod, held there and solved again (an active set, as for the friction
+/// branches and the punch).
+///
+/// Which equilibrium: the segments' first. Held on element e the contact acts along e's own
+/// normal, extended beyond its ends; it is right when the support projects onto e (within
+/// [`HOLD_TOLERANCE`]), else the neighbour on that side is held. When the neighbour's
+/// equilibrium lies back on e's side (each segment's lies beyond the node they share: the
+/// support sits in the kink's wedge, where neither projects), the node is held, along the line
+/// from the support's centre to it (the node's contact of [`support_forces`], continuous with
+/// both elements at the wedge's edges); it is right while the support stays in that wedge. So
+/// the node holds the rod only where no segment can (a kink's wedge catches the rod like a notch
+/// until the axial force across it exceeds ≈ N × the kink's angle), and where the support
+/// projects onto two overlapping elements the one it was on stays. (Where a held solve fails,
+/// or the holds do not settle, the search at every evaluation takes over for the rest of the
+/// solve, as before holds existed.)
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum SupportHold {
+    /// Element e's segment, extended.
+    Segment(usize),
+    /// Node j (between elements j − 1 and j).
+    Node(usize),
+}
+
+impl SupportHold {
+    /// The element the force acts through and how, on a rod of `ne` elements.
+    fn contact(self, ne: usize) -> (usize, ContactAt) {
+        match self {
+            SupportHold::Segment(e) => (e.min(ne - 1), ContactAt::Segment),
+            SupportHold::Node(0) => (0, ContactAt::Node(false)),
+            SupportHold::Node(j) => ((j - 1).min(ne - 1), ContactAt::Node(true)),
+        }
+    }
+}
+
 /// The forces a support exerts on the segment a–b: a normal penalty on the signed gap, plus
 /// (μ > 0) regularised Coulomb friction. Friction is incremental and rate independent: the slip
 /// of a step is the tangential displacement of the material point that was in contact at the last
 /// converged step (`anchor`, its current position) from where it was then; the tangential force
 /// follows an elastic predictor T = T_old − k_t·slip and a return to |T| ≤ μN. Rolling over a
 /// round support (the contact point moves through the material without sliding) therefore costs
-/// no friction. Forces are split to the end points by the contact parameter ξ. Returns None when
-/// the support does not project onto the segment (unless `clamp`).
+/// no friction. Forces are split to the end points by the contact parameter ξ. `at`: which part
+/// of the segment acts ([`ContactAt`]); None when the support does not project onto the segment
+/// and `at` is [`ContactAt::Within`].
 ///
 /// `branch`: None decides the friction branch from the state (the residual); Some keeps the
 /// given one with its formula extended smoothly beyond its range (stick without the limit, slip
@@ -404,7 +481,7 @@ fn support_forces(
     pb: Vector2<f64>,
     s_a: f64,
     l0: f64,
-    clamp: bool,
+    at: ContactAt,
     anchor: Vector2<f64>,
     branch: Option<FrictionBranch>,
 ) -> Option<SupportEval> {
@@ -416,7 +493,7 @@ fn support_forces(
     let t_seg = d / len;
     let n_seg = Vector2::new(-t_seg.y, t_seg.x);
     let xi = t_seg.dot(&(sup.centre - pa)) / len;
-    if !clamp && !(0.0..1.0).contains(&xi) {
+    if at == ContactAt::Within && !(0.0..1.0).contains(&xi) {
         return None;
     }
     // Past an end of the segment (the support in the wedge between two elements' normals, on
@@ -425,14 +502,13 @@ fn support_forces(
     // force is continuous where the contact passes a node. (The element's own normal there, as
     // before, made the force jump by the kink's angle and Newton cycle between the two elements:
     // a linear rod on point supports did not converge where a node crossed a support.)
-    let (t, n, gap) = if (0.0..=1.0).contains(&xi) {
-        (
-            t_seg,
-            n_seg,
-            n_seg.dot(&(pa - sup.centre)) - sup.radius_eff_m,
-        )
-    } else {
-        let node = if xi < 0.0 { pa } else { pb };
+    let at_node = match at {
+        ContactAt::Node(b) => Some(b),
+        ContactAt::Auto if !(0.0..=1.0).contains(&xi) => Some(xi >= 0.0),
+        _ => None,
+    };
+    let (t, n, gap) = if let Some(b) = at_node {
+        let node = if b { pb } else { pa };
         let r = node - sup.centre;
         let dist = r.norm();
         if dist > 0.0 && dist.is_finite() {
@@ -443,11 +519,31 @@ fn support_forces(
         } else {
             (t_seg, n_seg, -sup.radius_eff_m)
         }
+    } else {
+        (
+            t_seg,
+            n_seg,
+            n_seg.dot(&(pa - sup.centre)) - sup.radius_eff_m,
+        )
+    };
+    // The split of the force between the ends: at the node all on it; on a held segment by the
+    // linear rule extended beyond its ends (smooth along a Newton solve; the converged contact
+    // lies on the segment).
+    let xi_force = match (at_node, at) {
+        (Some(b), _) => {
+            if b {
+                1.0
+            } else {
+                0.0
+            }
+        }
+        (None, ContactAt::Segment) => xi,
+        _ => xi.clamp(0.0, 1.0),
     };
     let xi = xi.clamp(0.0, 1.0);
     let normal = -sup.k_normal * gap;
-    let mut fa = (1.0 - xi) * normal * n;
-    let mut fb = xi * normal * n;
+    let mut fa = (1.0 - xi_force) * normal * n;
+    let mut fb = xi_force * normal * n;
     let mut friction = 0.0;
     let mut decided = FrictionBranch::Free;
     if sup.mu > 0.0 {
@@ -466,8 +562,8 @@ fn support_forces(
             FrictionBranch::Stick => trial,
             FrictionBranch::Slip(sign) => sign * sup.mu * normal,
         };
-        fa += (1.0 - xi) * friction * t;
-        fb += xi * friction * t;
+        fa += (1.0 - xi_force) * friction * t;
+        fb += xi_force * friction * t;
     }
     Some(SupportEval {
         fa,
@@ -787,42 +883,122 @@ impl<'a> PlanarRod<'a> {
         changed
     }
 
+    /// The element support `si` projects onto at the current configuration, searching outward
+    /// from element `hint` (None: onto none, in a kink's wedge or past an end of the rod).
+    fn find_support_element(&self, si: usize, hint: usize) -> Option<usize> {
+        let ne = self.l0.len();
+        let hint = hint.min(ne - 1);
+        for off in 0..ne {
+            for e in [hint + off, hint.wrapping_sub(off)] {
+                if e < ne {
+                    let pa = self.q[e].xy();
+                    let pb = self.q[e + 1].xy();
+                    if support_forces(
+                        &self.supports[si],
+                        pa,
+                        pb,
+                        self.s_ref[e],
+                        self.l0[e],
+                        ContactAt::Within,
+                        pa,
+                        Some(FrictionBranch::Free),
+                    )
+                    .is_some()
+                    {
+                        return Some(e);
+                    }
+                }
+            }
+        }
+        None
+    }
+
+    /// Where support `si`'s centre projects onto the line of element `e`, as its ξ (0 at node
+    /// `e`, 1 at node `e + 1`, outside [0, 1] beyond its ends).
+    fn support_xi(&self, si: usize, e: usize) -> f64 {
+        let (pa, pb) = (self.q[e].xy(), self.q[e + 1].xy());
+        let d = pb - pa;
+        d.dot(&(self.supports[si].centre - pa)) / d.norm_squared()
+    }
+
+    /// Hold each support on the element it projects onto at the configuration a solve starts
+    /// from (the committed or predicted one), or on its last element where it projects onto
+    /// none (a kink's wedge: the segments are tried before the node, see [`SupportHold`]).
+    fn hold_supports(&mut self) {
+        let ne = self.l0.len();
+        for si in 0..self.supports.len() {
+            let hint = self.supports[si].hint.min(ne - 1);
+            let e = self.find_support_element(si, hint).unwrap_or(hint);
+            self.supports[si].held = Some(SupportHold::Segment(e));
+        }
+    }
+
+    /// Leave every support's element to the search at every evaluation.
+    fn release_supports(&mut self) {
+        self.supports.iter_mut().for_each(|s| s.held = None);
+    }
+
+    /// At a converged configuration: move each support whose contact does not lie on the part
+    /// of the rod it is held on to the part it lies on ([`SupportHold`]; `visited`: per support,
+    /// the holds this solve has left). Returns whether any moved.
+    fn update_support_holds(&mut self, visited: &mut [Vec<SupportHold>]) -> bool {
+        let ne = self.l0.len();
+        let tol = HOLD_TOLERANCE;
+        let mut changed = false;
+        for (si, left) in visited.iter_mut().enumerate() {
+            let Some(hold) = self.supports[si].held else {
+                continue;
+            };
+            let next = match hold {
+                SupportHold::Segment(e) => {
+                    let xi = self.support_xi(si, e);
+                    // Past an end: the neighbour there, or, when its equilibrium lay back on
+                    // this side, the node they share. Past the rod's ends: `off_end` reports it.
+                    let (nb, node) = if xi > 1.0 + tol && e + 1 < ne {
+                        (e + 1, e + 1)
+                    } else if xi < -tol && e > 0 {
+                        (e - 1, e)
+                    } else {
+                        continue;
+                    };
+                    if left.contains(&SupportHold::Segment(nb)) {
+                        SupportHold::Node(node)
+                    } else {
+                        SupportHold::Segment(nb)
+                    }
+                }
+                SupportHold::Node(j) => {
+                    // Right while the support stays in the node's wedge, past the end of the
+                    // element before it and before the start of the one after it.
+                    if j < ne && self.support_xi(si, j) > tol {
+                        SupportHold::Segment(j)
+                    } else if j > 0 && self.support_xi(si, j - 1) < 1.0 - tol {
+                        SupportHold::Segment(j - 1)
+                    } else {
+                        continue;
+                    }
+                }
+            };
+            left.push(hold);
+            self.supports[si].held = Some(next);
+            changed = true;
+        }
+        changed
+    }
+
     fn assemble_supports(&mut self) {
         let ne = self.l0.len();
         for si in 0..self.supports.len() {
             self.supports[si].tangent = None;
             // Find the element the support projects onto, searching outward from the last one.
             let hint = self.supports[si].hint.min(ne - 1);
-            let mut found = None;
-            for off in 0..ne {
-                for e in [hint + off, hint.wrapping_sub(off)] {
-                    if e < ne {
-                        let pa = self.q[e].xy();
-                        let pb = self.q[e + 1].xy();
-                        if support_forces(
-                            &self.supports[si],
-                            pa,
-                            pb,
-                            self.s_ref[e],
-                            self.l0[e],
-                            false,
-                            pa,
-                            Some(FrictionBranch::Free),
-                        )
-                        .is_some()
-                        {
-                            found = Some(e);
-                            break;
-                        }
-                    }
-                }
-                if found.is_some() {
-                    break;
-                }
-            }
-            // In a kink gap between two elements: the nearest one, clamped. Past the rod's free
-            // end: flagged, the solve reports it.
-            let e = found.unwrap_or(hint);
+            let found = self.find_support_element(si, hint);
+            // Held (within a solve, see `SupportHold`): that element or node. Else the element
+            // found; in a kink gap between two elements the nearest one, clamped (the node's
+            // contact). Past the rod's free end: flagged, the solve reports it.
+            let (e, at) = self.supports[si]
+                .held
+                .map_or((found.unwrap_or(hint), ContactAt::Auto), |h| h.contact(ne));
             let last = ne - 1;
             let beyond_end = found.is_none() && {
                 let (pa, pb) = (self.q[last].xy(), self.q[last + 1].xy());
@@ -843,13 +1019,13 @@ impl<'a> PlanarRod<'a> {
             let xi_anchor =
                 ((sup.contact_s_m - self.s_ref[e_anchor]) / self.l0[e_anchor]).clamp(0.0, 1.0);
             let anchor = anchor_of(e, e_anchor, xi_anchor, pa, pb, &self.q);
-            let Some(ev) = support_forces(sup, pa, pb, s_a, l0, true, anchor, sup.frozen) else {
+            let Some(ev) = support_forces(sup, pa, pb, s_a, l0, at, anchor, sup.frozen) else {
                 continue;
             };
             // The branch the state calls for (the same as `ev.branch` when nothing is frozen).
             let decided = match sup.frozen {
                 None => ev.branch,
-                Some(_) => support_forces(sup, pa, pb, s_a, l0, true, anchor, None)
+                Some(_) => support_forces(sup, pa, pb, s_a, l0, at, anchor, None)
                     .map_or(ev.branch, |d| d.branch),
             };
             for d in 0..2 {
@@ -864,6 +1040,7 @@ impl<'a> PlanarRod<'a> {
             sup.decided = decided;
             sup.tangent = Some(SupportTangent {
                 e,
+                at,
                 e_anchor,
                 xi_anchor,
                 branch: ev.branch,
@@ -880,6 +1057,7 @@ impl<'a> PlanarRod<'a> {
             let sup = &self.supports[si];
             let Some(SupportTangent {
                 e,
+                at,
                 e_anchor,
                 xi_anchor,
                 branch,
@@ -902,7 +1080,7 @@ impl<'a> PlanarRod<'a> {
                     p_plus[1],
                     s_a,
                     l0,
-                    true,
+                    at,
                     anchor_of(e, e_anchor, xi_anchor, p_plus[0], p_plus[1], &self.q),
                     Some(branch),
                 );
@@ -912,7 +1090,7 @@ impl<'a> PlanarRod<'a> {
                     p_minus[1],
                     s_a,
                     l0,
-                    true,
+                    at,
                     anchor_of(e, e_anchor, xi_anchor, p_minus[0], p_minus[1], &self.q),
                     Some(branch),
                 );
@@ -1025,6 +1203,15 @@ impl<'a> PlanarRod<'a> {
     /// residual: deciding the branch at every iterate let the iterates flip between stick, slip
     /// and a lifted contact (where the normal force of a trial configuration changes sign) and
     /// stall; the equilibrium is the same, as the branch is checked on it.
+    ///
+    /// Support contacts: the same for the part of the rod each support acts on. It is held on
+    /// one element (or node) during a Newton solve, starting from the element the support
+    /// projects onto at the start; at the converged configuration a support whose contact lies
+    /// elsewhere is held there and the step is solved again from that configuration (at most
+    /// [`MAX_HOLD_SWITCHES`] times, then the element is searched at every evaluation, as it was
+    /// before holds; see [`SupportHold`] for why and which equilibrium). A Newton solve that
+    /// fails while held is tried once more from the step's start with the search at every
+    /// evaluation.
     pub fn solve(&mut self, dt: f64, step: usize) -> Result<usize, RodError> {
         // Punch contact by an active set around Newton: start from the last committed contact
         // status (so unloading does not first throw the rod off the punch), converge, then release
@@ -1033,11 +1220,29 @@ impl<'a> PlanarRod<'a> {
             p.active.clone_from(&p.active_committed);
         }
         self.freeze_friction();
+        self.hold_supports();
+        let solved = self.solve_active_sets(dt, step);
+        self.release_supports();
+        solved
+    }
+
+    /// The active-set loop of [`PlanarRod::solve`] around Newton, from the punch's set, the
+    /// friction branches and the supports' holds `solve` set up.
+    fn solve_active_sets(&mut self, dt: f64, step: usize) -> Result<usize, RodError> {
         let start = self.q.clone();
         let mut total = 0;
         let mut switches = 0;
+        let mut hold_switches = 0;
+        let mut visited = vec![Vec::new(); self.supports.len()];
         for _ in 0..(4 * self.nodes()).max(20) {
-            let solved = self.solve_newton(dt, step);
+            let mut solved = self.solve_newton(dt, step);
+            if solved.is_err() && self.supports.iter().any(|s| s.held.is_some()) {
+                // No equilibrium where the supports are held: the solve without holds, from the
+                // step's start.
+                self.release_supports();
+                self.q.clone_from(&start);
+                solved = self.solve_newton(dt, step);
+            }
             let solved = match solved {
                 // A frozen branch the step cannot reach an equilibrium on (a stick spring held
                 // where the support slides far): once more with the branch decided by the state.
@@ -1059,8 +1264,16 @@ impl<'a> PlanarRod<'a> {
                     ),
                 });
             }
-            // Friction branches first (at most a few switches, then the state decides at every
-            // evaluation), then the punch's active set.
+            // The supports' holds first (the contact's place on the rod; solved again from
+            // here, a node's wedge away at most), then friction branches (at most a few
+            // switches, then the state decides at every evaluation), then the punch's active set.
+            if self.update_support_holds(&mut visited) {
+                hold_switches += 1;
+                if hold_switches >= MAX_HOLD_SWITCHES {
+                    self.release_supports();
+                }
+                continue;
+            }
             // A new branch is solved from the step's start: the equilibrium of the branch it
             // leaves can lie far off (a stick spring holding 100 × μN), and Newton from there
             // found unphysical equilibria (the rod wrapped round a support) on coarse rods.
@@ -1234,7 +1447,7 @@ impl PlanarRod<'_> {
                 let (aa, ab) = (Vector2::new(x[4], x[5]), Vector2::new(x[6], x[7]));
                 aa + (ab - aa) * xi
             };
-            let ev = support_forces(&s, pa, pb, s_a, l0, true, anchor, Some(st.branch))?;
+            let ev = support_forces(&s, pa, pb, s_a, l0, st.at, anchor, Some(st.branch))?;
             Some([
                 ev.fa.x,
                 ev.fa.y,
@@ -1700,6 +1913,7 @@ mod tests {
                 .min(ne - 1);
             let xi = ((sup.contact_s_m - rod.s_ref[e_anchor]) / rod.l0[e_anchor]).clamp(0.0, 1.0);
             let branch = sup.frozen.unwrap_or(sup.decided);
+            assert!(sup.held.is_none(), "a solve releases its holds");
             let (pa, pb) = (rod.q[e].xy(), rod.q[e + 1].xy());
             let h = 1e-7 * rod.l0[e];
             for j in 0..4 {
@@ -1714,7 +1928,7 @@ mod tests {
                         p[1],
                         rod.s_ref[e],
                         rod.l0[e],
-                        true,
+                        ContactAt::Auto,
                         anchor_of(e, e_anchor, xi, p[0], p[1], &rod.q),
                         Some(branch),
                     )
