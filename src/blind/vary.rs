@@ -968,6 +968,36 @@ mod tests {
         }
     }
 
+    /// A held-out gap the baseline closes itself (`verdict.extrapolation`): a null tension log
+    /// on a one-sided step-up protocol (1.21 % white noise). Its smaller training cycles leave
+    /// the hardening modulus loose (3.1·10³ ± 1.2·10³), and the training fit misses the largest
+    /// cycle, held out, by 1.21 × the floor; candidates that ended elsewhere along that loose
+    /// direction (a viscoelastic branch on its lower bound, a degradation, a drift) "closed"
+    /// it, and the verdict named viscoelasticity. Refitted on every cycle the baseline fits the
+    /// held-out cycle to the floor with a training cost within its parameters' 95 % region:
+    /// `none`, with words that say why.
+    #[test]
+    fn a_held_out_gap_the_baseline_closes_itself_is_none() {
+        use cablab_diagnose::{diagnose, Context, DiagnoseOptions};
+        let mut c = vary_case(&UNIFORM, 107).unwrap().case;
+        assert!(c.truths.is_empty(), "{}", c.name);
+        crate::blind::through_readers(&mut c).unwrap();
+        let d = diagnose(Context::project(), &c.tests, &DiagnoseOptions::default()).unwrap();
+        let held = d.baseline.gap_heldout_rel / d.verdict.noise_rel;
+        assert!(
+            held > cablab_diagnose::diagnose::NOISE_FLOOR_FIT,
+            "{}: {held} × the floor held out: the case no longer exercises the rule",
+            c.name
+        );
+        assert_eq!(d.verdict.effect, Effect::None, "{}", c.name);
+        let words = d.verdict.extrapolation.as_deref().unwrap_or("");
+        assert!(
+            words.contains("refitted on every cycle"),
+            "{}: {words:?}",
+            c.name
+        );
+    }
+
     /// The rule's null side: logs without an effect whose baseline leaves more than
     /// [`cablab_diagnose::diagnose::TRAINING_GAP_CHECK`] × the floor over the whole record because the
     /// floor does not count what is not noise-like (spikes, 1.34 ×). No candidate closes that,

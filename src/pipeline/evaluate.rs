@@ -928,6 +928,7 @@ pub fn words(d: &cablab_diagnose::Diagnosis) -> String {
         gap_all_rel: Some(d.baseline.gap_rel),
         on_training: d.verdict.on_training.clone(),
         effect_on_training: d.verdict.named_on_training.contains(&verdict),
+        extrapolation: d.verdict.extrapolation.clone(),
     })
 }
 

@@ -841,11 +841,26 @@ pub fn fit_coarse(
             residuals: None,
             sims: None,
         }));
+        // A run at the point of an earlier one that is scored (descents from two starts that
+        // end together, a start its descent did not leave) is not scored again: the earlier
+        // one wins any tie anyway.
+        let mut scored: Vec<usize> = Vec::with_capacity(runs.len());
+        let mut keep = vec![false; runs.len()];
+        for (i, run) in runs.iter().enumerate() {
+            if worth(i, run.cost)
+                && !scored
+                    .iter()
+                    .any(|&j| same_point(specs, &runs[j].params, &run.params))
+            {
+                keep[i] = true;
+                scored.push(i);
+            }
+        }
         runs = runs
             .into_par_iter()
             .enumerate()
             .map(|(i, run)| {
-                if !worth(i, run.cost) {
+                if !keep[i] {
                     return Run {
                         cost: f64::INFINITY,
                         residuals: None,
@@ -928,6 +943,19 @@ pub fn fit_coarse(
             opts.sensitivities,
         )
     }
+}
+
+/// Points closer than this on every parameter's unit axis ([`ParamSpec::fraction`]: 0 and 1 at
+/// its bounds) are the same point for scoring ([`fit_coarse`]): a part in 10⁷ of a parameter's
+/// range, where the data determine a parameter to 2 % of it at best.
+pub const SAME_POINT: f64 = 1e-7;
+
+/// Whether `a` and `b` are the same point of parameter space to [`SAME_POINT`].
+fn same_point(specs: &[ParamSpec], a: &[f64], b: &[f64]) -> bool {
+    specs
+        .iter()
+        .zip(a.iter().zip(b))
+        .all(|(s, (&x, &y))| (s.fraction(x) - s.fraction(y)).abs() <= SAME_POINT)
 }
 
 /// The end of a descent, or a point scored on every fitted sample.

@@ -324,7 +324,7 @@ pub fn rate_effect(inp: &RateInputs) -> Option<RateEffect> {
         .fold(0.0f64, f64::max);
     let rate_dependent = spread
         && change >= MIN_REL_CHANGE
-        && drift.is_some_and(|d| d.chi2 > chi2_quantile(1.0 - ALPHA, d.dof as f64));
+        && drift.is_some_and(|d| d.chi2 > crate::stats::chi2_quantile(1.0 - ALPHA, d.dof as f64));
     Some(RateEffect {
         band,
         strokes: fitted,
@@ -375,12 +375,4 @@ fn drift_fit(strokes: &[Stroke]) -> Option<DriftFit> {
         chi2,
         dof: strokes.len() - p,
     })
-}
-
-/// Upper quantile of χ² with `dof` degrees of freedom (Wilson–Hilferty; 3 % above the exact
-/// value at p = 0.999 and dof = 1, closer for more: conservative).
-fn chi2_quantile(p: f64, dof: f64) -> f64 {
-    let z = crate::stats::normal_quantile(p);
-    let v = 2.0 / (9.0 * dof);
-    dof * (1.0 - v + z * v.sqrt()).powi(3)
 }

@@ -496,6 +496,14 @@ fn t_quantile_band(p: f64, dof: f64) -> Option<(f64, f64)> {
     (student_t_cdf(a, dof) < p - GAP && student_t_cdf(b, dof) > p + GAP).then_some((a, b))
 }
 
+/// Upper quantile of χ² with `dof` degrees of freedom (Wilson–Hilferty; 3 % above the exact
+/// value at p = 0.999 and dof = 1, closer for more: conservative).
+pub fn chi2_quantile(p: f64, dof: f64) -> f64 {
+    let z = normal_quantile(p);
+    let v = 2.0 / (9.0 * dof);
+    dof * (1.0 - v + z * v.sqrt()).powi(3)
+}
+
 /// Standard normal quantile Φ⁻¹(p), 0 < p < 1 (Acklam's rational approximation, relative error
 /// below 1.2e-9). NaN outside (0, 1).
 pub fn normal_quantile(p: f64) -> f64 {

@@ -41,6 +41,10 @@ pub struct DiagnosisSummary {
     /// the held-out "How far", which does not move. Otherwise they follow it.
     #[serde(default)]
     pub effect_on_training: bool,
+    /// The verdict is `none` because the baseline refitted on every cycle closes the held-out
+    /// gap itself (`verdict.extrapolation`): those words.
+    #[serde(default)]
+    pub extrapolation: Option<String>,
 }
 
 /// A held-out gap within this factor of the noise floor counts as "at the noise floor" in words.
@@ -103,6 +107,26 @@ pub fn diagnosis_words(s: &DiagnosisSummary) -> String {
         ));
     }
     match (s.verdict_effect.as_str(), s.gap_after_rel) {
+        ("none", _) | ("", _) if s.extrapolation.is_some() => {
+            paras.push(format!(
+                "Which: none. The {baseline}'s held-out gap is {} of the largest measured \
+                 response, against a noise level of {}, and the {baseline} closes it itself: {}. \
+                 No unmodelled effect is needed to explain these tests. Earlier cycles that \
+                 reach as far as the held-out one would pin those parameters down (or diagnose \
+                 with `--holdout within-reach`, which holds out a cycle the others reach).",
+                fmt_percent(s.gap_before_rel, 1),
+                fmt_percent(s.noise_rel, 1),
+                s.extrapolation.as_deref().unwrap_or_default()
+            ));
+            if s.candidates_skipped {
+                paras.push(
+                    "The candidate effects were not calibrated: the baseline closes the gap \
+                     itself (all_candidates = true under [diagnosis] calibrates them anyway; \
+                     cablab diagnose always does)."
+                        .to_string(),
+                );
+            }
+        }
         ("none", _) | ("", _) if s.gap_before_rel <= NEAR_NOISE * s.noise_rel => {
             let whole = s
                 .gap_all_rel
@@ -383,6 +407,7 @@ mod tests {
             gap_all_rel: None,
             on_training: None,
             effect_on_training: false,
+            extrapolation: None,
         };
         let w = diagnosis_words(&s);
         assert!(

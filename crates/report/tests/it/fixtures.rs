@@ -192,6 +192,7 @@ pub fn kinematic_hardening_verdict() -> DiagnosisSummary {
         gap_all_rel: None,
         on_training: None,
         effect_on_training: false,
+        extrapolation: None,
     }
 }
 
