@@ -907,26 +907,25 @@ mod tests {
             .find(|e| e.effect == Effect::StiffnessDegradation)
             .unwrap();
         assert!(sd.below_resolution, "{}: {}", c.name, sd.shift_res);
-        for seed in [266] {
-            let mut c = vary_case(&UNIFORM, seed).unwrap().case;
-            crate::blind::through_readers(&mut c).unwrap();
-            let d = diagnose(Context::project(), &c.tests, &DiagnoseOptions::default()).unwrap();
-            let v = &d.verdict;
-            assert_eq!(v.effects, c.truths, "{}", c.name);
-            let words = v.on_training.as_deref().unwrap_or("");
-            assert!(
-                words.contains("the earlier cycles can"),
-                "{}: {words:?}",
-                c.name
-            );
-            let held = d.baseline.gap_heldout_rel / v.noise_rel;
-            assert!(
-                v.gap_after_rel / v.noise_rel <= held.max(NOISE_FLOOR_FIT) + 1e-9,
-                "{}: {} × the floor held out",
-                c.name,
-                v.gap_after_rel / v.noise_rel
-            );
-        }
+        let seed = 266;
+        let mut c = vary_case(&UNIFORM, seed).unwrap().case;
+        crate::blind::through_readers(&mut c).unwrap();
+        let d = diagnose(Context::project(), &c.tests, &DiagnoseOptions::default()).unwrap();
+        let v = &d.verdict;
+        assert_eq!(v.effects, c.truths, "{}", c.name);
+        let words = v.on_training.as_deref().unwrap_or("");
+        assert!(
+            words.contains("the earlier cycles can"),
+            "{}: {words:?}",
+            c.name
+        );
+        let held = d.baseline.gap_heldout_rel / v.noise_rel;
+        assert!(
+            v.gap_after_rel / v.noise_rel <= held.max(NOISE_FLOOR_FIT) + 1e-9,
+            "{}: {} × the floor held out",
+            c.name,
+            v.gap_after_rel / v.noise_rel
+        );
     }
 
     /// The same for a second effect: a viscoelastic torsion log with a compliant machine (0.37 %

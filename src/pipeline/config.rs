@@ -1149,6 +1149,15 @@ fn refuse_output_in_input(out_abs: &Path, pattern: &str) -> Result<()> {
     Ok(())
 }
 
+/// The held-out policy a `[diagnosis] holdout` value names (`None`: not a policy's name).
+pub fn holdout_policy(name: &str) -> Option<cablab_diagnose::HoldoutPolicy> {
+    match name {
+        "last_cycle" => Some(cablab_diagnose::HoldoutPolicy::LastCycle),
+        "within_reach" => Some(cablab_diagnose::HoldoutPolicy::LastCycleWithinReach),
+        _ => None,
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -1573,14 +1582,5 @@ compliance = 2e-7
                 );
             }
         }
-    }
-}
-
-/// The held-out policy a `[diagnosis] holdout` value names (`None`: not a policy's name).
-pub fn holdout_policy(name: &str) -> Option<cablab_diagnose::HoldoutPolicy> {
-    match name {
-        "last_cycle" => Some(cablab_diagnose::HoldoutPolicy::LastCycle),
-        "within_reach" => Some(cablab_diagnose::HoldoutPolicy::LastCycleWithinReach),
-        _ => None,
     }
 }

@@ -335,11 +335,12 @@ fn whole_record(
     let (g_base, g_whole) = (gap_over_noise(base), gap_over_noise(&whole));
     (g_whole <= NOISE_FLOOR_FIT && rise <= limit).then(|| Extrapolation {
         words: format!(
-            "the baseline fitted to the training cycles misses the held-out cycle by {g_base:.2} \
-             × the noise floor, but refitted on every cycle it fits the held-out cycle to \
-             {g_whole:.2} × the floor and the training cycles within their parameters' \
-             uncertainty (its training cost rises by {rise:.1}, the {:.0} % bound is {limit:.1}): \
-             the gap is where the training cycles leave its parameters loose, not an effect",
+            "refitted on every cycle, the {} baseline fits the held-out cycle to {g_whole:.2} × \
+             the noise floor ({g_base:.2} × fitted to the training cycles alone) and the training \
+             cycles within their parameters' uncertainty (its cost there rises by {rise:.1}; the \
+             {:.0} % bound is {limit:.1}): the gap is where the training cycles leave its \
+             parameters loose, not an unmodelled effect",
+            base.model.law,
             100.0 * WHOLE_REFIT_CONFIDENCE
         ),
     })

@@ -207,13 +207,7 @@ fn fit_serial(v2: &[(f64, f64)]) -> Option<SerialNoise> {
         (sse(a0, 0.0), a0)
     };
     let mut best = (f64::INFINITY, 0.0, 0.0);
-    for j in 0..=240 {
-        // φ = 1 − e^(−t), t from 0 to 7 (φ up to 0.999), with φ = 0 first.
-        let phi = if j == 0 {
-            0.0
-        } else {
-            1.0 - (-(7.0 * j as f64 / 240.0)).exp()
-        };
+    for phi in phi_grid() {
         let (e, a) = fit(phi);
         if e < best.0 {
             best = (e, phi, a);
@@ -246,6 +240,29 @@ pub fn rms_sigma_at_lag(signal: &[f64], k: usize) -> f64 {
     trimmed_rms(&d, JITTER_TRIM) * TRIMMED_RMS_CONSISTENCY / 6f64.sqrt()
 }
 
+/// (k, v_k²) at the lags of [`serial_lags`], v_k the RMS scale of the lag-k second differences
+/// ([`rms_sigma_at_lag`]); lags with no scale left out.
+fn rms_scales(signal: &[f64]) -> Vec<(f64, f64)> {
+    serial_lags(signal.len())
+        .into_iter()
+        .map(|k| (k as f64, rms_sigma_at_lag(signal, k)))
+        .filter(|&(_, v)| v > 0.0)
+        .map(|(k, v)| (k, v * v))
+        .collect()
+}
+
+/// The grid of φ the serial-noise fits search: 0, then 1 − e^(−t) for t from 7/240 to 7 (φ up
+/// to 0.999, finer near 1).
+fn phi_grid() -> impl Iterator<Item = f64> {
+    (0..=240).map(|j| {
+        if j == 0 {
+            0.0
+        } else {
+            1.0 - (-(7.0 * j as f64 / 240.0)).exp()
+        }
+    })
+}
+
 /// [`serial_noise`] of a signal read through a coarse ADC, its noise below about a count: the
 /// same fit over lags, each lag's scale from the RMS of its second differences (the largest
 /// [`JITTER_TRIM`] of |d| left out, corrected to a Gaussian σ) instead of their MAD. Most
@@ -257,15 +274,117 @@ pub fn rms_sigma_at_lag(signal: &[f64], k: usize) -> f64 {
 /// this way). On unquantised Gaussian noise it agrees with [`serial_noise`] to within
 /// sampling.
 pub fn serial_noise_rms(signal: &[f64]) -> SerialNoise {
-    let v2: Vec<(f64, f64)> = serial_lags(signal.len())
-        .into_iter()
-        .map(|k| (k as f64, rms_sigma_at_lag(signal, k)))
-        .filter(|&(_, v)| v > 0.0)
-        .map(|(k, v)| (k, v * v))
-        .collect();
+    let v2 = rms_scales(signal);
     fit_serial(&v2).unwrap_or(SerialNoise {
         sigma: v2.first().map_or(0.0, |&(_, v)| v.sqrt()),
         phi: 0.0,
+    })
+}
+
+/// Noise that is an AR(1) process plus white noise of its own (a reading's rounding to a
+/// coarse count on top of a filtered amplifier's noise): [`serial_noise_rms_white`].
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct SerialWhiteNoise {
+    /// σ of the AR(1) part.
+    pub sigma_ar: f64,
+    /// Its lag-1 correlation φ ∈ [0, 0.999].
+    pub phi: f64,
+    /// σ of the white part.
+    pub sigma_white: f64,
+}
+
+impl SerialWhiteNoise {
+    /// Long-run variance factor of the sum over its marginal variance: the variance of a long
+    /// stretch's mean (or of any slow pattern fitted to it) is this many times that of white
+    /// noise of the same marginal σ, (σ_a² (1 + φ)/(1 − φ) + σ_w²)/(σ_a² + σ_w²).
+    pub fn long_run_factor(&self) -> f64 {
+        let (a, w) = (self.sigma_ar.powi(2), self.sigma_white.powi(2));
+        if a + w <= 0.0 {
+            return 1.0;
+        }
+        (a * (1.0 + self.phi) / (1.0 - self.phi) + w) / (a + w)
+    }
+
+    /// The lag-1 correlation of the AR(1) noise with the same long-run factor (what an effective
+    /// sample size n (1 − φ)/(1 + φ) needs).
+    pub fn equivalent_phi(&self) -> f64 {
+        let r = self.long_run_factor();
+        ((r - 1.0) / (r + 1.0)).clamp(0.0, 0.999)
+    }
+}
+
+/// [`serial_noise_rms`] with a white part besides the AR(1) one: the RMS scales v_k of the
+/// second differences at several lags fitted by v_k² = σ_a² g_k(φ) + σ_w² + c k⁴ (all ≥ 0) over
+/// the same grid of φ. Why: a reading rounded to a coarse count carries the rounding as white
+/// noise of about q/√12 on top of its (possibly correlated) noise, and the single AR(1) of
+/// [`serial_noise_rms`] then reads a correlation between the two (the white part halves the
+/// lag-1 correlation of an equal AR(1) part), while a slow pattern fitted to the record sees the
+/// AR(1) part's long-run variance. `None` with fewer than 4 lags or no fit.
+pub fn serial_noise_rms_white(signal: &[f64]) -> Option<SerialWhiteNoise> {
+    let v2 = rms_scales(signal);
+    if v2.len() < 4 {
+        return None;
+    }
+    // For a given φ: minimise Σ ((v_k² − a g_k − b − c k⁴)/v_k²)² over a, b, c ≥ 0, every
+    // active set of the bounds tried (eight 3 × 3 or smaller least-squares problems).
+    let fit = |phi: f64| -> Option<(f64, [f64; 3])> {
+        let rows: Vec<([f64; 3], f64)> = v2
+            .iter()
+            .map(|&(k, v)| {
+                let p = phi.powf(k);
+                (
+                    [(1.0 - p) * (3.0 - p) / 3.0 / v, 1.0 / v, k.powi(4) / v],
+                    1.0,
+                )
+            })
+            .collect();
+        let mut best: Option<(f64, [f64; 3])> = None;
+        for mask in 1u8..8 {
+            let free: Vec<usize> = (0..3).filter(|j| mask & (1 << j) != 0).collect();
+            let m = free.len();
+            let mut ata = nalgebra::DMatrix::<f64>::zeros(m, m);
+            let mut aty = nalgebra::DVector::<f64>::zeros(m);
+            for (x, y) in &rows {
+                for (i, &fi) in free.iter().enumerate() {
+                    aty[i] += x[fi] * y;
+                    for (j, &fj) in free.iter().enumerate() {
+                        ata[(i, j)] += x[fi] * x[fj];
+                    }
+                }
+            }
+            let Some(sol) = ata.lu().solve(&aty) else {
+                continue;
+            };
+            if sol.iter().any(|v| !v.is_finite() || *v < 0.0) {
+                continue;
+            }
+            let mut coef = [0.0; 3];
+            for (i, &fi) in free.iter().enumerate() {
+                coef[fi] = sol[i];
+            }
+            let sse: f64 = rows
+                .iter()
+                .map(|(x, y)| (y - x[0] * coef[0] - x[1] * coef[1] - x[2] * coef[2]).powi(2))
+                .sum();
+            if best.is_none_or(|b| sse < b.0) {
+                best = Some((sse, coef));
+            }
+        }
+        best
+    };
+    let mut best: Option<(f64, f64, [f64; 3])> = None;
+    for phi in phi_grid() {
+        if let Some((e, c)) = fit(phi) {
+            if best.is_none_or(|b| e < b.0) {
+                best = Some((e, phi, c));
+            }
+        }
+    }
+    let (_, phi, [a, b, _]) = best?;
+    (a + b > 0.0).then(|| SerialWhiteNoise {
+        sigma_ar: a.sqrt(),
+        phi: if a > 0.0 { phi.min(0.999) } else { 0.0 },
+        sigma_white: b.sqrt(),
     })
 }
 
@@ -1367,6 +1486,46 @@ mod tests {
     /// rounding, 1.34 here) within 15 % and see its correlation, where the MAD's second
     /// differences are zero or whole counts (it read 1.82 with φ = 0 on seed 0: a count's
     /// scale, whatever the noise); unquantised, the two agree within 10 %.
+    /// AR(1) noise (φ = 0.9) plus white noise of the same σ, on a slow sine: the AR(1) +
+    /// white fit separates the two parts and reads the long-run factor, (19 + 1)/2 = 10,
+    /// where a single AR(1) reads a correlation between the two; AR(1) alone has next to no
+    /// white part, white noise alone next to no AR(1) part. Three seeds each.
+    #[test]
+    fn serial_noise_rms_white_separates_a_white_part() {
+        let n = Normal::new(0.0, 1.0).unwrap();
+        for seed in 0..3u64 {
+            let mut rng = ChaCha8Rng::seed_from_u64(seed);
+            let len = 20_000;
+            let mut a = 0.0;
+            let (mut both, mut ar, mut white) = (vec![], vec![], vec![]);
+            for i in 0..len {
+                a = 0.9 * a + (1.0f64 - 0.81).sqrt() * n.sample(&mut rng);
+                let w = n.sample(&mut rng);
+                let m = 30.0 * (i as f64 * 3e-4).sin();
+                both.push(m + a + w);
+                ar.push(m + a);
+                white.push(m + w);
+            }
+            let f = serial_noise_rms_white(&both).unwrap();
+            assert!((f.phi - 0.9).abs() < 0.04, "seed {seed}: {f:?}");
+            assert!((f.sigma_ar - 1.0).abs() < 0.15, "seed {seed}: {f:?}");
+            assert!((f.sigma_white - 1.0).abs() < 0.1, "seed {seed}: {f:?}");
+            assert!(
+                (f.long_run_factor() / 10.0 - 1.0).abs() < 0.25,
+                "seed {seed}: {f:?}"
+            );
+            let single = serial_noise_rms(&both);
+            assert!(single.phi < 0.8, "seed {seed}: {single:?}");
+            let f = serial_noise_rms_white(&ar).unwrap();
+            assert!(
+                f.sigma_white < 0.2 && (f.phi - 0.9).abs() < 0.04,
+                "seed {seed}: {f:?}"
+            );
+            let f = serial_noise_rms_white(&white).unwrap();
+            assert!(f.long_run_factor() < 1.2, "seed {seed}: {f:?}");
+        }
+    }
+
     #[test]
     fn serial_noise_rms_sees_noise_below_a_count() {
         let signal = ramp_dwell_ramp();

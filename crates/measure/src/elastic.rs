@@ -678,15 +678,15 @@ mod tests {
         let n = 4000;
         let x: Vec<f64> = (0..n).map(|i| i as f64).collect();
         let (mut ar, mut white, mut p) = (Vec::new(), Vec::new(), 0.0f64);
-        for i in 0..n {
+        for (i, &xi) in x.iter().enumerate() {
             let e = d.sample(&mut rng);
             p = if i == 0 {
                 e
             } else {
                 0.9 * p + (1.0f64 - 0.81).sqrt() * e
             };
-            ar.push(0.5 * x[i] + p);
-            white.push(0.5 * x[i] + d.sample(&mut rng));
+            ar.push(0.5 * xi + p);
+            white.push(0.5 * xi + d.sample(&mut rng));
         }
         assert!(crate::condition::noise_level(&ar) < 0.4);
         let s = residual_noise(&x, &ar);

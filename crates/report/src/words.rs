@@ -110,10 +110,9 @@ pub fn diagnosis_words(s: &DiagnosisSummary) -> String {
         ("none", _) | ("", _) if s.extrapolation.is_some() => {
             paras.push(format!(
                 "Which: none. The {baseline}'s held-out gap is {} of the largest measured \
-                 response, against a noise level of {}, and the {baseline} closes it itself: {}. \
-                 No unmodelled effect is needed to explain these tests. Earlier cycles that \
-                 reach as far as the held-out one would pin those parameters down (or diagnose \
-                 with `--holdout within-reach`, which holds out a cycle the others reach).",
+                 response, against a noise level of {}, but {}. Earlier cycles that reach as far \
+                 as the held-out one would pin those parameters down (or diagnose with \
+                 `--holdout within-reach`, which holds out a cycle the others reach).",
                 fmt_percent(s.gap_before_rel, 1),
                 fmt_percent(s.noise_rel, 1),
                 s.extrapolation.as_deref().unwrap_or_default()
@@ -416,6 +415,35 @@ mod tests {
         );
         assert!(
             w.contains("To separate them: a hold at constant control (relaxation) or a second loading rate."),
+            "{w}"
+        );
+    }
+
+    /// A `none` whose held-out gap the baseline closes itself says so, with the refit's words,
+    /// and neither that it "already fits" nor that a candidate is missing.
+    #[test]
+    fn a_gap_the_baseline_closes_itself_is_said_in_words() {
+        let s = DiagnosisSummary {
+            baseline_law: "elastoplastic".into(),
+            gap_before_rel: 0.030,
+            verdict_effect: "none".into(),
+            noise_rel: 0.025,
+            candidates_skipped: true,
+            extrapolation: Some("refitted on every cycle, the elastoplastic baseline fits".into()),
+            ..Default::default()
+        };
+        let w = diagnosis_words(&s);
+        assert!(
+            w.starts_with("Which: none. The elastoplastic baseline's held-out gap is 3.0\u{a0}%"),
+            "{w}"
+        );
+        assert!(
+            w.contains("but refitted on every cycle, the elastoplastic baseline fits."),
+            "{w}"
+        );
+        assert!(w.contains("the baseline closes the gap itself"), "{w}");
+        assert!(
+            !w.contains("already fits") && !w.contains("none of the candidates"),
             "{w}"
         );
     }

@@ -1573,10 +1573,10 @@ impl PlanarRod<'_> {
             local.push(Some((e, ea, j)));
         }
         for col in sens.dq.iter_mut() {
-            for i in 0..nodes {
-                for d in 0..3 {
-                    if self.prescribed[i][d].is_some() {
-                        col[i][d] = 0.0;
+            for (c, p) in col.iter_mut().zip(&self.prescribed).take(nodes) {
+                for (cd, pd) in c.iter_mut().zip(p) {
+                    if pd.is_some() {
+                        *cd = 0.0;
                     }
                 }
             }
