@@ -255,7 +255,10 @@ pub const UNEXPLAINED_GAP: f64 = 1.5;
 pub const TRAINING_GAP_CHECK: f64 = 1.25;
 
 /// The largest held-out baseline gap (RMS in noise units) for which the baseline is refitted
-/// on every cycle to see whether it closes the gap itself (`whole_record`). A training fit
+/// on every cycle to see whether it closes the gap itself (`whole_record`; uniform kinds only:
+/// on a three-point test the refit is a full-rod calibration on every sample, 1–2.5 s of a
+/// diagnosis whose budget is 3 s, and the blind check's three-point nulls are `none` without
+/// it). A training fit
 /// that leaves a parameter loose (a hardening modulus the smaller cycles of a step-up protocol
 /// barely load) can miss the held-out cycle it extrapolates to by a systematic part of the
 /// order of the noise; several times the noise is a model that does not fit, and the refit
@@ -499,7 +502,8 @@ pub fn diagnose(
     // A held-out gap above the floor that the baseline itself closes once it sees every cycle,
     // without fitting the training cycles worse than their own optimum beyond its parameters'
     // uncertainty: the training fit's extrapolation, not an effect (`whole_record`).
-    let extrapolation = (base_gap_noise > NOISE_FLOOR_FIT
+    let extrapolation = (cablab_rod::uniform::is_uniform(kind)
+        && base_gap_noise > NOISE_FLOOR_FIT
         && base_gap_noise <= WHOLE_REFIT_MAX_GAP
         && base_train_gap < TRAINING_GAP_CHECK)
         .then(|| whole_record(ctx, tests, &base, &train, &held, &noise, opts))
