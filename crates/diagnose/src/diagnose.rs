@@ -49,7 +49,8 @@ use crate::locate::span_of_baseline;
 use crate::mesh::MeshCheck;
 use crate::model::{DiagTest, ModelSpec};
 use crate::select::{
-    choose, compare, elastic_limit, fit_failure, ic, ic_tolerance, n_eff_of, score, Scored,
+    choose, compare, elastic_limit, fit_failure, ic, ic_tolerance, n_eff_of, rss_in_noise, score,
+    Scored,
 };
 use cablab_core::{Effect, TestKind};
 use serde::Serialize;
@@ -255,14 +256,13 @@ pub const UNEXPLAINED_GAP: f64 = 1.5;
 pub const TRAINING_GAP_CHECK: f64 = 1.25;
 
 /// The largest held-out baseline gap (RMS in noise units) for which the baseline is refitted
-/// on every cycle to see whether it closes the gap itself (`whole_record`; uniform kinds only:
-/// on a three-point test the refit is a full-rod calibration on every sample, 1–2.5 s of a
-/// diagnosis whose budget is 3 s, and the blind check's three-point nulls are `none` without
-/// it). A training fit
-/// that leaves a parameter loose (a hardening modulus the smaller cycles of a step-up protocol
+/// on every cycle to see whether it closes the gap itself (`whole_record`). A training fit that
+/// leaves a parameter loose (a hardening modulus the smaller cycles of a step-up protocol
 /// barely load) can miss the held-out cycle it extrapolates to by a systematic part of the
 /// order of the noise; several times the noise is a model that does not fit, and the refit
-/// would be spent for nothing.
+/// would be spent for nothing. Uniform kinds only: on a three-point test the refit is a
+/// full-rod calibration on every sample, 1–2.5 s of a diagnosis whose budget is 3 s, and the
+/// blind check's three-point nulls are `none` without it.
 pub const WHOLE_REFIT_MAX_GAP: f64 = 3.0;
 
 /// Confidence of the training cycles' parameter region the whole-record refit must stay in
@@ -322,14 +322,7 @@ fn whole_record(
         &warm_opts,
     )
     .ok()?;
-    let chi2_on = |s: &Scored, idx: &[Vec<usize>]| -> f64 {
-        s.all_resid
-            .iter()
-            .zip(idx)
-            .zip(noise)
-            .map(|((r, idx), sd)| idx.iter().map(|&i| (r[i] / sd).powi(2)).sum::<f64>())
-            .sum()
-    };
+    let chi2_on = |s: &Scored, idx: &[Vec<usize>]| rss_in_noise(&s.all_resid, idx, noise);
     let n_train: usize = train.iter().map(Vec::len).sum();
     let rise = (chi2_on(&whole, train) - chi2_on(base, train)).max(0.0) * base.cal.n_eff
         / n_train.max(1) as f64;
@@ -508,7 +501,9 @@ pub fn diagnose(
         && base_train_gap < TRAINING_GAP_CHECK)
         .then(|| whole_record(ctx, tests, &base, &train, &held, &noise, opts))
         .flatten();
-    let candidates_skipped = if let (Some(x), false) = (&extrapolation, opts.all_candidates) {
+    let candidates_skipped = if opts.all_candidates {
+        None
+    } else if let Some(x) = &extrapolation {
         Some(format!(
             "{}: no effect can explain a gap the baseline closes itself, so the candidates were \
              not calibrated (all_candidates = true under [diagnosis] calibrates them anyway; \
@@ -516,17 +511,14 @@ pub fn diagnose(
             x.words
         ))
     } else {
-        (!opts.all_candidates
-            && base_gap_noise <= NOISE_FLOOR_FIT
-            && base_train_gap < TRAINING_GAP_CHECK)
-            .then(|| {
-                format!(
-            "the baseline fits the held-out data to the noise floor ({base_gap_noise:.2} × the \
-             noise, ≤ {NOISE_FLOOR_FIT}): no effect can explain a gap that is not there, so the \
-             candidates were not calibrated (all_candidates = true under [diagnosis] \
-             calibrates them anyway; cablab diagnose always does)"
-        )
-            })
+        (base_gap_noise <= NOISE_FLOOR_FIT && base_train_gap < TRAINING_GAP_CHECK).then(|| {
+            format!(
+                "the baseline fits the held-out data to the noise floor ({base_gap_noise:.2} × \
+                 the noise, ≤ {NOISE_FLOOR_FIT}): no effect can explain a gap that is not there, \
+                 so the candidates were not calibrated (all_candidates = true under \
+                 [diagnosis] calibrates them anyway; cablab diagnose always does)"
+            )
+        })
     };
     let cands: Vec<Effect> = match &opts.candidates {
         _ if candidates_skipped.is_some() => vec![],

@@ -111,6 +111,16 @@ pub(crate) struct Scored {
     pub(crate) n_held: usize,
 }
 
+/// Σ (r/σ)² over the samples `idx` of each test's residuals `all_resid` (σ: `noise` per test).
+pub(crate) fn rss_in_noise(all_resid: &[Vec<f64>], idx: &[Vec<usize>], noise: &[f64]) -> f64 {
+    all_resid
+        .iter()
+        .zip(idx)
+        .zip(noise)
+        .map(|((r, idx), s)| idx.iter().map(|&i| (r[i] / s).powi(2)).sum::<f64>())
+        .sum()
+}
+
 impl Scored {
     /// A model fitted with residuals `all_resid` on every sample, scored on the samples `idx`
     /// of each test (in noise units, `noise` per test).
@@ -127,11 +137,7 @@ impl Scored {
             .zip(idx)
             .map(|(r, idx)| idx.iter().map(|&i| r[i]).collect())
             .collect();
-        let rss_noise = held_resid
-            .iter()
-            .zip(noise)
-            .map(|(r, s)| r.iter().map(|v| (v / s).powi(2)).sum::<f64>())
-            .sum();
+        let rss_noise = rss_in_noise(&all_resid, idx, noise);
         Scored {
             effect,
             model,
@@ -325,15 +331,16 @@ impl Choice {
 ///
 /// Under a coarse count (`stats::lattice_like`: the noise below about one count, read on a fit
 /// within [`LATTICE_FIT`] of the floor) both read the count's dithering as white noise,
-/// whatever the noise's own correlation; there the lags' RMS scales read it
-/// (`stats::noise_lag1_from_lags_rms`).
+/// whatever the noise's own correlation; there the lags' RMS scales, fitted as AR(1) noise plus
+/// white rounding, read it as the φ of the AR(1) with the same long-run variance
+/// (`stats::noise_phi_long_run_rms`).
 pub(crate) fn n_eff_of(best: &Scored) -> f64 {
     let series: Vec<&[f64]> = best.held_resid.iter().map(Vec::as_slice).collect();
     // Only on a fit near the floor: a misfit's corners inflate the residuals' RMS, not their
     // MAD, and would pass for a coarse count.
     let near_floor = best.rss_noise <= LATTICE_FIT * LATTICE_FIT * best.n_held as f64;
     let rho = match (near_floor && stats::lattice_like(&series))
-        .then(|| stats::noise_lag1_from_lags_rms(&series))
+        .then(|| stats::noise_phi_long_run_rms(&series))
         .flatten()
     {
         Some(rho) => rho,

@@ -89,17 +89,14 @@ pub const LAGS_MIN_SAMPLES: usize = 60;
 /// of 276, so that no model, however close, could be preferred to the baseline and the
 /// verdict was `unexplained`). The second differences at lags 1–6 still see the noise there.
 pub fn noise_lag1_from_lags(series: &[&[f64]]) -> Option<f64> {
-    lag1_by_length(series, cablab_measure::condition::serial_noise)
+    phi_by_length(series, |x| cablab_measure::condition::serial_noise(x).phi)
 }
 
-/// φ of `model` per series of at least [`LAGS_MIN_SAMPLES`], averaged weighted by length.
-fn lag1_by_length(
-    series: &[&[f64]],
-    model: fn(&[f64]) -> cablab_measure::condition::SerialNoise,
-) -> Option<f64> {
+/// `phi` of each series of at least [`LAGS_MIN_SAMPLES`], averaged weighted by length.
+fn phi_by_length(series: &[&[f64]], phi: fn(&[f64]) -> f64) -> Option<f64> {
     let (mut sum, mut n) = (0.0, 0usize);
     for x in series.iter().filter(|x| x.len() >= LAGS_MIN_SAMPLES) {
-        sum += model(x).phi * x.len() as f64;
+        sum += phi(x) * x.len() as f64;
         n += x.len();
     }
     (n > 0).then(|| sum / n as f64)
@@ -134,18 +131,11 @@ pub fn lattice_like(series: &[&[f64]]) -> bool {
 /// (a 2·10⁻⁴ N·m count, AR(1) noise of 0.3 count) read n_eff 188 of 594 held-out samples from
 /// the lag-1 correlation, and a stiffness degradation whose extension moved nothing the
 /// training cycles determine passed for significant.
-pub fn noise_lag1_from_lags_rms(series: &[&[f64]]) -> Option<f64> {
-    fn long_run(x: &[f64]) -> cablab_measure::condition::SerialNoise {
+pub fn noise_phi_long_run_rms(series: &[&[f64]]) -> Option<f64> {
+    phi_by_length(series, |x| {
         use cablab_measure::condition::{serial_noise_rms, serial_noise_rms_white};
-        match serial_noise_rms_white(x) {
-            Some(w) => cablab_measure::condition::SerialNoise {
-                sigma: (w.sigma_ar.powi(2) + w.sigma_white.powi(2)).sqrt(),
-                phi: w.equivalent_phi(),
-            },
-            None => serial_noise_rms(x),
-        }
-    }
-    lag1_by_length(series, long_run)
+        serial_noise_rms_white(x).map_or_else(|| serial_noise_rms(x).phi, |w| w.equivalent_phi())
+    })
 }
 
 #[cfg(test)]
@@ -213,7 +203,7 @@ mod tests {
         assert!(lattice_like(&[&resid]));
         let by_differences = noise_lag1_from_differences(&[&resid])
             .min(noise_lag1_from_lags(&[&resid]).unwrap_or(1.0));
-        let by_rms = noise_lag1_from_lags_rms(&[&resid]).unwrap();
+        let by_rms = noise_phi_long_run_rms(&[&resid]).unwrap();
         let lag1 = lag1_autocorrelation(&resid);
         // The truth an effective sample size needs: the residuals' long-run variance over their
         // marginal one (200 batch means of 150 samples, 30 correlation times of the AR(1)

@@ -1481,11 +1481,6 @@ mod tests {
         }
     }
 
-    /// A ramp–dwell–ramp record read through an ADC whose count (3 σ) is above its AR(1)
-    /// noise (φ = 0.9, σ = 1): the RMS scales read the reading's whole error (noise and
-    /// rounding, 1.34 here) within 15 % and see its correlation, where the MAD's second
-    /// differences are zero or whole counts (it read 1.82 with φ = 0 on seed 0: a count's
-    /// scale, whatever the noise); unquantised, the two agree within 10 %.
     /// AR(1) noise (φ = 0.9) plus white noise of the same σ, on a slow sine: the AR(1) +
     /// white fit separates the two parts and reads the long-run factor, (19 + 1)/2 = 10,
     /// where a single AR(1) reads a correlation between the two; AR(1) alone has next to no
@@ -1526,6 +1521,11 @@ mod tests {
         }
     }
 
+    /// A ramp–dwell–ramp record read through an ADC whose count (3 σ) is above its AR(1)
+    /// noise (φ = 0.9, σ = 1): the RMS scales read the reading's whole error (noise and
+    /// rounding, 1.34 here) within 15 % and see its correlation, where the MAD's second
+    /// differences are zero or whole counts (it read 1.82 with φ = 0 on seed 0: a count's
+    /// scale, whatever the noise); unquantised, the two agree within 10 %.
     #[test]
     fn serial_noise_rms_sees_noise_below_a_count() {
         let signal = ramp_dwell_ramp();
