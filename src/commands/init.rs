@@ -472,12 +472,15 @@ fn stated_section(
     }
 }
 
-/// Millimetres to 6 significant digits (metres × 1e3 is not exact in binary: 0.05 m → 50.00000000000001).
+/// Millimetres to 12 significant digits: metres × 1e3 is not exact in binary (0.05 m →
+/// 50.00000000000001), and rounding that off writes the file's own number (a length the
+/// metadata states as 69.505083 mm stays that, so a campaign's tests are the ones `cablab
+/// diagnose` reads from the file, to the bit; 6 digits wrote 69.5051).
 fn round_mm(v: f64) -> f64 {
     if v == 0.0 || !v.is_finite() {
         return v;
     }
-    let mag = 10f64.powi(5 - v.abs().log10().floor() as i32);
+    let mag = 10f64.powi(11 - v.abs().log10().floor() as i32);
     (v * mag).round() / mag
 }
 
@@ -1065,10 +1068,14 @@ mod tests {
     }
 
     #[test]
-    fn millimetres_round_to_six_digits_and_roots_are_relative() {
+    fn millimetres_round_to_twelve_digits_and_roots_are_relative() {
         assert_eq!(round_mm(0.05 * 1e3), 50.0);
         assert_eq!(round_mm(2.8000000000000003), 2.8);
         assert_eq!(round_mm(98.5), 98.5);
+        // The file's own digits, and the metres they came from back to the bit.
+        assert_eq!(round_mm(0.069505083 * 1e3), 69.505083);
+        assert_eq!(round_mm(0.069505083 * 1e3) * 1e-3, 0.069505083);
+        assert_eq!(round_mm(38.346905), 38.346905);
         assert_eq!(root_from(Path::new("pipelines/x.toml")), None);
         assert_eq!(
             root_from(Path::new("reports/x/pipeline.toml")).as_deref(),
