@@ -178,6 +178,10 @@ pub(crate) fn draw_mesh<DB: plotters::prelude::DrawingBackend>(
     mesh.draw().map_err(draw_err)
 }
 
+/// Mean advance of a caption character in ems (sans-serif, mixed text; digits and lower case
+/// are about 0.55, capitals wider): what [`curve_chart`] assumes to fit a caption to the plot.
+const CAPTION_CHAR_EM: f64 = 0.56;
+
 /// The chart of a curve plot: title, a plot area with the legend column
 /// ([`crate::style::LEGEND_PX`]) right of it, both axes meshed.
 pub(crate) fn curve_chart<'a, DB: plotters::prelude::DrawingBackend>(
@@ -198,9 +202,12 @@ pub(crate) fn curve_chart<'a, DB: plotters::prelude::DrawingBackend>(
 > {
     use crate::style::{self, FONT};
     use plotters::prelude::*;
+    // A caption wider than the plot would be cut at both edges (a folder's long file names):
+    // shortened in the middle to what fits; the SVG's <title> keeps it whole.
+    let fits = (f64::from(area.dim_in_pixel().0) - 24.0) / (CAPTION_CHAR_EM * style::TITLE_SIZE);
     let mut chart = ChartBuilder::on(area)
         .caption(
-            crate::text::strip_xml_forbidden(title),
+            crate::text::shorten_middle(&crate::text::strip_xml_forbidden(title), fits as usize),
             (FONT, style::TITLE_SIZE).into_font(),
         )
         .margin(12)

@@ -24,6 +24,21 @@ pub fn escape_html(s: &str) -> String {
     out
 }
 
+/// `s` in at most `max` characters: whole when it fits, else its start and end around a "…"
+/// (a file name's end tells the files of a folder apart as often as its start).
+pub fn shorten_middle(s: &str, max: usize) -> String {
+    let n = s.chars().count();
+    if n <= max || max < 3 {
+        return s.to_string();
+    }
+    let keep = max - 1;
+    let head = keep.div_ceil(2);
+    let tail = keep - head;
+    let start: String = s.chars().take(head).collect();
+    let end: String = s.chars().skip(n - tail).collect();
+    format!("{start}…{end}")
+}
+
 /// Drops the characters that XML 1.0 forbids (control characters other than tab, line feed and
 /// carriage return) without escaping anything else. plotters escapes markup in SVG text but
 /// passes these through, and a single one makes the whole SVG ill-formed.
@@ -259,6 +274,19 @@ pub fn scaled_label(label: &str, exp: i32) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn shorten_middle_keeps_both_ends_within_the_limit() {
+        assert_eq!(shorten_middle("short", 10), "short");
+        assert_eq!(shorten_middle("abcdefghij", 10), "abcdefghij");
+        let s = shorten_middle(
+            "tension__kinematic_hardening__vary126/vary-0.TXT — tension",
+            21,
+        );
+        assert_eq!(s.chars().count(), 21, "{s}");
+        assert_eq!(s, "tension__k… — tension");
+        assert_eq!(shorten_middle("αβγδεζηθικ", 5), "αβ…ικ");
+    }
 
     #[test]
     fn escape_html_replaces_all_five_markup_characters() {
