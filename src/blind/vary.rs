@@ -997,6 +997,174 @@ mod tests {
         );
     }
 
+    /// The same rule leaves a real effect alone. Single-effect logs of all three uniform kinds,
+    /// mostly on one-sided step-up protocols (the ones where the training cycles leave the
+    /// baseline's parameters loose, as on vary107), whose baseline misses the held-out cycle by
+    /// 1.1–3 × the floor while fitting the training cycles below
+    /// [`cablab_diagnose::diagnose::TRAINING_GAP_CHECK`]: exactly the cases the whole-record
+    /// refit is run on. Refitted on every cycle, the baseline cannot take on the effect's
+    /// signature without fitting the training cycles worse than their parameters' uncertainty
+    /// allows, so the verdict still names the effect and says nothing about an extrapolation.
+    #[test]
+    fn the_whole_record_refit_leaves_a_real_effect_alone() {
+        use cablab_diagnose::diagnose::{NOISE_FLOOR_FIT, TRAINING_GAP_CHECK, WHOLE_REFIT_MAX_GAP};
+        use cablab_diagnose::{diagnose, Context, DiagnoseOptions};
+        // Of the varied family's first 300 cases, the right single-effect verdicts the rule is
+        // run on (held out 1.1–3 ×, training below 1.25 ×), one or two per kind and effect:
+        // held out 1.14–2.97 ×, training 0.92–1.17 × (vary101, 186 and 211 are the others).
+        for (seed, truth) in [
+            (21, Effect::KinematicHardening), // pure bending, step-up, two-sided
+            (120, Effect::SensorDrift),       // tension, step-up
+            (169, Effect::StiffnessDegradation), // tension, constant amplitude
+            (180, Effect::SensorDrift),       // torsion, step-up
+            (191, Effect::StiffnessDegradation), // pure bending, step-up
+            (234, Effect::Viscoelasticity),   // pure bending, step-up
+        ] {
+            let mut c = vary_case(&UNIFORM, seed).unwrap().case;
+            assert_eq!(c.truths, vec![truth], "{}", c.name);
+            crate::blind::through_readers(&mut c).unwrap();
+            let d = diagnose(Context::project(), &c.tests, &DiagnoseOptions::default()).unwrap();
+            let held = d.baseline.gap_heldout_rel / d.verdict.noise_rel;
+            let train = d.baseline.gap_train_rel / d.verdict.noise_rel;
+            assert!(
+                held > NOISE_FLOOR_FIT && held <= WHOLE_REFIT_MAX_GAP && train < TRAINING_GAP_CHECK,
+                "{}: held out {held:.2} ×, training {train:.2} × the floor: the case no longer \
+                 exercises the rule",
+                c.name
+            );
+            assert_eq!(d.verdict.effect, truth, "{}", c.name);
+            assert!(
+                d.verdict.extrapolation.is_none(),
+                "{}: {:?}",
+                c.name,
+                d.verdict.extrapolation
+            );
+        }
+    }
+
+    /// The same rule at the set level (`ladder::climb`'s `closes`). vary103: a torsion log with
+    /// friction and a sensor drift at 0.11 % noise on a one-sided step-up protocol. Friction and
+    /// drift leave 1.17 × the floor on the largest cycle, held out; the climb used to add a
+    /// stiffness degradation for that rest (1.13 ×). Refitted on every cycle, the pair's own
+    /// model fits the held-out cycle to the floor within its parameters' uncertainty, so the set
+    /// takes no third member, and the words say why rather than calling the rest unexplained.
+    #[test]
+    fn a_set_that_closes_its_own_gap_takes_no_further_member() {
+        use cablab_diagnose::{diagnose, Context, DiagnoseOptions};
+        let mut c = vary_case(&UNIFORM, 103).unwrap().case;
+        assert_eq!(
+            c.truths,
+            vec![Effect::FrictionHysteresis, Effect::SensorDrift],
+            "{}",
+            c.name
+        );
+        crate::blind::through_readers(&mut c).unwrap();
+        let d = diagnose(Context::project(), &c.tests, &DiagnoseOptions::default()).unwrap();
+        let mut set = d.verdict.effects.clone();
+        set.sort();
+        let mut truth = c.truths.clone();
+        truth.sort();
+        assert_eq!(set, truth, "{}", c.name);
+        let after = d.verdict.gap_after_rel / d.verdict.noise_rel;
+        assert!(
+            after > cablab_diagnose::diagnose::NOISE_FLOOR_FIT && after < 1.5,
+            "{}: the pair leaves {after:.2} × the floor: the case no longer exercises the rule",
+            c.name
+        );
+        let words = d.verdict.extrapolation.as_deref().unwrap_or("");
+        assert!(
+            words.contains("the elastoplastic baseline with friction hysteresis and sensor drift"),
+            "{}: {words:?}",
+            c.name
+        );
+        assert!(d.verdict.remainder.is_none(), "{}", c.name);
+    }
+
+    /// A pair whose members each fit the held-out cycle no better than the baseline alone.
+    /// vary126: a tension log with kinematic hardening and stiffness degradation at 0.11 %
+    /// noise, whose held-out last cycle is slow (a rate change) and long. Each candidate alone
+    /// leaves 2.2 × the floor or more, so no single effect is named, and the verdict was
+    /// `unexplained` with both effects in the vocabulary. The best single effects that fitted
+    /// now start a set search too: a pair closes the gap to below 1.5 × (kinematic hardening
+    /// and the degradation, or a Maxwell branch standing in for the hardening beside the same
+    /// degradation: one swap apart, the words name the set and the HTML the waterfall).
+    #[test]
+    fn a_pair_whose_members_alone_do_not_narrow_the_gap_is_not_unexplained() {
+        use cablab_diagnose::{diagnose, Context, DiagnoseOptions};
+        let mut c = vary_case(&UNIFORM, 126).unwrap().case;
+        assert_eq!(
+            c.truths,
+            vec![Effect::KinematicHardening, Effect::StiffnessDegradation],
+            "{}",
+            c.name
+        );
+        crate::blind::through_readers(&mut c).unwrap();
+        let d = diagnose(Context::project(), &c.tests, &DiagnoseOptions::default()).unwrap();
+        let before = d.baseline.gap_heldout_rel / d.verdict.noise_rel;
+        let best_single = d
+            .effects
+            .iter()
+            .filter(|e| e.fit_failed.is_none())
+            .map(|e| e.gap_after_rel / d.verdict.noise_rel)
+            .fold(f64::INFINITY, f64::min);
+        assert!(
+            before >= 1.5 && best_single >= before - 0.01,
+            "{}: held out {before:.2} ×, best single {best_single:.2} ×: the case no longer \
+             exercises the rule",
+            c.name
+        );
+        assert_ne!(d.verdict.effect, Effect::Unexplained, "{}", c.name);
+        assert_eq!(d.verdict.effects.len(), 2, "{}", c.name);
+        assert!(
+            d.verdict.effects.contains(&Effect::StiffnessDegradation),
+            "{}: {:?}",
+            c.name,
+            d.verdict.effects
+        );
+        let after = d.verdict.gap_after_rel / d.verdict.noise_rel;
+        assert!(after < 1.5, "{}: {after:.2}", c.name);
+    }
+
+    /// A last cycle nothing predicts, past the others' reach, is not the test. vary226: a
+    /// torsion log with kinematic hardening and a sensor drift (0.31 % white noise) on a
+    /// one-sided step-up protocol. Held out, its largest cycle is the first whose unloading
+    /// yields in reverse, which the smaller cycles never showed: the best set (friction +
+    /// piecewise elasticity) still left 3.18 × the floor, and neither true effect was named.
+    /// Diagnosed again holding out the latest cycle within the others' reach (`diagnose`'s
+    /// fallback), the truth closes it to the floor, and the words say which cycle was held
+    /// out and why.
+    #[test]
+    fn a_last_cycle_nothing_predicts_is_held_out_within_reach_instead() {
+        use cablab_diagnose::{diagnose, Context, DiagnoseOptions, HoldoutPolicy};
+        let mut c = vary_case(&UNIFORM, 226).unwrap().case;
+        assert_eq!(
+            c.truths,
+            vec![Effect::KinematicHardening, Effect::SensorDrift],
+            "{}",
+            c.name
+        );
+        crate::blind::through_readers(&mut c).unwrap();
+        let d = diagnose(Context::project(), &c.tests, &DiagnoseOptions::default()).unwrap();
+        assert_eq!(
+            d.holdout.policy,
+            HoldoutPolicy::LastCycleWithinReach,
+            "{}",
+            c.name
+        );
+        let mut set = d.verdict.effects.clone();
+        set.sort();
+        assert_eq!(set, c.truths, "{}", c.name);
+        let after = d.verdict.gap_after_rel / d.verdict.noise_rel;
+        assert!(after < 1.25, "{}: {after:.2}", c.name);
+        let why = d.verdict.holdout_fallback.as_deref().unwrap_or("");
+        assert!(
+            why.contains("reaches past the control range of the others")
+                && why.contains("within the others' reach is held out instead"),
+            "{}: {why:?}",
+            c.name
+        );
+    }
+
     /// The rule's null side: logs without an effect whose baseline leaves more than
     /// [`cablab_diagnose::diagnose::TRAINING_GAP_CHECK`] × the floor over the whole record because the
     /// floor does not count what is not noise-like (spikes, 1.34 ×). No candidate closes that,

@@ -893,11 +893,16 @@ fn fmt4(v: f64) -> String {
 /// The diagnosis in plain words (the report crate's wording).
 pub fn words(d: &cablab_diagnose::Diagnosis) -> String {
     let verdict = d.verdict.effect;
-    let after = d
-        .effects
-        .iter()
-        .find(|e| e.effect == verdict)
-        .map(|e| e.gap_after_rel);
+    let is_set = d.verdict.effects.len() > 1;
+    // A set's gap is its own model's (`verdict.gap_after_rel`), not its first member's.
+    let after = if is_set {
+        Some(d.verdict.gap_after_rel)
+    } else {
+        d.effects
+            .iter()
+            .find(|e| e.effect == verdict)
+            .map(|e| e.gap_after_rel)
+    };
     let top = d.located.first().map(|l| (l.where_.clone(), l.share));
     cablab_report::words::diagnosis_words(&cablab_report::words::DiagnosisSummary {
         baseline_law: d.baseline.law.clone(),
@@ -929,6 +934,31 @@ pub fn words(d: &cablab_diagnose::Diagnosis) -> String {
         on_training: d.verdict.on_training.clone(),
         effect_on_training: d.verdict.named_on_training.contains(&verdict),
         extrapolation: d.verdict.extrapolation.clone(),
+        set: if is_set {
+            d.verdict
+                .effects
+                .iter()
+                .map(|e| e.as_str().to_string())
+                .collect()
+        } else {
+            vec![]
+        },
+        holdout_fallback: d.verdict.holdout_fallback.clone(),
+        set_steps: if is_set {
+            d.verdict
+                .steps
+                .iter()
+                .map(|r| {
+                    (
+                        r.step.to_string(),
+                        r.effect.as_str().to_string(),
+                        r.gap_after_rel,
+                    )
+                })
+                .collect()
+        } else {
+            vec![]
+        },
     })
 }
 

@@ -486,8 +486,14 @@ pub fn html(
     // section.
     let mut diag = String::new();
     for ((specimen, kind, level), idx) in series_list(outcomes, series) {
-        let mut verdicts: Vec<(&str, usize)> = Vec::new();
-        for v in idx.iter().filter_map(|&i| outcomes[i].verdict.as_deref()) {
+        // A set is counted as the set ("a + b"), as each test's section names it.
+        let mut verdicts: Vec<(String, usize)> = Vec::new();
+        for v in idx.iter().filter_map(|&i| {
+            let o = &outcomes[i];
+            o.verdict
+                .as_deref()
+                .map(|v| verdict_named(v, &o.verdict_effects))
+        }) {
             match verdicts.iter_mut().find(|x| x.0 == v) {
                 Some(x) => x.1 += 1,
                 None => verdicts.push((v, 1)),

@@ -44,7 +44,7 @@
 //! What it does not do: read files or print (the CLI does), or simulate (see `model`).
 
 use crate::error::DiagError;
-use crate::ladder::{climb, exchange, ladder, refit};
+use crate::ladder::{climb, exchange, ladder, refit, Climbed};
 use crate::locate::span_of_baseline;
 use crate::mesh::MeshCheck;
 use crate::model::{DiagTest, ModelSpec};
@@ -82,6 +82,10 @@ pub struct Baseline {
     pub gap: f64,
     /// RMS gap on the held-out samples / largest |measured response|.
     pub gap_heldout_rel: f64,
+    /// RMS gap on the training samples (the ones it was fitted to) / largest |measured
+    /// response|: with `gap_heldout_rel`, whether the baseline misses the held-out cycle, the
+    /// earlier cycles, or both.
+    pub gap_train_rel: f64,
     /// The data are explained as well with the yield out of their reach: the baseline is its
     /// elastic limit (yield parameter pinned at its upper bound, three times the largest
     /// measured stress resultant; the hardening is then not identified).
@@ -215,10 +219,17 @@ pub struct Verdict {
     pub on_training: Option<String>,
     /// When the verdict is `none` although the baseline's held-out gap is above the floor,
     /// because the baseline refitted on every cycle fits them all to the floor
-    /// ([`WHOLE_REFIT_MAX_GAP`], `whole_record`): in plain words, the two fits and why the
-    /// gap is the training fit's extrapolation. Absent otherwise.
+    /// ([`WHOLE_REFIT_MAX_GAP`], `closes_itself`), or when the verdict's set leaves a gap above
+    /// the floor that its own model closes that way (the set search took no further member):
+    /// in plain words, the two fits and why the gap is the training fit's extrapolation.
+    /// Absent otherwise.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub extrapolation: Option<String>,
+    /// When the default hold-out's last cycle reached past the others and no verdict closed it,
+    /// and the latest cycle within their reach was held out instead ([`diagnose`]): in plain
+    /// words, why. `holdout.policy` then says `last_cycle_within_reach`. Absent otherwise.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub holdout_fallback: Option<String>,
     /// The members of `effects` named on the training cycles (`on_training`), `[]` when the
     /// held-out cycle named them all.
     pub named_on_training: Vec<Effect>,
@@ -256,7 +267,7 @@ pub const UNEXPLAINED_GAP: f64 = 1.5;
 pub const TRAINING_GAP_CHECK: f64 = 1.25;
 
 /// The largest held-out baseline gap (RMS in noise units) for which the baseline is refitted
-/// on every cycle to see whether it closes the gap itself (`whole_record`). A training fit that
+/// on every cycle to see whether it closes the gap itself (`closes_itself`). A training fit that
 /// leaves a parameter loose (a hardening modulus the smaller cycles of a step-up protocol
 /// barely load) can miss the held-out cycle it extrapolates to by a systematic part of the
 /// order of the noise; several times the noise is a model that does not fit, and the refit
@@ -266,16 +277,17 @@ pub const TRAINING_GAP_CHECK: f64 = 1.25;
 pub const WHOLE_REFIT_MAX_GAP: f64 = 3.0;
 
 /// Confidence of the training cycles' parameter region the whole-record refit must stay in
-/// (`whole_record`).
+/// (`closes_itself`).
 pub const WHOLE_REFIT_CONFIDENCE: f64 = 0.95;
 
 /// What the whole-record refit found when it closes the gap.
-struct Extrapolation {
-    words: String,
+#[derive(Debug, Clone)]
+pub(crate) struct Extrapolation {
+    pub(crate) words: String,
 }
 
-/// The baseline refitted on every sample (training and held-out), warm-started from its
-/// training fit: `Some` when it fits the held-out samples to the floor ([`NOISE_FLOOR_FIT`])
+/// The model `base` (the baseline, or a set's model; `what` in the words) refitted on every
+/// sample (training and held-out), warm-started from its training fit: `Some` when it fits the held-out samples to the floor ([`NOISE_FLOOR_FIT`])
 /// while its cost on the training samples rises by no more than the
 /// [`WHOLE_REFIT_CONFIDENCE`] quantile of χ² with as many degrees of freedom as the baseline
 /// has effective parameters, in units of the training residuals' effective sample size
@@ -285,15 +297,31 @@ struct Extrapolation {
 /// extrapolate, and no effect is needed to close it. A real effect whose signature the
 /// baseline cannot take on leaves the held-out cycle above the floor, or costs the training
 /// cycles more than their parameters' uncertainty allows. `None` also when the refit fails.
-fn whole_record(
+///
+/// Only where it applies: a uniform kind (on a three-point test the refit is a full-rod
+/// calibration, see [`WHOLE_REFIT_MAX_GAP`]) and a model that misses the held-out cycle by
+/// more than [`NOISE_FLOOR_FIT`] and at most [`WHOLE_REFIT_MAX_GAP`] × the floor while fitting
+/// the training cycles below [`TRAINING_GAP_CHECK`] × (a model that misses the training cycles
+/// too lacks something there); `None` elsewhere, without refitting.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn closes_itself(
     ctx: Context,
     tests: &[DiagTest],
     base: &Scored,
+    what: &str,
     train: &[Vec<usize>],
     held: &[Vec<usize>],
     noise: &[f64],
     opts: &DiagnoseOptions,
 ) -> Option<Extrapolation> {
+    let held_gap = gap_over_noise(base);
+    if !(cablab_rod::uniform::is_uniform(tests[0].kind)
+        && held_gap > NOISE_FLOOR_FIT
+        && held_gap <= WHOLE_REFIT_MAX_GAP
+        && gap_over_noise(&on_training(base, train, noise)) < TRAINING_GAP_CHECK)
+    {
+        return None;
+    }
     let all: Vec<Vec<usize>> = train
         .iter()
         .zip(held)
@@ -331,12 +359,11 @@ fn whole_record(
     let (g_base, g_whole) = (gap_over_noise(base), gap_over_noise(&whole));
     (g_whole <= NOISE_FLOOR_FIT && rise <= limit).then(|| Extrapolation {
         words: format!(
-            "refitted on every cycle, the {} baseline fits the held-out cycle to {g_whole:.2} × \
+            "refitted on every cycle, {what} fits the held-out cycle to {g_whole:.2} × \
              the noise floor ({g_base:.2} × fitted to the training cycles alone) and the training \
              cycles within their parameters' uncertainty (its cost there rises by {rise:.1}; the \
              {:.0} % bound is {limit:.1}): the gap is where the training cycles leave its \
              parameters loose, not an unmodelled effect",
-            base.model.law,
             100.0 * WHOLE_REFIT_CONFIDENCE
         ),
     })
@@ -393,7 +420,76 @@ pub struct Failed {
 
 /// Run the diagnosis on `tests` (one kind; several tests are fitted jointly with shared
 /// parameters, e.g. two specimen lengths).
+///
+/// With the default hold-out ([`HoldoutPolicy::LastCycle`]) on tests whose last cycle reaches
+/// past the control range of the others (a growing amplitude whose largest level is one
+/// cycle), a verdict that leaves at least [`UNEXPLAINED_GAP`] × the floor on that cycle (an
+/// effect or a set that does not close it, or `unexplained`) is diagnosed again holding out
+/// the latest cycle within the others' reach ([`HoldoutPolicy::LastCycleWithinReach`]). When
+/// that names an effect or a set and closes its held-out cycle below [`UNEXPLAINED_GAP`], it
+/// is the diagnosis, and `verdict.holdout_fallback` says why: a held-out cycle past everything
+/// the fits saw scores the models' extrapolation (on a one-sided step-up log the largest
+/// cycle is the first whose unloading yields in reverse, and even the true model misses it),
+/// and when nothing predicts it the cycle within reach is the fair test. Otherwise the first
+/// diagnosis stands. The rule is not the default policy itself: on protocols whose effects
+/// the last cycle does show, the within-reach cycle loses them (see
+/// [`HoldoutPolicy::LastCycleWithinReach`]).
 pub fn diagnose(
+    ctx: Context,
+    tests: &[DiagTest],
+    opts: &DiagnoseOptions,
+) -> Result<Diagnosis, DiagError> {
+    let d = diagnose_held_out(ctx, tests, opts)?;
+    if opts.holdout != HoldoutPolicy::LastCycle {
+        return Ok(d);
+    }
+    let v = &d.verdict;
+    let left = v.gap_after_rel / v.noise_rel.max(f64::MIN_POSITIVE);
+    let open = v.effect == Effect::Unexplained
+        || (v.effect != Effect::None && v.extrapolation.is_none() && left >= UNEXPLAINED_GAP);
+    let within = HoldoutPolicy::LastCycleWithinReach;
+    if !open || split(tests, &within).ok() == split(tests, &opts.holdout).ok() {
+        return Ok(d);
+    }
+    let wopts = DiagnoseOptions {
+        holdout: within,
+        ..opts.clone()
+    };
+    let Ok(mut w) = diagnose_held_out(ctx, tests, &wopts) else {
+        return Ok(d);
+    };
+    let wv = &w.verdict;
+    let w_left = wv.gap_after_rel / wv.noise_rel.max(f64::MIN_POSITIVE);
+    if matches!(wv.effect, Effect::None | Effect::Unexplained) || !(w_left < UNEXPLAINED_GAP) {
+        return Ok(d);
+    }
+    let names = |v: &Verdict| -> String {
+        match v.effects.as_slice() {
+            [] => v.effect.as_str().replace('_', " "),
+            set => set
+                .iter()
+                .map(|e| e.as_str().replace('_', " "))
+                .collect::<Vec<_>>()
+                .join(" + "),
+        }
+    };
+    w.verdict.holdout_fallback = Some(format!(
+        "the last cycle reaches past the control range of the others, and nothing predicted it \
+         from them (held out, {} left {left:.2} times the noise floor): a cycle past everything \
+         the fits saw scores the models' extrapolation, so the latest cycle within the others' \
+         reach is held out instead, and {} fits it to {w_left:.2} times the noise floor",
+        if v.effect == Effect::Unexplained {
+            format!("the {} baseline", d.baseline.law)
+        } else {
+            names(v)
+        },
+        names(&w.verdict)
+    ));
+    Ok(w)
+}
+
+/// [`diagnose`] with the hold-out `opts.holdout`, no fallback.
+fn diagnose_held_out(
     ctx: Context,
     tests: &[DiagTest],
     opts: &DiagnoseOptions,
@@ -494,13 +590,9 @@ pub fn diagnose(
     let base_train_gap = gap_over_noise(&base_train);
     // A held-out gap above the floor that the baseline itself closes once it sees every cycle,
     // without fitting the training cycles worse than their own optimum beyond its parameters'
-    // uncertainty: the training fit's extrapolation, not an effect (`whole_record`).
-    let extrapolation = (cablab_rod::uniform::is_uniform(kind)
-        && base_gap_noise > NOISE_FLOOR_FIT
-        && base_gap_noise <= WHOLE_REFIT_MAX_GAP
-        && base_train_gap < TRAINING_GAP_CHECK)
-        .then(|| whole_record(ctx, tests, &base, &train, &held, &noise, opts))
-        .flatten();
+    // uncertainty: the training fit's extrapolation, not an effect (`closes_itself`).
+    let base_words = format!("the {} baseline", base.model.law);
+    let extrapolation = closes_itself(ctx, tests, &base, &base_words, &train, &held, &noise, opts);
     let candidates_skipped = if opts.all_candidates {
         None
     } else if let Some(x) = &extrapolation {
@@ -682,6 +774,8 @@ pub fn diagnose(
             && fit_failure(&base, s).is_some()
     };
     let mut found: Option<SetFound> = None;
+    // The verdict's set closes its own held-out gap refitted on every cycle: what the refit found.
+    let mut set_closed: Option<Extrapolation> = None;
     let mut unexplained = unexplained;
     // The verdict's model (the set's, once a set is found) and its gap on the training samples.
     let mut verdict_model: Option<Scored> =
@@ -699,12 +793,26 @@ pub fn diagnose(
         let g1 = (first.rss_noise / first.n_held.max(1) as f64).sqrt();
         if g1 > NOISE_FLOOR_FIT {
             let mut f = search(first);
-            // Kept when the information criterion prefers it beyond its tolerance.
+            // Kept when the information criterion prefers it beyond its tolerance, and, when the
+            // set found closes its own held-out gap refitted on every cycle (`SetFound::closed`),
+            // is no larger than that set (the same set fitted better, or one as small).
+            let replaces = |alt: &SetFound, f: &SetFound| {
+                alt.set.len() > 1
+                    && (f.closed.is_none() || alt.set.len() <= f.set.len())
+                    && prefers(&alt.last, &f.last)
+            };
+            // Every other set searched, for the equivalents of the one kept.
+            let mut others: Vec<SetFound> = Vec::new();
+            let mut consider = |alt: SetFound, f: &mut SetFound| {
+                if replaces(&alt, f) {
+                    others.push(std::mem::replace(f, alt));
+                } else {
+                    others.push(alt);
+                }
+            };
             if gap_over_noise(&f.last) >= UNEXPLAINED_GAP {
                 for alt in scored.iter().filter(law_replacing).map(search) {
-                    if alt.set.len() > 1 && prefers(&alt.last, &f.last) {
-                        f = alt;
-                    }
+                    consider(alt, &mut f);
                 }
             }
             // A greedy climb is path-dependent: when two single effects are close, the first
@@ -723,20 +831,44 @@ pub fn diagnose(
                     .collect();
                 next.sort_by(|a, b| a.rss_noise.total_cmp(&b.rss_noise));
                 for alt in next.into_iter().take(ALT_STARTS).map(search) {
-                    if alt.set.len() > 1 && prefers(&alt.last, &f.last) {
-                        f = alt;
-                    }
+                    consider(alt, &mut f);
                 }
             }
+            add_equivalent_sets(&mut f, others);
             found = Some(f);
         }
     } else if unexplained.is_some() {
-        // Replaces `unexplained` only when the set closes the gap below that threshold.
-        for alt in scored.iter().filter(law_replacing).map(search) {
+        // Two effects whose signatures cancel in part can each fit the held-out cycle no better
+        // than the baseline alone (a kinematic hardening's early reverse yield and a stiffness
+        // degradation's softer unloading, each taken alone, mispredict a slow last cycle), so no
+        // single effect is named while the pair closes the gap. Besides the law-replacing
+        // candidates, the best single effects that fitted (`ALT_STARTS`, by their held-out gap)
+        // start a set search too. A set replaces `unexplained` only when it closes the gap below
+        // that threshold and the information criterion prefers it to the baseline.
+        let mut fitted: Vec<&Scored> = scored
+            .iter()
+            .filter(|s| s.effect != Effect::None && fit_failure(&base, s).is_none())
+            .collect();
+        fitted.sort_by(|a, b| a.rss_noise.total_cmp(&b.rss_noise));
+        let starts = scored
+            .iter()
+            .filter(law_replacing)
+            .chain(fitted.into_iter().take(ALT_STARTS));
+        let mut others: Vec<SetFound> = Vec::new();
+        for alt in starts.map(search) {
             let better = found.as_ref().is_none_or(|f| prefers(&alt.last, &f.last));
-            if alt.set.len() > 1 && gap_over_noise(&alt.last) < UNEXPLAINED_GAP && better {
-                found = Some(alt);
+            if alt.set.len() > 1
+                && gap_over_noise(&alt.last) < UNEXPLAINED_GAP
+                && prefers(&alt.last, &base)
+                && better
+            {
+                others.extend(found.replace(alt));
+            } else {
+                others.push(alt);
             }
+        }
+        if let Some(f) = found.as_mut() {
+            add_equivalent_sets(f, others);
         }
         if found.is_some() {
             unexplained = None;
@@ -748,8 +880,9 @@ pub fn diagnose(
             steps: found_steps,
             last,
             alternatives,
-            ..
+            closed,
         } = found;
+        set_closed = closed;
         set = found_set;
         steps = found_steps;
         gap_after = abs_rms(&last.held_resid);
@@ -796,13 +929,18 @@ pub fn diagnose(
                 effect: Effect::None,
                 ..vm_train
             };
-            let (rungs, bigger, _) = climb(
+            let Climbed {
+                rungs,
+                last: bigger,
+                ..
+            } = climb(
                 ctx,
                 tests,
                 start,
                 vec![],
                 MAX_SET - set.len(),
                 opts.candidates.as_deref(),
+                None,
                 &train,
                 &train,
                 &noise,
@@ -862,7 +1000,13 @@ pub fn diagnose(
             }
         }
     }
-    let remainder = remainder_words(&set, gap_after, noise_rms);
+    // A set that closes its own gap refitted on every cycle leaves no unexplained part: the
+    // words say why (`verdict.extrapolation`).
+    let remainder = if set_closed.is_some() {
+        None
+    } else {
+        remainder_words(&set, gap_after, noise_rms)
+    };
     let ladder = if opts.ladder {
         Some(ladder(ctx, tests, &train, &held, &noise, opts, scale)?)
     } else {
@@ -877,6 +1021,7 @@ pub fn diagnose(
             gap_rel: all_gap / scale,
             gap: all_gap,
             gap_heldout_rel: gap_before / scale,
+            gap_train_rel: train_rms(&base, &train) / scale,
             yield_out_of_reach,
         },
         located,
@@ -905,7 +1050,8 @@ pub fn diagnose(
             unexplained,
             remainder,
             on_training: on_training_words,
-            extrapolation: extrapolation.map(|x| x.words),
+            extrapolation: extrapolation.or(set_closed).map(|x| x.words),
+            holdout_fallback: None,
             named_on_training,
             noise_rel: noise_rms / scale,
             noise: noise_rms,
@@ -1087,6 +1233,51 @@ fn prefers(a: &Scored, b: &Scored) -> bool {
     ic(a, n_eff, a.n_held) + ic_tolerance(n_eff) < ic(b, n_eff, b.n_held)
 }
 
+/// Sets that other searches found (`others`) and that the information criterion cannot tell
+/// from `f`'s, one swap away from it (the same size, one member different), recorded as its
+/// equivalents (`SetFound::alternatives`) unless already there: two searches from different
+/// single effects can end in sets that differ in one member and fit equally well (a Maxwell
+/// branch or a kinematic hardening beside the same degradation), and the first kept must not
+/// hide the other. Sets of another size are the parsimony rule's, not equivalents.
+fn add_equivalent_sets(f: &mut SetFound, others: Vec<SetFound>) {
+    for alt in others {
+        if alt.set.len() != f.set.len()
+            || f.set.len() < 2
+            || prefers(&f.last, &alt.last)
+            || prefers(&alt.last, &f.last)
+        {
+            continue;
+        }
+        let out: Vec<Effect> = f
+            .set
+            .iter()
+            .copied()
+            .filter(|e| !alt.set.contains(e))
+            .collect();
+        let inn: Vec<Effect> = alt
+            .set
+            .iter()
+            .copied()
+            .filter(|e| !f.set.contains(e))
+            .collect();
+        if let ([out], [inn]) = (out.as_slice(), inn.as_slice()) {
+            if !f
+                .alternatives
+                .iter()
+                .any(|(o, s)| o == out && s.effect == *inn)
+            {
+                f.alternatives.push((
+                    *out,
+                    Scored {
+                        effect: *inn,
+                        ..alt.last
+                    },
+                ));
+            }
+        }
+    }
+}
+
 /// What [`set_search`] found.
 struct SetFound {
     /// The members, in the order they were added.
@@ -1097,6 +1288,9 @@ struct SetFound {
     last: Scored,
     /// Sets one swap away that explain the held-out data as well (member out, other model).
     alternatives: Vec<(Effect, Scored)>,
+    /// The set closes its own held-out gap once refitted on every cycle ([`closes_itself`]):
+    /// what the refit found. A larger set does not replace it.
+    closed: Option<Extrapolation>,
 }
 
 /// The set search from the single effect `first` (scored on the baseline `base`): forward
@@ -1131,13 +1325,29 @@ fn set_search(
         effect: Effect::None,
         ..first.clone()
     };
-    let (mut steps, mut last, mut alternatives) = climb(
+    // A set that closes its own held-out gap once refitted on every cycle takes no further
+    // member (`climb`'s `closes`).
+    let closes = |s: &Scored| {
+        let label = s.model.label();
+        let mut parts = label.split('+');
+        let law = parts.next().unwrap_or_default();
+        let added: Vec<String> = parts.map(|e| e.replace('_', " ")).collect();
+        let what = format!("the {law} baseline with {}", added.join(" and "));
+        closes_itself(ctx, tests, s, &what, train, held, noise, opts)
+    };
+    let Climbed {
+        rungs: mut steps,
+        mut last,
+        mut alternatives,
+        mut closed,
+    } = climb(
         ctx,
         tests,
         start,
         prior,
         2,
         opts.candidates.as_deref(),
+        Some(&closes),
         train,
         held,
         noise,
@@ -1188,6 +1398,8 @@ fn set_search(
         last = ex.model;
         alternatives = ex.equivalent;
         if ex.swapped.is_some() {
+            // What the refit found was about the set before the swap.
+            closed = None;
             // The member swapped in can make another redundant that the climb needed on its way
             // (a Maxwell branch taken first for a hardening, then a drift for the rest: once the
             // hardening is swapped in, the drift may be a stand-in too). Backward elimination
@@ -1202,13 +1414,18 @@ fn set_search(
                     gap_after_rel: f64::NAN,
                 })
                 .collect();
-            let (rungs, reduced, _) = climb(
+            let Climbed {
+                rungs,
+                last: reduced,
+                ..
+            } = climb(
                 ctx,
                 tests,
                 last,
                 members,
                 0,
                 opts.candidates.as_deref(),
+                None,
                 train,
                 held,
                 noise,
@@ -1235,6 +1452,7 @@ fn set_search(
         steps,
         last,
         alternatives,
+        closed,
     }
 }
 

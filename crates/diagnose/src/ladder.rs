@@ -1,5 +1,6 @@
 //! The ladder: from linear elasticity, one effect at a time, then backward elimination.
 
+use crate::diagnose::Extrapolation;
 use crate::error::DiagError;
 use crate::floors::{resolution_floor, rounding_like};
 use crate::model::{DiagTest, ModelSpec};
@@ -50,12 +51,13 @@ pub(crate) fn ladder(
         None,
         opts,
     )?;
-    let (rungs, _, _) = climb(
+    let Climbed { rungs, .. } = climb(
         ctx,
         tests,
         start,
         vec![],
         6,
+        None,
         None,
         train,
         held,
@@ -71,10 +73,17 @@ pub(crate) fn ladder(
 /// candidates excluded; only `allowed` ones if given) until the held-out gap reaches the noise
 /// floor or nothing helps; then
 /// backward elimination of the added effects the rule finds redundant (those of the `prior`
-/// rungs that led to `start` included). Returns the rungs (`prior` first), the final model and
-/// its equivalent sets: the models of the last forward step whose held-out score the rule cannot
+/// rungs that led to `start` included). Returns ([`Climbed`]) the rungs (`prior` first), the
+/// final model and its equivalent sets: the models of the last forward step whose held-out score the rule cannot
 /// tell from the one it added (each scored, so the same model with the added effect swapped for
 /// another), kept when no later step dropped an effect.
+///
+/// `closes`, when given, is asked before each forward step whether the current model closes its
+/// own held-out gap once refitted on every cycle ([`crate::diagnose::closes_itself`]): then the
+/// gap is where the training cycles leave its parameters loose, and an effect added to close it
+/// would stand in for that (a stiffness degradation taking up a step-up protocol's largest
+/// cycle beside a friction and a drift that are there). The climb stops there and returns what
+/// `closes` said, unless backward elimination then changes the model.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn climb(
     ctx: Context,
@@ -83,21 +92,27 @@ pub(crate) fn climb(
     prior: Vec<Rung>,
     max_add: usize,
     allowed: Option<&[Effect]>,
+    closes: Option<&Closes>,
     train: &[Vec<usize>],
     held: &[Vec<usize>],
     noise: &[f64],
     opts: &DiagnoseOptions,
     scale: f64,
-) -> (Vec<Rung>, Scored, Vec<(Effect, Scored)>) {
+) -> Climbed {
     let kind = tests[0].kind;
     let resolution = resolution_floor(tests);
     let mut cur = start;
     let mut rungs = prior;
     let mut alternatives: Vec<(Effect, Scored)> = Vec::new();
     let rms_abs = Scored::held_rms;
+    let mut closed = None;
     for _ in 0..max_add {
         let g = (cur.rss_noise / cur.n_held as f64).sqrt();
         if g <= NOISE_FLOOR_FIT {
+            break;
+        }
+        if let Some(x) = closes.and_then(|c| c(&cur)) {
+            closed = Some(x);
             break;
         }
         let cands: Vec<Effect> = applicable(ctx, kind, &cur.model)
@@ -177,9 +192,31 @@ pub(crate) fn climb(
         });
         cur = smaller;
         alternatives.clear();
+        closed = None;
     }
-    (rungs, cur, alternatives)
+    Climbed {
+        rungs,
+        last: cur,
+        alternatives,
+        closed,
+    }
 }
+
+/// What [`climb`] ends with.
+pub(crate) struct Climbed {
+    /// The rungs (the `prior` ones first).
+    pub(crate) rungs: Vec<Rung>,
+    /// The final model.
+    pub(crate) last: Scored,
+    /// Its equivalents: (the effect the last forward step added, a model with another instead).
+    pub(crate) alternatives: Vec<(Effect, Scored)>,
+    /// What `closes` said, when the climb stopped there and the model did not change after.
+    pub(crate) closed: Option<Extrapolation>,
+}
+
+/// The question [`climb`] asks before each forward step: does the current model close its own
+/// held-out gap once refitted on every cycle (`Some`: what the refit found)?
+pub(crate) type Closes<'a> = dyn Fn(&Scored) -> Option<Extrapolation> + Sync + 'a;
 
 /// `model` fitted warm-started from `from`'s parameters and scored on the held-out data, labelled
 /// `effect`; `None` when it cannot be fitted.

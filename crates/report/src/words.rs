@@ -42,9 +42,22 @@ pub struct DiagnosisSummary {
     #[serde(default)]
     pub effect_on_training: bool,
     /// The verdict is `none` because the baseline refitted on every cycle closes the held-out
-    /// gap itself (`verdict.extrapolation`): those words.
+    /// gap itself, or the verdict's set closes the rest of it that way
+    /// (`verdict.extrapolation`): those words.
     #[serde(default)]
     pub extrapolation: Option<String>,
+    /// The verdict's set when it has two or more members (`verdict.effects`), the member that
+    /// explains most first; empty for a single effect. `gap_after_rel` is then the set's.
+    #[serde(default)]
+    pub set: Vec<String>,
+    /// "How far" over the set (`verdict.steps`): each step (`add` or `drop`), its effect and the
+    /// held-out relative gap after it, from the baseline.
+    #[serde(default)]
+    pub set_steps: Vec<(String, String, f64)>,
+    /// The latest cycle within the others' reach was held out instead of a last cycle nothing
+    /// predicted (`verdict.holdout_fallback`): those words.
+    #[serde(default)]
+    pub holdout_fallback: Option<String>,
 }
 
 /// A held-out gap within this factor of the noise floor counts as "at the noise floor" in words.
@@ -90,6 +103,15 @@ pub fn effect_words(effect: &str) -> String {
     }
 }
 
+/// "a", "a and b", "a, b and c".
+fn join_and(v: &[String]) -> String {
+    match v {
+        [] => String::new(),
+        [a] => a.clone(),
+        [init @ .., last] => format!("{} and {last}", init.join(", ")),
+    }
+}
+
 /// Writes the diagnosis as plain-text paragraphs: where, which and how far, then the
 /// equivalent explanations and the experiment that would separate them.
 pub fn diagnosis_words(s: &DiagnosisSummary) -> String {
@@ -99,6 +121,11 @@ pub fn diagnosis_words(s: &DiagnosisSummary) -> String {
     } else {
         format!("{} baseline", s.baseline_law)
     };
+    if let Some(why) = &s.holdout_fallback {
+        paras.push(format!(
+            "Held out: {why}. The figures below are on that cycle."
+        ));
+    }
     if let Some((place, share)) = &s.top_location {
         paras.push(format!(
             "Where: the largest share of the squared residual, {}, lies in {}.",
@@ -183,21 +210,72 @@ pub fn diagnosis_words(s: &DiagnosisSummary) -> String {
             fmt_percent(s.noise_rel, 1)
         )),
         (effect, after) => {
-            let mut p = format!("Which: {} explains the gap best.", effect_words(effect));
+            let mut p = if s.set.len() > 1 {
+                let names: Vec<String> = s.set.iter().map(|e| e.replace('_', " ")).collect();
+                // The first member alone: the first step of "How far" when it adds that member.
+                let alone = s
+                    .set_steps
+                    .first()
+                    .filter(|(step, e, _)| step == "add" && *e == s.set[0])
+                    .map(|t| t.2);
+                let first = match alone {
+                    Some(g) if g >= s.gap_before_rel => {
+                        "; none of them narrows it on its own, only the set does.".to_string()
+                    }
+                    _ => format!(
+                        "; {} explains most of it on its own.",
+                        effect_words(&s.set[0])
+                    ),
+                };
+                format!(
+                    "Which: {} together explain the gap best{first}",
+                    join_and(&names)
+                )
+            } else {
+                format!("Which: {} explains the gap best.", effect_words(effect))
+            };
             if let Some(w) = s.on_training.as_ref().filter(|_| s.effect_on_training) {
                 p.push(' ');
                 p.push_str(w);
             } else if let Some(after) = after {
                 let reached = after <= 1.25 * s.noise_rel;
-                p.push_str(&format!(
-                    " How far: adding it to the {baseline} brings the held-out gap from {} to {} \
-                     of the largest measured response",
-                    fmt_percent(s.gap_before_rel, 1),
-                    fmt_percent(after, 1)
-                ));
+                if s.set.len() > 1 && !s.set_steps.is_empty() {
+                    let steps: Vec<String> = s
+                        .set_steps
+                        .iter()
+                        .map(|(step, e, g)| {
+                            let how = if step == "drop" {
+                                "dropped again"
+                            } else {
+                                "added"
+                            };
+                            format!("with {} {how}, {}", e.replace('_', " "), fmt_percent(*g, 1))
+                        })
+                        .collect();
+                    p.push_str(&format!(
+                        " How far: the {baseline} leaves a held-out gap of {} of the largest \
+                         measured response; {}",
+                        fmt_percent(s.gap_before_rel, 1),
+                        steps.join("; ")
+                    ));
+                } else {
+                    p.push_str(&format!(
+                        " How far: adding it to the {baseline} brings the held-out gap from {} \
+                         to {} of the largest measured response",
+                        fmt_percent(s.gap_before_rel, 1),
+                        fmt_percent(after, 1)
+                    ));
+                }
                 if reached {
                     p.push_str(&format!(
                         ", down to the noise floor ({}).",
+                        fmt_percent(s.noise_rel, 1)
+                    ));
+                } else if let Some(x) = &s.extrapolation {
+                    // The set closes the rest itself once refitted on every cycle.
+                    p.push_str(&format!(
+                        "; {:.1} points remain above the noise floor ({}), but {x}.",
+                        (after - s.noise_rel) * 100.0,
                         fmt_percent(s.noise_rel, 1)
                     ));
                 } else {
@@ -407,6 +485,9 @@ mod tests {
             on_training: None,
             effect_on_training: false,
             extrapolation: None,
+            set: vec![],
+            set_steps: vec![],
+            holdout_fallback: None,
         };
         let w = diagnosis_words(&s);
         assert!(
@@ -446,5 +527,104 @@ mod tests {
             !w.contains("already fits") && !w.contains("none of the candidates"),
             "{w}"
         );
+    }
+
+    /// A set whose model closes the rest of its gap refitted on every cycle says so in "How
+    /// far", instead of calling that rest unexplained.
+    #[test]
+    fn a_rest_the_set_closes_itself_is_not_called_unexplained() {
+        let mut s = DiagnosisSummary {
+            baseline_law: "elastoplastic".into(),
+            gap_before_rel: 0.076,
+            verdict_effect: "friction_hysteresis".into(),
+            gap_after_rel: Some(0.0042),
+            noise_rel: 0.003,
+            ..Default::default()
+        };
+        let w = diagnosis_words(&s);
+        assert!(w.contains("so part of the gap is still unexplained"), "{w}");
+        s.extrapolation =
+            Some("refitted on every cycle, the elastoplastic baseline with friction fits".into());
+        let w = diagnosis_words(&s);
+        assert!(
+            w.contains(
+                "from 7.6\u{a0}% to 0.4\u{a0}% of the largest measured response; 0.1 points remain \
+                 above the noise floor (0.3\u{a0}%), but refitted on every cycle, the \
+                 elastoplastic baseline with friction fits."
+            ),
+            "{w}"
+        );
+        assert!(!w.contains("unexplained"), "{w}");
+    }
+
+    /// A set is named as a set, and "How far" walks its steps to the set's own gap.
+    #[test]
+    fn a_set_is_named_with_its_members_and_how_far_walks_its_steps() {
+        let mut s = DiagnosisSummary {
+            baseline_law: "elastoplastic".into(),
+            gap_before_rel: 0.076,
+            verdict_effect: "friction_hysteresis".into(),
+            gap_after_rel: Some(0.0026),
+            noise_rel: 0.0023,
+            set: vec!["friction_hysteresis".into(), "sensor_drift".into()],
+            set_steps: vec![
+                ("add".into(), "friction_hysteresis".into(), 0.0069),
+                ("add".into(), "sensor_drift".into(), 0.0026),
+            ],
+            ..Default::default()
+        };
+        let w = diagnosis_words(&s);
+        assert!(
+            w.starts_with(
+                "Which: friction hysteresis and sensor drift together explain the gap best; \
+                 friction hysteresis (rate-independent"
+            ),
+            "{w}"
+        );
+        assert!(
+            w.contains(
+                "How far: the elastoplastic baseline leaves a held-out gap of 7.6\u{a0}% of the \
+                 largest measured response; with friction hysteresis added, 0.7\u{a0}%; with \
+                 sensor drift added, 0.3\u{a0}%, down to the noise floor (0.2\u{a0}%)."
+            ),
+            "{w}"
+        );
+        // A first member that alone widens the gap is not said to explain most of it.
+        s.gap_before_rel = 0.0072;
+        s.set_steps[0].2 = 0.0075;
+        let w = diagnosis_words(&s);
+        assert!(
+            w.contains("none of them narrows it on its own, only the set does."),
+            "{w}"
+        );
+        assert!(!w.contains("explains most"), "{w}");
+    }
+
+    /// A diagnosis that held out the cycle within reach instead of the last one says so first,
+    /// before the figures that are on that cycle.
+    #[test]
+    fn a_cycle_held_out_within_reach_is_said_before_the_figures() {
+        let s = DiagnosisSummary {
+            baseline_law: "elastoplastic".into(),
+            gap_before_rel: 0.009,
+            verdict_effect: "sensor_drift".into(),
+            gap_after_rel: Some(0.0032),
+            noise_rel: 0.0031,
+            holdout_fallback: Some("the last cycle reaches past the others".into()),
+            ..Default::default()
+        };
+        let w = diagnosis_words(&s);
+        assert!(
+            w.starts_with(
+                "Held out: the last cycle reaches past the others. The figures below are on \
+                 that cycle.\n\nWhich: sensor drift"
+            ),
+            "{w}"
+        );
+        let without = diagnosis_words(&DiagnosisSummary {
+            holdout_fallback: None,
+            ..s
+        });
+        assert!(!without.contains("Held out:"), "{without}");
     }
 }

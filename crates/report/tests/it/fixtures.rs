@@ -193,6 +193,9 @@ pub fn kinematic_hardening_verdict() -> DiagnosisSummary {
         on_training: None,
         effect_on_training: false,
         extrapolation: None,
+        set: vec![],
+        set_steps: vec![],
+        holdout_fallback: None,
     }
 }
 
