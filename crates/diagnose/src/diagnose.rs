@@ -654,11 +654,17 @@ fn diagnose_held_out(
             .iter()
             .map(|s| on_training(s, &train, &noise))
             .collect();
+        // Not the held-out cycle's resolution: an effect the training cycles show and the
+        // held-out one does not is what this rule is for (a stiffness degradation that settles
+        // in the first cycles). Resolved on the training cycles, a fit that did not fail, and a
+        // held-out cycle predicted no worse.
         let usable_train: Vec<bool> = scored
             .iter()
-            .zip(&usable)
-            .map(|(s, &u)| {
-                u && gap_over_noise(s) <= g0.max(NOISE_FLOOR_FIT)
+            .zip(&fit_failed)
+            .map(|(s, f)| {
+                f.is_none()
+                    && extrapolation.is_none()
+                    && gap_over_noise(s) <= g0.max(NOISE_FLOOR_FIT)
                     && !rounding_like(tests, &base.all_resid, &s.all_resid, &train, &resolution)
             })
             .collect();
