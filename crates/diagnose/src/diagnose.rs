@@ -287,8 +287,9 @@ pub(crate) struct Extrapolation {
 }
 
 /// The model `base` (the baseline, or a set's model; `what` in the words) refitted on every
-/// sample (training and held-out), warm-started from its training fit: `Some` when it fits the held-out samples to the floor ([`NOISE_FLOOR_FIT`])
-/// while its cost on the training samples rises by no more than the
+/// sample (training and held-out), warm-started from its training fit: `Some` when it fits the
+/// held-out samples to the floor ([`NOISE_FLOOR_FIT`]) while its cost on the training samples
+/// rises by no more than the
 /// [`WHOLE_REFIT_CONFIDENCE`] quantile of χ² with as many degrees of freedom as the baseline
 /// has effective parameters, in units of the training residuals' effective sample size
 /// (n_eff / n × Δχ²: correlated noise carries less information per sample). Then one set of
@@ -463,15 +464,9 @@ pub fn diagnose(
     if matches!(wv.effect, Effect::None | Effect::Unexplained) || !(w_left < UNEXPLAINED_GAP) {
         return Ok(d);
     }
-    let names = |v: &Verdict| -> String {
-        match v.effects.as_slice() {
-            [] => v.effect.as_str().replace('_', " "),
-            set => set
-                .iter()
-                .map(|e| e.as_str().replace('_', " "))
-                .collect::<Vec<_>>()
-                .join(" + "),
-        }
+    let names = |v: &Verdict| match v.effects.as_slice() {
+        [] => spoken(&[v.effect], " + "),
+        set => spoken(set, " + "),
     };
     w.verdict.holdout_fallback = Some(format!(
         "the last cycle reaches past the control range of the others, and nothing predicted it \
@@ -1178,12 +1173,7 @@ fn on_training_set_words(
     after: f64,
     more: i64,
 ) -> String {
-    let names = |v: &[Effect]| {
-        v.iter()
-            .map(|e| e.as_str().replace('_', " "))
-            .collect::<Vec<_>>()
-            .join(" + ")
-    };
+    let names = |v: &[Effect]| spoken(v, " + ");
     let params = match more {
         1 => "one more parameter".to_string(),
         k if k > 1 => format!("{k} more parameters"),
@@ -1284,6 +1274,15 @@ fn add_equivalent_sets(f: &mut SetFound, others: Vec<SetFound>) {
     }
 }
 
+/// Effect names in words ("friction hysteresis"), joined by `sep`.
+fn spoken(effects: &[Effect], sep: &str) -> String {
+    effects
+        .iter()
+        .map(|e| e.as_str().replace('_', " "))
+        .collect::<Vec<_>>()
+        .join(sep)
+}
+
 /// What [`set_search`] found.
 struct SetFound {
     /// The members, in the order they were added.
@@ -1334,11 +1333,18 @@ fn set_search(
     // A set that closes its own held-out gap once refitted on every cycle takes no further
     // member (`climb`'s `closes`).
     let closes = |s: &Scored| {
-        let label = s.model.label();
-        let mut parts = label.split('+');
-        let law = parts.next().unwrap_or_default();
-        let added: Vec<String> = parts.map(|e| e.replace('_', " ")).collect();
-        let what = format!("the {law} baseline with {}", added.join(" and "));
+        let added: Vec<Effect> = s
+            .model
+            .law_effects
+            .iter()
+            .chain(&s.model.test_effects)
+            .copied()
+            .collect();
+        let what = format!(
+            "the {} baseline with {}",
+            s.model.law,
+            spoken(&added, " and ")
+        );
         closes_itself(ctx, tests, s, &what, train, held, noise, opts)
     };
     let Climbed {

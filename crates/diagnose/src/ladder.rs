@@ -74,8 +74,8 @@ pub(crate) fn ladder(
 /// floor or nothing helps; then
 /// backward elimination of the added effects the rule finds redundant (those of the `prior`
 /// rungs that led to `start` included). Returns ([`Climbed`]) the rungs (`prior` first), the
-/// final model and its equivalent sets: the models of the last forward step whose held-out score the rule cannot
-/// tell from the one it added (each scored, so the same model with the added effect swapped for
+/// final model and its equivalent sets: the models of the last forward step whose held-out
+/// score the rule cannot tell from the one it added (each scored, so the same model with the added effect swapped for
 /// another), kept when no later step dropped an effect.
 ///
 /// `closes`, when given, is asked before each forward step whether the current model closes its

@@ -123,7 +123,7 @@ pub fn diagnosis_words(s: &DiagnosisSummary) -> String {
     };
     if let Some(why) = &s.holdout_fallback {
         paras.push(format!(
-            "Held out: {why}. The figures below are on that cycle."
+            "Held out: {why}. The held-out gaps here and in the charts are on that cycle."
         ));
     }
     if let Some((place, share)) = &s.top_location {
@@ -616,8 +616,8 @@ mod tests {
         let w = diagnosis_words(&s);
         assert!(
             w.starts_with(
-                "Held out: the last cycle reaches past the others. The figures below are on \
-                 that cycle.\n\nWhich: sensor drift"
+                "Held out: the last cycle reaches past the others. The held-out gaps here and \
+                 in the charts are on that cycle.\n\nWhich: sensor drift"
             ),
             "{w}"
         );
