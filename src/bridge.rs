@@ -106,6 +106,8 @@ pub fn geometry_noted(
     let mut notes = Vec::new();
     let what = if kind == TestKind::ThreePoint {
         "support span"
+    } else if length_m.is_none() && rec.extensometer_gauge_length().is_some() {
+        "extensometer's gauge length"
     } else {
         "free length"
     };
@@ -114,8 +116,13 @@ pub fn geometry_noted(
         (Some(l), _) => bail!("{file}: the {what} must be positive, got {l} m"),
         (None, Some(l)) => {
             notes.push(format!(
-                "the {what} {:.4} mm is the file's own (its metadata; with an extensometer, the gauge length)",
-                l * 1e3
+                "the {what} {:.4} mm is the file's own (its metadata{})",
+                l * 1e3,
+                if what.starts_with("extensometer") {
+                    ""
+                } else {
+                    "; with an extensometer, the gauge length"
+                }
             ));
             l
         }

@@ -646,3 +646,87 @@ fn a_negative_loop_area_within_the_noise_is_a_note_and_read_as_zero() {
         a.notes
     );
 }
+
+/// A testXpert export of a tension test whose control is the extensometer ("Standardweg", beside
+/// the crosshead channel) and whose metadata give both the free length between the clamps
+/// (`Versuchslänge 120 mm`) and the extensometer's gauge length (`Messlänge Standardweg 80 mm`),
+/// as the data2rdf testXpert export in `../shared/real_logs` does. The extensometer's travel is
+/// ε × 80 mm: strain from the free length would make (EA) 1.5× too large, silently. Generated
+/// here: (EA) = 10⁵ N exactly, the crosshead travel ε × 120 mm.
+fn testxpert_with_gauge_length(dir: &Path) -> PathBuf {
+    let ea = 1e5;
+    let mut s = String::new();
+    for (k, v) in [
+        ("\"Prüfart\"", "\"Zugversuch\""),
+        ("\"Probenkennung\"", "\"ext-1\""),
+        ("\"Durchmesser\"", "6\t\"mm\""),
+        ("\"Versuchslänge\"", "120\t\"mm\""),
+        ("\"Messlänge Standardweg\"", "80\t\"mm\""),
+    ] {
+        s.push_str(&format!("{k}\t{v}\n"));
+    }
+    s.push_str("\"Prüfzeit\"\t\"Standardkraft\"\t\"Traversenweg absolut\"\t\"Standardweg\"\n");
+    s.push_str("\"s\"\t\"N\"\t\"mm\"\t\"mm\"\n");
+    let n = 400;
+    let mut i = 0;
+    for cycle in 0..3 {
+        for k in 0..=2 * n {
+            if cycle > 0 && k == 0 {
+                continue;
+            }
+            let up = if k <= n { k } else { 2 * n - k };
+            let strain = 0.002 * up as f64 / n as f64;
+            let force = ea * strain + 0.05 * wiggle(i);
+            s.push_str(&format!(
+                "{:.3}\t{:.5}\t{:.6}\t{:.6}\n",
+                0.05 * i as f64,
+                force,
+                strain * 120.0,
+                strain * 80.0
+            ));
+            i += 1;
+        }
+    }
+    let p = dir.join("tension_extensometer.TXT");
+    std::fs::write(&p, s).unwrap();
+    p
+}
+
+/// `cablab analyze FILE [ARGS] --json`, which must succeed: its JSON.
+fn analyze_ok(p: &Path, args: &[&str]) -> Value {
+    let out = cablab()
+        .arg("analyze")
+        .arg(p)
+        .args(args)
+        .arg("--json")
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(0), "{stderr}");
+    json_of(&out.stdout)
+}
+
+#[test]
+fn an_extensometer_travel_is_strain_over_its_gauge_length_not_the_free_length() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = testxpert_with_gauge_length(dir.path());
+    let j = analyze_ok(&p, &[]);
+    let notes = j["notes"].to_string();
+    assert!(
+        notes.contains("gauge length ('Messlänge Standardweg: 80 mm')")
+            && notes.contains("'Versuchslänge: 120 mm'"),
+        "the note names both lengths: {notes}"
+    );
+    let ea = j["stiffness"]["value"].as_f64().unwrap();
+    assert!((ea / 1e5 - 1.0).abs() < 0.005, "(EA) {ea} N, truth 1e5 N");
+
+    // The crosshead as the control: its travel belongs to the free length.
+    let j = analyze_ok(&p, &["--control", "Traversenweg absolut"]);
+    let notes = j["notes"].to_string();
+    assert!(!notes.contains("Messlänge"), "{notes}");
+    let ea = j["stiffness"]["value"].as_f64().unwrap();
+    assert!(
+        (ea / 1e5 - 1.0).abs() < 0.005,
+        "(EA) {ea} N from the crosshead, truth 1e5 N"
+    );
+}

@@ -831,7 +831,7 @@ pub(crate) fn build(
     let data = to_frame(&names, columns, labels, &source)?;
     let cross_section_m2 = crate::roles::area_from_metadata(&raw.metadata);
     let flat_section = crate::roles::flat_section_from_metadata(&raw.metadata);
-    Ok(TestRecord {
+    let mut rec = TestRecord {
         kind,
         kind_reason,
         kind_evidence,
@@ -847,7 +847,9 @@ pub(crate) fn build(
         joined_blocks: joined,
         warnings,
         notes,
-    })
+    };
+    rec.use_extensometer_gauge_length();
+    Ok(rec)
 }
 
 /// Moves the columns into a DataFrame without copying; NaN becomes null.
@@ -963,6 +965,41 @@ impl TestRecord {
         });
         let c = &self.channels[i];
         mount_of(&c.name, c.dimension, crosshead_elsewhere)
+    }
+
+    /// An extension measured on the specimen (an extensometer's travel, testXpert's standard
+    /// travel beside a crosshead channel) belongs to the extensometer's gauge length, not to the
+    /// free length between the clamps: with both in the metadata (testXpert's `Versuchslänge:
+    /// 120 mm` and `Messlänge Standardweg: 80 mm`), the specimen's length is the gauge length,
+    /// with a note. Strain = travel / 120 mm would make (EA) and E 1.5× too large.
+    fn use_extensometer_gauge_length(&mut self) {
+        let Some((gauge, g, free)) = self.extensometer_gauge_length() else {
+            return;
+        };
+        let i = self.channel_index(Role::Control).expect("a control");
+        self.specimen.free_length_m = Some(gauge);
+        self.notes.push(Diagnostic {
+            file: self.provenance.path.clone(),
+            line: None,
+            column: None,
+            message: format!(
+                "the control '{}' is measured on the specimen over its gauge length ('{g}'): that length, not the free length between the clamps ('{free}'), turns its travel into strain",
+                self.channels[i].name
+            ),
+        });
+    }
+
+    /// When the control is a travel measured on the specimen and the metadata give a gauge
+    /// length besides a different free length: `(gauge length m, "key: value" of the gauge
+    /// length, "key: value" of the free length)`. The specimen's length is then that gauge
+    /// length (see the reader's note).
+    pub fn extensometer_gauge_length(&self) -> Option<(f64, String, String)> {
+        let i = self.channel_index(Role::Control)?;
+        if self.channels[i].dimension != Some(Dimension::Length) || self.mount(i) != Mount::Specimen
+        {
+            return None;
+        }
+        crate::roles::extensometer_gauge_length(&self.metadata, &self.channels[i].name)
     }
 
     /// Index of the channel with `role` (first one).

@@ -919,6 +919,90 @@ fn stated_area(meta: &[(String, String)]) -> Option<f64> {
     })
 }
 
+/// Metadata keys of a specimen length, in order of preference: the free (clamp) length or span;
+/// a gauge length; a bare "length".
+const LENGTH_KEY_GROUPS: [&[&str]; 3] = [
+    &[
+        "free length",
+        "freie länge",
+        "clamp length",
+        "einspannlänge",
+        "versuchslänge",
+        "test length",
+        "support span",
+        "span",
+        "stützweite",
+        "auflagerabstand",
+        "luz",
+        "distanza appoggi",
+    ],
+    GAUGE_LENGTH_KEYS,
+    &["length", "länge", "longitud", "lunghezza"],
+];
+
+/// Metadata keys of a gauge length (testXpert's `Messlänge Standardweg`, Bluehill's `Tensile
+/// strain gauge length`, ...).
+const GAUGE_LENGTH_KEYS: &[&str] = &[
+    "gauge length",
+    "gage length",
+    "l0 - course standard",
+    "messlänge",
+    "parallel length",
+    "longitud calibrada",
+    "original length",
+    "initial length",
+    "original gauge length",
+];
+
+/// The first metadata entry with a value whose key is one of `keys` (in the order of `keys`):
+/// the key itself, or the key followed by more words (`Messlänge Standardweg`); a key of two or
+/// more words may also end the name (Bluehill's `Tensile strain gauge length`).
+fn find_key(meta: &[(String, String)], keys: &[&str]) -> Option<(String, String)> {
+    for k in keys {
+        let matches = |key: &str| {
+            let nk = norm_key(key);
+            nk == *k
+                || nk.starts_with(&format!("{k} "))
+                || nk.starts_with(&format!("{k},"))
+                || (k.contains(' ') && nk.ends_with(&format!(" {k}")))
+        };
+        if let Some((key, v)) = meta
+            .iter()
+            .find(|(key, v)| !v.trim().is_empty() && matches(key))
+        {
+            return Some((key.clone(), v.clone()));
+        }
+    }
+    None
+}
+
+/// The length a specimen-mounted extension channel called `channel` measures over, when the
+/// metadata give both a free (clamp) length and a different gauge length: `(gauge length m,
+/// "key: value" of the gauge length, "key: value" of the free length)`. A gauge length whose key
+/// names the channel (`Messlänge Standardweg` for `Standardweg`) is preferred to the first one.
+pub(crate) fn extensometer_gauge_length(
+    meta: &[(String, String)],
+    channel: &str,
+) -> Option<(f64, String, String)> {
+    let (fk, fv) = find_key(meta, LENGTH_KEY_GROUPS[0])?;
+    let (free, _) = length_m(&fk, &fv)?;
+    let ch = norm_key(channel);
+    let named = meta.iter().find(|(k, v)| {
+        let nk = norm_key(k);
+        !v.trim().is_empty()
+            && !ch.is_empty()
+            && nk.contains(ch.as_str())
+            && GAUGE_LENGTH_KEYS.iter().any(|g| nk.contains(g))
+    });
+    let (gk, gv) = named
+        .cloned()
+        .or_else(|| find_key(meta, GAUGE_LENGTH_KEYS))?;
+    let (gauge, _) = length_m(&gk, &gv)?;
+    let show =
+        |k: &str, v: &str| format!("{}: {}", k.trim().trim_end_matches(':').trim(), v.trim());
+    ((gauge - free).abs() > 1e-9 * free.abs()).then(|| (gauge, show(&gk, &gv), show(&fk, &fv)))
+}
+
 /// Specimen label, diameter and free length (or span) from metadata; warnings for assumed units.
 ///
 /// A gauge length (`Gauge length`, testXpert's `Gage length, standard travel`, `L0 - course
@@ -957,54 +1041,7 @@ pub(crate) fn specimen_from_metadata(
         "średnica",
         "d0",
     ];
-    let len_keys: [&[&str]; 3] = [
-        &[
-            "free length",
-            "freie länge",
-            "clamp length",
-            "einspannlänge",
-            "versuchslänge",
-            "test length",
-            "support span",
-            "span",
-            "stützweite",
-            "auflagerabstand",
-            "luz",
-            "distanza appoggi",
-        ],
-        &[
-            "gauge length",
-            "gage length",
-            "l0 - course standard",
-            "messlänge",
-            "parallel length",
-            "longitud calibrada",
-            "original length",
-            "initial length",
-            "original gauge length",
-        ],
-        &["length", "länge", "longitud", "lunghezza"],
-    ];
-    let find = |keys: &[&str]| -> Option<(String, String)> {
-        for k in keys {
-            // A key of two or more words may also end the name (Bluehill's `Tensile strain
-            // gauge length`).
-            let matches = |key: &str| {
-                let nk = norm_key(key);
-                nk == *k
-                    || nk.starts_with(&format!("{k} "))
-                    || nk.starts_with(&format!("{k},"))
-                    || (k.contains(' ') && nk.ends_with(&format!(" {k}")))
-            };
-            if let Some((key, v)) = meta
-                .iter()
-                .find(|(key, v)| !v.trim().is_empty() && matches(key))
-            {
-                return Some((key.clone(), v.clone()));
-            }
-        }
-        None
-    };
+    let find = |keys: &[&str]| find_key(meta, keys);
     // "Specimen thickness: 1.06 mm" is a dimension, not the specimen's name.
     let dimension_key = |k: &str| {
         let nk = norm_key(k);
@@ -1048,7 +1085,7 @@ pub(crate) fn specimen_from_metadata(
             }
         }
     }
-    for group in len_keys {
+    for group in LENGTH_KEY_GROUPS {
         if let Some((k, v)) = find(group) {
             if let Some((l, assumed)) = length_m(&k, &v) {
                 sp.free_length_m = Some(l);
@@ -1397,6 +1434,42 @@ mod tests {
             None
         );
         assert_eq!(area_from_metadata(&kv(&[("Breite [mm]", "150")])), None);
+    }
+
+    /// The gauge length an extensometer's travel belongs to: the one whose key names the
+    /// channel first, only beside a different free length, with both as written.
+    #[test]
+    fn extensometer_gauge_length_beside_a_free_length() {
+        let meta = |kv: &[(&str, &str)]| -> Vec<(String, String)> {
+            kv.iter()
+                .map(|(k, v)| (k.to_string(), v.to_string()))
+                .collect()
+        };
+        let m = meta(&[
+            ("Versuchslänge", "120 mm"),
+            ("Messlänge Feinweg", "25 mm"),
+            ("Messlänge Standardweg", "80 mm"),
+        ]);
+        let (l, g, f) = extensometer_gauge_length(&m, "Standardweg").unwrap();
+        assert!((l - 0.080).abs() < 1e-12);
+        assert_eq!(g, "Messlänge Standardweg: 80 mm");
+        assert_eq!(f, "Versuchslänge: 120 mm");
+        // No key names the channel: the first gauge length.
+        let (l, ..) = extensometer_gauge_length(&m, "Extensometer").unwrap();
+        assert!((l - 0.025).abs() < 1e-12);
+        // The same length twice, or no free length: nothing to choose.
+        assert!(extensometer_gauge_length(
+            &meta(&[
+                ("Versuchslänge", "80 mm"),
+                ("Messlänge Standardweg", "80 mm")
+            ]),
+            "Standardweg"
+        )
+        .is_none());
+        assert!(
+            extensometer_gauge_length(&meta(&[("Gauge length", "25 mm")]), "Extensometer")
+                .is_none()
+        );
     }
 
     #[test]
