@@ -70,6 +70,13 @@ pub fn geometry(
     geometry_noted(rec, kind, length_m, diameter_m, flat).map(|(g, f, _)| (g, f))
 }
 
+/// Whether the record's control is a curvature (1/m, 1/mm).
+pub fn curvature_control(rec: &TestRecord) -> bool {
+    rec.channel_index(Role::Control)
+        .and_then(|i| rec.channels[i].dimension)
+        == Some(cablab_ingest::units::Dimension::Curvature)
+}
+
 /// Whether the record's control is a dimensionless strain (mm/mm, %, µm/m, ...).
 fn strain_control(rec: &TestRecord) -> bool {
     rec.channel_index(Role::Control)
@@ -129,6 +136,13 @@ pub fn geometry_noted(
         (None, None) if kind == TestKind::Tension && strain_control(rec) => {
             notes.push(
                 "no free length given: a strain control needs none, (EA) = dF/dε (l₀ = 1 m only carries the strain)"
+                    .into(),
+            );
+            1.0
+        }
+        (None, None) if kind == TestKind::PureBending && curvature_control(rec) => {
+            notes.push(
+                "no free length given: a curvature control needs none, (EI) = dM/dκ (l₀ = 1 m only carries the curvature)"
                     .into(),
             );
             1.0
@@ -226,6 +240,8 @@ pub fn flat_section_note(kind: TestKind, f: &RectangularSection, from: &str) -> 
 ///   analysis' sectional strain u/l₀ is ε itself and (EA) = dF/dε;
 /// - torsion, a surface shear strain γ (a torsional extensometer's "Shear Strain", in degrees or
 ///   dimensionless): γ = r θ / l₀, so the twist θ = 2 γ l₀ / d (needs the diameter);
+/// - pure bending, a curvature κ (a moment–curvature record): the end rotation κ l₀, so that the
+///   analysis' κ_B = θ_B / l₀ is κ itself and (EI) = dM/dκ;
 /// - any other strain as the control (a strain in bending, an axial strain against a torque): an
 ///   error naming the column: it is not the kind's control and no factor makes it one.
 ///
@@ -293,6 +309,17 @@ pub fn sectional_control(
                 "the control {show} is a surface shear strain γ = r θ / l₀: taken as the twist θ = 2 γ l₀ / d (l₀ = {:.4} mm, d = {:.4} mm), so (GJ) = T r / γ",
                 geom.free_length_m * 1e3,
                 d * 1e3
+            )))
+        }
+        (Some(D::Curvature), TestKind::PureBending) => {
+            // The analysis takes the kind's control as the end rotation θ_B and divides by l₀
+            // (κ_B = θ_B / l₀, eq. (4)): a curvature is that quotient already.
+            let l = geom.free_length_m;
+            for x in &mut curve.control {
+                *x *= l;
+            }
+            Ok(Some(format!(
+                "the control {show} is the curvature κ itself: (EI) = dM/dκ, with no division by a length"
             )))
         }
         (Some(D::Ratio), _) => bail!(

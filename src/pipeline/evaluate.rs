@@ -444,11 +444,8 @@ fn stages(
     // A pure-bending file whose control is the curvature K_B itself needs no length for (EI)_B:
     // with a length its control becomes the angle θ_B = K_B l₀ (eq. (4)); without one it is
     // characterised on l₀ = 1 m, where the sectional control is K_B.
-    let curvature_control = t.kind == TestKind::PureBending
-        && rec
-            .channel_index(cablab_core::Role::Control)
-            .and_then(|i| rec.channels[i].dimension)
-            == Some(cablab_ingest::units::Dimension::Curvature);
+    let curvature_control =
+        t.kind == TestKind::PureBending && crate::bridge::curvature_control(&rec);
     let length_known = t.free_length_m.is_some() || rec.specimen.free_length_m.is_some();
     let machine_level = !length_known && !curvature_control;
     let (geom, flat) = if length_known {
@@ -496,7 +493,8 @@ fn stages(
         out.needs.push("diameter_mm".into());
     }
     let mut curve = crate::bridge::curve(&rec)?;
-    // A strain control (extensometer strain, torsional shear strain) in the kind's variable.
+    // A strain or curvature control (extensometer strain, torsional shear strain, κ_B) in the
+    // kind's variable.
     out.notes.extend(crate::bridge::sectional_control(
         &rec,
         t.kind,
@@ -504,11 +502,6 @@ fn stages(
         flat.as_ref(),
         &mut curve,
     )?);
-    if curvature_control && length_known {
-        for c in &mut curve.control {
-            *c *= geom.free_length_m;
-        }
-    }
     out.rows = Some(curve.control.len());
     drop(rec);
     done(0);

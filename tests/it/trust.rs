@@ -730,3 +730,40 @@ fn an_extensometer_travel_is_strain_over_its_gauge_length_not_the_free_length() 
         "(EA) {ea} N from the crosshead, truth 1e5 N"
     );
 }
+
+/// A moment–curvature record (the layout of the ACSR 'Cardinal' curve in `../shared/real_logs`,
+/// denser): the curvature is the sectional control itself, so (EI) = dM/dκ and the yield
+/// curvature do not depend on a length, given or not. `analyze` divided the curvature by the
+/// given length as if it were the end rotation: (EI) and κ_y scaled with 1/l₀.
+#[test]
+fn a_curvature_control_needs_no_length_and_is_not_divided_by_one() {
+    let dir = tempfile::tempdir().unwrap();
+    let (ei, k_y) = (1600.0, 0.02);
+    let mut s = String::from("curvature [1/m],bending_moment [N.m]\n");
+    for i in 1..=120 {
+        let k = 0.0005 * i as f64;
+        // Bilinear: EI up to κ_y, a tenth of it beyond.
+        let m = ei * k.min(k_y) + 0.1 * ei * (k - k_y).max(0.0) + 0.01 * wiggle(i);
+        s.push_str(&format!("{k},{m}\n"));
+    }
+    let p = dir.path().join("moment_curvature.csv");
+    std::fs::write(&p, s).unwrap();
+    let mut seen = Vec::new();
+    for args in [&[][..], &["--length-mm", "500"], &["--length-mm", "2000"]] {
+        let j = analyze_ok(&p, args);
+        assert_eq!(j["kind"], "pure_bending");
+        assert_eq!(j["stiffness"]["unit"], "N m^2");
+        let v = j["stiffness"]["value"].as_f64().unwrap();
+        assert!(
+            (v / ei - 1.0).abs() < 0.01,
+            "{args:?}: (EI) {v} N m², truth {ei}"
+        );
+        let ky = j["yield"]["control"].as_f64().unwrap();
+        assert!(
+            (ky / k_y - 1.0).abs() < 0.1,
+            "{args:?}: κ_y {ky} 1/m, truth {k_y}"
+        );
+        seen.push((v, ky));
+    }
+    assert!(seen.windows(2).all(|w| w[0] == w[1]), "{seen:?}");
+}
