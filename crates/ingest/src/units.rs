@@ -132,6 +132,9 @@ static TABLE: &[Row] = &[
     (&["kip", "kips"], D::Force, "N", 1e3 * LBF_N, 0.0, true),
     (&["kgf", "kp", "kg-f"], D::Force, "N", KGF_N, 0.0, true),
     (&["gf"], D::Force, "N", KGF_N * 1e-3, 0.0, false),
+    // Decanewton: French machines' force unit (1 daN ≈ 1 kgf).
+    (&["daN", "DaN"], D::Force, "N", 10.0, 0.0, false),
+    (&["ozf"], D::Force, "N", LBF_N / 16.0, 0.0, true),
     // angle
     (
         &["rad", "radian", "radians"],
@@ -142,6 +145,15 @@ static TABLE: &[Row] = &[
         true,
     ),
     (&["mrad"], D::Angle, "rad", 1e-3, 0.0, true),
+    // Gradians (400 to the turn); German "Grad" is the degree, below.
+    (
+        &["gon"],
+        D::Angle,
+        "rad",
+        std::f64::consts::PI / 200.0,
+        0.0,
+        true,
+    ),
     (
         &["°", "deg", "degree", "degrees", "grad", "grados", "gradi"],
         D::Angle,
@@ -170,6 +182,31 @@ static TABLE: &[Row] = &[
     (&["N·m", "Nm"], D::Torque, "N m", 1.0, 0.0, false),
     (&["N·mm", "Nmm"], D::Torque, "N m", 1e-3, 0.0, false),
     (&["mN·m", "mNm"], D::Torque, "N m", 1e-3, 0.0, false),
+    // Torque gauges and small torsion testers (Mark-10, Imada): N·cm, cN·m, kgf·cm, ozf·in.
+    (
+        &["N·cm", "Ncm", "cN·m", "cNm"],
+        D::Torque,
+        "N m",
+        1e-2,
+        0.0,
+        false,
+    ),
+    (
+        &["kgf·cm", "kgfcm", "kp·cm", "kpcm"],
+        D::Torque,
+        "N m",
+        KGF_N * 1e-2,
+        0.0,
+        true,
+    ),
+    (
+        &["ozf·in", "oz·in", "in·oz", "in·ozf", "ozfin", "ozin"],
+        D::Torque,
+        "N m",
+        LBF_N / 16.0 * IN_M,
+        0.0,
+        true,
+    ),
     (
         &["kN·m", "kNm", "KNm", "KN·m"],
         D::Torque,
@@ -216,6 +253,7 @@ static TABLE: &[Row] = &[
     ),
     // ratios
     (&["%"], D::Ratio, "1", 1e-2, 0.0, false),
+    (&["‰"], D::Ratio, "1", 1e-3, 0.0, false),
     (
         &["mm/mm", "m/m", "in/in", "-", "1", "ratio"],
         D::Ratio,
@@ -225,7 +263,16 @@ static TABLE: &[Row] = &[
         true,
     ),
     (
-        &["µm/m", "μm/m", "um/m", "µε", "με", "ppm"],
+        &[
+            "µm/m",
+            "μm/m",
+            "um/m",
+            "µε",
+            "με",
+            "ppm",
+            "microstrain",
+            "µstrain",
+        ],
         D::Ratio,
         "1",
         1e-6,
@@ -544,11 +591,38 @@ mod tests {
         ] {
             assert!((f(s) - inlb).abs() < 1e-12, "{s}");
         }
+        // Torque gauges' units.
+        for s in ["N·cm", "N*cm", "Ncm", "N.cm", "cN·m", "cNm"] {
+            assert_eq!(f(s), 1e-2, "{s}");
+            assert_eq!(lookup(s).unwrap().dimension, Dimension::Torque, "{s}");
+        }
+        for s in ["kgf·cm", "kgfcm", "kgf.cm", "kp·cm"] {
+            assert!((f(s) - 0.0980665).abs() < 1e-15, "{s}");
+        }
+        let ozin = 4.4482216152605 / 16.0 * 0.0254;
+        for s in ["ozf·in", "ozF-in", "oz·in", "ozin", "in-oz"] {
+            assert!((f(s) - ozin).abs() < 1e-15, "{s}");
+        }
+    }
+
+    /// Decanewtons (French machines), ounces-force (force gauges), gradians.
+    #[test]
+    fn decanewton_ounce_force_and_gradians() {
+        assert_eq!(f("daN"), 10.0);
+        assert_eq!(lookup("daN").unwrap().dimension, Dimension::Force);
+        assert!((f("ozF") - 0.27801385095378125).abs() < 1e-15);
+        assert!((f("gon") - std::f64::consts::PI / 200.0).abs() < 1e-18);
+        assert_eq!(lookup("gon").unwrap().dimension, Dimension::Angle);
+        // German "Grad" stays the degree.
+        assert!((f("Grad") - std::f64::consts::PI / 180.0).abs() < 1e-18);
     }
 
     #[test]
     fn ratios_and_percent() {
         assert_eq!(f("%"), 0.01);
+        assert_eq!(f("‰"), 1e-3);
+        assert_eq!(f("microstrain"), 1e-6);
+        assert_eq!(lookup("‰").unwrap().dimension, Dimension::Ratio);
         assert_eq!(f("mm/mm"), 1.0);
         assert_eq!(lookup("mm/mm").unwrap().dimension, Dimension::Ratio);
         assert_eq!(lookup("1/m").unwrap().dimension, Dimension::Curvature);
