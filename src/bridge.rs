@@ -56,6 +56,44 @@ pub fn curve(rec: &TestRecord) -> Result<Curve> {
     Ok(c)
 }
 
+/// Correlation below which a response is taken to run against its control: a passive specimen's
+/// force or moment rises with its elongation, twist, deflection or rotation over any cyclic
+/// record (hysteresis, holds and drift lower the correlation, they do not reverse it).
+pub const OPPOSITE_SIGNS_CORRELATION: f64 = -0.5;
+
+/// A response recorded in the opposite sign convention to its control (a tensile force logged
+/// negative against a positive elongation, a crosshead counted downwards): the Pearson
+/// correlation of the two over the complete rows is below [`OPPOSITE_SIGNS_CORRELATION`]. The
+/// response's sign is reversed, so that every stiffness comes out positive, and the note says so;
+/// a record whose response does not follow its control (noise, a random file) is left alone.
+/// Reported values (force, moment) are then in the control's sign convention.
+pub fn align_response_sign(curve: &mut Curve) -> Option<String> {
+    let n = curve.control.len() as f64;
+    if n < 3.0 {
+        return None;
+    }
+    let mc = curve.control.iter().sum::<f64>() / n;
+    let mr = curve.response.iter().sum::<f64>() / n;
+    let (mut scc, mut srr, mut scr) = (0.0, 0.0, 0.0);
+    for (c, r) in curve.control.iter().zip(&curve.response) {
+        let (dc, dr) = (c - mc, r - mr);
+        scc += dc * dc;
+        srr += dr * dr;
+        scr += dc * dr;
+    }
+    let rho = scr / (scc * srr).sqrt();
+    // A flat channel gives NaN: no evidence either way.
+    if rho.is_nan() || rho >= OPPOSITE_SIGNS_CORRELATION {
+        return None;
+    }
+    for r in &mut curve.response {
+        *r = -*r;
+    }
+    Some(format!(
+        "the response falls as the control rises (correlation {rho:.2}): the two channels count in opposite sign conventions (a tensile force logged negative, a travel counted downwards), so the response's sign is reversed and the stiffness is positive"
+    ))
+}
+
 /// Geometry from the caller (SI: m, settled where flags and pipelines are parsed), else from the
 /// record's metadata, and the flat section b × h the moduli use when there is one. The length is
 /// required; the section is optional (moduli need it). See [`geometry_noted`] for what else the
@@ -388,6 +426,7 @@ pub fn read_test(
         flat.as_ref(),
         &mut curve,
     )?);
+    said.notes.extend(align_response_sign(&mut curve));
     Ok(ReadTest {
         rec,
         kind,
@@ -1114,6 +1153,33 @@ mod tests {
                 assert!(oa.samples_at_rest > 0, "{name}: {oa:?}");
             }
         }
+    }
+
+    /// A response that does not follow its control (a random file, a flat record) keeps its
+    /// sign; one that runs against it is reversed, the note giving the correlation.
+    #[test]
+    fn only_a_response_that_runs_against_its_control_is_reversed() {
+        let c: Vec<f64> = (0..200).map(|i| (i as f64 * 0.1).sin()).collect();
+        let noise: Vec<f64> = (0..200).map(|i| ((i * 7919) % 101) as f64 - 50.0).collect();
+        let mut random = Curve {
+            control: c.clone(),
+            response: noise.clone(),
+            ..Default::default()
+        };
+        assert!(align_response_sign(&mut random).is_none());
+        assert_eq!(random.response, noise);
+        let mut against = Curve {
+            control: c.clone(),
+            response: c.iter().map(|x| -3.0 * x + 0.01).collect(),
+            ..Default::default()
+        };
+        let note = align_response_sign(&mut against).unwrap();
+        assert!(note.contains("correlation -1.00"), "{note}");
+        assert!(against
+            .response
+            .iter()
+            .zip(&c)
+            .all(|(r, x)| (r - (3.0 * x - 0.01)).abs() < 1e-12));
     }
 
     /// A three-point test in any sign convention is turned to the rod's (deflection and force

@@ -502,6 +502,8 @@ fn stages(
         flat.as_ref(),
         &mut curve,
     )?);
+    out.notes
+        .extend(crate::bridge::align_response_sign(&mut curve));
     out.rows = Some(curve.control.len());
     drop(rec);
     done(0);

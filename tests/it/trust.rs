@@ -767,3 +767,57 @@ fn a_curvature_control_needs_no_length_and_is_not_divided_by_one() {
     }
     assert!(seen.windows(2).all(|w| w[0] == w[1]), "{seen:?}");
 }
+
+/// A tensile force logged negative against a positive elongation (and the same for a torque
+/// against its twist): the stiffness was reported negative, with no word. The response's sign
+/// is reversed with a note, (EA) and (GJ) come out as generated; both channels negative (a
+/// machine that counts the whole test negative) needed and gets no reversal.
+#[test]
+fn a_response_in_the_opposite_sign_convention_is_turned_not_reported_negative() {
+    let dir = tempfile::tempdir().unwrap();
+    let write = |name: &str, header: &str, sc: f64, sr: f64, k: f64| {
+        let mut s = String::from(header);
+        for i in 0..600 {
+            let u = 0.01 * (if i < 300 { i } else { 600 - i }) as f64;
+            let r = k * u + 0.05 * wiggle(i);
+            s.push_str(&format!("{},{},{}\n", 0.1 * i as f64, sc * u, sr * r));
+        }
+        let p = dir.path().join(name);
+        std::fs::write(&p, s).unwrap();
+        p
+    };
+    let tension = "Time (s),Displacement (mm),Force (N)\n";
+    // 50 N per mm over 100 mm: (EA) = 5000 N.
+    for (name, sc, sr, flipped) in [
+        ("opposite.csv", 1.0, -1.0, true),
+        ("opposite_travel.csv", -1.0, 1.0, true),
+        ("both_negative.csv", -1.0, -1.0, false),
+    ] {
+        let p = write(name, tension, sc, sr, 50.0);
+        let j = analyze_ok(&p, &["--kind", "tension", "--length-mm", "100"]);
+        let ea = j["stiffness"]["value"].as_f64().unwrap();
+        assert!((ea / 5000.0 - 1.0).abs() < 0.002, "{name}: (EA) {ea} N");
+        let notes = j["notes"].to_string();
+        assert_eq!(
+            notes.contains("opposite sign conventions"),
+            flipped,
+            "{name}: {notes}"
+        );
+    }
+    // Torsion: 1000 N·mm (1 N m) per degree, the torque logged negative.
+    let p = write(
+        "torsion.csv",
+        "Time (s),Angle (deg),Torque (N·mm)\n",
+        1.0,
+        -1.0,
+        1000.0,
+    );
+    let j = analyze_ok(&p, &["--kind", "torsion", "--length-mm", "100"]);
+    // (GJ) = T l₀ / θ = 1 N m per degree × 0.1 m / (π/180).
+    let gj_true = 0.1 / (std::f64::consts::PI / 180.0);
+    let gj = j["stiffness"]["value"].as_f64().unwrap();
+    assert!(
+        (gj / gj_true - 1.0).abs() < 0.002,
+        "(GJ) {gj}, truth {gj_true}"
+    );
+}
