@@ -19,6 +19,26 @@ pub struct Curve {
     pub response: Vec<f64>,
     /// Rows of the main block that were dropped as incomplete.
     pub dropped_rows: usize,
+    /// Rows that repeat the row before them exactly, time included (kept, counted).
+    pub repeated_rows: usize,
+}
+
+impl Curve {
+    /// The warning for rows that repeat the one before them, time stamp included: the same
+    /// sample written again (a logger's repeated record, a workbook's formula rows all showing
+    /// one cached value). They carry no measurement of their own: a record of fewer than three
+    /// distinct rows is refused ([`curve`]); otherwise they stay (every later stage sees the
+    /// rows as written) and the warning says the fits count them.
+    pub fn repeated_rows_warning(&self) -> Option<String> {
+        (self.repeated_rows > 0).then(|| {
+            format!(
+                "{} row(s) repeat the row before them exactly (time, control and response): the same sample written again, counted by the fits as if measured ({} distinct rows of {})",
+                self.repeated_rows,
+                self.control.len() - self.repeated_rows,
+                self.control.len()
+            )
+        })
+    }
 }
 
 /// Extract the complete rows of a record. Errors name the file and the missing role.
@@ -36,6 +56,15 @@ pub fn curve(rec: &TestRecord) -> Result<Curve> {
     for i in 0..control.len() {
         let ti = time.as_ref().map(|t| t[i]);
         let ok = control[i].is_finite() && response[i].is_finite() && ti.is_none_or(f64::is_finite);
+        // The same time, control and response as the row before: the sample repeated.
+        let repeat = ok
+            && ti.is_some()
+            && c.control.last() == Some(&control[i])
+            && c.response.last() == Some(&response[i])
+            && t_out.as_ref().and_then(|v| v.last()) == ti.as_ref();
+        if repeat {
+            c.repeated_rows += 1;
+        }
         if ok {
             c.control.push(control[i]);
             c.response.push(response[i]);
@@ -47,10 +76,18 @@ pub fn curve(rec: &TestRecord) -> Result<Curve> {
         }
     }
     c.time_s = t_out;
-    if c.control.len() < 3 {
+    let distinct = c.control.len() - c.repeated_rows;
+    if distinct < 3 {
         bail!(
-            "{file}: only {} complete rows (time, control and response all numbers); a test needs more",
-            c.control.len()
+            "{file}: only {distinct} complete rows (time, control and response all numbers){}; a test needs more",
+            if c.repeated_rows > 0 {
+                format!(
+                    " once {} that repeat the row before them exactly are set aside",
+                    c.repeated_rows
+                )
+            } else {
+                String::new()
+            }
         );
     }
     Ok(c)
@@ -427,6 +464,7 @@ pub fn read_test(
         &mut curve,
     )?);
     said.notes.extend(align_response_sign(&mut curve));
+    said.warnings.extend(curve.repeated_rows_warning());
     Ok(ReadTest {
         rec,
         kind,
@@ -1081,6 +1119,7 @@ mod tests {
             control,
             response,
             dropped_rows: 0,
+            repeated_rows: 0,
         }
     }
 

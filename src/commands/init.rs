@@ -93,8 +93,7 @@ pub struct Survey {
 /// Extensions of files that are never test exports.
 const NOT_TESTS_EXT: &[&str] = &[
     "md", "toml", "json", "html", "htm", "svg", "png", "jpg", "jpeg", "gif", "pdf", "parquet",
-    "tex", "yaml", "yml", "zip", "gz", "xz", "7z", "rs", "py", "ipynb", "xlsx", "xls", "docx",
-    "lock",
+    "tex", "yaml", "yml", "zip", "gz", "xz", "7z", "rs", "py", "ipynb", "docx", "lock",
 ];
 /// File-name beginnings of files that are never test exports.
 const NOT_TESTS_NAME: &[&str] = &[

@@ -504,6 +504,7 @@ fn stages(
     )?);
     out.notes
         .extend(crate::bridge::align_response_sign(&mut curve));
+    out.warnings.extend(curve.repeated_rows_warning());
     out.rows = Some(curve.control.len());
     drop(rec);
     done(0);

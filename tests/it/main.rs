@@ -14,3 +14,4 @@ mod sections;
 mod shards;
 mod three_point_history;
 mod trust;
+mod workbooks;

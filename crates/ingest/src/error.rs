@@ -139,6 +139,14 @@ pub enum IngestError {
         /// What went wrong.
         detail: String,
     },
+    /// A spreadsheet (xlsx, xls, ods) that could not be read, or has no sheet with a table.
+    #[error("{file}: {detail}")]
+    Workbook {
+        /// File path or label.
+        file: String,
+        /// What went wrong.
+        detail: String,
+    },
     /// Building the polars table failed (internal; should not happen).
     #[error("{file}: building the table failed: {detail}")]
     Table {

@@ -17,6 +17,7 @@ mod roles;
 mod table;
 pub mod tokenize;
 pub mod units;
+mod workbook;
 mod xml;
 
 pub use decode::{Confidence, Encoding};
@@ -119,7 +120,10 @@ pub fn read_path(path: &Path, opts: &ReadOptions) -> Result<TestRecord, IngestEr
         .read_to_end(&mut bytes)
         .map_err(io)?;
     let source = path.display().to_string();
-    sniff_binary(&bytes, &source)?;
+    let book = workbook::is_workbook(&bytes);
+    if !book {
+        sniff_binary(&bytes, &source)?;
+    }
     bytes.reserve_exact((meta.len().min(MAX_FILE_BYTES) as usize + 1).saturating_sub(bytes.len()));
     r.read_to_end(&mut bytes).map_err(io)?;
     if bytes.len() as u64 > MAX_FILE_BYTES {
@@ -130,9 +134,43 @@ pub fn read_path(path: &Path, opts: &ReadOptions) -> Result<TestRecord, IngestEr
         });
     }
     let sha = sha256_hex(&bytes);
+    if book {
+        return parse_workbook(&bytes, sha, &source, opts);
+    }
     let enc = decode::detect_assess(&bytes);
     let text = decode::decode_owned(bytes, enc.0);
     parse(&text, enc, sha, &source, opts)
+}
+
+/// A spreadsheet export: its table sheet as text ([`workbook::to_text`]), read as a tab-separated
+/// export; the note says which sheet.
+fn parse_workbook(
+    bytes: &[u8],
+    sha256: String,
+    source: &str,
+    opts: &ReadOptions,
+) -> Result<TestRecord, IngestError> {
+    let sheet = workbook::to_text(bytes, source)?;
+    let mut rec = parse_with(
+        &sheet.text,
+        (Encoding::Utf8, decode::Confidence::Certain),
+        sha256,
+        source,
+        opts,
+        sheet.metadata,
+    )?;
+    let note = sheet.note;
+    rec.provenance.encoding = "workbook (xlsx, xls or ods)".into();
+    rec.notes.insert(
+        0,
+        Diagnostic {
+            file: source.into(),
+            line: None,
+            column: None,
+            message: note,
+        },
+    );
+    Ok(rec)
 }
 
 /// A NUL byte in the head of a file that is not UTF-16/32 text: binary, refused before the
@@ -171,6 +209,9 @@ pub fn read_bytes_hashed(
     source: &str,
     opts: &ReadOptions,
 ) -> Result<TestRecord, IngestError> {
+    if workbook::is_workbook(bytes) {
+        return parse_workbook(bytes, sha256, source, opts);
+    }
     let enc = decode::detect_assess(bytes);
     let text = decode::decode(bytes, enc.0);
     parse(&text, enc, sha256, source, opts)
@@ -182,10 +223,23 @@ fn sha256_hex(bytes: &[u8]) -> String {
 
 fn parse(
     text: &str,
+    enc: (Encoding, decode::Confidence),
+    sha256: String,
+    source: &str,
+    opts: &ReadOptions,
+) -> Result<TestRecord, IngestError> {
+    parse_with(text, enc, sha256, source, opts, Vec::new())
+}
+
+/// [`parse`], with `metadata` read elsewhere (a workbook's labelled cells) put before the
+/// metadata the text reader finds: where both give a key, the first wins.
+fn parse_with(
+    text: &str,
     (enc, confidence): (Encoding, decode::Confidence),
     sha256: String,
     source: &str,
     opts: &ReadOptions,
+    metadata: Vec<(String, String)>,
 ) -> Result<TestRecord, IngestError> {
     if text
         .trim_matches(|c: char| c.is_whitespace() || c == '\u{feff}')
@@ -204,6 +258,11 @@ fn parse(
         Format::MtsTestsuiteXml => xml::read_xml(text, source)?,
         _ => table::read_table(text, format, source)?,
     };
+    if !metadata.is_empty() {
+        let own = std::mem::take(&mut raw.metadata);
+        raw.metadata = metadata;
+        raw.metadata.extend(own);
+    }
     if enc == Encoding::Utf8StrayBom {
         raw.warnings.insert(
             0,

@@ -952,6 +952,9 @@ const GAUGE_LENGTH_KEYS: &[&str] = &[
     "original length",
     "initial length",
     "original gauge length",
+    // ISO 6892-1's symbol, as workbooks label it (`L0=`, `Lo:`).
+    "l0",
+    "lo",
 ];
 
 /// The first metadata entry with a value whose key is one of `keys` (in the order of `keys`):

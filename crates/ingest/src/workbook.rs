@@ -1,0 +1,198 @@
+//! Spreadsheet exports (Excel `.xlsx`/`.xlsm`/`.xls`, OpenDocument `.ods`): testXpert, Bluehill
+//! and NEXYGEN all export to Excel, and labs keep their campaigns there.
+//!
+//! A workbook is turned into the text a delimited export would be (one line per sheet row,
+//! cells separated by tabs, numbers as the shortest decimal that reads back to the same double)
+//! and read by the text readers from there: the metadata rows above the table, the names and
+//! units rows and the data rows are found as in any export. The sheet read is the one with the
+//! most rows holding two or more numbers (a results summary sheet has one row per specimen; a raw
+//! data sheet has one per sample); the note says which, and which others the workbook has.
+//!
+//! Cells are read by `calamine` (no dates feature: a date cell is its serial day number, as in a
+//! CSV export of the sheet). Line numbers in messages are the sheet's row numbers.
+
+use crate::error::IngestError;
+use calamine::{Data, Reader};
+use std::io::Cursor;
+
+/// Whether `head` starts like a workbook: a ZIP archive (xlsx, xlsm, ods) or an OLE compound
+/// file (xls).
+pub fn is_workbook(head: &[u8]) -> bool {
+    head.starts_with(b"PK\x03\x04")
+        || head.starts_with(&[0xD0, 0xCF, 0x11, 0xE0, 0xA1, 0xB1, 0x1A, 0xE1])
+}
+
+/// A workbook's table sheet as text, the note that says which sheet it is, and the workbook's
+/// labelled values as metadata (see [`labelled`]): the table sheet's first, then the other
+/// sheets' (a title such as `Statischer Rundzugversuch` on a cover sheet says the kind).
+pub struct SheetText {
+    /// The table sheet as tab-separated text.
+    pub text: String,
+    /// Which sheet was read, and which others there are.
+    pub note: String,
+    /// `(label, value)` pairs from the cells of every sheet.
+    pub metadata: Vec<(String, String)>,
+}
+
+/// Rows of a sheet other than the table sheet that are searched for labelled values and titles:
+/// cover and protocol sheets put them at the top.
+const OTHER_SHEET_ROWS: usize = 200;
+
+/// The sheet of `bytes` to read as text, the note that says which sheet it is, and the
+/// workbook's labelled values.
+pub fn to_text(bytes: &[u8], source: &str) -> Result<SheetText, IngestError> {
+    let err = |detail: String| IngestError::Workbook {
+        file: source.into(),
+        detail,
+    };
+    let mut wb = calamine::open_workbook_auto_from_rs(Cursor::new(bytes)).map_err(|e| {
+        err(format!(
+            "looks like a spreadsheet (a ZIP or OLE container) but cannot be read as xlsx, xls or ods: {e}"
+        ))
+    })?;
+    let names = wb.sheet_names();
+    let mut best: Option<(usize, String, calamine::Range<Data>)> = None;
+    let mut other_meta: Vec<(String, Vec<(String, String)>)> = Vec::new();
+    for name in &names {
+        let Ok(range) = wb.worksheet_range(name) else {
+            continue;
+        };
+        other_meta.push((name.clone(), labelled(&range, OTHER_SHEET_ROWS, Some(name))));
+        let numeric_rows = range
+            .rows()
+            .filter(|r| {
+                r.iter()
+                    .filter(|c| matches!(c, Data::Float(_) | Data::Int(_)))
+                    .count()
+                    >= 2
+            })
+            .count();
+        if numeric_rows > best.as_ref().map_or(0, |b| b.0) {
+            best = Some((numeric_rows, name.clone(), range));
+        }
+    }
+    let Some((_, sheet, range)) = best else {
+        return Err(err(format!(
+            "a workbook with no sheet holding a table of numbers (sheets: {})",
+            quoted(&names)
+        )));
+    };
+    let mut text = String::new();
+    // Blank lines for the rows above the range, so that line numbers are sheet rows.
+    let (row0, _) = range.start().unwrap_or((0, 0));
+    for _ in 0..row0 {
+        text.push('\n');
+    }
+    for row in range.rows() {
+        let last = row
+            .iter()
+            .rposition(|c| !matches!(c, Data::Empty))
+            .map_or(0, |i| i + 1);
+        for (i, cell) in row[..last].iter().enumerate() {
+            if i > 0 {
+                text.push('\t');
+            }
+            push_cell(&mut text, cell);
+        }
+        text.push('\n');
+    }
+    let mut metadata = labelled(&range, usize::MAX, None);
+    for (name, pairs) in other_meta {
+        if name != sheet {
+            metadata.extend(pairs);
+        }
+    }
+    let others: Vec<String> = names.iter().filter(|n| **n != sheet).cloned().collect();
+    let note = if others.is_empty() {
+        format!("read from the workbook's only sheet '{sheet}'")
+    } else {
+        format!(
+            "read from the workbook's sheet '{sheet}', the one with the most rows of numbers (the others: {})",
+            quoted(&others)
+        )
+    };
+    Ok(SheetText {
+        text,
+        note,
+        metadata,
+    })
+}
+
+/// Labelled values of a sheet's first `rows` rows, as a lab's workbook lays them out: a text
+/// cell ending in `:` or `=` (`Probe:`, `L0=`) labels the next non-empty cell of its row, and
+/// one row may hold several (`Probe: AH-123  FBruch: 5.26  sBruch: 369.2`). With `title` (a
+/// sheet other than the table's), a row whose only cell is text is kept as `(sheet, text)`:
+/// cover sheets name the test there. A label with no value beside it is skipped.
+fn labelled(
+    range: &calamine::Range<Data>,
+    rows: usize,
+    title: Option<&str>,
+) -> Vec<(String, String)> {
+    let mut out = Vec::new();
+    for row in range.rows().take(rows) {
+        let filled: Vec<&Data> = row.iter().filter(|c| !matches!(c, Data::Empty)).collect();
+        if let (Some(sheet), [Data::String(t)]) = (title, filled.as_slice()) {
+            if !t.trim().is_empty() {
+                out.push((sheet.to_string(), t.trim().to_string()));
+            }
+            continue;
+        }
+        let label = |c: &Data| match c {
+            Data::String(t) => {
+                let t = t.trim();
+                (t.len() > 1 && t.len() <= 60 && (t.ends_with(':') || t.ends_with('=')))
+                    .then(|| t.trim_end_matches([':', '=']).trim().to_string())
+            }
+            _ => None,
+        };
+        for (i, c) in filled.iter().enumerate() {
+            let Some(key) = label(c) else { continue };
+            let Some(v) = filled.get(i + 1) else { continue };
+            if label(v).is_some() || matches!(v, Data::Error(_)) {
+                continue;
+            }
+            let mut value = String::new();
+            push_cell(&mut value, v);
+            if !key.is_empty() && !value.is_empty() {
+                out.push((key, value));
+            }
+        }
+    }
+    out
+}
+
+/// A cell as a delimited export writes it. Numbers: Rust's shortest round-trip decimal (never an
+/// exponent), so the text reader parses the very double the sheet holds.
+fn push_cell(text: &mut String, cell: &Data) {
+    use std::fmt::Write;
+    match cell {
+        Data::Empty | Data::Error(_) => {}
+        Data::Int(i) => {
+            let _ = write!(text, "{i}");
+        }
+        Data::Float(f) => {
+            let _ = write!(text, "{f}");
+        }
+        Data::Bool(b) => text.push_str(if *b { "TRUE" } else { "FALSE" }),
+        Data::DateTime(d) => {
+            let _ = write!(text, "{}", d.as_f64());
+        }
+        Data::String(s) | Data::DateTimeIso(s) | Data::DurationIso(s) => {
+            // A cell's own tabs and line breaks would split it.
+            text.extend(
+                s.trim()
+                    .chars()
+                    .map(|c| if c.is_control() { ' ' } else { c }),
+            );
+        }
+    }
+}
+
+/// `'a', 'b'`.
+fn quoted(names: &[String]) -> String {
+    names
+        .iter()
+        .map(|n| format!("'{n}'"))
+        .collect::<Vec<_>>()
+        .join(", ")
+}
