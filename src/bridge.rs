@@ -623,6 +623,7 @@ pub fn read_options(r: &crate::cli::ReaderArgs, kind: Option<TestKind>) -> Resul
     Ok(ReadOptions {
         format,
         block: r.block,
+        sheet: r.sheet.clone(),
         time: r.time.clone(),
         control: r.control.clone(),
         response: r.response.clone(),

@@ -137,6 +137,10 @@ pub struct ReaderArgs {
     /// Use this data block (1-based) when the file holds several.
     #[arg(long, value_name = "N")]
     pub block: Option<usize>,
+    /// Read this sheet of a workbook (xlsx, xls, ods) instead of the one with the most rows of
+    /// numbers (one specimen per sheet, say).
+    #[arg(long, value_name = "NAME")]
+    pub sheet: Option<String>,
     /// Name of the time column (overrides detection).
     #[arg(long, value_name = "COLUMN")]
     pub time: Option<String>,

@@ -162,3 +162,28 @@ fn folder_mode_evaluates_a_workbook_beside_its_text_export() {
         .all(|t| t["ok"] == true && t["kind"] == "three_point"));
     assert_eq!(tests[0]["stiffness"], tests[1]["stiffness"]);
 }
+
+/// `--sheet` picks a sheet by name (one specimen per sheet); a name the workbook lacks is an
+/// error listing its sheets, and `--sheet` on a text export is an error saying so.
+#[test]
+fn sheet_picks_a_workbooks_sheet_and_is_refused_elsewhere() {
+    let xlsx = "tests/data/cablab__testxpert_three_point_workbook.xlsx";
+    let (code, j, err) = analyze_json(xlsx, &["--sheet", "Messwerte"]);
+    assert_eq!(code, Some(0), "{err}");
+    assert!(
+        j["notes"]
+            .to_string()
+            .contains("sheet 'Messwerte', as asked"),
+        "{}",
+        j["notes"]
+    );
+    let (code, _, err) = analyze_json(xlsx, &["--sheet", "Probe 7"]);
+    assert_eq!(code, Some(2));
+    assert!(
+        err.contains("no sheet 'Probe 7' (sheets: 'Ergebnisse', 'Messwerte', 'Notizen')"),
+        "{err}"
+    );
+    let (code, _, err) = analyze_json("raw_data/cable/three_point_2mm_1.TXT", &["--sheet", "A"]);
+    assert_eq!(code, Some(2));
+    assert!(err.contains("this file is a text export"), "{err}");
+}

@@ -39,6 +39,9 @@ pub struct ReadOptions {
     pub format: Option<Format>,
     /// Data block to read (1-based, `--block`); `None` = the longest.
     pub block: Option<usize>,
+    /// Sheet of a workbook to read (`--sheet`); `None` = the one with the most rows of numbers.
+    /// An error on a text export.
+    pub sheet: Option<String>,
     /// Name of the time column (`--time`).
     pub time: Option<String>,
     /// Name of the control column (`--control`).
@@ -150,14 +153,14 @@ fn parse_workbook(
     source: &str,
     opts: &ReadOptions,
 ) -> Result<TestRecord, IngestError> {
-    let sheet = workbook::to_text(bytes, source)?;
+    let sheet = workbook::to_text(bytes, source, opts.sheet.as_deref())?;
     let mut rec = parse_with(
         &sheet.text,
         (Encoding::Utf8, decode::Confidence::Certain),
         sha256,
         source,
         opts,
-        sheet.metadata,
+        Some(sheet.metadata),
     )?;
     let note = sheet.note;
     rec.provenance.encoding = "workbook (xlsx, xls or ods)".into();
@@ -228,18 +231,19 @@ fn parse(
     source: &str,
     opts: &ReadOptions,
 ) -> Result<TestRecord, IngestError> {
-    parse_with(text, enc, sha256, source, opts, Vec::new())
+    parse_with(text, enc, sha256, source, opts, None)
 }
 
-/// [`parse`], with `metadata` read elsewhere (a workbook's labelled cells) put before the
-/// metadata the text reader finds: where both give a key, the first wins.
+/// [`parse`] of a text export (`workbook` None) or of a workbook's table sheet, with the
+/// workbook's labelled cells put before the metadata the text reader finds: where both give a
+/// key, the first wins.
 fn parse_with(
     text: &str,
     (enc, confidence): (Encoding, decode::Confidence),
     sha256: String,
     source: &str,
     opts: &ReadOptions,
-    metadata: Vec<(String, String)>,
+    workbook: Option<Vec<(String, String)>>,
 ) -> Result<TestRecord, IngestError> {
     if text
         .trim_matches(|c: char| c.is_whitespace() || c == '\u{feff}')
@@ -250,6 +254,14 @@ fn parse_with(
         });
     }
     decode::check_text(text, source)?;
+    if let (Some(sheet), None) = (&opts.sheet, &workbook) {
+        return Err(IngestError::Workbook {
+            file: source.into(),
+            detail: format!(
+                "--sheet '{sheet}' picks a sheet of a workbook (xlsx, xls, ods); this file is a text export"
+            ),
+        });
+    }
     let (format, reason) = match opts.format {
         Some(f) => (f, "forced by --format".to_string()),
         None => format::detect(text, enc, source),
@@ -258,7 +270,7 @@ fn parse_with(
         Format::MtsTestsuiteXml => xml::read_xml(text, source)?,
         _ => table::read_table(text, format, source)?,
     };
-    if !metadata.is_empty() {
+    if let Some(metadata) = workbook {
         let own = std::mem::take(&mut raw.metadata);
         raw.metadata = metadata;
         raw.metadata.extend(own);

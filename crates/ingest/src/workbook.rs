@@ -40,7 +40,9 @@ const OTHER_SHEET_ROWS: usize = 200;
 
 /// The sheet of `bytes` to read as text, the note that says which sheet it is, and the
 /// workbook's labelled values.
-pub fn to_text(bytes: &[u8], source: &str) -> Result<SheetText, IngestError> {
+/// `sheet`: the sheet to read (an error naming the workbook's sheets when it has none of that
+/// name); `None`: the one with the most rows of numbers.
+pub fn to_text(bytes: &[u8], source: &str, sheet: Option<&str>) -> Result<SheetText, IngestError> {
     let err = |detail: String| IngestError::Workbook {
         file: source.into(),
         detail,
@@ -51,6 +53,14 @@ pub fn to_text(bytes: &[u8], source: &str) -> Result<SheetText, IngestError> {
         ))
     })?;
     let names = wb.sheet_names();
+    if let Some(want) = sheet {
+        if !names.iter().any(|n| n == want) {
+            return Err(err(format!(
+                "the workbook has no sheet '{want}' (sheets: {})",
+                quoted(&names)
+            )));
+        }
+    }
     let mut best: Option<(usize, String, calamine::Range<Data>)> = None;
     let mut other_meta: Vec<(String, Vec<(String, String)>)> = Vec::new();
     for name in &names {
@@ -67,10 +77,12 @@ pub fn to_text(bytes: &[u8], source: &str) -> Result<SheetText, IngestError> {
                     >= 2
             })
             .count();
-        if numeric_rows > best.as_ref().map_or(0, |b| b.0) {
+        let chosen = sheet == Some(name.as_str());
+        if chosen || (sheet.is_none() && numeric_rows > best.as_ref().map_or(0, |b| b.0)) {
             best = Some((numeric_rows, name.clone(), range));
         }
     }
+    let chosen_by_name = sheet.is_some();
     let Some((_, sheet, range)) = best else {
         return Err(err(format!(
             "a workbook with no sheet holding a table of numbers (sheets: {})",
@@ -105,6 +117,11 @@ pub fn to_text(bytes: &[u8], source: &str) -> Result<SheetText, IngestError> {
     let others: Vec<String> = names.iter().filter(|n| **n != sheet).cloned().collect();
     let note = if others.is_empty() {
         format!("read from the workbook's only sheet '{sheet}'")
+    } else if chosen_by_name {
+        format!(
+            "read from the workbook's sheet '{sheet}', as asked (the others: {})",
+            quoted(&others)
+        )
     } else {
         format!(
             "read from the workbook's sheet '{sheet}', the one with the most rows of numbers (the others: {})",
