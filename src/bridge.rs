@@ -98,21 +98,32 @@ pub fn curve(rec: &TestRecord) -> Result<Curve> {
 /// record (hysteresis, holds and drift lower the correlation, they do not reverse it).
 pub const OPPOSITE_SIGNS_CORRELATION: f64 = -0.5;
 
+/// Share of the range box (control range × response range) above which the area the path
+/// encloses, ∮ (r − r̄) dc in the file's own signs, counts as energy taken up: a passive
+/// specimen logged in opposite sign conventions encloses none (elastic) or a negative area.
+pub const LOOP_SHARE_AGAINST_FLIP: f64 = 0.02;
+
 /// A response recorded in the opposite sign convention to its control (a tensile force logged
 /// negative against a positive elongation, a crosshead counted downwards): the Pearson
-/// correlation of the two over the complete rows is below [`OPPOSITE_SIGNS_CORRELATION`]. The
-/// response's sign is reversed, so that every stiffness comes out positive, and the note says so;
-/// a record whose response does not follow its control (noise, a random file) is left alone.
+/// correlation of the two over the complete rows is below [`OPPOSITE_SIGNS_CORRELATION`] while
+/// the loops, in the file's signs, take up no energy (enclosed area at most
+/// [`LOOP_SHARE_AGAINST_FLIP`] of the range box). The response's sign is reversed, so that every
+/// stiffness comes out positive, and the note (first) says so; a record whose response does not
+/// follow its control (noise, a random file) is left alone. A response that runs against its
+/// control while its loops do take up energy is no passive specimen's in either sign
+/// convention (a response a quarter period or more out of phase: a soft specimen driven fast,
+/// where the grip's inertia, ∝ −ü, dominates): left as it is, with the warning (second).
 /// Reported values (force, moment) are then in the control's sign convention.
-pub fn align_response_sign(curve: &mut Curve) -> Option<String> {
-    let n = curve.control.len() as f64;
-    if n < 3.0 {
-        return None;
+pub fn align_response_sign(curve: &mut Curve) -> (Option<String>, Option<String>) {
+    let n = curve.control.len();
+    if n < 3 {
+        return (None, None);
     }
-    let mc = curve.control.iter().sum::<f64>() / n;
-    let mr = curve.response.iter().sum::<f64>() / n;
+    let (c, r) = (&curve.control, &curve.response);
+    let mc = c.iter().sum::<f64>() / n as f64;
+    let mr = r.iter().sum::<f64>() / n as f64;
     let (mut scc, mut srr, mut scr) = (0.0, 0.0, 0.0);
-    for (c, r) in curve.control.iter().zip(&curve.response) {
+    for (c, r) in c.iter().zip(r) {
         let (dc, dr) = (c - mc, r - mr);
         scc += dc * dc;
         srr += dr * dr;
@@ -121,14 +132,40 @@ pub fn align_response_sign(curve: &mut Curve) -> Option<String> {
     let rho = scr / (scc * srr).sqrt();
     // A flat channel gives NaN: no evidence either way.
     if rho.is_nan() || rho >= OPPOSITE_SIGNS_CORRELATION {
-        return None;
+        return (None, None);
+    }
+    let area: f64 = (1..n)
+        .map(|i| 0.5 * (r[i] + r[i - 1] - 2.0 * mr) * (c[i] - c[i - 1]))
+        .sum();
+    let (lo_c, hi_c) = c
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
+            (a.min(v), b.max(v))
+        });
+    let (lo_r, hi_r) = r
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
+            (a.min(v), b.max(v))
+        });
+    let share = area / ((hi_c - lo_c) * (hi_r - lo_r));
+    if share > LOOP_SHARE_AGAINST_FLIP {
+        return (
+            None,
+            Some(format!(
+                "the response falls as the control rises (correlation {rho:.2}) while its loops take up energy in the file's own signs (enclosed area {:.0} % of the range box): no sign convention makes this a passive specimen's response — it lags or leads its control by a quarter period or more, as when the grip's inertia dominates a soft specimen driven fast; the stiffness and the loop areas are not the specimen's",
+                100.0 * share
+            )),
+        );
     }
     for r in &mut curve.response {
         *r = -*r;
     }
-    Some(format!(
-        "the response falls as the control rises (correlation {rho:.2}): the two channels count in opposite sign conventions (a tensile force logged negative, a travel counted downwards), so the response's sign is reversed and the stiffness is positive"
-    ))
+    (
+        Some(format!(
+            "the response falls as the control rises (correlation {rho:.2}): the two channels count in opposite sign conventions (a tensile force logged negative, a travel counted downwards), so the response's sign is reversed and the stiffness is positive"
+        )),
+        None,
+    )
 }
 
 /// Geometry from the caller (SI: m, settled where flags and pipelines are parsed), else from the
@@ -463,7 +500,9 @@ pub fn read_test(
         flat.as_ref(),
         &mut curve,
     )?);
-    said.notes.extend(align_response_sign(&mut curve));
+    let (note, warning) = align_response_sign(&mut curve);
+    said.notes.extend(note);
+    said.warnings.extend(warning);
     said.warnings.extend(curve.repeated_rows_warning());
     Ok(ReadTest {
         rec,
@@ -1206,14 +1245,14 @@ mod tests {
             response: noise.clone(),
             ..Default::default()
         };
-        assert!(align_response_sign(&mut random).is_none());
+        assert_eq!(align_response_sign(&mut random), (None, None));
         assert_eq!(random.response, noise);
         let mut against = Curve {
             control: c.clone(),
             response: c.iter().map(|x| -3.0 * x + 0.01).collect(),
             ..Default::default()
         };
-        let note = align_response_sign(&mut against).unwrap();
+        let note = align_response_sign(&mut against).0.unwrap();
         assert!(note.contains("correlation -1.00"), "{note}");
         assert!(against
             .response

@@ -502,8 +502,9 @@ fn stages(
         flat.as_ref(),
         &mut curve,
     )?);
-    out.notes
-        .extend(crate::bridge::align_response_sign(&mut curve));
+    let (note, warning) = crate::bridge::align_response_sign(&mut curve);
+    out.notes.extend(note);
+    out.warnings.extend(warning);
     out.warnings.extend(curve.repeated_rows_warning());
     out.rows = Some(curve.control.len());
     drop(rec);

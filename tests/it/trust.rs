@@ -821,3 +821,30 @@ fn a_response_in_the_opposite_sign_convention_is_turned_not_reported_negative() 
         "(GJ) {gj}, truth {gj_true}"
     );
 }
+
+/// A torque that runs against its twist while its loops take up energy (a quarter period and
+/// more out of phase: torque = −0.5 θ + 0.3 θ̇/ω, as a grip's inertia and damping give on a soft
+/// specimen driven fast; the real Instron WaveMatrix silicone exports look like this): no sign
+/// convention makes it a specimen's, so it is not reversed, and the warning says so.
+#[test]
+fn a_response_out_of_phase_beyond_a_quarter_period_is_not_reversed_but_flagged() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut s = String::from("Time (s),Angle (rad),Torque (N·m)\n");
+    for i in 0..2000 {
+        let t = 0.01 * i as f64;
+        let w = std::f64::consts::TAU / 4.0;
+        let th = 0.2 * (w * t).sin();
+        let m = -0.5 * th + 0.3 * 0.2 * (w * t).cos() + 1e-4 * wiggle(i);
+        s.push_str(&format!("{t},{th},{m}\n"));
+    }
+    let p = dir.path().join("inertia.csv");
+    std::fs::write(&p, s).unwrap();
+    let j = analyze_ok(&p, &["--kind", "torsion", "--length-mm", "50"]);
+    let notes = j["notes"].to_string();
+    let warnings = j["warnings"].to_string();
+    assert!(!notes.contains("opposite sign conventions"), "{notes}");
+    assert!(
+        warnings.contains("no sign convention makes this a passive specimen"),
+        "{warnings}"
+    );
+}
