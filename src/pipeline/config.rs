@@ -123,6 +123,9 @@ pub struct FileOverride {
     /// Data block (1-based) to use.
     #[serde(default)]
     pub block: Option<usize>,
+    /// Sheet of a workbook to read (default: the one with the most rows of numbers).
+    #[serde(default)]
+    pub sheet: Option<String>,
     /// Column overrides.
     #[serde(default)]
     pub time: Option<String>,
@@ -400,6 +403,9 @@ pub struct PlannedTest {
     pub format: Option<String>,
     /// Block choice (1-based).
     pub block: Option<usize>,
+    /// Workbook sheet choice (absent from the cache key when not set).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub sheet: Option<String>,
     /// Column overrides.
     pub time: Option<String>,
     /// Control column override.
@@ -1042,6 +1048,7 @@ fn validate(file: PipelineFile, path: &Path, bytes: Vec<u8>, root: PathBuf) -> R
                 free_length_m: ov.length_mm.or(g.length_mm).map(|l| l * 1e-3),
                 format: ov.format.clone().or_else(|| g.format.clone()),
                 block: ov.block,
+                sheet: ov.sheet.clone(),
                 time: ov.time.clone(),
                 control: ov.control.clone(),
                 response: ov.response.clone(),

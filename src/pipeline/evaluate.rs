@@ -410,6 +410,7 @@ fn stages(
             .map(|f| f.parse().map_err(|e| anyhow!("format: {e}")))
             .transpose()?,
         block: t.block,
+        sheet: t.sheet.clone(),
         time: t.time.clone(),
         control: t.control.clone(),
         response: t.response.clone(),

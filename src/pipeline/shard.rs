@@ -376,6 +376,7 @@ mod tests {
                 free_length_m: Some(0.01),
                 format: None,
                 block: None,
+                sheet: None,
                 time: None,
                 control: None,
                 response: None,

@@ -187,3 +187,65 @@ fn sheet_picks_a_workbooks_sheet_and_is_refused_elsewhere() {
     assert_eq!(code, Some(2));
     assert!(err.contains("this file is a text export"), "{err}");
 }
+
+/// A pipeline picks a workbook's sheet per file (`[input.overrides."<file>"] sheet = …`): the
+/// named sheet is read; a sheet the workbook lacks fails that test alone, naming the sheets.
+#[test]
+fn a_pipeline_names_a_workbooks_sheet_per_file() {
+    let d = tempfile::tempdir().unwrap();
+    let raw = d.path().join("raw");
+    std::fs::create_dir_all(&raw).unwrap();
+    let xlsx = root().join("tests/data/cablab__testxpert_three_point_workbook.xlsx");
+    std::fs::copy(&xlsx, raw.join("a.xlsx")).unwrap();
+    std::fs::copy(&xlsx, raw.join("b.xlsx")).unwrap();
+    std::fs::write(
+        d.path().join("wb.toml"),
+        r#"[campaign]
+name = "wb"
+
+[[specimen]]
+label = "cable 2.8 mm"
+diameter_mm = 2.8
+
+[[input]]
+glob = "raw/*.xlsx"
+specimen = "cable 2.8 mm"
+kind = "three_point"
+
+[input.overrides."a.xlsx"]
+sheet = "Messwerte"
+
+[input.overrides."b.xlsx"]
+sheet = "Probe 9"
+"#,
+    )
+    .unwrap();
+    let out = cablab()
+        .current_dir(d.path())
+        .env("CI", "1")
+        .args(["run", "wb.toml", "--no-diagnosis", "-q"])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("no sheet 'Probe 9' (sheets: 'Ergebnisse', 'Messwerte', 'Notizen')"),
+        "{err}"
+    );
+    let v: Value =
+        serde_json::from_slice(&std::fs::read(d.path().join("reports/wb/summary.json")).unwrap())
+            .unwrap();
+    let tests = v["tests"].as_array().unwrap();
+    let ok: Vec<bool> = tests.iter().map(|t| t["ok"] == true).collect();
+    assert_eq!(ok, [true, false], "{tests:?}");
+    let j: Value = serde_json::from_slice(
+        &std::fs::read(d.path().join("reports/wb/tests/raw__a.xlsx/result.json")).unwrap(),
+    )
+    .unwrap();
+    assert!(
+        j["notes"]
+            .to_string()
+            .contains("sheet 'Messwerte', as asked"),
+        "{}",
+        j["notes"]
+    );
+}
