@@ -847,6 +847,22 @@ pub fn check_kind(rec: &TestRecord, kind: TestKind, force: bool) -> Result<Optio
             kind.as_str()
         )));
     }
+    if rec.kind_reason != "set by --kind" {
+        // Inferred from one part of the file, contradicted by another.
+        let four_point = ["4-point", "four-point", "four point", "vierpunkt"]
+            .iter()
+            .any(|w| rec.kind_reason.to_lowercase().contains(w));
+        bail!(
+            "{file}: the file contradicts itself on its kind: it reads as {} ({}), but {evidence}. Give the kind with --kind{}",
+            kind.as_str(),
+            rec.kind_reason,
+            if four_point {
+                "; a four-point bending test of force against deflection is none of cablab's kinds: its pure bending is moment against end rotation or curvature (the middle span of a four-point test, M = F a / 2 with a the support-to-load distance), and three_point's formulas do not hold for four loading points"
+            } else {
+                ""
+            }
+        )
+    }
     bail!(
         "{file}: declared kind {} contradicts the file: {evidence}. If the file is right, give its kind; if the kind is right, pass --force-kind (pipelines: force_kind = true)",
         kind.as_str()

@@ -848,3 +848,41 @@ fn a_response_out_of_phase_beyond_a_quarter_period_is_not_reversed_but_flagged()
         "{warnings}"
     );
 }
+
+/// A four-point bending log of force against deflection: its kind read from its own words
+/// (`4-point` → pure bending) is contradicted by its channels, and the error says the file
+/// contradicts itself and that no kind of cablab's fits, instead of inviting a kind that would
+/// apply three-point formulas; `--kind three-point` is refused on the file's words.
+#[test]
+fn a_four_point_force_deflection_log_is_refused_saying_why() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut s = String::from(
+        "Test type:,4-point bending\nSpan:,100,mm\nTime (s),Deflection (mm),Force (N)\n",
+    );
+    for i in 0..200 {
+        let d = 0.01 * (if i < 100 { i } else { 200 - i }) as f64;
+        s.push_str(&format!("{},{d},{}\n", 0.1 * i as f64, 50.0 * d));
+    }
+    let p = dir.path().join("fourpt.csv");
+    std::fs::write(&p, s).unwrap();
+    let out = cablab().arg("analyze").arg(&p).output().unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("contradicts itself on its kind")
+            && err.contains("three_point's formulas do not hold for four loading points"),
+        "{err}"
+    );
+    let out = cablab()
+        .arg("analyze")
+        .arg(&p)
+        .args(["--kind", "three-point", "--length-mm", "100"])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("declared kind three_point contradicts the file"),
+        "{err}"
+    );
+}
