@@ -120,20 +120,16 @@ pub fn align_response_sign(curve: &mut Curve) -> (Option<String>, Option<String>
         return (None, None);
     }
     let (c, r) = (&curve.control, &curve.response);
-    let mc = c.iter().sum::<f64>() / n as f64;
-    let mr = r.iter().sum::<f64>() / n as f64;
-    let (mut scc, mut srr, mut scr) = (0.0, 0.0, 0.0);
-    for (c, r) in c.iter().zip(r) {
-        let (dc, dr) = (c - mc, r - mr);
-        scc += dc * dc;
-        srr += dr * dr;
-        scr += dc * dr;
-    }
-    let rho = scr / (scc * srr).sqrt();
-    // A flat channel gives NaN: no evidence either way.
+    // Pearson's correlation from the least-squares line: sign of the slope, root of r² (0 for a
+    // flat response, which is no evidence either way).
+    let Ok(line) = cablab_measure::linear_fit(c, r) else {
+        return (None, None);
+    };
+    let rho = line.slope.signum() * line.r2.max(0.0).sqrt();
     if rho.is_nan() || rho >= OPPOSITE_SIGNS_CORRELATION {
         return (None, None);
     }
+    let mr = r.iter().sum::<f64>() / n as f64;
     let area: f64 = (1..n)
         .map(|i| 0.5 * (r[i] + r[i - 1] - 2.0 * mr) * (c[i] - c[i - 1]))
         .sum();
@@ -847,7 +843,7 @@ pub fn check_kind(rec: &TestRecord, kind: TestKind, force: bool) -> Result<Optio
             kind.as_str()
         )));
     }
-    if rec.kind_reason != "set by --kind" {
+    if rec.kind_reason != cablab_ingest::record::KIND_SET_BY_FLAG {
         // Inferred from one part of the file, contradicted by another.
         let four_point = ["4-point", "four-point", "four point", "vierpunkt"]
             .iter()

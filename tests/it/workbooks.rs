@@ -9,6 +9,16 @@
 use crate::common::{cablab, root};
 use serde_json::Value;
 
+/// `cablab ARGS` run in `dir`, as in CI.
+fn run_in(dir: &std::path::Path, args: &[&str]) -> std::process::Output {
+    cablab()
+        .current_dir(dir)
+        .env("CI", "1")
+        .args(args)
+        .output()
+        .unwrap()
+}
+
 fn analyze_json(file: &str, args: &[&str]) -> (Option<i32>, Value, String) {
     let out = cablab()
         .arg("analyze")
@@ -140,12 +150,7 @@ fn folder_mode_evaluates_a_workbook_beside_its_text_export() {
     ] {
         std::fs::copy(root().join(from), dir.join(to)).unwrap();
     }
-    let out = cablab()
-        .current_dir(d.path())
-        .env("CI", "1")
-        .args(["run", "lab", "--no-diagnosis", "-q"])
-        .output()
-        .unwrap();
+    let out = run_in(d.path(), &["run", "lab", "--no-diagnosis", "-q"]);
     assert_eq!(
         out.status.code(),
         Some(0),
@@ -220,12 +225,7 @@ sheet = "Probe 9"
 "#,
     )
     .unwrap();
-    let out = cablab()
-        .current_dir(d.path())
-        .env("CI", "1")
-        .args(["run", "wb.toml", "--no-diagnosis", "-q"])
-        .output()
-        .unwrap();
+    let out = run_in(d.path(), &["run", "wb.toml", "--no-diagnosis", "-q"]);
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(
         err.contains("no sheet 'Probe 9' (sheets: 'Ergebnisse', 'Messwerte', 'Notizen')"),

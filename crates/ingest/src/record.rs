@@ -89,6 +89,10 @@ pub struct BlockInfo {
     pub units: Vec<String>,
 }
 
+/// [`TestRecord::kind_reason`] of a kind the caller set (`--kind`, a pipeline's `kind`), as
+/// opposed to one read from the file.
+pub const KIND_SET_BY_FLAG: &str = "set by --kind";
+
 /// The canonical record of one test file.
 #[derive(Debug, Clone)]
 pub struct TestRecord {
@@ -809,7 +813,7 @@ pub(crate) fn build(
     let dims: Vec<Option<Dimension>> = infos.iter().map(|i| i.map(|x| x.dimension)).collect();
     let kind_evidence = kind_evidence(&texts, &source, &names, &units, &dims, c, r);
     let (kind, kind_reason) = match opts.kind {
-        Some(k) => (k, "set by --kind".to_string()),
+        Some(k) => (k, KIND_SET_BY_FLAG.to_string()),
         None => kind_from_text(&texts)
             .or_else(|| kind_from_channels(&dims, c, r))
             .unwrap_or((
