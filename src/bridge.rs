@@ -41,12 +41,35 @@ impl Curve {
     }
 }
 
+/// The error for a record without a control channel, naming the strain columns (read as
+/// ratios by their names, such as DIC's `exx--1`) that could be it: a strain symbol is never
+/// taken as the control unasked (an `exx` may be the axial or the transverse strain).
+fn no_control(rec: &TestRecord) -> anyhow::Error {
+    let file = &rec.provenance.path;
+    let strains: Vec<String> = rec
+        .channels
+        .iter()
+        .filter(|c| {
+            c.role == Role::Other && c.dimension == Some(cablab_ingest::units::Dimension::Ratio)
+        })
+        .map(|c| format!("'{}'", c.name))
+        .collect();
+    if strains.is_empty() {
+        anyhow!("{file}: no control channel (displacement, angle or rotation) was found; name one with --control")
+    } else {
+        anyhow!(
+            "{file}: no control channel (displacement, angle or rotation) was found; the file has strain columns ({}): name the axial one with --control",
+            strains.join(", ")
+        )
+    }
+}
+
 /// Extract the complete rows of a record. Errors name the file and the missing role.
 pub fn curve(rec: &TestRecord) -> Result<Curve> {
     let file = &rec.provenance.path;
-    let control = rec.role_values(Role::Control).ok_or_else(|| {
-        anyhow!("{file}: no control channel (displacement, angle or rotation) was found; name one with --control")
-    })?;
+    let control = rec
+        .role_values(Role::Control)
+        .ok_or_else(|| no_control(rec))?;
     let response = rec.role_values(Role::Response).ok_or_else(|| {
         anyhow!("{file}: no response channel (force, torque or moment) was found; name one with --response")
     })?;
@@ -218,6 +241,10 @@ pub fn geometry_noted(
     Vec<String>,
 )> {
     let file = &rec.provenance.path;
+    // Without a control there is nothing a length would convert: say that first.
+    if rec.channel_index(Role::Control).is_none() {
+        return Err(no_control(rec));
+    }
     let mut notes = Vec::new();
     let what = if kind == TestKind::ThreePoint {
         "support span"
@@ -445,6 +472,49 @@ pub fn sectional_control(
     }
 }
 
+/// A warning when the control has no unit, was taken as metres, and so taken moves the
+/// specimen farther than any test of its kind does: beyond its free length in tension (a strain
+/// of 100 %), beyond half the span in three-point bending. Such a travel is almost surely in
+/// millimetres (CCFatigue's `Machine_Displacement`, mm by its convention, written without a
+/// unit); the stiffness would otherwise be a thousand times off with only the "no unit" line
+/// beside it. The warning says what the millimetre reading would be and how to state it.
+pub fn unitless_control_warning(
+    rec: &TestRecord,
+    kind: TestKind,
+    geom: &cablab_measure::Geometry,
+) -> Option<String> {
+    let (limit, what, word) = match kind {
+        TestKind::Tension => (1.0, "free length", "tension"),
+        TestKind::ThreePoint => (0.5, "support span", "three-point bending"),
+        _ => return None,
+    };
+    let i = rec.channel_index(Role::Control)?;
+    let ch = &rec.channels[i];
+    if !ch.unit.is_empty() || ch.dimension.is_some() {
+        return None;
+    }
+    let (lo, hi) = rec
+        .values(i)?
+        .iter()
+        .filter(|v| v.is_finite())
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
+            (a.min(v), b.max(v))
+        });
+    let l0 = geom.free_length_m;
+    let share = (hi - lo) / l0;
+    (share.is_finite() && share > limit).then(|| {
+        format!(
+            "the control '{}' has no unit and, taken as metres, moves {:.4} m, {:.0} % of the {:.4} mm {what}: no {word} test goes that far; if it is in mm ({:.3} %), state --unit '{}=mm'",
+            ch.name,
+            hi - lo,
+            100.0 * share,
+            l0 * 1e3,
+            0.1 * share,
+            ch.name
+        )
+    })
+}
+
 /// Millimetres (as flags give lengths) to metres.
 fn mm(v: Option<f64>) -> Option<f64> {
     v.map(|x| x * 1e-3)
@@ -488,6 +558,8 @@ pub fn read_test(
         flat_given(t.width_mm, t.thickness_mm),
     )?;
     said.notes.extend(notes);
+    said.warnings
+        .extend(unitless_control_warning(&rec, kind, &geom));
     let mut curve = curve(&rec)?;
     said.notes.extend(sectional_control(
         &rec,

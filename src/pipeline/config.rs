@@ -105,6 +105,10 @@ pub struct InputGroup {
     /// Reader layout override (`--format`).
     #[serde(default)]
     pub format: Option<String>,
+    /// Units of columns the files write without one (or unreadably), by column name, as
+    /// `--unit COLUMN=UNIT` states them: `units = { Machine_Displacement = "mm" }`.
+    #[serde(default)]
+    pub units: BTreeMap<String, String>,
     /// Per-file overrides keyed by file name (not path).
     #[serde(default)]
     pub overrides: BTreeMap<String, FileOverride>,
@@ -135,6 +139,9 @@ pub struct FileOverride {
     /// Response column name.
     #[serde(default)]
     pub response: Option<String>,
+    /// Column units for this file; each replaces the input group's for the same column.
+    #[serde(default)]
+    pub units: BTreeMap<String, String>,
     /// Leave this file out of the campaign (with the reason in the summary).
     #[serde(default)]
     pub skip: Option<String>,
@@ -406,6 +413,9 @@ pub struct PlannedTest {
     /// Workbook sheet choice (absent from the cache key when not set).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub sheet: Option<String>,
+    /// Column units stated in the pipeline (absent from the cache key when none).
+    #[serde(skip_serializing_if = "BTreeMap::is_empty")]
+    pub units: BTreeMap<String, String>,
     /// Column overrides.
     pub time: Option<String>,
     /// Control column override.
@@ -1030,6 +1040,20 @@ fn validate(file: PipelineFile, path: &Path, bytes: Vec<u8>, root: PathBuf) -> R
                     .map_err(|e| anyhow!("{}: {e}", lines.at(&ctx, &octx, 0, "format")))?;
             }
             ov.settings().check(&|key| lines.at(&ctx, &octx, 0, key))?;
+            let mut units = g.units.clone();
+            units.extend(ov.units.clone());
+            for (col, unit) in &units {
+                if cablab_ingest::units::lookup(unit).is_none() {
+                    let at = if ov.units.contains_key(col) {
+                        lines.at(&ctx, &octx, 0, "units")
+                    } else {
+                        lines.at(&ctx, "input", gi, "units")
+                    };
+                    bail!(
+                        "{at}: column '{col}': cannot read the unit '{unit}'; expected one of cablab-ingest's unit table (N, kN, mm, s, deg, N·m, %, mm/mm, ...)"
+                    );
+                }
+            }
             if let Some(b) = ov.block {
                 if !(1..=10_000).contains(&b) {
                     bail!(
@@ -1049,6 +1073,7 @@ fn validate(file: PipelineFile, path: &Path, bytes: Vec<u8>, root: PathBuf) -> R
                 format: ov.format.clone().or_else(|| g.format.clone()),
                 block: ov.block,
                 sheet: ov.sheet.clone(),
+                units,
                 time: ov.time.clone(),
                 control: ov.control.clone(),
                 response: ov.response.clone(),

@@ -411,6 +411,11 @@ fn stages(
             .transpose()?,
         block: t.block,
         sheet: t.sheet.clone(),
+        units: t
+            .units
+            .iter()
+            .map(|(c, u)| (c.clone(), u.clone()))
+            .collect(),
         time: t.time.clone(),
         control: t.control.clone(),
         response: t.response.clone(),
@@ -458,6 +463,8 @@ fn stages(
             t.flat_section,
         )?;
         out.notes.extend(notes);
+        out.warnings
+            .extend(crate::bridge::unitless_control_warning(&rec, t.kind, &g));
         (g, f)
     } else {
         let g = cablab_measure::Geometry {

@@ -377,6 +377,7 @@ mod tests {
                 format: None,
                 block: None,
                 sheet: None,
+                units: Default::default(),
                 time: None,
                 control: None,
                 response: None,

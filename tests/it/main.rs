@@ -14,4 +14,5 @@ mod sections;
 mod shards;
 mod three_point_history;
 mod trust;
+mod unitless;
 mod workbooks;

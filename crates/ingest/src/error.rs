@@ -88,6 +88,21 @@ pub enum IngestError {
         /// Which role needed it (`time`, `control`, `response`).
         role: &'static str,
     },
+    /// The control column has no unit, its name says strain and its values go beyond ±1: a
+    /// ratio or a percent, which the file does not say.
+    #[error("{file}:{line}:{column}: the control column '{name}' has no unit and its name says strain, but its values reach {largest}: a ratio (mm/mm) or percent? state it with --unit '{name}=%' or --unit '{name}=mm/mm'")]
+    StrainScaleUnstated {
+        /// File path or label.
+        file: String,
+        /// 1-based physical line of the column names.
+        line: usize,
+        /// 1-based column.
+        column: usize,
+        /// Channel name.
+        name: String,
+        /// The largest magnitude in the column.
+        largest: f64,
+    },
     /// A table of one row per cycle (statistic-named columns such as `Torque:Maximum`), not the
     /// curve of a test: refused rather than analysed.
     #[error("{file}:{line}: a per-cycle summary table, not a test curve: {detail}; export the raw data (every sample) instead, or look at it with `cablab inspect`")]

@@ -616,7 +616,41 @@ pub(crate) fn build(
         }
         units[i] = unit.clone();
     }
-    let infos: Vec<_> = units.iter().map(|u| lookup(u)).collect();
+    // A column with no unit whose name says strain ("Strain", "Dehnung", DIC's `exx--1`, `ε`)
+    // is dimensionless by its name: taken as metres it would be a length a thousand or a
+    // million times off. Within ±1 it is read as a ratio (mm/mm); beyond, a percent is as
+    // likely as a large ratio, and it stays unread until its unit is stated (refused as a
+    // control below).
+    let mut strain_by_name = vec![false; n];
+    let mut strain_scale_unknown = vec![false; n];
+    for i in 0..n {
+        if !units[i].is_empty() || is_label[i] || !crate::roles::strain_by_name(&names[i]) {
+            continue;
+        }
+        let largest = block.columns[i]
+            .iter()
+            .filter(|v| v.is_finite())
+            .fold(0.0f64, |m, v| m.max(v.abs()));
+        if largest <= 1.0 {
+            strain_by_name[i] = true;
+            notes.push(Diagnostic {
+                file: source.clone(),
+                line: Some(block.names_line),
+                column: Some(i + 1),
+                message: format!(
+                    "'{}' has no unit: a strain by its name, within ±1, read as a ratio (mm/mm); if it is in percent, state --unit '{}=%'",
+                    names[i], names[i]
+                ),
+            });
+        } else {
+            strain_scale_unknown[i] = true;
+        }
+    }
+    let infos: Vec<_> = units
+        .iter()
+        .zip(&strain_by_name)
+        .map(|(u, &s)| if s { lookup("1") } else { lookup(u) })
+        .collect();
     let facts: Vec<ChannelFacts> = (0..n)
         .map(|i| ChannelFacts {
             // A label column takes no role: no name to score.
@@ -625,7 +659,13 @@ pub(crate) fn build(
             } else {
                 names[i].clone()
             },
-            dimension: infos[i].map(|x| x.dimension),
+            // A strain by its name whose scale is unclear still competes as the strain it is,
+            // so that, chosen as the control, it is refused with why (below).
+            dimension: if strain_scale_unknown[i] {
+                Some(crate::units::Dimension::Ratio)
+            } else {
+                infos[i].map(|x| x.dimension)
+            },
             // An unreadable unit scores like a missing one, so that the column still gets its
             // role by name and then refuses below for want of a unit.
             unit_written: !units[i].is_empty() && infos[i].is_some(),
@@ -713,7 +753,33 @@ pub(crate) fn build(
                 role,
             });
         }
-        if units[i].is_empty() {
+        if role == "control" && strain_scale_unknown[i] {
+            let largest = block.columns[i]
+                .iter()
+                .filter(|v| v.is_finite())
+                .fold(0.0f64, |m, v| m.max(v.abs()));
+            let e = IngestError::StrainScaleUnstated {
+                file: source.clone(),
+                line: block.names_line,
+                column: i + 1,
+                name: names[i].clone(),
+                largest,
+            };
+            if !opts.lenient {
+                return Err(e);
+            }
+            warnings.push(Diagnostic {
+                file: source.clone(),
+                line: Some(block.names_line),
+                column: Some(i + 1),
+                message: format!(
+                    "the control column '{}' has no unit and its name says strain, but its values reach {largest}: a ratio or percent? analysis refuses it until it is stated (--unit '{}=%' or '{}=mm/mm')",
+                    names[i], names[i], names[i]
+                ),
+            });
+            continue;
+        }
+        if units[i].is_empty() && !strain_by_name[i] {
             warnings.push(Diagnostic {
                 file: source.clone(),
                 line: Some(block.names_line),

@@ -137,7 +137,8 @@ fn time_score(c: &ChannelFacts) -> Option<i32> {
     }
     let dim_ok = c.dimension == Some(Dimension::Time);
     let word = has(&n, TIME_WORDS) || n == "t";
-    if !(dim_ok || (word && (!c.unit_written || c.dimension.is_none()))) {
+    // A column with no numbers on most rows (a time channel the export left empty) is none.
+    if !(dim_ok || (word && (!c.unit_written || c.dimension.is_none()))) || !c.filled {
         return None;
     }
     let mut s = if dim_ok { 10 } else { 4 };
@@ -159,7 +160,7 @@ fn response_score(c: &ChannelFacts, torque: bool) -> Option<i32> {
     };
     let dim_ok = c.dimension == Some(dim);
     let word = has(&n, words);
-    if !(dim_ok || (word && c.dimension.is_none())) {
+    if !(dim_ok || (word && c.dimension.is_none())) || !c.filled {
         return None;
     }
     let mut s = if dim_ok { 10 } else { 4 };
@@ -315,6 +316,51 @@ fn strain_named(lower_name: &str) -> bool {
     has(lower_name, STRAIN_WORDS)
 }
 
+/// Whether a channel name says strain, by a strain word ("Strain", "Dehnung") or as a strain
+/// symbol: `ε`, `eps`, `epsilon` alone or with an axis, or `e` with a two-index axis (`exx`,
+/// `e_yy`, `e11`, `eps_xy`), optionally numbered for a measuring point (CCFatigue's DIC
+/// `exx--1`, `e11_2`, `ε (3)`). A strain is dimensionless, so a column so named with no unit is
+/// still a ratio (see the reader).
+pub(crate) fn strain_by_name(name: &str) -> bool {
+    let n = name.trim().to_lowercase();
+    strain_named(&n) || strain_symbol(&n)
+}
+
+fn strain_symbol(lower_name: &str) -> bool {
+    // A measuring point's number after a separator: "--1", "_2", "-3", " (4)", " 5".
+    let mut base = lower_name.trim();
+    if let Some(inner) = base.strip_suffix(')') {
+        if let Some((b, num)) = inner.rsplit_once('(') {
+            if !num.is_empty() && num.trim().chars().all(|c| c.is_ascii_digit()) {
+                base = b.trim_end();
+            }
+        }
+    }
+    if let Some(pos) = base.rfind(['-', '_', ' ']) {
+        let num = &base[pos + 1..];
+        if !num.is_empty() && num.chars().all(|c| c.is_ascii_digit()) {
+            base = base[..pos].trim_end_matches(['-', '_', ' ']);
+        }
+    }
+    const AXES: &[&str] = &[
+        "xx", "yy", "zz", "xy", "yx", "xz", "zx", "yz", "zy", "11", "22", "33", "12", "21", "13",
+        "31", "23", "32",
+    ];
+    let axis_ok = |rest: &str, bare_ok: bool| {
+        let rest = rest.trim_start_matches(['_', ' ', '-']);
+        (bare_ok && rest.is_empty())
+            || AXES.contains(&rest)
+            || (bare_ok && matches!(rest, "x" | "y" | "z" | "axial" | "ax" | "long" | "trans"))
+    };
+    for sym in ["epsilon", "eps", "ε"] {
+        if let Some(rest) = base.strip_prefix(sym) {
+            return axis_ok(rest, true);
+        }
+    }
+    base.strip_prefix('e')
+        .is_some_and(|rest| !rest.is_empty() && axis_ok(rest, false))
+}
+
 /// Strain words: a ratio channel is a control candidate only when its name says strain.
 const STRAIN_WORDS: &[&str] = &[
     "strain",
@@ -343,7 +389,9 @@ fn strain_control_score(c: &ChannelFacts) -> Option<i32> {
             .iter()
             .any(|w| n.contains(w))
         || n.starts_with("tstrain");
-    (!excluded).then_some(16)
+    // A strain read as a ratio only because its name says so (no unit written) ranks below a
+    // length whose unit is written, above one without.
+    (!excluded).then_some(if c.unit_written { 16 } else { 12 })
 }
 
 /// Picks (time, control, response) column indices. `fixed` holds overrides already chosen.
@@ -1441,6 +1489,44 @@ mod tests {
 
     /// The gauge length an extensometer's travel belongs to: the one whose key names the
     /// channel first, only beside a different free length, with both as written.
+    #[test]
+    fn strain_by_name_words_and_symbols() {
+        for yes in [
+            "Strain",
+            "Tensile strain",
+            "Dehnung",
+            "exx--1",
+            "eyy--1 ",
+            "e_xx",
+            "e11",
+            "E11_2",
+            "eps",
+            "eps_xx",
+            "epsilon",
+            "ε",
+            "εxx (3)",
+            "eps-axial",
+        ] {
+            assert!(strain_by_name(yes), "{yes}");
+        }
+        for no in [
+            "e",
+            "ex",
+            "E",
+            "Elongation",
+            "Extension",
+            "exit",
+            "eta",
+            "e1",
+            "Load",
+            "energy",
+            "Machine_Displacement",
+            "epsilon rate x",
+        ] {
+            assert!(!strain_by_name(no), "{no}");
+        }
+    }
+
     #[test]
     fn extensometer_gauge_length_beside_a_free_length() {
         let meta = |kv: &[(&str, &str)]| -> Vec<(String, String)> {

@@ -1,0 +1,282 @@
+//! Columns written without a unit, on the real CCFatigue "TST" exports (EPFL CCLab, MIT; see
+//! `tests/data/EXPECTED.md`) and small generated files: a strain by its name is a ratio, never a
+//! length in metres; a travel taken as metres that no test of its kind could make is flagged with
+//! its millimetre reading; an empty time column is no time; a pipeline states units as
+//! `--unit` does.
+
+use crate::common::cablab;
+use crate::real_exports::{notes, warnings, within};
+use serde_json::Value;
+
+fn run(dir: Option<&std::path::Path>, args: &[&str]) -> (Option<i32>, Value, String) {
+    let mut c = cablab();
+    if let Some(d) = dir {
+        c.current_dir(d);
+    }
+    let out = c.env("CI", "1").args(args).output().unwrap();
+    (
+        out.status.code(),
+        serde_json::from_slice(&out.stdout).unwrap_or(Value::Null),
+        String::from_utf8_lossy(&out.stderr).into(),
+    )
+}
+
+const DIC: &str = "tests/data/ccfatigue__tst_qs_dic_strain_epoxy_BBM1S1.csv";
+const TRAVEL: &str = "tests/data/ccfatigue__tst_qs_unitless_machine_travel.csv";
+const FATIGUE: &str = "tests/data/ccfatigue__tst_fa_gfrp_cycles_1_to_6.csv";
+
+/// DIC strains `exx--1`, `eyy--1`, `exy--1` with no unit are ratios by their names. None is
+/// taken as the control unasked (an `exx` may be the axial or the transverse strain): the error
+/// names them. Named with `--control`, `exx--1` is the strain itself: no length is asked for,
+/// and E on the metadata's 13 × 4 mm section is the epoxy's 5.4–5.5 GPa (numpy: 5.39 GPa over
+/// ε = 0.05–0.25 %, 5.52 GPa over 0.003–0.58 %). Before, the file asked for a free length and,
+/// given one, read the strain as metres.
+#[test]
+fn a_dic_strain_without_a_unit_is_a_ratio_by_its_name() {
+    let (code, _, err) = run(None, &["analyze", DIC, "--kind", "tension", "--json"]);
+    assert_eq!(code, Some(2), "{err}");
+    assert!(
+        err.contains("no control channel")
+            && err.contains("'exx--1', 'eyy--1', 'exy--1'")
+            && err.contains("--control")
+            && !err.contains("free length"),
+        "{err}"
+    );
+    let (code, v, err) = run(
+        None,
+        &[
+            "analyze",
+            DIC,
+            "--kind",
+            "tension",
+            "--control",
+            "exx--1",
+            "--width-mm",
+            "13",
+            "--thickness-mm",
+            "4",
+            "--json",
+        ],
+    );
+    assert_eq!(code, Some(0), "{err}");
+    let e = v["modulus_pa"].as_f64().unwrap();
+    assert!((5.3e9..=5.65e9).contains(&e), "E = {e:e}");
+    let ea = v["stiffness"]["value"].as_f64().unwrap();
+    assert!(within(e, ea / 52e-6, 1e-9), "{e:e} {ea:e}");
+    let n = notes(&v).join("\n");
+    assert!(
+        n.contains("'exx--1' has no unit: a strain by its name") && n.contains("needs none"),
+        "{n}"
+    );
+    // `inspect` shows them dimensionless (SI unit "1") and gives them no role.
+    let (_, i, _) = run(None, &["inspect", DIC, "--json"]);
+    let ch = i["channels"].as_array().unwrap();
+    let exx = ch.iter().find(|c| c["name"] == "exx--1").unwrap();
+    assert_eq!(
+        (exx["si_unit"].as_str(), exx["role"].as_str()),
+        (Some("1"), Some("other"))
+    );
+}
+
+/// A unit-less column called "Strain" is the strain control of a tension test (a ratio within
+/// ±1, no length needed): (EA) = dF/dε exactly on a generated linear file. A unit-less "Strain"
+/// beyond ±1 (percent or a large ratio?) is refused as the control until its unit is stated,
+/// and `--unit Strain=%` then gives the same (EA).
+#[test]
+fn a_unitless_strain_column_is_a_ratio_or_refused_when_its_scale_is_unclear() {
+    let d = tempfile::tempdir().unwrap();
+    let write = |name: &str, scale: f64| {
+        let mut s = String::from("Time (s),Strain,Load (N)\n");
+        for i in 0..300 {
+            let e = 5e-5 * i as f64; // to 1.5 %, elastic
+            s.push_str(&format!(
+                "{:.2},{:.8},{:.4}\n",
+                0.1 * i as f64,
+                e * scale,
+                2.0e5 * e
+            ));
+        }
+        let p = d.path().join(name);
+        std::fs::write(&p, s).unwrap();
+        p.to_string_lossy().into_owned()
+    };
+    let ratio = write("ratio.csv", 1.0);
+    let (code, v, err) = run(None, &["analyze", &ratio, "--kind", "tension", "--json"]);
+    assert_eq!(code, Some(0), "{err}");
+    assert!(
+        within(v["stiffness"]["value"].as_f64().unwrap(), 2.0e5, 1e-6),
+        "{v}"
+    );
+    let percent = write("percent.csv", 100.0);
+    let (code, _, err) = run(None, &["analyze", &percent, "--kind", "tension", "--json"]);
+    assert_eq!(code, Some(2), "{err}");
+    assert!(
+        err.contains("'Strain' has no unit and its name says strain")
+            && err.contains("--unit 'Strain=%'"),
+        "{err}"
+    );
+    let (code, v, err) = run(
+        None,
+        &[
+            "analyze", &percent, "--kind", "tension", "--unit", "Strain=%", "--json",
+        ],
+    );
+    assert_eq!(code, Some(0), "{err}");
+    assert!(
+        within(v["stiffness"]["value"].as_f64().unwrap(), 2.0e5, 1e-6),
+        "{v}"
+    );
+}
+
+/// A unit-less `Machine_Displacement` (mm by the layout's convention) taken as metres moves
+/// 977 % of a 150 mm length: a warning says no tension test goes that far and gives the mm
+/// reading; stated as mm, the warning is gone and (EA) is 1000 × larger.
+#[test]
+fn a_unitless_travel_no_test_could_make_is_flagged_with_its_mm_reading() {
+    let args = |extra: &[&'static str]| {
+        let mut a = vec![
+            "analyze",
+            TRAVEL,
+            "--kind",
+            "tension",
+            "--length-mm",
+            "150",
+            "--json",
+        ];
+        a.extend_from_slice(extra);
+        a
+    };
+    let (code, metres, err) = run(None, &args(&[]));
+    assert_eq!(code, Some(0), "{err}");
+    let w = warnings(&metres).join("\n");
+    assert!(
+        w.contains(
+            "'Machine_Displacement' has no unit and, taken as metres, moves 1.4662 m, 977 %"
+        ) && w.contains("if it is in mm (0.977 %), state --unit 'Machine_Displacement=mm'"),
+        "{w}"
+    );
+    let (code, mm, err) = run(None, &args(&["--unit", "Machine_Displacement=mm"]));
+    assert_eq!(code, Some(0), "{err}");
+    assert!(
+        !warnings(&mm).iter().any(|w| w.contains("taken as metres")),
+        "{:?}",
+        warnings(&mm)
+    );
+    let (a, b) = (
+        metres["stiffness"]["value"].as_f64().unwrap(),
+        mm["stiffness"]["value"].as_f64().unwrap(),
+    );
+    assert!(within(b, 1e3 * a, 1e-6), "{a:e} {b:e}");
+}
+
+/// A time column empty on every row (`Th_time` of the fatigue layout) is no time: the file is
+/// analysed on its force and travel (before, it was taken as the time and the file refused with
+/// "only 0 complete rows"). With the units the layout leaves out (mm, kN; 4.2 kN is the test's
+/// 60 MPa on 70 mm²) and L = 160 mm, (EA) of the recorded cycles is the machine level's
+/// 7.2–7.3·10⁵ N that straight lines over cycles 2–6 give (numpy), within 10 %.
+#[test]
+fn an_empty_time_column_is_no_time() {
+    let (_, i, err) = run(None, &["inspect", FATIGUE, "--json"]);
+    let role = |name: &str| {
+        i["channels"]
+            .as_array()
+            .unwrap_or_else(|| panic!("{err}"))
+            .iter()
+            .find(|c| c["name"] == name)
+            .map(|c| c["role"].as_str().unwrap().to_string())
+    };
+    assert_eq!(role("Th_time").as_deref(), Some("other"));
+    assert_eq!(role("Machine_Load").as_deref(), Some("response"));
+    assert_eq!(role("Machine_Displacement").as_deref(), Some("control"));
+    let (code, v, err) = run(
+        None,
+        &[
+            "analyze",
+            FATIGUE,
+            "--kind",
+            "tension",
+            "--length-mm",
+            "160",
+            "--width-mm",
+            "25",
+            "--thickness-mm",
+            "2.8",
+            "--unit",
+            "Machine_Displacement=mm",
+            "--unit",
+            "Machine_Load=kN",
+            "--json",
+        ],
+    );
+    assert_eq!(code, Some(0), "{err}");
+    let ea = v["stiffness"]["value"].as_f64().unwrap();
+    assert!(within(ea, 7.25e5, 0.10), "{ea:e}");
+    assert_eq!(v["cycles"].as_array().unwrap().len(), 6, "{}", v["cycles"]);
+}
+
+/// A pipeline states the units the files leave out (`[[input]] units`, a file's override
+/// replacing the group's), as `--unit` does: the fatigue excerpt evaluates to the same (EA) as
+/// `analyze --unit`; a unit cablab cannot read is an error naming the pipeline line.
+#[test]
+fn a_pipeline_states_the_units_a_file_leaves_out() {
+    let d = tempfile::tempdir().unwrap();
+    std::fs::create_dir_all(d.path().join("raw")).unwrap();
+    std::fs::copy(
+        crate::common::root().join(FATIGUE),
+        d.path().join("raw/fa.csv"),
+    )
+    .unwrap();
+    let pipeline = |units: &str, over: &str| {
+        format!(
+            "[campaign]\nname = \"u\"\n\n[[specimen]]\nlabel = \"gfrp\"\nwidth_mm = 25\nthickness_mm = 2.8\n\n\
+             [[input]]\nglob = \"raw/*.csv\"\nspecimen = \"gfrp\"\nkind = \"tension\"\nlength_mm = 160\n{units}\n{over}\n\n\
+             [model]\ncalibrate = false\n"
+        )
+    };
+    std::fs::write(
+        d.path().join("p.toml"),
+        pipeline(
+            "units = { Machine_Displacement = \"m\", Machine_Load = \"kN\" }",
+            "[input.overrides.\"fa.csv\"]\nunits = { Machine_Displacement = \"mm\" }",
+        ),
+    )
+    .unwrap();
+    let (code, _, err) = run(Some(d.path()), &["run", "p.toml", "-q", "--no-diagnosis"]);
+    assert_eq!(code, Some(0), "{err}");
+    let r: Value = serde_json::from_slice(
+        &std::fs::read(d.path().join("reports/u/tests/raw__fa.csv/result.json")).unwrap(),
+    )
+    .unwrap();
+    let (_, a, _) = run(
+        None,
+        &[
+            "analyze",
+            FATIGUE,
+            "--kind",
+            "tension",
+            "--length-mm",
+            "160",
+            "--unit",
+            "Machine_Displacement=mm",
+            "--unit",
+            "Machine_Load=kN",
+            "--json",
+        ],
+    );
+    assert_eq!(
+        r["analysis"]["stiffness"]["value"], a["stiffness"]["value"],
+        "{}",
+        r["analysis"]["stiffness"]
+    );
+    std::fs::write(
+        d.path().join("p.toml"),
+        pipeline("units = { Machine_Load = \"kiloN\" }", ""),
+    )
+    .unwrap();
+    let (code, _, err) = run(Some(d.path()), &["run", "p.toml", "-q", "--no-diagnosis"]);
+    assert!(code.is_some_and(|c| c != 0), "{code:?} {err}");
+    assert!(
+        err.contains("p.toml:") && err.contains("units") && err.contains("'kiloN'"),
+        "{err}"
+    );
+}
