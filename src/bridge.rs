@@ -370,6 +370,22 @@ pub fn flat_section_note(kind: TestKind, f: &RectangularSection, from: &str) -> 
     )
 }
 
+/// Whether a channel's name says shear (a torsional extensometer's "Shear Strain", German
+/// "Schubverzerrung"/"Gleitung", ...).
+fn shear_named(name: &str) -> bool {
+    let n = name.to_lowercase();
+    [
+        "shear",
+        "schub",
+        "gleitung",
+        "cisaillement",
+        "cizalla",
+        "taglio",
+    ]
+    .iter()
+    .any(|w| n.contains(w))
+}
+
 /// The control in the kind's machine variable, where the file gives a strain:
 /// - tension, a strain ε (extensometer, DIC; mm/mm, %, µm/m): the elongation ε l₀, so that the
 ///   analysis' sectional strain u/l₀ is ε itself and (EA) = dF/dε;
@@ -396,17 +412,7 @@ pub fn sectional_control(
     };
     let c = &rec.channels[i];
     let show = show(c);
-    let lname = c.name.to_lowercase();
-    let shear = [
-        "shear",
-        "schub",
-        "gleitung",
-        "cisaillement",
-        "cizalla",
-        "taglio",
-    ]
-    .iter()
-    .any(|w| lname.contains(w));
+    let shear = shear_named(&c.name);
     match (c.dimension, kind) {
         (Some(D::Ratio), TestKind::Tension) if !shear => {
             let l = geom.free_length_m;
@@ -1104,6 +1110,32 @@ pub fn check_roles(
                     }
                 )),
                 _ => {}
+            }
+        }
+    }
+    // Torsion on the machine's angle while the file has a torsional extensometer's surface
+    // shear strain (an Instron torsion "Partner" export: `Shear Strain ( deg )` beside
+    // `Angle ( deg )`): the angle adds the grips' and the drive's twist and rests on the free
+    // length given, the shear strain is the specimen's own over its gauge (ASTM E143).
+    if kind == TestKind::Torsion {
+        if let Some(i) = ci {
+            let c = &rec.channels[i];
+            if !shear_named(&c.name) && c.dimension == Some(D::Angle) {
+                if let Some(k) = (0..rec.channels.len()).find(|&k| {
+                    let o = &rec.channels[k];
+                    k != i
+                        && o.role == Role::Other
+                        && shear_named(&o.name)
+                        && matches!(o.dimension, Some(D::Angle | D::Ratio))
+                }) {
+                    said.warnings.push(format!(
+                        "the stiffness comes from the angle {}{}: it adds the grips' and the machine's twist to the specimen's and rests on the free length; the file's torsional extensometer {} measures the specimen's own shear strain over its gauge: pass --control '{}' (with the diameter)",
+                        show(c),
+                        if control_given { " (chosen with --control)" } else { "" },
+                        show(&rec.channels[k]),
+                        rec.channels[k].name
+                    ));
+                }
             }
         }
     }

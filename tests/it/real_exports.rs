@@ -439,6 +439,31 @@ fn a_torsional_shear_strain_becomes_the_twist() {
     assert_eq!(out.status.code(), Some(2));
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("needs the diameter"), "{err}");
+    // On the machine's angle (the default role), (GJ) comes out 1.4 × too small here (the
+    // drive's and grips' extra twist in the file's angle): a warning names the torsiometer's
+    // column and how to use it.
+    let mut args = base.to_vec();
+    args.extend(["--diameter-mm", "19.05"]);
+    let m = json(&args);
+    assert!(
+        within(stiffness(&m), gj / 1.4, 0.005),
+        "{:e}",
+        stiffness(&m)
+    );
+    let w = warnings(&m).join("\n");
+    assert!(
+        w.contains("comes from the angle 'Angle' (deg)")
+            && w.contains("torsional extensometer 'Shear Strain' (deg)")
+            && w.contains("--control 'Shear Strain'"),
+        "{w}"
+    );
+    assert!(
+        !warnings(&a)
+            .iter()
+            .any(|w| w.contains("torsional extensometer")),
+        "{:?}",
+        warnings(&a)
+    );
 }
 
 /// A campaign over real exports (folder mode) gets the same stiffness as `analyze`: the strain
