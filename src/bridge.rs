@@ -187,6 +187,67 @@ pub fn align_response_sign(curve: &mut Curve) -> (Option<String>, Option<String>
     )
 }
 
+/// [`align_response_sign`] for a record read as `kind`, except for a strain control in tension
+/// that falls as the force rises: no sign convention is at work there but, far more likely, the
+/// transverse strain (Poisson's contraction: DIC's `exx` and `eyy` swap with the camera's axes,
+/// as between two files of one CCFatigue series) taken for the axial one, whose (EA) would come
+/// out about 1/ν too large once reversed. It is not reversed; the warning says so and names the
+/// file's strain columns that rise with the force. (note, warning) as `align_response_sign`.
+pub fn align_response_sign_of(
+    rec: &TestRecord,
+    kind: TestKind,
+    curve: &mut Curve,
+) -> (Option<String>, Option<String>) {
+    if kind != TestKind::Tension || !strain_control(rec) {
+        return align_response_sign(curve);
+    }
+    let rho = |c: &[f64], r: &[f64]| {
+        cablab_measure::linear_fit(c, r)
+            .map(|l| l.slope.signum() * l.r2.max(0.0).sqrt())
+            .unwrap_or(0.0)
+    };
+    let against = rho(&curve.control, &curve.response);
+    if against.is_nan() || against >= OPPOSITE_SIGNS_CORRELATION {
+        return (None, None);
+    }
+    let ci = rec.channel_index(Role::Control);
+    let force = rec.role_values(Role::Response).unwrap_or_default();
+    let rising: Vec<String> = (0..rec.channels.len())
+        .filter(|&k| {
+            Some(k) != ci
+                && rec.channels[k].role == Role::Other
+                && rec.channels[k].dimension == Some(cablab_ingest::units::Dimension::Ratio)
+        })
+        .filter(|&k| {
+            let v = rec.values(k).unwrap_or_default();
+            let (x, y): (Vec<f64>, Vec<f64>) = v
+                .iter()
+                .zip(&force)
+                .filter(|(a, b)| a.is_finite() && b.is_finite())
+                .map(|(a, b)| (*a, *b))
+                .unzip();
+            x.len() >= 3 && rho(&x, &y) > -OPPOSITE_SIGNS_CORRELATION
+        })
+        .map(|k| format!("'{}'", rec.channels[k].name))
+        .collect();
+    let name = ci.map(|i| rec.channels[i].name.clone()).unwrap_or_default();
+    (
+        None,
+        Some(format!(
+            "the strain '{name}' falls as the force rises (correlation {against:.2}): a transverse strain (Poisson's contraction), not the axial one, most likely — its (EA) would be about 1/ν too large; it is not reversed{}",
+            if rising.is_empty() {
+                "; name the axial strain with --control".to_string()
+            } else {
+                format!(
+                    "; the file's {} rise{} with the force: name the axial one with --control",
+                    rising.join(", "),
+                    if rising.len() == 1 { "s" } else { "" }
+                )
+            }
+        )),
+    )
+}
+
 /// Geometry from the caller (SI: m, settled where flags and pipelines are parsed), else from the
 /// record's metadata, and the flat section b × h the moduli use when there is one. The length is
 /// required; the section is optional (moduli need it). See [`geometry_noted`] for what else the
@@ -209,7 +270,7 @@ pub fn curvature_control(rec: &TestRecord) -> bool {
 }
 
 /// Whether the record's control is a dimensionless strain (mm/mm, %, µm/m, ...).
-fn strain_control(rec: &TestRecord) -> bool {
+pub fn strain_control(rec: &TestRecord) -> bool {
     rec.channel_index(Role::Control)
         .and_then(|i| rec.channels[i].dimension)
         == Some(cablab_ingest::units::Dimension::Ratio)
@@ -574,7 +635,7 @@ pub fn read_test(
         flat.as_ref(),
         &mut curve,
     )?);
-    let (note, warning) = align_response_sign(&mut curve);
+    let (note, warning) = align_response_sign_of(&rec, kind, &mut curve);
     said.notes.extend(note);
     said.warnings.extend(warning);
     said.warnings.extend(curve.repeated_rows_warning());

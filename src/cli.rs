@@ -171,6 +171,17 @@ pub struct InferArgs {
     /// Section diameter in mm of every file whose metadata lacks it.
     #[arg(long, value_name = "MM", allow_negative_numbers = true, value_parser = positive_mm)]
     pub diameter_mm: Option<f64>,
+    /// Control column of every file (what the machine drives; a strain such as DIC's `exx`),
+    /// overriding detection; a file without it is left out with why.
+    #[arg(long, value_name = "COLUMN")]
+    pub control: Option<String>,
+    /// Response column of every file (force, torque, moment), overriding detection.
+    #[arg(long, value_name = "COLUMN")]
+    pub response: Option<String>,
+    /// State a column's unit in every file that writes none or one that cannot be read
+    /// (`--unit "Machine_Displacement=mm"`); repeatable.
+    #[arg(long = "unit", value_name = "COLUMN=UNIT")]
+    pub units: Vec<String>,
 }
 
 /// `cablab run`.

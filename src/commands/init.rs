@@ -56,6 +56,9 @@ pub struct Found {
     pub format: String,
     /// Remarks (e.g. the file name contradicts the metadata).
     pub notes: Vec<String>,
+    /// Why no length is needed, when the control is already the sectional variable (a strain
+    /// in tension, a curvature in pure bending).
+    pub length_free: Option<String>,
 }
 
 impl Found {
@@ -65,7 +68,7 @@ impl Found {
         if self.kind.is_none() {
             g.push("kind");
         }
-        if self.length_mm.is_none() {
+        if self.length_mm.is_none() && self.length_free.is_none() {
             g.push(
                 if self.kind.as_ref().map(|k| k.value) == Some(TestKind::ThreePoint) {
                     "length_mm (support span)"
@@ -88,6 +91,20 @@ pub struct Survey {
     pub found: Vec<Found>,
     /// Files left out, with why.
     pub skipped: Vec<(PathBuf, String)>,
+    /// The columns and units the command line named for every file (`--control`,
+    /// `--response`, `--unit`), written into every `[[input]]`.
+    pub columns: Columns,
+}
+
+/// Column choices given once for a whole folder.
+#[derive(Debug, Clone, Default)]
+pub struct Columns {
+    /// Control column name.
+    pub control: Option<String>,
+    /// Response column name.
+    pub response: Option<String>,
+    /// Column units, `(column, unit)`.
+    pub units: Vec<(String, String)>,
 }
 
 /// Extensions of files that are never test exports.
@@ -372,9 +389,21 @@ pub fn joined(paths: &[PathBuf]) -> String {
 /// Read and infer every test under `paths`.
 pub fn survey(paths: &[PathBuf], d: &InferArgs) -> Result<Survey, CliError> {
     let mut s = Survey::default();
+    let reader = crate::cli::ReaderArgs {
+        control: d.control.clone(),
+        response: d.response.clone(),
+        units: d.units.clone(),
+        ..Default::default()
+    };
+    let opts = crate::bridge::read_options(&reader, None).map_err(CliError::input)?;
+    s.columns = Columns {
+        control: d.control.clone(),
+        response: d.response.clone(),
+        units: opts.units.clone(),
+    };
     let files = expand(paths, &mut s.skipped)?;
     for path in files {
-        let rec = match cablab_ingest::read_path(&path, &Default::default()) {
+        let rec = match cablab_ingest::read_path(&path, &opts) {
             Ok(r) => r,
             Err(e) => {
                 s.skipped.push((path, format!("not read as a test: {e}")));
@@ -431,7 +460,18 @@ pub fn survey(paths: &[PathBuf], d: &InferArgs) -> Result<Survey, CliError> {
             (None, Some(sec)) => Some(format!("{} {}", folder_name(&path), sec.value)),
             (None, None) => None,
         };
+        let length_free = match kind.as_ref().map(|k| k.value) {
+            Some(TestKind::Tension) if crate::bridge::strain_control(&rec) => {
+                Some("the control is a strain: (EA) = dF/dε")
+            }
+            Some(TestKind::PureBending) if crate::bridge::curvature_control(&rec) => {
+                Some("the control is a curvature: (EI) = dM/dκ")
+            }
+            _ => None,
+        }
+        .map(String::from);
         s.found.push(Found {
+            length_free,
             path,
             kind,
             length_mm,
@@ -578,11 +618,28 @@ pub fn no_kind_why(f: &Found) -> String {
 /// values would unlock the sectional results, for which files, and how to give them.
 pub fn unlock_note(s: &Survey, paths: &[PathBuf]) -> Option<String> {
     let (n, list) = gap_list(s)?;
+    // Without a length (and no strain or curvature control) a test is evaluated at the machine
+    // level; without only a section it keeps its sectional stiffness and lacks the modulus.
+    let no_length = s
+        .found
+        .iter()
+        .filter(|f| f.length_mm.is_none() && f.length_free.is_none())
+        .count();
+    let what = match (no_length, n - no_length) {
+        (0, _) => "they keep their sectional stiffness (EA, GJ, EI) without the modulus".to_string(),
+        (l, 0) => format!(
+            "{} evaluated at the machine level (stiffness in N/m or N m/rad, yield in m or rad)",
+            if l == 1 { "it is" } else { "they are" }
+        ),
+        (l, _) => format!(
+            "the {l} without a length are evaluated at the machine level (stiffness in N/m or N m/rad, \
+             yield in m or rad), the others keep their sectional stiffness without the modulus"
+        ),
+    };
     Some(format!(
-        "{n} of {} tests lack a length or diameter no file states: they are evaluated at the \
-         machine level (stiffness in N/m or N m/rad, yield in m or rad); these values would unlock \
-         the sectional results (EA, GJ, EI, modulus):\n{list}give them with --length-mm L / \
-         --diameter-mm D, or write a pipeline and fill in each file: `cablab init {}`",
+        "{n} of {} tests lack a length or diameter no file states: {what}; these values would \
+         unlock the rest:\n{list}give them with --length-mm L / --diameter-mm D, or write a \
+         pipeline and fill in each file: `cablab init {}`",
         s.found.len(),
         joined(paths)
     ))
@@ -752,7 +809,7 @@ pub fn render(s: &Survey, name: &str, root: Option<&str>, command: &str, gaps: G
         groups.entry(key).or_default().push(f);
     }
     for files in groups.values() {
-        for block in input_blocks(files, gaps) {
+        for block in input_blocks(files, gaps, &s.columns) {
             t.push_str(&block);
         }
     }
@@ -760,7 +817,7 @@ pub fn render(s: &Survey, name: &str, root: Option<&str>, command: &str, gaps: G
 }
 
 /// The `[[input]]` table(s) for files sharing folder, type, kind and length.
-fn input_blocks(files: &[&Found], gaps: Gaps) -> Vec<String> {
+fn input_blocks(files: &[&Found], gaps: Gaps, cols: &Columns) -> Vec<String> {
     let f0 = files[0];
     let dir = f0.path.parent().unwrap_or(Path::new(""));
     let names: Vec<String> = files
@@ -791,11 +848,11 @@ fn input_blocks(files: &[&Found], gaps: Gaps) -> Vec<String> {
         m.iter().map(|p| PathBuf::from(rel(p))).collect::<Vec<_>>() == want
     };
     if exact {
-        vec![block(files, &glob, gaps)]
+        vec![block(files, &glob, gaps, cols)]
     } else {
         files
             .iter()
-            .map(|f| block(&[*f], &glob::Pattern::escape(&rel(&f.path)), gaps))
+            .map(|f| block(&[*f], &glob::Pattern::escape(&rel(&f.path)), gaps, cols))
             .collect()
     }
 }
@@ -818,7 +875,7 @@ fn common_prefix(names: &[String]) -> String {
     p.into_iter().collect()
 }
 
-fn block(files: &[&Found], glob: &str, gaps: Gaps) -> String {
+fn block(files: &[&Found], glob: &str, gaps: Gaps, cols: &Columns) -> String {
     let f0 = files[0];
     let mut t = String::new();
     let labels: Vec<&str> = files.iter().map(|f| f.label.as_str()).collect();
@@ -848,11 +905,14 @@ fn block(files: &[&Found], glob: &str, gaps: Gaps) -> String {
             );
         }
     }
-    match &f0.length_mm {
-        Some(l) => {
+    match (&f0.length_mm, &f0.length_free) {
+        (Some(l), _) => {
             let _ = writeln!(t, "length_mm = {}  # {}", l.value, l.from);
         }
-        None => {
+        (None, Some(why)) => {
+            let _ = writeln!(t, "# length_mm: not needed for the stiffness ({why})");
+        }
+        (None, None) => {
             let what = if f0.kind.as_ref().map(|k| k.value) == Some(TestKind::ThreePoint) {
                 "support span"
             } else {
@@ -869,6 +929,19 @@ fn block(files: &[&Found], glob: &str, gaps: Gaps) -> String {
                 ),
             };
         }
+    }
+    for (key, v) in [("control", &cols.control), ("response", &cols.response)] {
+        if let Some(v) = v {
+            let _ = writeln!(t, "{key} = {}  # --{key}", q(v));
+        }
+    }
+    if !cols.units.is_empty() {
+        let units: Vec<String> = cols
+            .units
+            .iter()
+            .map(|(c, u)| format!("{} = {}", q(c), q(u)))
+            .collect();
+        let _ = writeln!(t, "units = {{ {} }}  # --unit", units.join(", "));
     }
     let mut layouts: Vec<&str> = files.iter().map(|f| f.format.as_str()).collect();
     layouts.sort_unstable();

@@ -32,10 +32,13 @@ pub fn run(a: RunArgs) -> CmdResult {
         || a.infer.length_mm.is_some()
         || a.infer.diameter_mm.is_some()
         || a.infer.name.is_some()
+        || a.infer.control.is_some()
+        || a.infer.response.is_some()
+        || !a.infer.units.is_empty()
         || a.skip_incomplete;
     if !folder_mode && inferred {
         return Err(CliError::input(anyhow::anyhow!(
-            "--name, --kind, --length-mm, --diameter-mm and --skip-incomplete are for folders of raw exports; a pipeline file sets these itself"
+            "--name, --kind, --length-mm, --diameter-mm, --control, --response, --unit and --skip-incomplete are for folders of raw exports; a pipeline file sets these itself"
         )));
     }
     let (campaign, source) = if folder_mode {

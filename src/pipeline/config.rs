@@ -109,6 +109,15 @@ pub struct InputGroup {
     /// `--unit COLUMN=UNIT` states them: `units = { Machine_Displacement = "mm" }`.
     #[serde(default)]
     pub units: BTreeMap<String, String>,
+    /// Time column of every file of the group, overriding detection (a file's override wins).
+    #[serde(default)]
+    pub time: Option<String>,
+    /// Control column of every file of the group (a file's override wins).
+    #[serde(default)]
+    pub control: Option<String>,
+    /// Response column of every file of the group (a file's override wins).
+    #[serde(default)]
+    pub response: Option<String>,
     /// Per-file overrides keyed by file name (not path).
     #[serde(default)]
     pub overrides: BTreeMap<String, FileOverride>,
@@ -1074,9 +1083,9 @@ fn validate(file: PipelineFile, path: &Path, bytes: Vec<u8>, root: PathBuf) -> R
                 block: ov.block,
                 sheet: ov.sheet.clone(),
                 units,
-                time: ov.time.clone(),
-                control: ov.control.clone(),
-                response: ov.response.clone(),
+                time: ov.time.clone().or_else(|| g.time.clone()),
+                control: ov.control.clone().or_else(|| g.control.clone()),
+                response: ov.response.clone().or_else(|| g.response.clone()),
                 settings: settings_for(&file, &g.specimen, kind).overlaid(&ov.settings()),
             });
         }

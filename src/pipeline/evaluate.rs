@@ -453,8 +453,11 @@ fn stages(
     let curvature_control =
         t.kind == TestKind::PureBending && crate::bridge::curvature_control(&rec);
     let length_known = t.free_length_m.is_some() || rec.specimen.free_length_m.is_some();
-    let machine_level = !length_known && !curvature_control;
-    let (geom, flat) = if length_known {
+    // A strain control in tension needs no length either: (EA) = dF/dε (`geometry_noted`
+    // carries the strain on l₀ = 1 m and says so).
+    let strain_control = t.kind == TestKind::Tension && crate::bridge::strain_control(&rec);
+    let machine_level = !length_known && !curvature_control && !strain_control;
+    let (geom, flat) = if length_known || strain_control {
         let (g, f, notes) = crate::bridge::geometry_noted(
             &rec,
             t.kind,
@@ -510,7 +513,7 @@ fn stages(
         flat.as_ref(),
         &mut curve,
     )?);
-    let (note, warning) = crate::bridge::align_response_sign(&mut curve);
+    let (note, warning) = crate::bridge::align_response_sign_of(&rec, t.kind, &mut curve);
     out.notes.extend(note);
     out.warnings.extend(warning);
     out.warnings.extend(curve.repeated_rows_warning());

@@ -23,6 +23,7 @@ fn run(dir: Option<&std::path::Path>, args: &[&str]) -> (Option<i32>, Value, Str
 
 const DIC: &str = "tests/data/ccfatigue__tst_qs_dic_strain_epoxy_BBM1S1.csv";
 const TRAVEL: &str = "tests/data/ccfatigue__tst_qs_unitless_machine_travel.csv";
+const SWAPPED: &str = "tests/data/ccfatigue__tst_qs_dic_strain_axes_swapped_BB1M1S2.csv";
 const FATIGUE: &str = "tests/data/ccfatigue__tst_fa_gfrp_cycles_1_to_6.csv";
 
 /// DIC strains `exx--1`, `eyy--1`, `exy--1` with no unit are ratios by their names. None is
@@ -279,4 +280,146 @@ fn a_pipeline_states_the_units_a_file_leaves_out() {
         err.contains("p.toml:") && err.contains("units") && err.contains("'kiloN'"),
         "{err}"
     );
+}
+
+/// In the series' next file the DIC axes are swapped: `exx--1` falls under tension (the
+/// transverse strain), `eyy--1` rises. Named as the control, the falling strain is not
+/// reversed as a sign convention would be (that gave (EA) = 1.13·10⁶ N ≈ (EA)/ν with a note):
+/// a warning says it is most likely the transverse strain and names `eyy--1`, which rises with
+/// the force. On `eyy--1`, (EA) is the numpy line's 2.86–3.02·10⁵ N (ε = 0.05–0.25 % and
+/// 0–0.73 %).
+#[test]
+fn a_strain_control_that_falls_under_tension_is_the_transverse_one() {
+    let args = |c: &'static str| {
+        vec![
+            "analyze",
+            SWAPPED,
+            "--kind",
+            "tension",
+            "--control",
+            c,
+            "--json",
+        ]
+    };
+    let (code, v, err) = run(None, &args("exx--1"));
+    assert_eq!(code, Some(0), "{err}");
+    let w = warnings(&v).join("\n");
+    assert!(
+        w.contains("the strain 'exx--1' falls as the force rises")
+            && w.contains("transverse strain")
+            && w.contains("'eyy--1'"),
+        "{w}"
+    );
+    assert!(
+        v["stiffness"]["value"].as_f64().unwrap() < 0.0,
+        "{}",
+        v["stiffness"]
+    );
+    assert!(
+        !notes(&v).iter().any(|n| n.contains("sign is reversed")),
+        "{:?}",
+        notes(&v)
+    );
+    let (code, v, err) = run(None, &args("eyy--1"));
+    assert_eq!(code, Some(0), "{err}");
+    let ea = v["stiffness"]["value"].as_f64().unwrap();
+    assert!((2.8e5..=3.15e5).contains(&ea), "{ea:e}");
+    assert!(
+        !warnings(&v).iter().any(|w| w.contains("transverse")),
+        "{:?}",
+        warnings(&v)
+    );
+}
+
+/// Folder mode takes the column choices once for every file (`--control`, `--unit`): the four
+/// files of the DIC series evaluate on `exx--1` as a strain (no length asked for: (EA) =
+/// dF/dε, not the machine level), and the pipeline it writes carries them.
+#[test]
+fn folder_mode_takes_a_control_and_units_for_every_file() {
+    let d = tempfile::tempdir().unwrap();
+    std::fs::create_dir_all(d.path().join("qs")).unwrap();
+    for f in [DIC, SWAPPED] {
+        let name = std::path::Path::new(f).file_name().unwrap();
+        std::fs::copy(
+            crate::common::root().join(f),
+            d.path().join("qs").join(name),
+        )
+        .unwrap();
+    }
+    let (code, _, err) = run(
+        Some(d.path()),
+        &[
+            "run",
+            "qs",
+            "--kind",
+            "tension",
+            "--control",
+            "exx--1",
+            "--unit",
+            "MD_Load--1=N",
+            "-q",
+            "--no-diagnosis",
+        ],
+    );
+    assert_eq!(code, Some(0), "{err}");
+    assert!(!err.contains("machine level"), "{err}");
+    let s: Value =
+        serde_json::from_slice(&std::fs::read(d.path().join("reports/qs/summary.json")).unwrap())
+            .unwrap();
+    let by = |needle: &str| {
+        s["tests"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|t| t["id"].as_str().unwrap().contains(needle))
+            .unwrap()
+            .clone()
+    };
+    let (_, a, _) = run(
+        None,
+        &[
+            "analyze",
+            DIC,
+            "--kind",
+            "tension",
+            "--control",
+            "exx--1",
+            "--json",
+        ],
+    );
+    assert_eq!(by("BBM1S1")["stiffness"], a["stiffness"]["value"]);
+    assert!(
+        by("BBM1S1").get("machine_stiffness").is_none(),
+        "{}",
+        by("BBM1S1")
+    );
+    // The swapped file is evaluated on its transverse strain as asked, and says so.
+    let r: Value = serde_json::from_slice(
+        &std::fs::read(
+            d.path()
+                .join("reports/qs")
+                .join(by("BB1M1S2")["report"].as_str().unwrap()),
+        )
+        .unwrap(),
+    )
+    .unwrap();
+    assert!(
+        r["warnings"].to_string().contains("transverse strain"),
+        "{}",
+        r["warnings"]
+    );
+    let p = std::fs::read_to_string(d.path().join("reports/qs/pipeline.toml")).unwrap();
+    assert!(
+        p.contains("control = \"exx--1\"")
+            && p.contains("units = { \"MD_Load--1\" = \"N\" }")
+            && p.contains("not needed for the stiffness"),
+        "{p}"
+    );
+    // A pipeline file sets these itself.
+    let (code, _, err) = run(
+        Some(d.path()),
+        &["run", "reports/qs/pipeline.toml", "--control", "exx--1"],
+    );
+    assert_eq!(code, Some(2), "{err}");
+    assert!(err.contains("--control"), "{err}");
 }
