@@ -582,6 +582,95 @@ pub fn unitless_control_warning(
     })
 }
 
+/// In tension, an extensometer's travel chosen as the control beside the same extensometer's
+/// strain (see [`same_extensometer_strain`]) with no gauge length in the metadata: the strain
+/// becomes the control (the roles are swapped in `rec`) and the note says why. `inspect` and
+/// `analyze` both apply it, so that both show the control the analysis uses.
+pub fn prefer_extensometer_strain(rec: &mut TestRecord, kind: TestKind) -> Option<String> {
+    if kind != TestKind::Tension || rec.extensometer_gauge_length().is_some() {
+        return None;
+    }
+    let i = rec.channel_index(Role::Control)?;
+    let (k, gauge) = same_extensometer_strain(rec, i)?;
+    let travel = show(&rec.channels[i]);
+    rec.channels[i].role = Role::Other;
+    rec.channels[k].role = Role::Control;
+    Some(format!(
+        "the stiffness comes from {}, the extensometer's own strain: it is the travel {travel} over a {:.2} mm gauge length, which the file does not state otherwise; the travel over the free length would not be the strain",
+        show(&rec.channels[k]),
+        gauge * 1e3
+    ))
+}
+
+/// The file's strain channel that is the specimen-mounted travel `i` over one gauge length, and
+/// that length (m): a strain-named ratio channel whose ratio to the travel is one number (the
+/// middle half of the ratios within 2 % of their median) over the samples beyond a fifth of the
+/// largest strain. `None` when the travel is no specimen-mounted length or no channel is so.
+pub fn same_extensometer_strain(rec: &TestRecord, i: usize) -> Option<(usize, f64)> {
+    use cablab_ingest::units::Dimension as D;
+    let c = &rec.channels[i];
+    if c.dimension != Some(D::Length) || rec.mount(i) != cablab_ingest::Mount::Specimen {
+        return None;
+    }
+    let travel = rec.values(i)?;
+    (0..rec.channels.len()).find_map(|k| {
+        let o = &rec.channels[k];
+        if k == i
+            || o.role != Role::Other
+            || o.dimension != Some(D::Ratio)
+            || !cablab_ingest::strain_by_name(&o.name)
+            || shear_named(&o.name)
+        {
+            return None;
+        }
+        let strain = rec.values(k)?;
+        let top = strain
+            .iter()
+            .filter(|v| v.is_finite())
+            .fold(0.0f64, |m, v| m.max(v.abs()));
+        let mut ratios: Vec<f64> = travel
+            .iter()
+            .zip(&strain)
+            .filter(|(t, e)| t.is_finite() && e.is_finite() && e.abs() > 0.2 * top)
+            .map(|(t, e)| t / e)
+            .collect();
+        if ratios.len() < 10 {
+            return None;
+        }
+        ratios.sort_by(f64::total_cmp);
+        let n = ratios.len();
+        let (q1, med, q3) = (ratios[n / 4], ratios[n / 2], ratios[3 * n / 4]);
+        (med > 0.0 && q1 >= 0.98 * med && q3 <= 1.02 * med).then_some((k, med))
+    })
+}
+
+/// A warning when the control is an extensometer's travel whose own strain channel says its
+/// gauge length, and the length the travel is divided by is another (the travel chosen with
+/// `--control` over the free length): (EA) is off by their ratio.
+pub fn gauge_length_warning(
+    rec: &TestRecord,
+    kind: TestKind,
+    geom: &cablab_measure::Geometry,
+) -> Option<String> {
+    if kind != TestKind::Tension {
+        return None;
+    }
+    let i = rec.channel_index(Role::Control)?;
+    let (k, gauge) = same_extensometer_strain(rec, i)?;
+    let ratio = geom.free_length_m / gauge;
+    ((ratio - 1.0).abs() > 0.02).then(|| {
+        format!(
+            "the travel {} is divided by {:.2} mm, but the file's {} is that travel over {:.2} mm, its gauge length: (EA) comes out {ratio:.2} × the specimen's; pass --control '{}' (or --length-mm {:.2})",
+            show(&rec.channels[i]),
+            geom.free_length_m * 1e3,
+            show(&rec.channels[k]),
+            gauge * 1e3,
+            rec.channels[k].name,
+            gauge * 1e3
+        )
+    })
+}
+
 /// Millimetres (as flags give lengths) to metres.
 fn mm(v: Option<f64>) -> Option<f64> {
     v.map(|x| x * 1e-3)
@@ -627,6 +716,8 @@ pub fn read_test(
     said.notes.extend(notes);
     said.warnings
         .extend(unitless_control_warning(&rec, kind, &geom));
+    said.warnings
+        .extend(gauge_length_warning(&rec, kind, &geom));
     let mut curve = curve(&rec)?;
     said.notes.extend(sectional_control(
         &rec,
@@ -1128,6 +1219,15 @@ pub fn check_roles(
             }
         }
     }
+    // An extensometer's travel beside the same extensometer's strain (MTS TestSuite's
+    // `Extensometer (mm)` and `Strain (mm/mm)`) with no gauge length in the metadata: the strain
+    // carries the gauge length, the travel would be divided by whatever length is given (the
+    // free length between the clamps, 4.9 × the 50.8 mm gauge in a real ASTM D3039 export).
+    // Unless the travel was asked for, the strain is the control.
+    if !control_given {
+        said.notes.extend(prefer_extensometer_strain(rec, kind));
+    }
+    let ci = rec.channel_index(Role::Control);
     if kind == TestKind::Tension {
         if let Some(i) = ci {
             use cablab_ingest::Mount;

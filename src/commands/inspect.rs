@@ -10,12 +10,31 @@ pub fn run(a: InspectArgs) -> CmdResult {
     let mut opts = crate::bridge::read_options(&a.reader, kind).map_err(CliError::input)?;
     // Inspect shows a column whose unit cannot be read (with a warning) rather than refusing.
     opts.lenient = true;
-    let rec = cablab_ingest::read_path(&a.file, &opts).map_err(CliError::input)?;
+    let mut rec = cablab_ingest::read_path(&a.file, &opts).map_err(CliError::input)?;
+    // The file's own kind takes the channel roles as `analyze` will (a flexure file's crosshead,
+    // not its strain; `bridge::read_test` reads it again the same way), and an extensometer's
+    // travel gives way to its own strain as there.
+    if kind.is_none() && rec.kind != cablab_core::TestKind::Unknown {
+        opts.kind = Some(rec.kind);
+        let reason = std::mem::take(&mut rec.kind_reason);
+        if let Ok(again) = cablab_ingest::read_path(&a.file, &opts) {
+            rec = again;
+        }
+        rec.kind_reason = reason;
+    }
+    let mut notes: Vec<String> = Vec::new();
+    if a.reader.control.is_none() {
+        let k = rec.kind;
+        notes.extend(crate::bridge::prefer_extensometer_strain(&mut rec, k));
+    }
     for w in &rec.warnings {
         eprintln!("cablab: warning: {}", w.located());
     }
     for n in &rec.notes {
         eprintln!("cablab: note: {}", n.located());
+    }
+    for n in &notes {
+        eprintln!("cablab: note: {n}");
     }
     let report = rec.inspect();
     if a.json {

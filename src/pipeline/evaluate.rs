@@ -468,6 +468,8 @@ fn stages(
         out.notes.extend(notes);
         out.warnings
             .extend(crate::bridge::unitless_control_warning(&rec, t.kind, &g));
+        out.warnings
+            .extend(crate::bridge::gauge_length_warning(&rec, t.kind, &g));
         (g, f)
     } else {
         let g = cablab_measure::Geometry {

@@ -111,3 +111,167 @@ fn monotonic_steel_tests_with_a_yield_are_elastoplastic() {
         );
     }
 }
+
+/// An MTS TestSuite "Timed" text export (UTF-8 BOM, CRLF, four metadata lines, tab-separated
+/// names with a trailing space, a units row), written here with `channels` and `rows`: the
+/// layout of the ASTM D3039 and D790 exports of olivecha/ASTMD (no licence, so not committed;
+/// these are twins with known truths).
+fn mts_testsuite_txt(test: &str, names: &[&str], units: &[&str], rows: &[Vec<f64>]) -> String {
+    let mut s = format!(
+        "\u{feff}File Path: C:\\MTS TestSuite\\Data Files\\x\\DAQ- Time, … - (Timed).txt   \r\nTest: {test}\r\nTest Run: 1\r\nDate: 1/22/2021 11:04:36 AM\r\n\r\n\r\n"
+    );
+    s += &names
+        .iter()
+        .map(|n| format!("{n} "))
+        .collect::<Vec<_>>()
+        .join("\t");
+    s += "\r\n";
+    s += &units.join("\t");
+    s += "\r\n";
+    for r in rows {
+        s += &r
+            .iter()
+            .map(|v| format!("{v}"))
+            .collect::<Vec<_>>()
+            .join("\t");
+        s += "\r\n";
+    }
+    s
+}
+
+/// A tension export with the extensometer's travel (mm) and the same extensometer's strain
+/// (mm/mm, over its 50.8 mm gauge), no gauge length in the metadata, run with the free length
+/// between the clamps (250.5 mm) as a technician would (the real D3039 export: (EA) 4.93 × too
+/// large, no warning). The strain is taken, (EA) = dF/dε exact; `inspect` shows the same
+/// control; with the travel forced by `--control`, a warning gives the ratio and the gauge
+/// length.
+#[test]
+fn an_extensometer_travel_gives_way_to_its_own_strain() {
+    let (ea, gauge, area) = (2.7e5, 50.8e-3, 15.2e-6);
+    let rows: Vec<Vec<f64>> = (0..400)
+        .map(|i| {
+            let eps = 3.5e-5 * i as f64;
+            let f = 20.0 + ea * eps + 0.3 * ((i * 7919 % 13) as f64 - 6.0);
+            // time, load, crosshead (with the grips' compliance), extensometer, strain, stress
+            vec![
+                0.1 * i as f64,
+                f,
+                1e3 * (eps * 0.2505 + f * 2e-8),
+                1e3 * eps * gauge,
+                eps,
+                f / area * 1e-6,
+            ]
+        })
+        .collect();
+    let text = mts_testsuite_txt(
+        "MTS EM Tension (Extensometer) 3",
+        &[
+            "Time",
+            "Load",
+            "Crosshead",
+            "Extensometer",
+            "Strain",
+            "Stress",
+        ],
+        &["sec", "N", "mm", "mm", "mm/mm", "N/mm²"],
+        &rows,
+    );
+    let d = tempfile::tempdir().unwrap();
+    let p = d.path().join("sample1.txt");
+    std::fs::write(&p, text).unwrap();
+    let f = p.to_string_lossy().into_owned();
+    let run = |extra: &[&str]| {
+        let out = cablab()
+            .args(["analyze", &f, "--length-mm", "250.5", "--json"])
+            .args(extra)
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        serde_json::from_slice::<Value>(&out.stdout).unwrap()
+    };
+    let v = run(&[]);
+    assert_eq!(
+        v["control_channel"]["name"], "Strain",
+        "{}",
+        v["control_channel"]
+    );
+    let got = v["stiffness"]["value"].as_f64().unwrap();
+    assert!((got / ea - 1.0).abs() < 0.005, "{got:e}");
+    assert!(
+        v["notes"].to_string().contains("50.80 mm gauge length"),
+        "{}",
+        v["notes"]
+    );
+    let forced = run(&["--control", "Extensometer"]);
+    let w = forced["warnings"].to_string();
+    assert!(
+        w.contains("comes out 4.93 × the specimen's") && w.contains("--length-mm 50.80"),
+        "{w}"
+    );
+    let out = cablab().args(["inspect", &f, "--json"]).output().unwrap();
+    let i: Value = serde_json::from_slice(&out.stdout).unwrap();
+    let role = |n: &str| {
+        i["channels"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|c| c["name"] == n)
+            .unwrap()["role"]
+            .clone()
+    };
+    assert_eq!(
+        (role("Strain"), role("Extensometer")),
+        ("control".into(), "other".into())
+    );
+}
+
+/// A three-point flexure export of the same software (`MTS EM Flexure (3-Point Bend)`: time,
+/// load, crosshead, a flexural strain and stress): `inspect` names the crosshead as the control,
+/// as `analyze` (which reads it as the three-point kind the metadata states) uses it; it used to
+/// show the strain, read as if the kind were not known.
+#[test]
+fn inspect_shows_the_control_analyze_uses() {
+    let rows: Vec<Vec<f64>> = (0..200)
+        .map(|i| {
+            let w = 1e-2 * i as f64; // mm
+            vec![
+                0.2 * i as f64,
+                30.0 * w,
+                w,
+                6.0 * 3.2 * w / 100.0f64.powi(2),
+                1.2 * w,
+            ]
+        })
+        .collect();
+    let text = mts_testsuite_txt(
+        "MTS EM Flexure (3-Point Bend)_x",
+        &["Time", "Load", "Crosshead", "Strain", "Stress"],
+        &["sec", "N", "mm", "mm/mm", "N/mm²"],
+        &rows,
+    );
+    let d = tempfile::tempdir().unwrap();
+    let p = d.path().join("flex.txt");
+    std::fs::write(&p, text).unwrap();
+    let f = p.to_string_lossy().into_owned();
+    let out = cablab().args(["inspect", &f, "--json"]).output().unwrap();
+    let i: Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(i["kind"], "three_point");
+    let control: Vec<&str> = i["channels"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|c| c["role"] == "control")
+        .map(|c| c["name"].as_str().unwrap())
+        .collect();
+    assert_eq!(control, ["Crosshead"]);
+    let out = cablab()
+        .args(["analyze", &f, "--length-mm", "100", "--json"])
+        .output()
+        .unwrap();
+    let a: Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(a["control_channel"]["name"], "Crosshead");
+}

@@ -321,7 +321,7 @@ fn strain_named(lower_name: &str) -> bool {
 /// `e_yy`, `e11`, `eps_xy`), optionally numbered for a measuring point (CCFatigue's DIC
 /// `exx--1`, `e11_2`, `ε (3)`). A strain is dimensionless, so a column so named with no unit is
 /// still a ratio (see the reader).
-pub(crate) fn strain_by_name(name: &str) -> bool {
+pub fn strain_by_name(name: &str) -> bool {
     let n = name.trim().to_lowercase();
     strain_named(&n) || strain_symbol(&n)
 }
