@@ -131,7 +131,7 @@ pub enum Command {
 pub struct ReaderArgs {
     /// Force the file layout instead of detecting it (mts793_dat, mts_testsuite_csv,
     /// mts_testsuite_xml, bluehill_csv, wavematrix_csv, testxpert_ascii, nexygen_text,
-    /// catman_ascii, delimited).
+    /// catman_ascii, deben_mtr, delimited).
     #[arg(long, value_name = "LAYOUT")]
     pub format: Option<String>,
     /// Use this data block (1-based) when the file holds several.

@@ -714,3 +714,43 @@ fn polish_bluehill_thousands_and_diameter() {
         warnings(&a)
     );
 }
+
+/// A Deben Microtest `.MTR` export (a tensile stage; ppieczywek/TDA, MIT): quoted `Key : value`
+/// lines with decimal commas, names with no units, numbers written `.1`, a quoted speed on every
+/// row, an end-marker row. It used to be refused ("header row … is not followed by any numeric
+/// data row" at the end marker: the text column hid the separator). Now: its layout, the
+/// Microtest software's units (s, mm, N), the 2,701 points the metadata counts, the span and the
+/// 5 × 1 mm section from the metadata; (EA) within 5 % of the numpy line over 10–40 % of the
+/// maximum force (2,066 N; 1,931–2,066 N over 10–50 %).
+#[test]
+fn a_deben_microtest_export_reads_with_its_layouts_units() {
+    let name = "tda__deben_microtest_tension_nanocellulose.MTR";
+    let i = inspect(name);
+    assert_eq!(i["format"], "deben_mtr");
+    assert_eq!(i["rows"], 2701);
+    assert_eq!(
+        channels(&i)[..3],
+        owned(&[
+            ("Point", "s", "time"),
+            ("Elongation", "mm", "control"),
+            ("Force", "N", "response"),
+        ])[..]
+    );
+    let a = analyze(name, &[]);
+    let ea = stiffness(&a);
+    assert!(within(ea, 2066.0, 0.05), "EA {ea:e}");
+    let e = a["modulus_pa"].as_f64().unwrap();
+    assert!(within(e, ea / 5e-6, 1e-9), "E {e:e}");
+    let n = notes(&a).join("\n");
+    assert!(
+        n.contains("the free length 10.0000 mm is the file's own")
+            && n.contains("5.0000 × 1.0000 mm")
+            && n.contains("end marker"),
+        "{n}"
+    );
+    assert!(
+        !warnings(&a).iter().any(|w| w.contains("no unit")),
+        "{:?}",
+        warnings(&a)
+    );
+}

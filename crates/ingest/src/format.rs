@@ -40,13 +40,16 @@ pub enum Format {
     NexygenText,
     /// HBM catman ASCII export (`catman` signature, `Channel name`/`Unit` header rows).
     CatmanAscii,
+    /// Deben Microtest `.MTR` export (`"File : ….MTR saved …"`, quoted `Key : value` lines,
+    /// `"Point","Elongation","Force","Position",…` with no units: s, mm, N, mm by the layout).
+    DebenMtr,
     /// Any delimited text with a header.
     Delimited,
 }
 
 impl Format {
     /// Every layout.
-    pub const ALL: [Format; 9] = [
+    pub const ALL: [Format; 10] = [
         Format::Mts793Dat,
         Format::MtsTestsuiteCsv,
         Format::MtsTestsuiteXml,
@@ -55,6 +58,7 @@ impl Format {
         Format::TestxpertAscii,
         Format::NexygenText,
         Format::CatmanAscii,
+        Format::DebenMtr,
         Format::Delimited,
     ];
 
@@ -69,6 +73,7 @@ impl Format {
             Format::TestxpertAscii => "testxpert_ascii",
             Format::NexygenText => "nexygen_text",
             Format::CatmanAscii => "catman_ascii",
+            Format::DebenMtr => "deben_mtr",
             Format::Delimited => "delimited",
         }
     }
@@ -82,7 +87,7 @@ impl fmt::Display for Format {
 
 /// Error for an unknown `--format` name.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
-#[error("unknown format '{0}': expected one of mts793_dat, mts_testsuite_csv, mts_testsuite_xml, bluehill_csv, wavematrix_csv, testxpert_ascii, nexygen_text, catman_ascii, delimited")]
+#[error("unknown format '{0}': expected one of mts793_dat, mts_testsuite_csv, mts_testsuite_xml, bluehill_csv, wavematrix_csv, testxpert_ascii, nexygen_text, catman_ascii, deben_mtr, delimited")]
 pub struct UnknownFormat(pub String);
 
 impl FromStr for Format {
@@ -269,6 +274,22 @@ pub fn detect(text: &str, encoding: Encoding, source: &str) -> (Format, String) 
             s,
             Format::NexygenText,
             "NEXYGEN: UTF-16 text with one tab-separated header line, units in parentheses".into(),
+        ));
+    }
+    // Deben Microtest: `"File : C:\…\X.MTR saved 2005-02-18 at 23:19:14"` first, then quoted
+    // `Key : value` lines and a quoted names row starting `"Point","Elongation","Force"`.
+    let deben_first = {
+        let l = first.trim_start_matches('"').to_lowercase();
+        l.starts_with("file :") && l.contains(".mtr")
+    };
+    let deben_names = lower_head
+        .iter()
+        .any(|l| l.starts_with("\"point\",\"elongation\",\"force\""));
+    if deben_first || deben_names {
+        cands.push((
+            if deben_first && deben_names { 80 } else { 60 },
+            Format::DebenMtr,
+            "Deben Microtest MTR ('File : ….MTR saved', 'Point, Elongation, Force' names)".into(),
         ));
     }
     cands.push((

@@ -594,6 +594,64 @@ pub(crate) fn build(
             units[i] = u;
         }
     }
+    // The Deben Microtest layout writes no units; its software's are s, mm and N (the file's
+    // own "Test duration : 2938,2s" and "Max extension : 5,381mm" say so too). Its last line
+    // is an end marker, no sample: Code 1 with the elongation and force written as 0
+    // (`270.6,0,0,.6065,1,100,…`, or every channel 0).
+    if provenance.format == Format::DebenMtr {
+        let mut stated = Vec::new();
+        for i in 0..n {
+            let unit = match names[i].trim().to_lowercase().as_str() {
+                "point" => "s",
+                "elongation" | "position" => "mm",
+                "force" => "N",
+                _ => continue,
+            };
+            if units[i].is_empty() && !is_label[i] {
+                units[i] = unit.to_string();
+                stated.push(format!("'{}' in {unit}", names[i]));
+            }
+        }
+        if !stated.is_empty() {
+            notes.push(Diagnostic {
+                file: source.clone(),
+                line: Some(block.names_line),
+                column: None,
+                message: format!(
+                    "the Deben Microtest layout writes no units: {} (the Microtest software's)",
+                    stated.join(", ")
+                ),
+            });
+        }
+        let at = |name: &str| {
+            names
+                .iter()
+                .position(|x| x.trim().eq_ignore_ascii_case(name))
+        };
+        if let (Some(code), Some(el), Some(f), true) =
+            (at("code"), at("elongation"), at("force"), block.rows >= 2)
+        {
+            let last = block.rows - 1;
+            let col = |c: usize| block.columns[c][last];
+            if col(code) == 1.0 && col(el) == 0.0 && col(f) == 0.0 {
+                let line = block.line_of_row(last);
+                for c in block.columns.iter_mut() {
+                    c.truncate(last);
+                }
+                for (_, l) in block.labels.iter_mut() {
+                    l.truncate(last);
+                }
+                block.rows = last;
+                block.last_data_line = block.line_of_row(last - 1);
+                notes.push(Diagnostic {
+                    file: source.clone(),
+                    line: Some(line),
+                    column: None,
+                    message: "the Deben Microtest end marker (Code 1, elongation and force written as 0) is no sample: left out".into(),
+                });
+            }
+        }
+    }
     // Units stated by the user (`--unit COLUMN=UNIT`) replace what the file says.
     for (col, unit) in &opts.units {
         let i = find_column(&names, &block.header_cells, col).ok_or_else(|| {
@@ -900,7 +958,30 @@ pub(crate) fn build(
     let labels = std::mem::take(&mut block.labels);
     let data = to_frame(&names, columns, labels, &source)?;
     let cross_section_m2 = crate::roles::area_from_metadata(&raw.metadata);
-    let flat_section = crate::roles::flat_section_from_metadata(&raw.metadata);
+    let mut flat_section = crate::roles::flat_section_from_metadata(&raw.metadata);
+    // Deben Microtest's `"Width : 5,0"` and `"Thickness : 1,0"` are in mm, as its span is: the
+    // layout writes no unit there either.
+    if flat_section.is_none() && provenance.format == Format::DebenMtr {
+        let mm = |key: &str| {
+            raw.metadata.iter().find_map(|(k, v)| {
+                k.trim()
+                    .eq_ignore_ascii_case(key)
+                    .then(|| v.trim().replace(',', ".").parse::<f64>().ok())
+                    .flatten()
+                    .filter(|x| x.is_finite() && *x > 0.0)
+            })
+        };
+        if let (Some(w), Some(t)) = (mm("Width"), mm("Thickness")) {
+            flat_section = Some((
+                cablab_core::RectangularSection {
+                    width_m: w * 1e-3,
+                    thickness_m: t * 1e-3,
+                },
+                "the Deben Microtest metadata's width and thickness (mm, the layout's unit)"
+                    .to_string(),
+            ));
+        }
+    }
     let mut rec = TestRecord {
         kind,
         kind_reason,

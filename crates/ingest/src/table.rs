@@ -286,40 +286,13 @@ fn sample_lines(bytes: &[u8], eol: u8, n: usize) -> Vec<&[u8]> {
 }
 
 fn detect_separator(lines: &[&[u8]]) -> Separator {
-    let mut best = (0usize, Separator::Tab);
-    let mut cells = Vec::new();
-    for sep in [
-        Separator::Tab,
-        Separator::Semicolon,
-        Separator::Comma,
-        Separator::Space,
-    ] {
-        let mut counts: Vec<(usize, usize)> = Vec::new();
-        for line in lines {
-            split(line, sep, &mut cells);
-            let mut nonempty = 0;
-            let ok = cells.iter().all(|&(a, b)| {
-                let c = &line[a..b.max(a)];
-                let t = c.iter().all(|&x| x == b' ');
-                if t {
-                    return true;
-                }
-                nonempty += 1;
-                numeric_any(c) || parse_cell(c, b'.') == Cell::Missing
-            });
-            if ok && nonempty > 0 {
-                match counts.iter_mut().find(|(k, _)| *k == cells.len()) {
-                    Some(e) => e.1 += 1,
-                    None => counts.push((cells.len(), 1)),
-                }
-            }
-        }
-        if let Some(&(ncells, count)) = counts.iter().max_by_key(|(k, c)| (*c, *k)) {
-            let score = count * if ncells >= 2 { 2 } else { 1 };
-            if score > best.0 {
-                best = (score, sep);
-            }
-        }
+    // Lines whose every cell is a number decide; only where no separator gives one do data
+    // rows with one text column beside at least two numbers (Deben Microtest's
+    // `.1,.001,-.1,.0035,0,100,"0.5 mm/min"` on every row) — before the first line's most
+    // frequent separator character, which a free-text first line would decide.
+    let mut best = best_separator(lines, false);
+    if best.0 == 0 {
+        best = best_separator(lines, true);
     }
     if best.0 > 0 {
         return best.1;
@@ -342,6 +315,52 @@ fn detect_separator(lines: &[&[u8]]) -> Separator {
     } else {
         Separator::Space
     }
+}
+
+/// The separator under which most lines (of one cell count, at least two cells counting double)
+/// are rows of numbers: every cell a number or missing, or with `mixed`, also one text cell
+/// beside at least two numbers. (score, separator); score 0 when no line is such a row.
+fn best_separator(lines: &[&[u8]], mixed: bool) -> (usize, Separator) {
+    let mut best = (0usize, Separator::Tab);
+    let mut cells = Vec::new();
+    for sep in [
+        Separator::Tab,
+        Separator::Semicolon,
+        Separator::Comma,
+        Separator::Space,
+    ] {
+        let mut counts: Vec<(usize, usize)> = Vec::new();
+        for line in lines {
+            split(line, sep, &mut cells);
+            let (mut nonempty, mut nums, mut text) = (0usize, 0usize, 0usize);
+            for &(a, b) in &cells {
+                let c = &line[a..b.max(a)];
+                if c.iter().all(|&x| x == b' ') {
+                    continue;
+                }
+                nonempty += 1;
+                if numeric_any(c) {
+                    nums += 1;
+                } else if parse_cell(c, b'.') != Cell::Missing {
+                    text += 1;
+                }
+            }
+            let ok = text == 0 || (mixed && text == 1 && nums >= 2 && cells.len() >= 3);
+            if ok && nonempty > 0 {
+                match counts.iter_mut().find(|(k, _)| *k == cells.len()) {
+                    Some(e) => e.1 += 1,
+                    None => counts.push((cells.len(), 1)),
+                }
+            }
+        }
+        if let Some(&(ncells, count)) = counts.iter().max_by_key(|(k, c)| (*c, *k)) {
+            let score = count * if ncells >= 2 { 2 } else { 1 };
+            if score > best.0 {
+                best = (score, sep);
+            }
+        }
+    }
+    best
 }
 
 fn detect_decimal(lines: &[&[u8]], sep: Separator) -> u8 {
@@ -1445,6 +1464,21 @@ mod tests {
                 ("Gauge length".into(), "25 mm".into())
             ]
         );
+    }
+
+    #[test]
+    fn a_text_column_on_every_row_does_not_hide_the_separator() {
+        // Deben Microtest: a free-text first line, quoted names, and every data row ending in
+        // a quoted speed; no line is numbers only, and the first line's spaces won before.
+        let text = "\"Comment : 200N tensile with 1119:1 gearbox &  256 line encoder\"\n\
+                    \"Point\",\"Elongation\",\"Force\",\"Speed\"\n\
+                    .1,.001,-.1,\"0.5 mm/min\"\n.2,.002,.3,\"0.5 mm/min\"\n.3,.004,.6,\"0.5 mm/min\"\n";
+        let t = read_table(text, Format::Delimited, "t").unwrap();
+        assert_eq!(t.separator, Some(Separator::Comma));
+        let b = &t.blocks[0];
+        assert_eq!(b.rows, 3);
+        assert_eq!(b.columns[2], vec![-0.1, 0.3, 0.6]);
+        assert_eq!(b.labels.len(), 1);
     }
 
     #[test]
