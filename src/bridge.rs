@@ -671,6 +671,102 @@ pub fn gauge_length_warning(
     })
 }
 
+/// A warning when the control jumps between two samples while the response does not move
+/// back to where the record started (a step over 20 × the median step and 5 % of the control's
+/// range, landing within 5 % of the range of the first sample, the response's step within 3 × its
+/// median): a displacement counted from each phase's start (CellScale UniVert's
+/// `Displacement_mm` back to 0 from the preload to the stretch), not the specimen's travel. It
+/// names the file's other channels of the control's dimension that run on there.
+pub fn control_reset_warning(rec: &TestRecord, curve: &Curve) -> Option<String> {
+    let (c, r) = (&curve.control, &curve.response);
+    if c.len() < 10 {
+        return None;
+    }
+    let median_step = |v: &[f64]| {
+        let mut d: Vec<f64> = v
+            .windows(2)
+            .map(|w| (w[1] - w[0]).abs())
+            .filter(|d| *d > 0.0 && d.is_finite())
+            .collect();
+        if d.is_empty() {
+            return 0.0;
+        }
+        let k = d.len() / 2;
+        *d.select_nth_unstable_by(k, f64::total_cmp).1
+    };
+    let (mc, mr) = (median_step(c), median_step(r));
+    let (lo, hi) = c
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
+            (a.min(v), b.max(v))
+        });
+    // Back to where the record started (within 5 % of the range), from away from it.
+    let near_start = |v: f64| (v - c[0]).abs() <= 0.05 * (hi - lo);
+    // Against the motion on both sides: the control ran one way, jumps the other, and runs
+    // on the first way again (a fast sweep through its start is no reset).
+    let i = (2..c.len() - 1).find(|&i| {
+        let (before, jump, after) = (c[i - 1] - c[i - 2], c[i] - c[i - 1], c[i + 1] - c[i]);
+        let dc = jump.abs();
+        before * jump < 0.0
+            && after * jump < 0.0
+            && dc > 20.0 * mc
+            && dc > 0.05 * (hi - lo)
+            && near_start(c[i])
+            && !near_start(c[i - 1])
+            && (r[i] - r[i - 1]).abs() <= 3.0 * mr
+    })?;
+    let ci = rec.channel_index(Role::Control)?;
+    let ch = &rec.channels[ci];
+    // The other lengths, on the same complete rows, that do not jump there.
+    let rows = complete_rows(rec);
+    let others: Vec<String> = (0..rec.channels.len())
+        .filter(|&k| {
+            k != ci
+                && rec.channels[k].role == Role::Other
+                && rec.channels[k].dimension.is_some()
+                && rec.channels[k].dimension == ch.dimension
+        })
+        .filter(|&k| {
+            let Some(v) = rec.values(k) else { return false };
+            let v: Vec<f64> = rows.iter().map(|&j| v[j]).collect();
+            v.len() == c.len()
+                && v.iter().all(|x| x.is_finite())
+                && (v[i] - v[i - 1]).abs() <= 3.0 * median_step(&v)
+        })
+        .map(|k| show(&rec.channels[k]))
+        .collect();
+    let factor = ch.factor.max(f64::MIN_POSITIVE);
+    Some(format!(
+        "the control {} jumps from {} to {} {} between complete rows {i} and {} while the response does not move: it is counted from each phase's start, not the specimen's travel{}",
+        show(ch),
+        (c[i - 1] / factor * 1e6).round() / 1e6,
+        (c[i] / factor * 1e6).round() / 1e6,
+        if ch.unit.is_empty() { ch.si_unit.as_str() } else { ch.unit.as_str() },
+        i + 1,
+        match others.first() {
+            Some(o) => format!(
+                "; {} runs on there: --control '{}'",
+                others.join(", "),
+                o.trim_start_matches('\'').split('\'').next().unwrap_or_default()
+            ),
+            None => String::new(),
+        }
+    ))
+}
+
+/// Indices of the record's complete rows (control, response and time, where there is one, all
+/// numbers), as [`curve`] keeps them.
+fn complete_rows(rec: &TestRecord) -> Vec<usize> {
+    let c = rec.role_values(Role::Control).unwrap_or_default();
+    let r = rec.role_values(Role::Response).unwrap_or_default();
+    let t = rec.role_values(Role::Time);
+    (0..c.len().min(r.len()))
+        .filter(|&i| {
+            c[i].is_finite() && r[i].is_finite() && t.as_ref().is_none_or(|t| t[i].is_finite())
+        })
+        .collect()
+}
+
 /// Millimetres (as flags give lengths) to metres.
 fn mm(v: Option<f64>) -> Option<f64> {
     v.map(|x| x * 1e-3)
@@ -726,6 +822,7 @@ pub fn read_test(
         flat.as_ref(),
         &mut curve,
     )?);
+    said.warnings.extend(control_reset_warning(&rec, &curve));
     let (note, warning) = align_response_sign_of(&rec, kind, &mut curve);
     said.notes.extend(note);
     said.warnings.extend(warning);

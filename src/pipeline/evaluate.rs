@@ -515,6 +515,8 @@ fn stages(
         flat.as_ref(),
         &mut curve,
     )?);
+    out.warnings
+        .extend(crate::bridge::control_reset_warning(&rec, &curve));
     let (note, warning) = crate::bridge::align_response_sign_of(&rec, t.kind, &mut curve);
     out.notes.extend(note);
     out.warnings.extend(warning);

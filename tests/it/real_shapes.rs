@@ -275,3 +275,81 @@ fn inspect_shows_the_control_analyze_uses() {
     let a: Value = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!(a["control_channel"]["name"], "Crosshead");
 }
+
+/// A CellScale UniVert CSV (the layout of sabdelfa/Sinusoidal-Testing-Analysis' sample, no
+/// licence, so a twin): `SetName,Cycle,Time_S,Size_mm,Displacement_mm,Force_N`, a preload phase
+/// then stretch/recover cycles, `Displacement_mm` counted from each phase's start (back to 0
+/// after the preload) while `Size_mm` runs on. It was refused as "the control never moves
+/// beyond its noise"; now the error says the first loading is too short and why, a warning
+/// names the jump and the continuous `Size`, and on `Size` (EA) is the truth.
+#[test]
+fn a_displacement_reset_between_phases_is_named_with_the_channel_that_runs_on() {
+    let (ea, l0, s0) = (38.0, 29.212e-3, 28.941);
+    let mut s = String::from("SetName,Cycle,Time_S,Size_mm,Displacement_mm,Force_N\n");
+    let mut t = 0.0;
+    let force = |size: f64| ea * (size - 29.212) * 1e-3 / l0 + 0.07;
+    for k in 0..8 {
+        let size = s0 + 0.271 * k as f64 / 7.0;
+        s += &format!(
+            "Sinusoid,1-Preload,{t:.3},{size:.4},{:.4},{:.4}\n",
+            size - s0,
+            force(size).min(0.07)
+        );
+        t += 0.2;
+    }
+    for cyc in 1..=3 {
+        for k in 0..=100 {
+            let d = 0.979 * (1.0 - (std::f64::consts::PI * k as f64 / 100.0).cos()) / 2.0;
+            s += &format!(
+                "Sinusoid,{cyc}-Stretch,{t:.3},{:.4},{d:.4},{:.4}\n",
+                29.212 + d,
+                force(29.212 + d)
+            );
+            t += 0.2;
+        }
+        for k in 1..=25 {
+            let d = 0.979 * (1.0 - k as f64 / 25.0);
+            s += &format!(
+                "Sinusoid,{cyc}-Recover,{t:.3},{:.4},{d:.4},{:.4}\n",
+                29.212 + d,
+                force(29.212 + d)
+            );
+            t += 0.2;
+        }
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("Sample Data.csv");
+    std::fs::write(&p, s).unwrap();
+    let f = p.to_string_lossy().into_owned();
+    let base = [
+        "analyze",
+        f.as_str(),
+        "--kind",
+        "tension",
+        "--length-mm",
+        "29.212",
+    ];
+    let out = cablab().args(base).output().unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("'Displacement' (mm) jumps from 0.271 to 0 mm")
+            && err.contains("--control 'Size'")
+            && err.contains("the first loading holds only")
+            && !err.contains("never moves"),
+        "{err}"
+    );
+    let out = cablab()
+        .args(base)
+        .args(["--control", "Size", "--json"])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: Value = serde_json::from_slice(&out.stdout).unwrap();
+    let got = v["stiffness"]["value"].as_f64().unwrap();
+    assert!((got / ea - 1.0).abs() < 0.01, "{got}");
+}

@@ -723,7 +723,21 @@ pub fn analyze(
         .flat_map(|s| s.start..s.end)
         .collect();
     if first_idx.len() < 10 {
-        return Err(MeasureError::NoMotion);
+        let (lo, hi) = c
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
+                (a.min(v), b.max(v))
+            });
+        return Err(match (first_idx.first(), first_idx.last()) {
+            (Some(&a), Some(&b)) if hi - lo > 10.0 * cn.noise.max(f64::MIN_POSITIVE) => {
+                MeasureError::ShortFirstLoading {
+                    n: first_idx.len(),
+                    from: a + 1,
+                    to: b + 1,
+                }
+            }
+            _ => MeasureError::NoMotion,
+        });
     }
     let last_first = *first_idx.last().unwrap_or(&0);
     let sign = if c[last_first] >= c[first_idx[0]] {

@@ -113,6 +113,17 @@ pub enum MeasureError {
     /// The control never moves beyond its noise.
     #[error("the control never moves beyond its noise: no first loading to analyse")]
     NoMotion,
+    /// The control moves, but its first loading is too short to fit: it turns back (or jumps
+    /// back) after a few samples.
+    #[error("the first loading holds only {n} sample(s) (complete rows {from}–{to}) before the control turns back: too few to fit; a control that jumps back (a displacement counted from each phase's start) needs a continuous one named with --control")]
+    ShortFirstLoading {
+        /// Samples in the first loading.
+        n: usize,
+        /// Its first row (1-based complete row).
+        from: usize,
+        /// Its last row (1-based complete row).
+        to: usize,
+    },
 }
 
 #[cfg(test)]
