@@ -874,8 +874,8 @@ pub fn kind_of_file(
         }
         None => bail!(
             "{}: the file does not say which test it is (no test-type metadata, no channel units \
-             that tell, no kind in its name): give --kind tension, torsion, three_point or \
-             pure_bending",
+             that tell, no kind in its name): give --kind tension, torsion, three-point or \
+             pure-bending",
             path.display()
         ),
     }

@@ -754,3 +754,29 @@ fn a_deben_microtest_export_reads_with_its_layouts_units() {
         warnings(&a)
     );
 }
+
+/// The French testXpert export starts at 146 N with its extensometer at 0 (zeroed at the
+/// preload) and no rest: the response's zero comes from a line through the first samples,
+/// 144 N from the file's. That is 6 % of the maximum force and every reported force (the yield)
+/// is counted from it while the maximum is the file's own: a warning says so, with the value.
+#[test]
+fn a_zero_taken_from_a_start_without_rest_is_said_when_it_moves_the_forces() {
+    let a = analyze("hilhorst__testxpert_tension_allong1_fr.TRA", &[]);
+    let o = a["offsets"]["response"].as_f64().unwrap();
+    assert!((o - 144.27).abs() < 0.5, "{o}");
+    assert_eq!(a["offsets"]["samples_at_rest"], 0);
+    let w = warnings(&a).join("\n");
+    assert!(
+        w.contains("the response's zero is taken 1.4427e2 N from the file's") && w.contains("6 %"),
+        "{w}"
+    );
+    // A demo tension file also starts without a rest, but its line's zero is 0.04 N from the
+    // file's (of 100 N): nothing to say.
+    let d = json(&["analyze", "raw_data/cable/tension_100N_1.csv"]);
+    assert!(
+        d["offsets"]["response"].as_f64().unwrap().abs() < 0.5,
+        "{}",
+        d["offsets"]
+    );
+    assert!(!d["warnings"].to_string().contains("zero is taken"));
+}

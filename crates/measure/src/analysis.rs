@@ -704,9 +704,27 @@ pub fn analyze(
     excluded.extend(in_control);
     excluded.sort_unstable();
     excluded.dedup();
+    let peak_before = r
+        .iter()
+        .filter(|v| v.is_finite())
+        .fold(0.0f64, |m, v| m.max(v.abs()));
     let offsets = opts
         .zero_offsets
         .then(|| zero_offsets_with(&mut c, &mut r, cn, rn));
+    // Without an initial rest the response's zero is where a straight line through its first
+    // samples starts: a preload or a seating force there becomes the zero of every force that
+    // follows (the cycles' peaks, the yield), unlike the file's own maximum. Said when it moves
+    // them by more than 5 % of the largest response.
+    if let Some(o) = offsets.filter(|o| o.samples_at_rest == 0) {
+        if peak_before > 0.0 && o.response.abs() > 0.05 * peak_before {
+            warnings.push(format!(
+                "the response's zero is taken {:.4e} {} from the file's (a straight line through its first samples: the record starts without a rest), {:.0} % of its largest value: the cycles' peaks and the yield are counted from it, the maximum response is the file's own; a preload is then not in the forces reported",
+                o.response,
+                kind.response_unit(),
+                100.0 * o.response.abs() / peak_before
+            ));
+        }
+    }
     if offsets.is_some() {
         (cn, rn) = (ChannelNoise::of(&c), ChannelNoise::of(&r));
     }
