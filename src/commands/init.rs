@@ -252,9 +252,8 @@ pub fn kind_from_name(name: &str, control: Option<Dimension>) -> Option<Sourced<
         let next = words.get(i + 1).copied().unwrap_or("");
         let pair = format!("{w} {next}");
         match *w {
-            "tension" | "tensile" | "zug" | "zugversuch" | "traction" | "traccion" | "trazione" => {
-                hit(TestKind::Tension, w.to_string())
-            }
+            "tension" | "tensile" | "zug" | "zugversuch" | "traction" | "tract" | "traccion"
+            | "trazione" => hit(TestKind::Tension, w.to_string()),
             "torsion" | "torsionsversuch" | "torsione" => hit(TestKind::Torsion, w.to_string()),
             "3pb" | "3pt" | "3point" | "threepoint" | "dreipunkt" | "3pkt" | "tpb" => {
                 hit(TestKind::ThreePoint, w.to_string())
@@ -271,7 +270,7 @@ pub fn kind_from_name(name: &str, control: Option<Dimension>) -> Option<Sourced<
             "pure" | "reine" if matches!(next, "bending" | "biegung") => {
                 hit(TestKind::PureBending, pair)
             }
-            "bending" | "biegung" | "biegeversuch" | "flexion" | "bend" => {
+            "bending" | "biegung" | "biegeversuch" | "flexion" | "flex" | "flexural" | "bend" => {
                 let prev = if i > 0 { words[i - 1] } else { "" };
                 if !matches!(prev, "pure" | "reine") {
                     bare_bending.get_or_insert(w.to_string());
@@ -1084,6 +1083,15 @@ mod tests {
         assert_eq!(k("bending_1.csv", Some(Dimension::Force)), None);
         let s = kind_from_name("x_3pb_y.txt", None).unwrap();
         assert_eq!(s.from, "file name '3pb'");
+        // French abbreviations of a Shimadzu lab's names: Tract(ion), Flex(ion).
+        assert_eq!(k("Exemple_Shimadzu_Tract_L100_D2.csv", None), Some(Tension));
+        assert_eq!(
+            k(
+                "Exemple_MS_Shimadzu_Flex_L20_D2.csv",
+                Some(Dimension::Length)
+            ),
+            Some(ThreePoint)
+        );
     }
 
     /// The kind word anywhere in a name, between any separators and among filler words, is found.

@@ -353,3 +353,70 @@ fn a_displacement_reset_between_phases_is_named_with_the_channel_that_runs_on() 
     let got = v["stiffness"]["value"].as_f64().unwrap();
     assert!((got / ea - 1.0).abs() < 0.01, "{got}");
 }
+
+/// A Shimadzu Trapezium export of several specimens side by side (the layout of
+/// raballito/tensile_test_analyzer's flexure example, GPL, so a twin): a row naming each
+/// specimen on every third cell, `Temps,Force,Course_Traverse` repeated, their units repeated.
+/// It was read as one table of 18 columns of which cablab silently took the fourth specimen's.
+/// Now each specimen is a block titled by its name, a warning lists them and says which one the
+/// numbers are, and `--block N` reads another with its own stiffness.
+#[test]
+fn specimens_side_by_side_are_blocks_and_the_one_read_is_said() {
+    let ks = [30.0, 45.0, 60.0]; // N/mm
+    let lens = [300usize, 500, 400];
+    let mut s = String::from("Brut 1,,,Recuit,,,Etiré test 250°C,,\n");
+    s += &["Temps,Force,Course_Traverse"; 3].join(",");
+    s += "\n";
+    s += &["sec,N,mm"; 3].join(",");
+    s += "\n";
+    for i in 0..500 {
+        let cells: Vec<String> = (0..3)
+            .map(|j| {
+                if i < lens[j] {
+                    let w = 4e-4 * i as f64; // to 0.2 mm: w/l0 = 0.01
+                    format!("{:.2},{:.5},{w:.5}", 0.01 * i as f64, ks[j] * w)
+                } else {
+                    ",,".to_string()
+                }
+            })
+            .collect();
+        s += &cells.join(",");
+        s += "\n";
+    }
+    let d = tempfile::tempdir().unwrap();
+    let p = d.path().join("flex.csv");
+    std::fs::write(&p, s).unwrap();
+    let f = p.to_string_lossy().into_owned();
+    let run = |extra: &[&str]| {
+        let out = cablab()
+            .args([
+                "analyze",
+                &f,
+                "--kind",
+                "three-point",
+                "--length-mm",
+                "20",
+                "--json",
+            ])
+            .args(extra)
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        serde_json::from_slice::<Value>(&out.stdout).unwrap()
+    };
+    let k_of = |v: &Value| v["stiffness"]["value"].as_f64().unwrap() * 48.0 / 0.02f64.powi(3);
+    let v = run(&[]);
+    let w = v["warnings"].to_string();
+    assert!(
+        w.contains("the file holds 3 specimens side by side (1: 'Brut 1', 300 rows, 2: 'Recuit', 500 rows, 3: 'Etiré test 250°C', 400 rows)")
+            && w.contains("this is specimen 2 'Recuit', the longest"),
+        "{w}"
+    );
+    assert!((k_of(&v) / 45e3 - 1.0).abs() < 0.01, "{}", k_of(&v));
+    let v3 = run(&["--block", "3"]);
+    assert!((k_of(&v3) / 60e3 - 1.0).abs() < 0.01, "{}", k_of(&v3));
+}

@@ -423,3 +423,75 @@ fn folder_mode_takes_a_control_and_units_for_every_file() {
     assert_eq!(code, Some(2), "{err}");
     assert!(err.contains("--control"), "{err}");
 }
+
+/// A table of numbers with no names row at all (an old MTS 810 DAQ's `t,x,F` rows from line 1;
+/// mskin001/Tensile_Data_Processing, no licence, so a twin): it was refused as "no numeric data
+/// rows found (numeric rows from line 1 on have no names row directly above them)". Its columns
+/// are now named by position, the note says how to give roles and units, line numbers stay the
+/// file's own, and with them (EA) is the truth.
+#[test]
+fn a_headerless_table_is_read_with_columns_named_by_position() {
+    let d = tempfile::tempdir().unwrap();
+    let mut s = String::new();
+    for i in 0..200 {
+        let x = 1e-3 * i as f64; // mm
+        if i == 4 {
+            s += "0.5,oops,3\n"; // line 5: a malformed row
+            continue;
+        }
+        s += &format!("{:.4},{x:.6},{:.4}\n", 0.1 * i as f64, 28_000.0 * x);
+    }
+    let p = d.path().join("MTS810 LoadCell1.csv");
+    std::fs::write(&p, s).unwrap();
+    let f = p.to_string_lossy().into_owned();
+    let (code, i, err) = run(None, &["inspect", &f, "--json"]);
+    assert_eq!(code, Some(0), "{err}");
+    let names: Vec<&str> = i["channels"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|c| c["name"].as_str().unwrap())
+        .collect();
+    assert_eq!(names, ["column 1", "column 2", "column 3"]);
+    assert!(
+        err.contains("no names row") && err.contains("--control"),
+        "{err}"
+    );
+    let w = &i["warnings"][0];
+    assert_eq!(
+        (w["line"].as_u64(), w["column"].as_u64()),
+        (Some(5), Some(2)),
+        "{w}"
+    );
+    let (code, v, err) = run(
+        None,
+        &[
+            "analyze",
+            &f,
+            "--kind",
+            "tension",
+            "--length-mm",
+            "50",
+            "--time",
+            "column 1",
+            "--control",
+            "column 2",
+            "--response",
+            "column 3",
+            "--unit",
+            "column 1=s",
+            "--unit",
+            "column 2=mm",
+            "--unit",
+            "column 3=N",
+            "--json",
+        ],
+    );
+    assert_eq!(code, Some(0), "{err}");
+    // k = 28,000 N/mm = 2.8e7 N/m, (EA) = k l0 = 1.4e6 N.
+    assert!(
+        within(v["stiffness"]["value"].as_f64().unwrap(), 1.4e6, 1e-3),
+        "{}",
+        v["stiffness"]
+    );
+}

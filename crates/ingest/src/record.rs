@@ -500,6 +500,34 @@ pub(crate) fn build(
                 joined.iter().map(|&k| blocks[k - 1].rows).sum::<usize>()
             ),
         });
+    } else if raw.side_by_side && blocks.len() > 1 {
+        // Several specimens side by side: the result is one of them, which must be said next
+        // to every number (a warning), with the others' names.
+        warnings.push(Diagnostic {
+            file: source.clone(),
+            line: Some(blocks[main_block - 1].names_line),
+            column: None,
+            message: format!(
+                "the file holds {} specimens side by side ({}): this is specimen {main_block} '{}'{} only; --block N reads another",
+                blocks.len(),
+                blocks
+                    .iter()
+                    .map(|b| format!(
+                        "{}: '{}', {} rows",
+                        b.index,
+                        b.title.as_deref().unwrap_or(""),
+                        b.rows
+                    ))
+                    .collect::<Vec<_>>()
+                    .join(", "),
+                blocks[main_block - 1].title.as_deref().unwrap_or(""),
+                if opts.block.is_some() {
+                    ""
+                } else {
+                    ", the longest (ties: the first)"
+                }
+            ),
+        });
     } else if blocks.len() > 1 {
         notes.push(Diagnostic {
             file: source.clone(),

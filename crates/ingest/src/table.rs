@@ -48,6 +48,9 @@ impl RawBlock {
 #[derive(Debug, Default)]
 pub(crate) struct RawTable {
     pub blocks: Vec<RawBlock>,
+    /// The blocks are specimens written side by side (Mecmesin Emperor, Shimadzu Trapezium),
+    /// each titled by its name: the record is one of them.
+    pub side_by_side: bool,
     pub metadata: Vec<(String, String)>,
     pub warnings: Vec<Diagnostic>,
     /// What the reader did that is worth saying but casts no doubt on a number (a footer
@@ -131,6 +134,67 @@ pub(crate) fn read_table(
     if let Some(t) = side_by_side_samples(bytes, eol, sep, dec) {
         return Ok(t);
     }
+    // A table of numbers with no names row at all (an old DAQ's `t,x,F` rows from line 1): its
+    // columns are named by position, `column 1` …, read as if a names row stood above line 1;
+    // every line number is then the file's own again. The note says how to give roles and units.
+    if let Some(first) = sample
+        .iter()
+        .find(|l| !l.iter().all(|b| b.is_ascii_whitespace()))
+    {
+        let mut spans = Vec::new();
+        split(first, sep, &mut spans);
+        let all_numbers = spans.len() >= 2
+            && spans
+                .iter()
+                .all(|&(a, b)| matches!(parse_cell(&first[a..b.max(a)], dec), Cell::Num(_)));
+        if all_numbers && sample.first().is_some_and(|l| l == first) {
+            let names: Vec<String> = (1..=spans.len()).map(|i| format!("column {i}")).collect();
+            let sep_str = match sep {
+                Separator::Tab => "\t",
+                Separator::Comma => ",",
+                Separator::Semicolon => ";",
+                Separator::Space => " ",
+            };
+            let mut text2 = names.join(sep_str).into_bytes();
+            text2.push(eol);
+            text2.extend_from_slice(bytes);
+            let mut t = read_numbers_under(&text2, source, format, sep, dec)?;
+            for b in &mut t.blocks {
+                b.names_line = b.names_line.saturating_sub(1).max(1);
+                b.units_line = b.units_line.map(|u| u.saturating_sub(1));
+                b.first_data_line -= 1;
+                b.last_data_line -= 1;
+                for r in &mut b.line_runs {
+                    r.1 -= 1;
+                }
+            }
+            for d in t.warnings.iter_mut().chain(t.notes.iter_mut()) {
+                d.line = d.line.map(|l| l.saturating_sub(1).max(1));
+            }
+            t.notes.push(crate::Diagnostic {
+                file: source.to_string(),
+                line: Some(1),
+                column: None,
+                message: format!(
+                    "no names row: the {} columns are called 'column 1' … 'column {}' by position; name the roles with --time, --control, --response (\"column 2\") and the units with --unit",
+                    names.len(),
+                    names.len()
+                ),
+            });
+            return Ok(t);
+        }
+    }
+    read_numbers_under(bytes, source, format, sep, dec)
+}
+
+/// The delimited-text engine over `bytes` with the separator and decimal mark found.
+fn read_numbers_under(
+    bytes: &[u8],
+    source: &str,
+    format: Format,
+    sep: Separator,
+    dec: u8,
+) -> Result<RawTable, IngestError> {
     let mut eng = Engine {
         text: bytes,
         source,
@@ -175,8 +239,23 @@ fn side_by_side_samples(bytes: &[u8], eol: u8, sep: Separator, dec: u8) -> Optio
         }
         lines.push(line);
         pos = end + 1;
-        if lines.len() == 3 && !lines[2].starts_with(b"Sample ") {
-            return None;
+        // Three header rows tell the layout: read no further for any other file.
+        if lines.len() == 3 {
+            let mut sp = Vec::new();
+            let row = |l: &[u8], sp: &mut Vec<(usize, usize)>| -> Vec<String> {
+                split(l, sep, sp);
+                sp.iter()
+                    .map(|&x| cell_text_raw(l, x).trim().to_string())
+                    .collect()
+            };
+            let (a, b, c) = (
+                row(lines[0], &mut sp),
+                row(lines[1], &mut sp),
+                row(lines[2], &mut sp),
+            );
+            if mecmesin(&a, &b, &c).is_none() && trapezium(&a, &b, &c).is_none() {
+                return None;
+            }
         }
     }
     if lines.len() < 5 {
@@ -190,33 +269,22 @@ fn side_by_side_samples(bytes: &[u8], eol: u8, sep: Separator, dec: u8) -> Optio
             .map(|&sp| cell_text_raw(line, sp).trim().to_string())
             .collect()
     };
-    let names = texts(lines[0], &mut spans);
-    let units = texts(lines[1], &mut spans);
-    let titles = texts(lines[2], &mut spans);
-    let k = names.iter().position(|c| c.is_empty())?;
-    if k < 2
-        || names[k..].iter().any(|c| !c.is_empty())
-        || units[k.min(units.len())..].iter().any(|c| !c.is_empty())
-    {
-        return None;
-    }
-    let m = titles.len() / k;
-    let titled = |j: usize| titles.get(j * k).is_some_and(|t| t.starts_with("Sample "));
-    if m < 2
-        || !(0..m).all(titled)
-        || titles
-            .iter()
-            .enumerate()
-            .any(|(i, t)| i % k != 0 && !t.is_empty())
-    {
-        return None;
-    }
+    let row0 = texts(lines[0], &mut spans);
+    let row1 = texts(lines[1], &mut spans);
+    let row2 = texts(lines[2], &mut spans);
+    let (names, units, titles, names_line, units_line, k, m) = match mecmesin(&row0, &row1, &row2) {
+        Some((k, m)) => (row0, row1, row2, 1, 2, k, m),
+        None => {
+            let (k, m) = trapezium(&row0, &row1, &row2)?;
+            (row1, row2, row0, 2, 3, k, m)
+        }
+    };
     let first = (3..lines.len()).find(|&i| !lines[i].iter().all(|b| b.is_ascii_whitespace()))?;
     let mut blocks: Vec<RawBlock> = (0..m)
         .map(|j| RawBlock {
             title: Some(titles[j * k].clone()),
-            names_line: 1,
-            units_line: Some(2),
+            names_line,
+            units_line: Some(units_line),
             first_data_line: first + 1,
             header_cells: names[..k].to_vec(),
             unit_cells: (0..k)
@@ -263,10 +331,52 @@ fn side_by_side_samples(bytes: &[u8], eol: u8, sep: Separator, dec: u8) -> Optio
     blocks.retain(|b| b.rows > 0);
     (!blocks.is_empty()).then(|| RawTable {
         blocks,
+        side_by_side: true,
         separator: Some(sep),
         decimal: dec,
         ..Default::default()
     })
+}
+
+/// Mecmesin Emperor's three header rows: names in the first k cells only, units likewise,
+/// `Sample n` on every k-th cell of the third. (k, samples).
+fn mecmesin(names: &[String], units: &[String], titles: &[String]) -> Option<(usize, usize)> {
+    let k = names.iter().position(|c| c.is_empty())?;
+    if k < 2
+        || names[k..].iter().any(|c| !c.is_empty())
+        || units[k.min(units.len())..].iter().any(|c| !c.is_empty())
+    {
+        return None;
+    }
+    let m = titles.len() / k;
+    let titled = |j: usize| titles.get(j * k).is_some_and(|t| t.starts_with("Sample "));
+    let only_titles = titles
+        .iter()
+        .enumerate()
+        .all(|(i, t)| i % k == 0 || t.is_empty());
+    (m >= 2 && (0..m).all(titled) && only_titles).then_some((k, m))
+}
+
+/// Shimadzu Trapezium's several specimens side by side: a first row naming each specimen on
+/// every k-th cell (`Brut 1,,,Brut 2,,,…`), then the k names repeated for each
+/// (`Temps,Force,Course_Traverse,Temps,…`) and their units likewise. (k, specimens).
+fn trapezium(titles: &[String], names: &[String], units: &[String]) -> Option<(usize, usize)> {
+    let n = names.len();
+    // The shortest period of the names row that repeats at least twice.
+    let k = (2..=n / 2).find(|&k| {
+        n % k == 0
+            && (k..n).all(|i| names[i] == names[i % k])
+            && names[..k].iter().all(|c| !c.is_empty())
+    })?;
+    let m = n / k;
+    let periodic_units = units.len() >= n && (k..n).all(|i| units[i] == units[i % k]);
+    let titled = (0..m).all(|j| titles.get(j * k).is_some_and(|t| !t.is_empty()))
+        && titles
+            .iter()
+            .enumerate()
+            .all(|(i, t)| i % k == 0 || t.is_empty());
+    (periodic_units && titled && names[..k].iter().all(|c| c.parse::<f64>().is_err()))
+        .then_some((k, m))
 }
 
 fn sample_lines(bytes: &[u8], eol: u8, n: usize) -> Vec<&[u8]> {

@@ -67,9 +67,17 @@ fn no_numeric_rows() {
         ),
         "{e}"
     );
-    let e = read(b"1,2\n3,4\n").unwrap_err();
-    assert!(matches!(e, IngestError::NoData { .. }), "{e}");
-    assert!(e.to_string().contains("line 1"), "{e}");
+    // Numbers with no names row at all: columns named by position, and a note that says so.
+    let r = read(b"1,2\n3,4\n").unwrap();
+    let names: Vec<&str> = r.channels.iter().map(|c| c.name.as_str()).collect();
+    assert_eq!(names, ["column 1", "column 2"]);
+    assert!(
+        r.notes
+            .iter()
+            .any(|n| n.line == Some(1) && n.message.contains("no names row")),
+        "{:?}",
+        r.notes
+    );
 }
 
 #[test]

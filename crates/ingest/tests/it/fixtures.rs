@@ -688,12 +688,18 @@ fn mecmesin_emperor_samples_side_by_side_are_blocks() {
         .into_iter()
         .fold(f64::MIN, f64::max);
     assert!(rel(max, 7.1847));
-    // The choice is a note, not a warning; `--block 9` reads sample 9 to its own end.
-    assert!(r.warnings.is_empty(), "{:?}", r.warnings);
+    // The record is one sample of ten: a warning names them all and the one read (a number
+    // reported for "the file" is that sample's); `--block 9` reads sample 9 to its own end.
+    assert_eq!(r.warnings.len(), 1, "{:?}", r.warnings);
     assert!(
-        r.notes.iter().any(|n| n.message.contains("10 data blocks")),
+        r.warnings[0]
+            .message
+            .contains("the file holds 10 specimens side by side (1: 'Sample 1', 4160 rows")
+            && r.warnings[0]
+                .message
+                .contains("this is specimen 1 'Sample 1'"),
         "{:?}",
-        r.notes
+        r.warnings
     );
     let nine = read_path(
         &data("forcelib__mecmesin_emperor_10_samples.csv"),
