@@ -364,7 +364,7 @@ fn trapezium(titles: &[String], names: &[String], units: &[String]) -> Option<(u
     let n = names.len();
     // The shortest period of the names row that repeats at least twice.
     let k = (2..=n / 2).find(|&k| {
-        n % k == 0
+        n.is_multiple_of(k)
             && (k..n).all(|i| names[i] == names[i % k])
             && names[..k].iter().all(|c| !c.is_empty())
     })?;
