@@ -7,14 +7,18 @@ use crate::common::cablab;
 use serde_json::Value;
 
 fn analyze_json(file: &str, extra: &[&str]) -> Value {
-    let out = cablab()
-        .args(["analyze", &format!("tests/data/{file}"), "--json"])
-        .args(extra)
-        .output()
-        .unwrap();
+    let f = format!("tests/data/{file}");
+    let mut args = vec!["analyze", f.as_str()];
+    args.extend_from_slice(extra);
+    cablab_json(&args)
+}
+
+/// `cablab ARGS --json`, which must succeed; its JSON.
+fn cablab_json(args: &[&str]) -> Value {
+    let out = cablab().args(args).arg("--json").output().unwrap();
     assert!(
         out.status.success(),
-        "{file}: {}",
+        "{args:?}: {}",
         String::from_utf8_lossy(&out.stderr)
     );
     serde_json::from_slice(&out.stdout).unwrap()
@@ -181,17 +185,9 @@ fn an_extensometer_travel_gives_way_to_its_own_strain() {
     std::fs::write(&p, text).unwrap();
     let f = p.to_string_lossy().into_owned();
     let run = |extra: &[&str]| {
-        let out = cablab()
-            .args(["analyze", &f, "--length-mm", "250.5", "--json"])
-            .args(extra)
-            .output()
-            .unwrap();
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
-        serde_json::from_slice::<Value>(&out.stdout).unwrap()
+        let mut args = vec!["analyze", f.as_str(), "--length-mm", "250.5"];
+        args.extend_from_slice(extra);
+        cablab_json(&args)
     };
     let v = run(&[]);
     assert_eq!(
@@ -212,8 +208,7 @@ fn an_extensometer_travel_gives_way_to_its_own_strain() {
         w.contains("comes out 4.93 × the specimen's") && w.contains("--length-mm 50.80"),
         "{w}"
     );
-    let out = cablab().args(["inspect", &f, "--json"]).output().unwrap();
-    let i: Value = serde_json::from_slice(&out.stdout).unwrap();
+    let i = cablab_json(&["inspect", &f]);
     let role = |n: &str| {
         i["channels"]
             .as_array()
@@ -257,8 +252,7 @@ fn inspect_shows_the_control_analyze_uses() {
     let p = d.path().join("flex.txt");
     std::fs::write(&p, text).unwrap();
     let f = p.to_string_lossy().into_owned();
-    let out = cablab().args(["inspect", &f, "--json"]).output().unwrap();
-    let i: Value = serde_json::from_slice(&out.stdout).unwrap();
+    let i = cablab_json(&["inspect", &f]);
     assert_eq!(i["kind"], "three_point");
     let control: Vec<&str> = i["channels"]
         .as_array()
@@ -268,11 +262,7 @@ fn inspect_shows_the_control_analyze_uses() {
         .map(|c| c["name"].as_str().unwrap())
         .collect();
     assert_eq!(control, ["Crosshead"]);
-    let out = cablab()
-        .args(["analyze", &f, "--length-mm", "100", "--json"])
-        .output()
-        .unwrap();
-    let a: Value = serde_json::from_slice(&out.stdout).unwrap();
+    let a = cablab_json(&["analyze", &f, "--length-mm", "100"]);
     assert_eq!(a["control_channel"]["name"], "Crosshead");
 }
 
@@ -339,17 +329,9 @@ fn a_displacement_reset_between_phases_is_named_with_the_channel_that_runs_on() 
             && !err.contains("never moves"),
         "{err}"
     );
-    let out = cablab()
-        .args(base)
-        .args(["--control", "Size", "--json"])
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let v: Value = serde_json::from_slice(&out.stdout).unwrap();
+    let mut args = base.to_vec();
+    args.extend(["--control", "Size"]);
+    let v = cablab_json(&args);
     let got = v["stiffness"]["value"].as_f64().unwrap();
     assert!((got / ea - 1.0).abs() < 0.01, "{got}");
 }
@@ -388,25 +370,16 @@ fn specimens_side_by_side_are_blocks_and_the_one_read_is_said() {
     std::fs::write(&p, s).unwrap();
     let f = p.to_string_lossy().into_owned();
     let run = |extra: &[&str]| {
-        let out = cablab()
-            .args([
-                "analyze",
-                &f,
-                "--kind",
-                "three-point",
-                "--length-mm",
-                "20",
-                "--json",
-            ])
-            .args(extra)
-            .output()
-            .unwrap();
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
-        serde_json::from_slice::<Value>(&out.stdout).unwrap()
+        let mut args = vec![
+            "analyze",
+            f.as_str(),
+            "--kind",
+            "three-point",
+            "--length-mm",
+            "20",
+        ];
+        args.extend_from_slice(extra);
+        cablab_json(&args)
     };
     let k_of = |v: &Value| v["stiffness"]["value"].as_f64().unwrap() * 48.0 / 0.02f64.powi(3);
     let v = run(&[]);
@@ -440,30 +413,22 @@ fn the_small_deflection_limit_counts_from_contact() {
     let d = tempfile::tempdir().unwrap();
     let p = d.path().join("flex1.csv");
     std::fs::write(&p, s).unwrap();
-    let out = cablab()
-        .args([
-            "analyze",
-            &p.to_string_lossy(),
-            "--kind",
-            "three-point",
-            "--length-mm",
-            "20",
-        ])
-        .arg("--json")
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let v: Value = serde_json::from_slice(&out.stdout).unwrap();
+    let v = cablab_json(&[
+        "analyze",
+        &p.to_string_lossy(),
+        "--kind",
+        "three-point",
+        "--length-mm",
+        "20",
+    ]);
     // Within 8 %: the elastica correction still counts the deflection from zero stroke and
     // reads 7 % high here, which a warning says.
     let got = v["stiffness"]["value"].as_f64().unwrap();
     assert!((got / ei - 1.0).abs() < 0.08, "EI {got}");
     assert!(
-        v["warnings"].to_string().contains("the punch meets the specimen at w = 6.29"),
+        v["warnings"]
+            .to_string()
+            .contains("the punch meets the specimen at w = 6.29"),
         "{}",
         v["warnings"]
     );
