@@ -21,6 +21,8 @@ pub struct Curve {
     pub dropped_rows: usize,
     /// Rows that repeat the row before them exactly, time included (kept, counted).
     pub repeated_rows: usize,
+    /// The record's row of each sample kept (an index into every channel of the record).
+    pub rows: Vec<usize>,
 }
 
 impl Curve {
@@ -89,6 +91,7 @@ pub fn curve(rec: &TestRecord) -> Result<Curve> {
             c.repeated_rows += 1;
         }
         if ok {
+            c.rows.push(i);
             c.control.push(control[i]);
             c.response.push(response[i]);
             if let (Some(v), Some(t)) = (t_out.as_mut(), ti) {
@@ -143,12 +146,9 @@ pub fn align_response_sign(curve: &mut Curve) -> (Option<String>, Option<String>
         return (None, None);
     }
     let (c, r) = (&curve.control, &curve.response);
-    // Pearson's correlation from the least-squares line: sign of the slope, root of r² (0 for a
-    // flat response, which is no evidence either way).
-    let Ok(line) = cablab_measure::linear_fit(c, r) else {
+    let Some(rho) = correlation(c, r) else {
         return (None, None);
     };
-    let rho = line.slope.signum() * line.r2.max(0.0).sqrt();
     if rho.is_nan() || rho >= OPPOSITE_SIGNS_CORRELATION {
         return (None, None);
     }
@@ -187,6 +187,14 @@ pub fn align_response_sign(curve: &mut Curve) -> (Option<String>, Option<String>
     )
 }
 
+/// Pearson's correlation of `r` on `c` from the least-squares line: the sign of the slope, the
+/// root of r² (0 for a flat response, which is no evidence either way); `None` when no line fits.
+fn correlation(c: &[f64], r: &[f64]) -> Option<f64> {
+    cablab_measure::linear_fit(c, r)
+        .ok()
+        .map(|l| l.slope.signum() * l.r2.max(0.0).sqrt())
+}
+
 /// [`align_response_sign`] for a record read as `kind`, except for a strain control in tension
 /// that falls as the force rises: no sign convention is at work there but, far more likely, the
 /// transverse strain (Poisson's contraction: DIC's `exx` and `eyy` swap with the camera's axes,
@@ -201,11 +209,7 @@ pub fn align_response_sign_of(
     if kind != TestKind::Tension || !strain_control(rec) {
         return align_response_sign(curve);
     }
-    let rho = |c: &[f64], r: &[f64]| {
-        cablab_measure::linear_fit(c, r)
-            .map(|l| l.slope.signum() * l.r2.max(0.0).sqrt())
-            .unwrap_or(0.0)
-    };
+    let rho = |c: &[f64], r: &[f64]| correlation(c, r).unwrap_or(0.0);
     let against = rho(&curve.control, &curve.response);
     if against.is_nan() || against >= OPPOSITE_SIGNS_CORRELATION {
         return (None, None);
@@ -683,16 +687,17 @@ pub fn control_reset_warning(rec: &TestRecord, curve: &Curve) -> Option<String> 
         return None;
     }
     let median_step = |v: &[f64]| {
-        let mut d: Vec<f64> = v
+        let d: Vec<f64> = v
             .windows(2)
             .map(|w| (w[1] - w[0]).abs())
-            .filter(|d| *d > 0.0 && d.is_finite())
+            .filter(|d| *d > 0.0)
             .collect();
-        if d.is_empty() {
-            return 0.0;
+        let m = cablab_measure::stats::median(&d);
+        if m.is_nan() {
+            0.0
+        } else {
+            m
         }
-        let k = d.len() / 2;
-        *d.select_nth_unstable_by(k, f64::total_cmp).1
     };
     let (mc, mr) = (median_step(c), median_step(r));
     let (lo, hi) = c
@@ -717,8 +722,8 @@ pub fn control_reset_warning(rec: &TestRecord, curve: &Curve) -> Option<String> 
     })?;
     let ci = rec.channel_index(Role::Control)?;
     let ch = &rec.channels[ci];
-    // The other lengths, on the same complete rows, that do not jump there.
-    let rows = complete_rows(rec);
+    // The other channels, on the same complete rows, that do not jump there.
+    let rows = &curve.rows;
     let others: Vec<String> = (0..rec.channels.len())
         .filter(|&k| {
             k != ci
@@ -752,19 +757,6 @@ pub fn control_reset_warning(rec: &TestRecord, curve: &Curve) -> Option<String> 
             None => String::new(),
         }
     ))
-}
-
-/// Indices of the record's complete rows (control, response and time, where there is one, all
-/// numbers), as [`curve`] keeps them.
-fn complete_rows(rec: &TestRecord) -> Vec<usize> {
-    let c = rec.role_values(Role::Control).unwrap_or_default();
-    let r = rec.role_values(Role::Response).unwrap_or_default();
-    let t = rec.role_values(Role::Time);
-    (0..c.len().min(r.len()))
-        .filter(|&i| {
-            c[i].is_finite() && r[i].is_finite() && t.as_ref().is_none_or(|t| t[i].is_finite())
-        })
-        .collect()
 }
 
 /// Millimetres (as flags give lengths) to metres.
@@ -1534,6 +1526,7 @@ mod tests {
             response,
             dropped_rows: 0,
             repeated_rows: 0,
+            rows: vec![],
         }
     }
 

@@ -708,7 +708,8 @@ pub(crate) fn build(
     // likely as a large ratio, and it stays unread until its unit is stated (refused as a
     // control below).
     let mut strain_by_name = vec![false; n];
-    let mut strain_scale_unknown = vec![false; n];
+    // The largest magnitude of such a column beyond ±1 (its scale unknown), else None.
+    let mut strain_scale_unknown: Vec<Option<f64>> = vec![None; n];
     for i in 0..n {
         if !units[i].is_empty() || is_label[i] || !crate::roles::strain_by_name(&names[i]) {
             continue;
@@ -729,7 +730,7 @@ pub(crate) fn build(
                 ),
             });
         } else {
-            strain_scale_unknown[i] = true;
+            strain_scale_unknown[i] = Some(largest);
         }
     }
     let infos: Vec<_> = units
@@ -747,7 +748,7 @@ pub(crate) fn build(
             },
             // A strain by its name whose scale is unclear still competes as the strain it is,
             // so that, chosen as the control, it is refused with why (below).
-            dimension: if strain_scale_unknown[i] {
+            dimension: if strain_scale_unknown[i].is_some() {
                 Some(crate::units::Dimension::Ratio)
             } else {
                 infos[i].map(|x| x.dimension)
@@ -839,11 +840,7 @@ pub(crate) fn build(
                 role,
             });
         }
-        if role == "control" && strain_scale_unknown[i] {
-            let largest = block.columns[i]
-                .iter()
-                .filter(|v| v.is_finite())
-                .fold(0.0f64, |m, v| m.max(v.abs()));
+        if let (Some(largest), "control") = (strain_scale_unknown[i], role) {
             let e = IngestError::StrainScaleUnstated {
                 file: source.clone(),
                 line: block.names_line,
