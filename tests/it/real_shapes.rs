@@ -399,7 +399,8 @@ fn specimens_side_by_side_are_blocks_and_the_one_read_is_said() {
 /// contact, where the elastic line meets zero force, not from zero stroke. From zero stroke the
 /// whole elastic range lay beyond the limit and the window moved into the slack: EI came out
 /// 10 × low (0.019 against the file's 0.22 N m²), with an interval of ±622 %. The elastica
-/// correction still counts from zero stroke (found, not fixed): 7 % high here, and warned.
+/// correction counts from contact too (toe compensation, as ISO 178 and ASTM D790 do); from
+/// zero stroke it read 7 % high here.
 #[test]
 fn the_small_deflection_limit_counts_from_contact() {
     let (ei, span, gap): (f64, f64, f64) = (0.22, 0.02, 0.63e-3);
@@ -421,14 +422,23 @@ fn the_small_deflection_limit_counts_from_contact() {
         "--length-mm",
         "20",
     ]);
-    // Within 8 %: the elastica correction still counts the deflection from zero stroke and
-    // reads 7 % high here, which a warning says.
+    // The deflection counts from contact (toe compensation): the elastica correction of a
+    // stroke counted from zero read 0.236 here (+7 %). The twin's force is linear in the
+    // deflection, which the elastica correction reads about 1 % stiff at w/l0 = 0.0175.
     let got = v["stiffness"]["value"].as_f64().unwrap();
-    assert!((got / ei - 1.0).abs() < 0.08, "EI {got}");
+    assert!((got / ei - 1.0).abs() < 0.015, "EI {got}");
     assert!(
-        v["warnings"]
+        v["notes"]
             .to_string()
             .contains("the punch meets the specimen at w = 6.29"),
+        "{}",
+        v["notes"]
+    );
+    // Measured from contact, the test stays within the small-deflection range.
+    assert!(
+        !v["warnings"]
+            .to_string()
+            .contains("beyond the small-deflection"),
         "{}",
         v["warnings"]
     );

@@ -17,9 +17,13 @@
 //! to the punch deflection w; `large_deflection.small_deflection_stiffness` keeps what eq. (3)
 //! gives on the same window. The first loading is analysed only up to where geometry alone
 //! softens the force by 10 % ([`THREE_POINT_GEOMETRY_LIMIT`], w/l₀ ≈ 0.1, the rod turned by
-//! ~17° at the supports): beyond that the idealisation of point supports the rod slides over
+//! ~17° at the supports) past contact: beyond that the idealisation of point supports the rod slides over
 //! without friction is too far from a real rig for the correction to separate material from
 //! geometry (dividing by ρ then amplifies every modelling error into a spurious stiffening).
+//! A slack or gap before the punch meets the specimen is no deflection: when the first loading's
+//! elastic line meets zero force beyond a twentieth of the small-deflection limit, w counts
+//! from there (toe compensation, as ISO 178 and ASTM D790 do), for the correction, the limits
+//! and the large-deflection check alike, and a note gives the contact.
 //!
 //! Rules of the behaviour class (`Behaviour`):
 //! * every cycle's loading and unloading coincide and no residual deformation → reversible:
@@ -776,15 +780,36 @@ pub fn analyze(
     let geometry_limit = elastica.as_ref().map_or(f64::INFINITY, |t| {
         t.small_deflection_limit(THREE_POINT_GEOMETRY_LIMIT)
     });
+    // Three-point toe compensation (ISO 178, ASTM D790): a slack or gap before the punch meets
+    // the specimen is no deflection, so the elastica correction counts from contact (`toe`,
+    // oriented stroke, 0 when there is none worth moving the origin for).
+    let toe_w = match &elastica {
+        Some(tab) => {
+            let limit_w = tab.small_deflection_limit(opts.small_deflection_tolerance) * l0;
+            let toe_w = toe_before_contact(&xs, &rm, &first_idx, geometry_limit * l0, limit_w);
+            if toe_w > 0.0 {
+                notes.push(format!(
+                    "three-point: the punch meets the specimen at w = {toe_w:.4e} m (w/l0 = {:.4}), where the first loading's elastic line meets zero force; the deflection counts from there (toe compensation), as the elastica correction and the small-deflection limit require",
+                    toe_w / l0
+                ));
+            }
+            toe_w
+        }
+        None => 0.0,
+    };
     let to_fit_x = |w: f64| -> Option<f64> {
         match &elastica {
-            Some(tab) => tab.corrected_deflection(w / l0).map(|v| v * l0),
+            Some(tab) => tab
+                .corrected_deflection((w - toe_w) / l0)
+                .map(|v| toe_w + v * l0),
             None => Some(w),
         }
     };
     let from_fit_x = |x: f64| -> f64 {
         match &elastica {
-            Some(tab) => tab.deflection_from_corrected(x / l0).map_or(x, |v| v * l0),
+            Some(tab) => tab
+                .deflection_from_corrected((x - toe_w) / l0)
+                .map_or(x, |v| toe_w + v * l0),
             None => x,
         }
     };
@@ -797,7 +822,7 @@ pub fn analyze(
     let mut fx: Vec<f64> = Vec::with_capacity(env_idx.len());
     let mut fw: Vec<f64> = Vec::with_capacity(env_idx.len());
     for &i in &env_idx {
-        match to_fit_x(xs[i]).filter(|_| xs[i].abs() / l0 <= geometry_limit) {
+        match to_fit_x(xs[i]).filter(|_| (xs[i] - toe_w).abs() / l0 <= geometry_limit) {
             Some(v) => {
                 fx.push(v);
                 fw.push(xs[i]);
@@ -1066,7 +1091,7 @@ pub fn analyze(
     let fit_xs: Vec<f64> = xs.iter().map(|&v| to_fit_x(v).unwrap_or(v)).collect();
     if let Some(s) = stiffness.as_mut() {
         let top = match &elastica {
-            Some(_) => to_fit_x(geometry_limit * l0).unwrap_or(f64::INFINITY),
+            Some(_) => to_fit_x(toe_w + geometry_limit * l0).unwrap_or(f64::INFINITY),
             None => f64::INFINITY,
         };
         let check = first_unloading_fit(
@@ -1310,8 +1335,11 @@ pub fn analyze(
         (Some(tab), Some(e), Some(st)) => {
             let limit = tab.small_deflection_limit(opts.small_deflection_tolerance);
             let (a, b) = e.window_idx;
-            let wmax = fw[a..b].iter().fold(0.0f64, |m, v| m.max(v.abs())) / l0;
-            let test_max = xs.iter().fold(0.0f64, |m, v| m.max(v.abs())) / l0;
+            let wmax = fw[a..b]
+                .iter()
+                .fold(0.0f64, |m, v| m.max((v - toe_w).abs()))
+                / l0;
+            let test_max = xs.iter().fold(0.0f64, |m, v| m.max((v - toe_w).abs())) / l0;
             if test_max > limit {
                 warnings.push(format!(
                     "three-point test reaches w/l0 = {test_max:.4}, beyond the small-deflection range (w/l0 <= {limit:.4}): the stiffness is corrected by the exact elastica, but the peak curvature/moment estimates are not accurate there"
@@ -1631,6 +1659,40 @@ fn virgin_envelope(segments: &[Segment], cm: &[f64], first_idx: &[usize], h: f64
     out
 }
 
+/// Share of the small-deflection limit a slack before contact must reach for the three-point
+/// deflection to be counted from contact: below it, counting from zero stroke moves the
+/// elastica correction's slope by less than about 0.1 % of the tolerance's softening.
+const TOE_SHARE_OF_LIMIT: f64 = 0.05;
+
+/// Three-point: the oriented stroke where the first loading's elastic line meets zero force
+/// (the punch meets the specimen after a slack or gap), found on the uncorrected first loading
+/// within the geometry limit `reach_w`; 0 when that is not beyond [`TOE_SHARE_OF_LIMIT`] of the
+/// small-deflection limit `limit_w` or no elastic range is found. The x-intercept of the
+/// uncorrected line differs from the corrected one's by the elastica's softening over the
+/// window (≤ 1 % of the window's stroke), which moves the corrected slope by far less.
+fn toe_before_contact(
+    xs: &[f64],
+    rm: &[f64],
+    first_idx: &[usize],
+    reach_w: f64,
+    limit_w: f64,
+) -> f64 {
+    let (mut x, mut y) = (Vec::new(), Vec::new());
+    for &i in first_idx {
+        if xs[i].abs() > reach_w {
+            break;
+        }
+        x.push(xs[i]);
+        y.push(rm[i]);
+    }
+    let reach = x.iter().fold(0.0f64, |m, v| m.max(*v));
+    crate::elastic::auto_elastic_range(&x, &y)
+        .ok()
+        .and_then(|e| e.fit.x_intercept())
+        .filter(|w| w.is_finite() && *w > TOE_SHARE_OF_LIMIT * limit_w && *w < reach)
+        .unwrap_or(0.0)
+}
+
 /// Fewest samples of a three-point window moved into the small-deflection range.
 const MIN_SMALL_DEFLECTION_SAMPLES: usize = 20;
 
@@ -1664,13 +1726,6 @@ fn small_deflection_window(
         .x_intercept()
         .filter(|w| w.is_finite() && *w > 0.0 && *w < reach)
         .unwrap_or(0.0);
-    if contact > 0.25 * limit_w {
-        warnings.push(format!(
-            "stiffness: the punch meets the specimen at w = {:.4e} m (w/l0 = {:.4}), where the elastic line meets zero force (a slack or gap before contact): the small-deflection limit counts from there, but the elastica correction still counts from zero stroke, so (EI) reads high, by about 7 % at w/l0 = 0.03 before contact",
-            contact,
-            contact / l0
-        ));
-    }
     let top = fw[a..b]
         .iter()
         .fold(0.0f64, |m, v| m.max(v.abs() - contact));
