@@ -537,11 +537,23 @@ pub fn describe(s: &Survey) -> String {
             (None, Some(x)) => format!("section {} ({})", x.value, x.from),
             (None, None) => "diameter ?".to_string(),
         };
+        let specimen = match cablab_ingest::specimens_side_by_side(&f.path) {
+            Some(titles) => format!(
+                "{} specimens side by side, a test each: {}",
+                titles.len(),
+                titles
+                    .iter()
+                    .enumerate()
+                    .map(|(i, t)| format!("#{} '{t}'", i + 1))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ),
+            None => format!("specimen '{}'", f.label),
+        };
         let _ = writeln!(
             t,
-            "  {}: {kind}; {len}; {dia}; specimen '{}'",
-            f.path.display(),
-            f.label
+            "  {}: {kind}; {len}; {dia}; {specimen}",
+            f.path.display()
         );
         for n in &f.notes {
             let _ = writeln!(t, "    note: {n}");
@@ -636,7 +648,7 @@ pub fn unlock_note(s: &Survey, paths: &[PathBuf]) -> Option<String> {
         ),
     };
     Some(format!(
-        "{n} of {} tests lack a length or diameter no file states: {what}; these values would \
+        "{n} of {} files lack a length or diameter no file states: {what}; these values would \
          unlock the rest:\n{list}give them with --length-mm L / --diameter-mm D, or write a \
          pipeline and fill in each file: `cablab init {}`",
         s.found.len(),
@@ -724,8 +736,9 @@ pub fn render(s: &Survey, name: &str, root: Option<&str>, command: &str, gaps: G
         t,
         "description = {}",
         q(&format!(
-            "{} test files, inferred by folder mode",
-            s.found.len()
+            "{} test file{}, inferred by folder mode",
+            s.found.len(),
+            if s.found.len() == 1 { "" } else { "s" }
         ))
     );
     if let Some(r) = root {
@@ -989,9 +1002,10 @@ pub fn run(a: InitArgs) -> CmdResult {
         .map_err(|e| CliError::failed(anyhow::anyhow!("{}: cannot write: {e}", out.display())))?;
     let gaps = s.found.iter().filter(|f| !f.gaps().is_empty()).count();
     eprintln!(
-        "cablab: wrote {} ({} tests{}); run it with `cablab run {}`",
+        "cablab: wrote {} ({} file{}{}); run it with `cablab run {}`",
         out.display(),
         s.found.len(),
+        if s.found.len() == 1 { "" } else { "s" },
         if gaps > 0 {
             format!(", {gaps} with values marked {FILL_IN} to fill in")
         } else {

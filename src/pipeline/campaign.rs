@@ -319,8 +319,13 @@ pub fn write_campaign_outputs(
     }
     outputs.sort();
     // Inputs were hashed when they were read (a test that could not be read is hashed here).
+    // A file of several specimens side by side is one input of several tests.
     let mut inputs: Vec<Hashed> = Vec::new();
+    let mut hashed = std::collections::BTreeSet::new();
     for (t, o) in c.tests.iter().zip(outcomes) {
+        if !hashed.insert(t.file_id.as_str()) {
+            continue;
+        }
         let sha = if o.input_sha256.is_empty() {
             let b = std::fs::read(&t.path).with_context(|| format!("cannot read {}", t.id))?;
             sha256_hex(&b)
@@ -328,7 +333,7 @@ pub fn write_campaign_outputs(
             o.input_sha256.clone()
         };
         inputs.push(Hashed {
-            path: t.id.clone(),
+            path: t.file_id.clone(),
             sha256: sha,
         });
     }

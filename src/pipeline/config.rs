@@ -399,8 +399,14 @@ fn default_tables() -> Vec<String> {
 /// One test the campaign will evaluate, fully resolved.
 #[derive(Debug, Clone, Serialize)]
 pub struct PlannedTest {
-    /// Stable id: the path relative to the project root, `/`-separated.
+    /// Stable id: the path relative to the project root, `/`-separated; for one of several
+    /// specimens a file holds side by side, that path and `#N` (its block, numbered to the width
+    /// of the largest: `#01` … `#10`).
     pub id: String,
+    /// The file's path relative to the project root (the id without a specimen's `#N`): the
+    /// manifest's input. Not in the cache key (the id is).
+    #[serde(skip)]
+    pub file_id: String,
     /// Absolute or root-relative path to the raw file.
     pub path: PathBuf,
     /// Specimen type label.
@@ -1071,23 +1077,41 @@ fn validate(file: PipelineFile, path: &Path, bytes: Vec<u8>, root: PathBuf) -> R
                     );
                 }
             }
-            tests.push(PlannedTest {
-                id,
-                path: p,
-                specimen: g.specimen.clone(),
-                diameter_m,
-                flat_section,
-                kind,
-                free_length_m: ov.length_mm.or(g.length_mm).map(|l| l * 1e-3),
-                format: ov.format.clone().or_else(|| g.format.clone()),
-                block: ov.block,
-                sheet: ov.sheet.clone(),
-                units,
-                time: ov.time.clone().or_else(|| g.time.clone()),
-                control: ov.control.clone().or_else(|| g.control.clone()),
-                response: ov.response.clone().or_else(|| g.response.clone()),
-                settings: settings_for(&file, &g.specimen, kind).overlaid(&ov.settings()),
-            });
+            // Specimens side by side in one file (Mecmesin, Trapezium): one test each, unless
+            // the pipeline picks a block.
+            let blocks: Vec<(String, Option<usize>)> = match (ov.block, &ov.sheet) {
+                (None, None) => match cablab_ingest::specimens_side_by_side(&p) {
+                    // Numbered to the same width, so that ids sort in block order.
+                    Some(titles) => {
+                        let w = titles.len().to_string().len();
+                        (1..=titles.len())
+                            .map(|k| (format!("{id}#{k:0w$}"), Some(k)))
+                            .collect()
+                    }
+                    None => vec![(id.clone(), None)],
+                },
+                _ => vec![(id.clone(), ov.block)],
+            };
+            for (test_id, block) in blocks {
+                tests.push(PlannedTest {
+                    id: test_id,
+                    file_id: id.clone(),
+                    path: p.clone(),
+                    specimen: g.specimen.clone(),
+                    diameter_m,
+                    flat_section,
+                    kind,
+                    free_length_m: ov.length_mm.or(g.length_mm).map(|l| l * 1e-3),
+                    format: ov.format.clone().or_else(|| g.format.clone()),
+                    block,
+                    sheet: ov.sheet.clone(),
+                    units: units.clone(),
+                    time: ov.time.clone().or_else(|| g.time.clone()),
+                    control: ov.control.clone().or_else(|| g.control.clone()),
+                    response: ov.response.clone().or_else(|| g.response.clone()),
+                    settings: settings_for(&file, &g.specimen, kind).overlaid(&ov.settings()),
+                });
+            }
         }
     }
     if tests.is_empty() {

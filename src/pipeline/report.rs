@@ -717,9 +717,14 @@ fn section(out_dir: &Path, o: &TestOutcome) -> TestSection {
                 .map(|s| (caption(n), s))
         })
         .collect();
+    // One of several specimens side by side in a file (`path#N`) is named by its title too.
+    let title = match (&o.header.specimen_id, o.id.rsplit('/').next()) {
+        (Some(label), Some(name)) if name.contains('#') => format!("{} — {label}", o.id),
+        _ => o.id.clone(),
+    };
     TestSection {
         id: o.id.clone(),
-        title: o.id.clone(),
+        title,
         headline,
         facts,
         svgs,

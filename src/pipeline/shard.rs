@@ -368,6 +368,7 @@ mod tests {
         ids.iter()
             .map(|id| PlannedTest {
                 id: id.to_string(),
+                file_id: id.to_string(),
                 path: PathBuf::from(id),
                 specimen: "s".into(),
                 diameter_m: Some(1e-3),

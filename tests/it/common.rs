@@ -54,3 +54,32 @@ pub fn tree(dir: &Path) -> BTreeMap<PathBuf, Vec<u8>> {
     }
     out
 }
+
+/// A Shimadzu Trapezium export of three specimens side by side, written as the real one is
+/// (raballito/tensile_test_analyzer's flexure example, GPL, so a twin): a row naming each
+/// specimen on every third cell (`Brut 1`, `Recuit`, `Etiré test 250°C`), `Temps,Force,
+/// Course_Traverse` repeated, their units repeated, then rows of three cells per specimen
+/// (`lens` rows each, empty cells below a shorter one's end); specimen j's force is `ks[j]` N/mm
+/// times the punch travel, which rises 0.4 µm a row.
+pub fn trapezium_twin(ks: [f64; 3], lens: [usize; 3]) -> String {
+    let mut s = String::from("Brut 1,,,Recuit,,,Etiré test 250°C,,\n");
+    s += &["Temps,Force,Course_Traverse"; 3].join(",");
+    s += "\n";
+    s += &["sec,N,mm"; 3].join(",");
+    s += "\n";
+    for i in 0..lens.iter().copied().max().unwrap_or(0) {
+        let cells: Vec<String> = (0..3)
+            .map(|j| {
+                if i < lens[j] {
+                    let w = 4e-4 * i as f64; // mm
+                    format!("{:.2},{:.5},{w:.5}", 0.01 * i as f64, ks[j] * w)
+                } else {
+                    ",,".to_string()
+                }
+            })
+            .collect();
+        s += &cells.join(",");
+        s += "\n";
+    }
+    s
+}

@@ -186,7 +186,7 @@ fn gaps_are_listed_once_and_init_marks_them() {
     assert!(
         r.stderr.contains(
             "skipped lab2/sample_1.csv: its kind is not stated by its metadata, channels or file name"
-        ) && r.stderr.contains("note: 1 of 1 tests lack a length or diameter")
+        ) && r.stderr.contains("note: 1 of 1 files lack a length or diameter")
             && r.stderr
                 .contains("need length_mm (free length), diameter_mm:\n    lab2/zug_2.csv")
             && r.stderr.contains("cablab init lab2"),
@@ -598,4 +598,76 @@ fn real_logs_run_in_one_command() {
         }
     }
     assert!(machine >= 7, "tests at the machine level: {machine}");
+}
+
+/// A Shimadzu Trapezium file of three specimens side by side (`Brut 1,,,Recuit,,,…` over
+/// `Temps,Force,Course_Traverse` repeated; the layout of a real GPL flexure export, so a twin):
+/// folder mode makes each specimen a test of its own (`flex.csv#1` …), named by its title in the
+/// tables, each with its own stiffness (48 EI / l0³ = 30, 45 and 60 N/mm); the manifest lists the
+/// file once and `verify` reruns it. Before, a campaign read the longest specimen only and said
+/// so in a warning.
+#[test]
+fn specimens_side_by_side_are_a_test_each() {
+    let ks = [30.0, 45.0, 60.0]; // N/mm
+    let s = crate::common::trapezium_twin(ks, [300, 500, 400]);
+    let d = tempfile::tempdir().unwrap();
+    std::fs::create_dir_all(d.path().join("lab")).unwrap();
+    std::fs::write(d.path().join("lab/flex.csv"), s).unwrap();
+    let r = run_in(
+        d.path(),
+        &[
+            "run",
+            "lab",
+            "--kind",
+            "three-point",
+            "--length-mm",
+            "20",
+            "--no-diagnosis",
+        ],
+    );
+    assert_eq!(r.code, 0, "{}", r.stderr);
+    assert!(
+        r.stderr.contains(
+            "3 specimens side by side, a test each: #1 'Brut 1', #2 'Recuit', #3 'Etiré test 250°C'"
+        ) && r.stderr.contains("3 tests, 3 ok"),
+        "{}",
+        r.stderr
+    );
+    let out = d.path().join("reports/lab");
+    let v: Value =
+        serde_json::from_slice(&std::fs::read(out.join("summary.json")).unwrap()).unwrap();
+    let tests = v["tests"].as_array().unwrap();
+    let ids: Vec<&str> = tests.iter().map(|t| t["id"].as_str().unwrap()).collect();
+    assert_eq!(ids, ["lab/flex.csv#1", "lab/flex.csv#2", "lab/flex.csv#3"]);
+    for (t, k) in tests.iter().zip(ks) {
+        let ei = t["stiffness"].as_f64().unwrap();
+        let want = k * 1e3 * 0.02f64.powi(3) / 48.0;
+        assert!(
+            (ei / want - 1.0).abs() < 0.01,
+            "{}: {ei} vs {want}",
+            t["id"]
+        );
+    }
+    let specimens = std::fs::read_to_string(out.join("specimens_three_point.csv")).unwrap();
+    for title in ["Brut 1", "Recuit", "Etiré test 250°C"] {
+        assert!(specimens.contains(&format!("\n{title},")), "{specimens}");
+    }
+    // Each test's page names its specimen in a note, not a warning.
+    assert!(!specimens.contains("side by side"), "{specimens}");
+    let m: Value =
+        serde_json::from_slice(&std::fs::read(out.join("manifest.json")).unwrap()).unwrap();
+    let inputs: Vec<&str> = m["inputs"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|i| i["path"].as_str().unwrap())
+        .collect();
+    assert_eq!(inputs, ["lab/flex.csv"]);
+    let html = std::fs::read_to_string(out.join("index.html")).unwrap();
+    assert!(
+        html.contains("lab/flex.csv#2 — Recuit"),
+        "no titled test section"
+    );
+    let v = run_in(d.path(), &["verify", "reports/lab/manifest.json"]);
+    assert_eq!(v.code, 0, "{}{}", v.stdout, v.stderr);
 }

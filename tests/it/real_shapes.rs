@@ -345,26 +345,7 @@ fn a_displacement_reset_between_phases_is_named_with_the_channel_that_runs_on() 
 #[test]
 fn specimens_side_by_side_are_blocks_and_the_one_read_is_said() {
     let ks = [30.0, 45.0, 60.0]; // N/mm
-    let lens = [300usize, 500, 400];
-    let mut s = String::from("Brut 1,,,Recuit,,,Etiré test 250°C,,\n");
-    s += &["Temps,Force,Course_Traverse"; 3].join(",");
-    s += "\n";
-    s += &["sec,N,mm"; 3].join(",");
-    s += "\n";
-    for i in 0..500 {
-        let cells: Vec<String> = (0..3)
-            .map(|j| {
-                if i < lens[j] {
-                    let w = 4e-4 * i as f64; // to 0.2 mm: w/l0 = 0.01
-                    format!("{:.2},{:.5},{w:.5}", 0.01 * i as f64, ks[j] * w)
-                } else {
-                    ",,".to_string()
-                }
-            })
-            .collect();
-        s += &cells.join(",");
-        s += "\n";
-    }
+    let s = crate::common::trapezium_twin(ks, [300, 500, 400]);
     let d = tempfile::tempdir().unwrap();
     let p = d.path().join("flex.csv");
     std::fs::write(&p, s).unwrap();

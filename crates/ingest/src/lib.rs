@@ -194,6 +194,31 @@ fn sniff_binary(head: &[u8], source: &str) -> Result<(), IngestError> {
     })
 }
 
+/// The specimens a text export holds side by side (Mecmesin Emperor's `Sample 1,,,Sample 2`,
+/// Shimadzu Trapezium's `Brut 1,,,Brut 2`), by their titles in block order (`--block N` reads
+/// the N-th), when there are at least two; None for a workbook, an unreadable file or any other
+/// layout. Reads the first 64 KiB only: a campaign asks this of every file it plans, so that
+/// each specimen becomes a test of its own.
+pub fn specimens_side_by_side(path: &Path) -> Option<Vec<String>> {
+    use std::io::Read;
+    let mut head = Vec::with_capacity(1 << 16);
+    std::fs::File::open(path)
+        .ok()?
+        .take(1 << 16)
+        .read_to_end(&mut head)
+        .ok()?;
+    if workbook::is_workbook(&head) {
+        return None;
+    }
+    // Cut at the last line end, so that no half row is read.
+    if head.len() == 1 << 16 {
+        let end = head.iter().rposition(|&b| b == b'\n' || b == b'\r')?;
+        head.truncate(end + 1);
+    }
+    let enc = decode::detect_assess(&head);
+    table::side_by_side_titles(&decode::decode(&head, enc.0))
+}
+
 /// Reads bytes already in memory; `source` names them in messages and the provenance.
 pub fn read_bytes(
     bytes: &[u8],

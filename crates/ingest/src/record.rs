@@ -502,13 +502,19 @@ pub(crate) fn build(
         });
     } else if raw.side_by_side && blocks.len() > 1 {
         // Several specimens side by side: the result is one of them, which must be said next
-        // to every number (a warning), with the others' names.
-        warnings.push(Diagnostic {
+        // to every number (a warning), with the others' names; a note when the block was asked
+        // for (a campaign makes each specimen a test of its own).
+        let said = if opts.block.is_some() {
+            &mut notes
+        } else {
+            &mut warnings
+        };
+        said.push(Diagnostic {
             file: source.clone(),
             line: Some(blocks[main_block - 1].names_line),
             column: None,
             message: format!(
-                "the file holds {} specimens side by side ({}): this is specimen {main_block} '{}'{} only; --block N reads another",
+                "the file holds {} specimens side by side ({}): this is specimen {main_block} '{}'{}",
                 blocks.len(),
                 blocks
                     .iter()
@@ -524,7 +530,7 @@ pub(crate) fn build(
                 if opts.block.is_some() {
                     ""
                 } else {
-                    ", the longest (ties: the first)"
+                    ", the longest (ties: the first), only; --block N reads another (a campaign makes each a test of its own)"
                 }
             ),
         });
@@ -550,6 +556,12 @@ pub(crate) fn build(
         });
     }
     let mut block: RawBlock = std::mem::take(&mut raw.blocks[main_block - 1]);
+    // A specimen side by side with others is named by its block's title.
+    let side_title = raw
+        .side_by_side
+        .then(|| block.title.clone())
+        .flatten()
+        .filter(|t| !t.is_empty());
     for &k in &joined[1..] {
         let next = std::mem::take(&mut raw.blocks[k - 1]);
         append_block(&mut block, next);
@@ -970,7 +982,10 @@ pub(crate) fn build(
                 "neither the metadata nor the channels say which test this is".into(),
             )),
     };
-    let (specimen, specimen_notes) = specimen_from_metadata(&raw.metadata);
+    let (mut specimen, specimen_notes) = specimen_from_metadata(&raw.metadata);
+    if specimen.label.is_none() {
+        specimen.label = side_title;
+    }
     for m in specimen_notes {
         notes.push(Diagnostic {
             file: source.clone(),

@@ -105,13 +105,8 @@ struct Engine<'a> {
     skipped_count: usize,
 }
 
-/// Reads every block of a delimited text.
-pub(crate) fn read_table(
-    text: &str,
-    format: Format,
-    source: &str,
-) -> Result<RawTable, IngestError> {
-    let bytes = text.as_bytes();
+/// The line end, separator and decimal mark of a delimited text, and its first 400 lines.
+fn text_layout(bytes: &[u8]) -> (u8, Separator, u8, Vec<&[u8]>) {
     let eol = if memchr::memchr(b'\n', &bytes[..bytes.len().min(1 << 16)]).is_none()
         && bytes.contains(&b'\r')
     {
@@ -131,6 +126,33 @@ pub(crate) fn read_table(
             dec = d;
         }
     }
+    (eol, sep, dec, sample)
+}
+
+/// The titles of the specimens a text holds side by side (Mecmesin Emperor, Shimadzu
+/// Trapezium; [`side_by_side_samples`]), in block order, when there are at least two; None for
+/// any other layout. `head` may be the file's beginning cut at a line end: every specimen's
+/// rows start on the same line, so a specimen with a row anywhere has one in the first lines.
+pub(crate) fn side_by_side_titles(head: &str) -> Option<Vec<String>> {
+    let bytes = head.as_bytes();
+    let (eol, sep, dec, _) = text_layout(bytes);
+    let t = side_by_side_samples(bytes, eol, sep, dec)?;
+    (t.blocks.len() >= 2).then(|| {
+        t.blocks
+            .into_iter()
+            .map(|b| b.title.unwrap_or_default())
+            .collect()
+    })
+}
+
+/// Reads every block of a delimited text.
+pub(crate) fn read_table(
+    text: &str,
+    format: Format,
+    source: &str,
+) -> Result<RawTable, IngestError> {
+    let bytes = text.as_bytes();
+    let (eol, sep, dec, sample) = text_layout(bytes);
     if let Some(t) = side_by_side_samples(bytes, eol, sep, dec) {
         return Ok(t);
     }

@@ -710,6 +710,19 @@ fn mecmesin_emperor_samples_side_by_side_are_blocks() {
     )
     .unwrap();
     assert_eq!(nine.data.height(), 4120);
+    // Asked for, the specimen is said in a note and names the record.
+    assert!(nine.warnings.is_empty(), "{:?}", nine.warnings);
+    assert!(nine
+        .notes
+        .iter()
+        .any(|n| n.message.contains("this is specimen 9 'Sample 9'")));
+    assert_eq!(nine.specimen.label.as_deref(), Some("Sample 9"));
+    // A campaign learns the specimens from the file's head.
+    let titles =
+        cablab_ingest::specimens_side_by_side(&data("forcelib__mecmesin_emperor_10_samples.csv"))
+            .unwrap();
+    assert_eq!(titles.len(), 10);
+    assert_eq!(titles[9], "Sample 10");
     assert!(rel(val(&nine, "Force", 1), 0.3005));
     assert!(rel(val(&nine, "Distance", 4120), 50.0025e-3));
     assert!(rel(val(&nine, "Time", 4120), 0.06865 * 60.0));
