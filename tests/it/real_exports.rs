@@ -756,27 +756,44 @@ fn a_deben_microtest_export_reads_with_its_layouts_units() {
 }
 
 /// The French testXpert export starts at 146 N with its extensometer at 0 (zeroed at the
-/// preload) and no rest: the response's zero comes from a line through the first samples,
-/// 144 N from the file's. That is 6 % of the maximum force and every reported force (the yield)
-/// is counted from it while the maximum is the file's own: a warning says so, with the value.
+/// preload) and no rest: a preload, recorded after the load cell was tared, so the file's zero
+/// is the force's. Before, a line through the first samples put the zero 144 N up and every
+/// force counted from it: Rp0.2 2,235.5 N against the reference 2,379.4 N (6 % low, warned). Now
+/// the preload is kept, said in a note, and Rp0.2 is the reference's; the English file of the
+/// same series (73 N preload) likewise: 3,316.0 → 3,389.0 N against 3,389.7 N.
 #[test]
-fn a_zero_taken_from_a_start_without_rest_is_said_when_it_moves_the_forces() {
-    let a = analyze("hilhorst__testxpert_tension_allong1_fr.TRA", &[]);
-    let o = a["offsets"]["response"].as_f64().unwrap();
-    assert!((o - 144.27).abs() < 0.5, "{o}");
-    assert_eq!(a["offsets"]["samples_at_rest"], 0);
-    let w = warnings(&a).join("\n");
-    assert!(
-        w.contains("the response's zero is taken 1.4427e2 N from the file's") && w.contains("6 %"),
-        "{w}"
+fn a_start_at_a_preload_keeps_the_files_zero() {
+    let a = analyze(
+        "hilhorst__testxpert_tension_allong1_fr.TRA",
+        &["--yield-method", "offset"],
     );
-    // A demo tension file also starts without a rest, but its line's zero is 0.04 N from the
-    // file's (of 100 N): nothing to say.
+    let p = a["offsets"]["preload"].as_f64().unwrap();
+    // The first sample reads 146.37 N; the start line meets it within its noise.
+    assert!((p - 146.37).abs() < 0.5, "{p}");
+    assert_eq!(a["offsets"]["response"], 0.0);
+    assert_eq!(a["offsets"]["samples_at_rest"], 0);
+    let notes = a["notes"].to_string();
+    assert!(
+        notes.contains("the record starts loaded, at 1.4624e2 N (6.0 % of its largest value)"),
+        "{notes}"
+    );
+    assert!(!warnings(&a).join("\n").contains("zero is taken"));
+    let y = a["yield"]["response"].as_f64().unwrap();
+    assert!(within(y, 2379.4, 0.005), "Rp0.2 {y}");
+    let e = analyze(
+        "hilhorst__testxpert_tension_mdb1pct_en.TRA",
+        &["--yield-method", "offset"],
+    );
+    let y = e["yield"]["response"].as_f64().unwrap();
+    assert!(within(y, 3389.7, 0.005), "Rp0.2 {y}");
+    // A demo tension file also starts without a rest, at 0.04 N (of 100 N, within its noise):
+    // an offset, taken off, nothing to say.
     let d = json(&["analyze", "raw_data/cable/tension_100N_1.csv"]);
     assert!(
-        d["offsets"]["response"].as_f64().unwrap().abs() < 0.5,
+        d["offsets"]["response"].as_f64().unwrap().abs() < 0.5
+            && d["offsets"].get("preload").is_none(),
         "{}",
         d["offsets"]
     );
-    assert!(!d["warnings"].to_string().contains("zero is taken"));
+    assert!(!d["notes"].to_string().contains("starts loaded"));
 }

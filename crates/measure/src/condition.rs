@@ -1279,7 +1279,16 @@ pub struct Offsets {
     /// Number of leading samples at rest the offsets were averaged over (0: taken from straight
     /// lines through the first samples instead).
     pub samples_at_rest: usize,
+    /// The load a record without an initial rest starts at, kept in the response as the file
+    /// records it (a preload: see [`zero_offsets`]); absent otherwise.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub preload: Option<f64>,
 }
+
+/// A start load is a preload when it exceeds this many σ of the response's jitter…
+const PRELOAD_SIGMA: f64 = 10.0;
+/// …and this share of the largest response.
+const PRELOAD_SHARE: f64 = 0.01;
 
 /// Removes the zero offsets. With an initial rest (a hold that starts at the first sample, see
 /// [`holds`]) the offsets are the control and response means over it. Without one, they are
@@ -1290,6 +1299,15 @@ pub struct Offsets {
 /// sets the zero; the response's zero is kept within the noise (3σ/√5) of what its first 5
 /// samples say along that line's slope, so that a slack start does not pull it below the flat
 /// level.
+///
+/// A record without a rest that starts loaded in the direction it goes on loading (the start
+/// load [`PRELOAD_SIGMA`] σ and [`PRELOAD_SHARE`] of the largest response beyond zero, of that
+/// response's sign) starts at a preload: testXpert, Bluehill and TestSuite tare the load cell
+/// before the preload and record from it, so the file's own zero is the force's zero and is kept
+/// ([`Offsets::preload`]); the control's zero is still taken (an extensometer zeroed at the
+/// preload). Subtracting it put every force — the yield, the cycles' peaks — low by the preload
+/// (a real testXpert export: 144 N, Rp0.2 6.6 % low). A start load of the other sign is no
+/// preload and is taken off.
 pub fn zero_offsets(control: &mut [f64], response: &mut [f64]) -> Offsets {
     let n = control.len().min(response.len());
     let cn = ChannelNoise::of(&control[..n]);
@@ -1311,6 +1329,7 @@ pub fn zero_offsets_with(
             control: 0.0,
             response: 0.0,
             samples_at_rest: 0,
+            preload: None,
         };
     }
     let h = reversal_threshold_with(&control[..n], control_noise.jitter);
@@ -1364,18 +1383,37 @@ pub fn zero_offsets_with(
                 let early =
                     response[..k].iter().sum::<f64>() / k as f64 - f.slope * (k - 1) as f64 / 2.0;
                 let tol = 3.0 * jitter_level(&response[..m]) / (k as f64).sqrt();
-                f.intercept.clamp(early - tol, early + tol)
+                // Nor further from the first sample than its own noise allows (the record's
+                // jitter): on a coarse record whose first samples already bend (a Bluehill
+                // export at 2 Hz: −43 N at rest, then 525, 1152, 1685 N), the line through them
+                // met the first sample 232 N below it.
+                let own = 3.0 * response_noise.jitter;
+                f.intercept
+                    .clamp(early - tol, early + tol)
+                    .clamp(response[0] - own, response[0] + own)
             }
             None => response[0],
         };
         (at0(control, m), r0)
     };
+    let peak = response[..n]
+        .iter()
+        .copied()
+        .filter(|v| v.is_finite())
+        .fold(0.0f64, |m, v| if v.abs() > m.abs() { v } else { m });
+    let preload = (rest < 3
+        && or * peak > 0.0
+        && or.abs() > PRELOAD_SIGMA * response_noise.jitter
+        && or.abs() > PRELOAD_SHARE * peak.abs())
+    .then_some(or);
+    let or = if preload.is_some() { 0.0 } else { or };
     control.iter_mut().for_each(|c| *c -= oc);
     response.iter_mut().for_each(|r| *r -= or);
     Offsets {
         control: oc,
         response: or,
         samples_at_rest: rest,
+        preload,
     }
 }
 
@@ -2191,15 +2229,34 @@ mod tests {
         assert_eq!(o.samples_at_rest, 3);
         assert!((o.control - 5.0).abs() < 1e-12 && (o.response - 0.2).abs() < 1e-12);
         assert!((c[5] - 0.3).abs() < 1e-12 && (r[5] - 3.0).abs() < 1e-12);
-        // No rest: the zero is where straight lines through the first samples start.
+        // No rest: the zero is where straight lines through the first samples start; a
+        // response that starts at −2 while it goes on to +147 is offset by −2.
         let mut c: Vec<f64> = (0..50).map(|i| 1.0 + 0.1 * i as f64).collect();
-        let mut r: Vec<f64> = (0..50).map(|i| 2.0 + 3.0 * i as f64).collect();
+        let mut r: Vec<f64> = (0..50).map(|i| -2.0 + 3.0 * i as f64).collect();
         let o = zero_offsets(&mut c, &mut r);
         assert_eq!(o.samples_at_rest, 0);
         assert!(
-            (o.control - 1.0).abs() < 1e-9 && (o.response - 2.0).abs() < 1e-9,
+            (o.control - 1.0).abs() < 1e-9 && (o.response + 2.0).abs() < 1e-9,
             "{o:?}"
         );
+        assert_eq!(o.preload, None);
+        assert!((r[0]).abs() < 1e-9);
+        // Starting at +2 on the way to +149 (1.3 % of it), it starts at a preload: the file's
+        // zero is kept, the control's is taken.
+        let mut c: Vec<f64> = (0..50).map(|i| 1.0 + 0.1 * i as f64).collect();
+        let mut r: Vec<f64> = (0..50).map(|i| 2.0 + 3.0 * i as f64).collect();
+        let o = zero_offsets(&mut c, &mut r);
+        assert!((o.control - 1.0).abs() < 1e-9, "{o:?}");
+        assert_eq!(o.response, 0.0);
+        assert!((o.preload.unwrap() - 2.0).abs() < 1e-9, "{o:?}");
+        assert!((r[0] - 2.0).abs() < 1e-12 && c[0].abs() < 1e-9);
+        // Within the noise (σ 0.5: 10 σ = 5) a start load is an offset, whatever its sign.
+        let clean: Vec<f64> = (0..2000).map(|i| 2.0 + 0.5 * i as f64).collect();
+        let mut r = noisy(&clean, 0.5, 7);
+        let mut c: Vec<f64> = (0..2000).map(|i| 0.1 * i as f64).collect();
+        let o = zero_offsets(&mut c, &mut r);
+        assert_eq!(o.preload, None, "{o:?}");
+        assert!((o.response - 2.0).abs() < 1.0, "{o:?}");
         let cc = correct_compliance(&[1.0, 2.0], &[10.0, 20.0], 0.01);
         assert_eq!(cc, vec![0.9, 1.8]);
     }
