@@ -149,8 +149,11 @@ pub fn align_response_sign(curve: &mut Curve) -> (Option<String>, Option<String>
     let Some(rho) = correlation(c, r) else {
         return (None, None);
     };
-    if rho.is_nan() || rho >= OPPOSITE_SIGNS_CORRELATION {
+    if rho.is_nan() {
         return (None, None);
+    }
+    if rho >= OPPOSITE_SIGNS_CORRELATION {
+        return first_loading_against(curve, rho);
     }
     let mr = r.iter().sum::<f64>() / n as f64;
     let area: f64 = (1..n)
@@ -182,6 +185,41 @@ pub fn align_response_sign(curve: &mut Curve) -> (Option<String>, Option<String>
     (
         Some(format!(
             "the response falls as the control rises (correlation {rho:.2}): the two channels count in opposite sign conventions (a tensile force logged negative, a travel counted downwards), so the response's sign is reversed and the stiffness is positive"
+        )),
+        None,
+    )
+}
+
+/// [`align_response_sign`] where the whole record does not say (correlation `rho` above
+/// [`OPPOSITE_SIGNS_CORRELATION`]) but the first loading does: a test that softens after its
+/// peak (a notched concrete beam cracking, EN 14651: the force falls back towards zero over a
+/// deflection many times the peak's) correlates its control with the falling force over most
+/// of the record. From the start to the response's largest magnitude, the two run against each
+/// other (correlation below [`FIRST_LOADING_AGAINST`] over at least 10 samples): the response is
+/// reversed, and the note says so. A real MTS 793 export logged the beam's opening positive and
+/// its force negative (correlation −0.79 to the peak, −0.37 over the record); read as they were,
+/// EI came out from the softening branch, 93 % low.
+fn first_loading_against(curve: &mut Curve, rho: f64) -> (Option<String>, Option<String>) {
+    let r = &curve.response;
+    let Some(peak) = (0..r.len())
+        .filter(|&i| r[i].is_finite())
+        .max_by(|&a, &b| r[a].abs().total_cmp(&r[b].abs()))
+    else {
+        return (None, None);
+    };
+    if peak < 10 {
+        return (None, None);
+    }
+    let first = correlation(&curve.control[..=peak], &r[..=peak]).unwrap_or(0.0);
+    if first.is_nan() || first >= OPPOSITE_SIGNS_CORRELATION {
+        return (None, None);
+    }
+    for v in &mut curve.response {
+        *v = -*v;
+    }
+    (
+        Some(format!(
+            "the response falls as the control rises up to its largest magnitude (correlation {first:.2} there, {rho:.2} over the whole record, which softens after its peak): the two channels count in opposite sign conventions, so the response's sign is reversed and the stiffness is positive"
         )),
         None,
     )
@@ -759,6 +797,119 @@ pub fn control_reset_warning(rec: &TestRecord, curve: &Curve) -> Option<String> 
     ))
 }
 
+/// A specimen-mounted control (an extensometer's travel or strain) that jumps back in one sample
+/// while the response goes on (the step over 20 × the control's median step and a quarter of
+/// the range it had reached, against its motion until then; the response's step within a tenth
+/// of its range; the control not back within that quarter in the rest of the record): the
+/// extensometer was taken off or slipped, as a clip-on is before fracture. What follows is no
+/// measurement of the specimen — a real Bluehill export in Polish reads −0.133 after 0.044,
+/// which made the strain look transverse (correlation −0.64 over the whole record) and the rest
+/// of the test dozens of reversed cycles with a loop area of −24 J. The curve is cut before the
+/// jump and a warning names the row and the channels that run on.
+pub fn extensometer_removed(rec: &TestRecord, curve: &mut Curve) -> Option<String> {
+    let ci = rec.channel_index(Role::Control)?;
+    if rec.mount(ci) != cablab_ingest::Mount::Specimen {
+        return None;
+    }
+    let (c, r) = (&curve.control, &curve.response);
+    let n = c.len().min(r.len());
+    if n < 20 {
+        return None;
+    }
+    let steps: Vec<f64> = c[..n]
+        .windows(2)
+        .map(|w| (w[1] - w[0]).abs())
+        .filter(|d| *d > 0.0)
+        .collect();
+    let mc = cablab_measure::stats::median(&steps);
+    let (rlo, rhi) = r[..n]
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
+            (a.min(v), b.max(v))
+        });
+    // A control that never moves (or a NaN median) has no step to compare a jump with.
+    if mc.is_nan() || mc <= 0.0 {
+        return None;
+    }
+    let (mut lo, mut hi) = (c[0], c[0]);
+    let mut cut = None;
+    for i in 1..n {
+        let reach = hi - lo;
+        let jump = c[i] - c[i - 1];
+        // The motion until then: the way the control went from its start.
+        let motion = c[i - 1] - c[0];
+        if reach > 0.0
+            && jump * motion < 0.0
+            && jump.abs() > 20.0 * mc
+            && jump.abs() > 0.25 * reach
+            && (r[i] - r[i - 1]).abs() <= 0.1 * (rhi - rlo)
+        {
+            // Not back: the control stays a quarter of the reach away from where it jumped.
+            let gap = 0.25 * reach;
+            if c[i..n]
+                .iter()
+                .all(|&v| (v - c[i - 1]) * motion.signum() < -gap)
+            {
+                cut = Some(i);
+                break;
+            }
+        }
+        lo = lo.min(c[i]);
+        hi = hi.max(c[i]);
+    }
+    let jump = cut?;
+    // A slip that starts a few samples before the jump (0.904, 0.903, 0.894, 0.896, 0.881, then
+    // 0.775 %) is cut too: from the last sample at the control's farthest reach, when that lies
+    // within the last 20 samples before the jump.
+    let sign = (c[jump - 1] - c[0]).signum();
+    let far = (0..jump)
+        .rev()
+        .take(20)
+        .max_by(|&a, &b| (sign * c[a]).total_cmp(&(sign * c[b])))
+        .filter(|&k| (0..jump).all(|j| sign * c[j] <= sign * c[k]));
+    let i = far.map_or(jump, |k| k + 1);
+    let ch = &rec.channels[ci];
+    let factor = ch.factor.max(f64::MIN_POSITIVE);
+    let raw = rec.values(ci).unwrap_or_default();
+    let at = |j: usize| {
+        curve
+            .rows
+            .get(j)
+            .and_then(|&k| raw.get(k))
+            .map_or(f64::NAN, |v| v / factor)
+    };
+    let (from, to) = (at(jump - 1), at(jump));
+    let row = curve.rows.get(jump).map_or(jump + 1, |&k| k + 1);
+    let others: Vec<String> = (0..rec.channels.len())
+        .filter(|&k| {
+            k != ci
+                && rec.channels[k].role == Role::Other
+                && rec.channels[k].dimension == Some(cablab_ingest::units::Dimension::Length)
+        })
+        .map(|k| show(&rec.channels[k]))
+        .collect();
+    let total = n;
+    curve.control.truncate(i);
+    curve.response.truncate(i);
+    if let Some(t) = curve.time_s.as_mut() {
+        t.truncate(i);
+    }
+    curve.rows.truncate(i);
+    Some(format!(
+        "the extensometer {} jumps from {} to {} {} at data row {row} (complete row {}) while the response goes on, and does not come back: taken off or slipped; the analysis ends at its farthest reach before it ({i} of {total} complete rows), the rest of the test is not analysed{}",
+        show(ch),
+        (from * 1e6).round() / 1e6,
+        (to * 1e6).round() / 1e6,
+        if ch.unit.is_empty() { ch.si_unit.as_str() } else { ch.unit.as_str() },
+        jump + 1,
+        if others.is_empty() {
+            String::new()
+        } else {
+            format!(" ({} runs on to the end: --control to analyse it)", others.join(", "))
+        }
+    ))
+}
+
 /// Millimetres (as flags give lengths) to metres.
 fn mm(v: Option<f64>) -> Option<f64> {
     v.map(|x| x * 1e-3)
@@ -814,6 +965,7 @@ pub fn read_test(
         flat.as_ref(),
         &mut curve,
     )?);
+    said.warnings.extend(extensometer_removed(&rec, &mut curve));
     said.warnings.extend(control_reset_warning(&rec, &curve));
     let (note, warning) = align_response_sign_of(&rec, kind, &mut curve);
     said.notes.extend(note);

@@ -516,6 +516,8 @@ fn stages(
         &mut curve,
     )?);
     out.warnings
+        .extend(crate::bridge::extensometer_removed(&rec, &mut curve));
+    out.warnings
         .extend(crate::bridge::control_reset_warning(&rec, &curve));
     let (note, warning) = crate::bridge::align_response_sign_of(&rec, t.kind, &mut curve);
     out.notes.extend(note);

@@ -24,6 +24,18 @@ fn cablab_json(args: &[&str]) -> Value {
     serde_json::from_slice(&out.stdout).unwrap()
 }
 
+/// `cablab analyze` on `text` written to a temporary file called `name`, with `args` after the
+/// path; the JSON result.
+fn analyze_written(name: &str, text: &str, args: &[&str]) -> Value {
+    let d = tempfile::tempdir().unwrap();
+    let p = d.path().join(name);
+    std::fs::write(&p, text).unwrap();
+    let path = p.to_string_lossy().into_owned();
+    let mut all = vec!["analyze", path.as_str()];
+    all.extend_from_slice(args);
+    cablab_json(&all)
+}
+
 /// mechtesting machine file (steel 1045 through the machine travel, gradual yield): the
 /// snapshot reported an envelope-bend yield of 76,702 N, CI 76,209–76,924 N, above the file's
 /// maximum force of 74,590 N (the corner of the hinge fit above the rounded curve).
@@ -392,17 +404,11 @@ fn the_small_deflection_limit_counts_from_contact() {
         let f = k * (w - gap).max(0.0) + 0.02 * ((i * 7919 % 7) as f64 - 3.0) / 3.0;
         s += &format!("{:.3},{f:.5},{:.6}\n", 0.05 * i as f64, w * 1e3);
     }
-    let d = tempfile::tempdir().unwrap();
-    let p = d.path().join("flex1.csv");
-    std::fs::write(&p, s).unwrap();
-    let v = cablab_json(&[
-        "analyze",
-        &p.to_string_lossy(),
-        "--kind",
-        "three-point",
-        "--length-mm",
-        "20",
-    ]);
+    let v = analyze_written(
+        "flex1.csv",
+        &s,
+        &["--kind", "three-point", "--length-mm", "20"],
+    );
     // The deflection counts from contact (toe compensation): the elastica correction of a
     // stroke counted from zero read 0.236 here (+7 %). The twin's force is linear in the
     // deflection, which the elastica correction reads about 1 % stiff at w/l0 = 0.0175.
@@ -423,4 +429,140 @@ fn the_small_deflection_limit_counts_from_contact() {
         "{}",
         v["warnings"]
     );
+}
+
+/// An Instron Bluehill export in Polish (the layout of a real one, no licence, so a twin:
+/// `Godzina;Przemieszczenie;Obciążenie;Odkształcenie 1` over `(s);(mm);(N);(mm/mm)`, decimal
+/// comma) whose clip-on extensometer is taken off at ε = 0.0289 while the force goes on: from
+/// then on `Odkształcenie 1` reads −0.1335. Before, the Polish strain was no control candidate
+/// (the crosshead's EA came out 5 × low with no word of the extensometer); named `Strain 1`, it
+/// was taken, then judged transverse over the whole record (correlation −0.64), and the rest of
+/// the test became reversed cycles with a negative loop area. Now the strain is the control, the
+/// curve ends where the extensometer jumped, and a warning says so.
+#[test]
+fn an_extensometer_taken_off_ends_the_analysis_with_a_warning() {
+    let (ea, l0) = (1.28e6, 25.0); // N, mm
+    let mut s =
+        String::from("Godzina;Przemieszczenie;Obciążenie;Odkształcenie 1\n(s);(mm);(N);(mm/mm)\n");
+    let comma = |v: f64, d: usize| format!("{v:.d$}").replace('.', ",");
+    for i in 0..460 {
+        let eps = 1e-4 * i as f64;
+        let f = if eps < 5e-3 {
+            ea * eps
+        } else {
+            ea * 5e-3 + 0.01 * ea * (eps - 5e-3)
+        } + 2.0 * ((i * 7919 % 5) as f64 - 2.0);
+        let strain = if i < 290 {
+            eps
+        } else {
+            -0.1335 - 1e-5 * i as f64
+        };
+        s += &format!(
+            "{};{};{};{}\n",
+            comma(0.1 * i as f64, 3),
+            comma(1.5 * l0 * eps, 5),
+            comma(f, 3),
+            comma(strain, 6)
+        );
+    }
+    let v = analyze_written(
+        "Specimen_RawData_1.csv",
+        &s,
+        &["--kind", "tension", "--length-mm", "25"],
+    );
+    assert_eq!(v["control_channel"]["name"], "Odkształcenie 1");
+    let got = v["stiffness"]["value"].as_f64().unwrap();
+    assert!((got / ea - 1.0).abs() < 0.01, "EA {got}");
+    let w = v["warnings"].to_string();
+    assert!(
+        w.contains("the extensometer 'Odkształcenie 1' (mm/mm) jumps from 0.0289 to -0.1364 mm/mm at data row 291"),
+        "{w}"
+    );
+    assert!(
+        !w.contains("transverse") && !w.contains("loop area negative"),
+        "{w}"
+    );
+    assert_eq!(v["cycles"].as_array().unwrap().len(), 1);
+}
+
+/// A notched concrete beam in three-point bending (EN 14651; the shape of a real MTS 793 export,
+/// no licence, so a twin): the deflection transducer counts positive, the force negative; the
+/// force peaks at 15 kN at w = 0.05 mm and falls back towards zero over 3 mm as the beam
+/// cracks. Over the whole record the deflection correlates with the falling force, so the signs
+/// looked alike and EI came from the softening branch (on the real file 9.05·10³ against
+/// 1.25–1.53·10⁵ N m²). The first loading says the two count in opposite conventions: the force
+/// is reversed, with a note, and EI is the rising line's.
+#[test]
+fn a_force_logged_negative_against_a_softening_beam_is_reversed() {
+    let (k, span): (f64, f64) = (3.0e8, 0.5); // N/m, m
+    let mut s = String::from("Time (s),Deflection (mm),Force (kN)\n");
+    for i in 0..=600 {
+        let w = 3e-3 * i as f64 / 600.0; // m
+        let wp = 5e-5;
+        let f = if w <= wp {
+            k * w
+        } else {
+            k * wp * (-(w - wp) / 5e-4).exp()
+        } + 20.0 * ((i * 7919 % 5) as f64 - 2.0);
+        s += &format!("{:.2},{:.6},{:.5}\n", 0.5 * i as f64, w * 1e3, -f * 1e-3);
+    }
+    let v = analyze_written(
+        "beam.csv",
+        &s,
+        &["--kind", "three-point", "--length-mm", "500"],
+    );
+    let ei = v["stiffness"]["value"].as_f64().unwrap();
+    let want = k * span.powi(3) / 48.0;
+    assert!((ei / want - 1.0).abs() < 0.03, "EI {ei} against {want}");
+    assert!(
+        v["notes"]
+            .to_string()
+            .contains("the response falls as the control rises up to its largest magnitude"),
+        "{}",
+        v["notes"]
+    );
+}
+
+/// An MTS 793 acquisition written in 10 s buffers without a time column (the layout of a real
+/// export of 48 buffers, no licence, so a twin): `MTS793|MPT|ENU|…`, then per buffer a
+/// `Data Acquisition … Time: 10.007813 Sec` line, `Station 1 Displacement`/`Station 1 Force` in
+/// in and lbf, and its rows. One signal: each buffer starts where the last one ended. Before,
+/// cablab read the first buffer only (10 s of 473 s, EA 24 % off on the real file), saying so in
+/// a note; the buffers are now joined.
+#[test]
+fn mts_793_buffers_without_time_are_one_record() {
+    let mut s = String::from("MTS793|MPT|ENU|1|2|.|/|:|1|0|0|A\n");
+    let (k, per) = (400.0, 150usize); // lbf/in, rows per buffer
+    let mut i = 0usize;
+    for b in 0..4 {
+        s += &format!(
+            "\nData Acquisition\t\t\t\t\t\tTime:\t{:.6}\tSec\t7/8/2019 11:48:24 AM\n",
+            10.007813 * (b + 1) as f64
+        );
+        s += "Station 1 Displacement\tStation 1 Force\nin\tlbf\n";
+        for _ in 0..per {
+            let x = 1e-3 * i as f64 + 2e-5 * ((i * 7919 % 5) as f64 - 2.0); // in
+            s += &format!("{x:.7e}\t{:.7e}\n", k * 1e-3 * i as f64);
+            i += 1;
+        }
+    }
+    let d = tempfile::tempdir().unwrap();
+    let p = d.path().join("specimen.dat");
+    std::fs::write(&p, s).unwrap();
+    let v = cablab_json(&["inspect", &p.to_string_lossy()]);
+    assert_eq!(v["blocks_found"], 4, "{v}");
+    assert_eq!(v["blocks_joined"], serde_json::json!([1, 2, 3, 4]), "{v}");
+    assert_eq!(v["rows"], 600);
+    let a = cablab_json(&[
+        "analyze",
+        &p.to_string_lossy(),
+        "--kind",
+        "tension",
+        "--length-mm",
+        "50",
+    ]);
+    // EA = k · l0 = 400 lbf/in × 50 mm = 70.05 N/mm × 50 mm.
+    let ea = a["stiffness"]["value"].as_f64().unwrap();
+    let want = 400.0 * 4.448_221_615 / 25.4e-3 * 0.05;
+    assert!((ea / want - 1.0).abs() < 0.01, "EA {ea} against {want}");
 }

@@ -322,7 +322,7 @@ fn continues(a: &RawBlock, b: &RawBlock) -> bool {
         return false;
     }
     let Some(t) = raw_time_column(a) else {
-        return false;
+        return continues_without_time(a, b);
     };
     let ta: Vec<f64> = a.columns[t]
         .iter()
@@ -340,6 +340,34 @@ fn continues(a: &RawBlock, b: &RawBlock) -> bool {
     let dt = steps[steps.len() / 2];
     let last = ta[ta.len() - 1];
     dt > 0.0 && first_b > last && first_b - last <= 10.0 * dt
+}
+
+/// Blocks without a time column (an MTS 793 acquisition written in 10 s buffers, each under its
+/// own `Data Acquisition … Time: 10.007813 Sec` line, displacement and force only) continue one
+/// another when every column's first value in `b` lies within 10 of `a`'s median steps (at
+/// least 3 rows, a column that moves) of its last: one signal cut into buffers, not a new test
+/// starting from zero. Before, such a file was read as its first buffer: 10 s of a 473 s test.
+fn continues_without_time(a: &RawBlock, b: &RawBlock) -> bool {
+    if a.rows < 3 || a.columns.is_empty() {
+        return false;
+    }
+    a.columns.iter().zip(&b.columns).all(|(x, y)| {
+        let v: Vec<f64> = x.iter().copied().filter(|v| !v.is_nan()).collect();
+        let (Some(&last), Some(&first)) = (v.last(), y.iter().find(|v| !v.is_nan())) else {
+            return false;
+        };
+        let mut steps: Vec<f64> = v
+            .windows(2)
+            .map(|w| (w[1] - w[0]).abs())
+            .filter(|d| *d > 0.0)
+            .collect();
+        if steps.len() < 2 {
+            return false;
+        }
+        steps.sort_by(|p, q| p.total_cmp(q));
+        let step = steps[steps.len() / 2];
+        (first - last).abs() <= 10.0 * step
+    })
 }
 
 /// Appends block `b`'s rows to `a` (same columns).
@@ -487,16 +515,26 @@ pub(crate) fn build(
     };
     let mut warnings = std::mem::take(&mut raw.warnings);
     let mut notes = std::mem::take(&mut raw.notes);
+    let joined_by_time = raw
+        .blocks
+        .get(main_block - 1)
+        .and_then(raw_time_column)
+        .is_some();
     if joined.len() > 1 {
         notes.push(Diagnostic {
             file: source.clone(),
             line: Some(blocks[main_block - 1].names_line),
             column: None,
             message: format!(
-                "{} data blocks found; blocks {}-{} have the same columns and continuous time and were joined into one series of {} rows (read one with --block N)",
+                "{} data blocks found; blocks {}-{} have the same columns and continue one another ({}) and were joined into one series of {} rows (read one with --block N)",
                 blocks.len(),
                 joined[0],
                 joined[joined.len() - 1],
+                if joined_by_time {
+                    "their time runs on"
+                } else {
+                    "no time column: every channel starts where the block before ended"
+                },
                 joined.iter().map(|&k| blocks[k - 1].rows).sum::<usize>()
             ),
         });

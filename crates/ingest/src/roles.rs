@@ -369,8 +369,17 @@ const STRAIN_WORDS: &[&str] = &[
     "deformation",
     "deformación",
     "deformazione",
+    "deformação",
     "allongement",
     "extenso",
+    // Polish (Bluehill's `Odkształcenie 1`), Czech, Swedish, Danish/Norwegian, Finnish, Russian.
+    "odkształcenie",
+    "deformacja",
+    "přetvoření",
+    "töjning",
+    "tøjning",
+    "venymä",
+    "деформация",
 ];
 
 /// A dimensionless strain as a tension control: an extensometer's (or DIC's) strain is the
@@ -383,11 +392,20 @@ fn strain_control_score(c: &ChannelFacts) -> Option<i32> {
     if c.dimension != Some(Dimension::Ratio) || !c.filled || !strain_named(&n) {
         return None;
     }
+    // Bluehill's strain from the crosshead names it: `Tensile strain (Extension)`, in Polish
+    // `Odkształcenie przy rozciąganiu (Przemieszczenie)`.
     let excluded = has(&n, CROSSHEAD_WORDS)
         || has(&n, SETPOINT)
-        || ["extension", "rate", "shear", "true", "log"]
-            .iter()
-            .any(|w| n.contains(w))
+        || [
+            "extension",
+            "rate",
+            "shear",
+            "true",
+            "log",
+            "przemieszczenie",
+        ]
+        .iter()
+        .any(|w| n.contains(w))
         || n.starts_with("tstrain");
     // A strain read as a ratio only because its name says so (no unit written) ranks below a
     // length whose unit is written, above one without.
