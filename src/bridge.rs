@@ -1016,12 +1016,21 @@ pub fn kind_of_file(
             ));
             Ok((k.value, format!("the {}", k.from)))
         }
-        None => bail!(
-            "{}: the file does not say which test it is (no test-type metadata, no channel units \
-             that tell, no kind in its name): give --kind tension, torsion, three-point or \
-             pure-bending",
-            path.display()
-        ),
+        // A compression test is said as such: no kind of cablab's fits it.
+        None => match rec.compression_evidence() {
+            Some(e) => bail!(
+                "{}: {e} says compression, which cablab does not evaluate (its kinds: tension, \
+                 torsion, three-point, pure-bending); give --kind to analyse it as one of them \
+                 anyway",
+                path.display()
+            ),
+            None => bail!(
+                "{}: the file does not say which test it is (no test-type metadata, no channel \
+                 units that tell, no kind in its name): give --kind tension, torsion, three-point \
+                 or pure-bending",
+                path.display()
+            ),
+        },
     }
 }
 

@@ -566,3 +566,33 @@ fn mts_793_buffers_without_time_are_one_record() {
     let want = 400.0 * 4.448_221_615 / 25.4e-3 * 0.05;
     assert!((ea / want - 1.0).abs() < 0.01, "EA {ea} against {want}");
 }
+
+/// An MTS TestSuite export of a compression and relaxation test (the layout of a real one, no
+/// licence, so a twin: `Test: 20181130_Compression and Relaxation_Alginate`, `Crosshead`,
+/// `Load`, `Time`), read without `--kind`: cablab has no compression kind, and the error now
+/// says that is why, quoting the metadata, instead of "the file does not say which test it is".
+#[test]
+fn a_compression_test_without_a_kind_is_refused_as_compression() {
+    let rows: Vec<Vec<f64>> = (0..50)
+        .map(|i| vec![0.01 * i as f64, 0.002 * i as f64, 0.1 * i as f64])
+        .collect();
+    let s = mts_testsuite_txt(
+        "20181130_Compression and Relaxation_Alginate 738",
+        &["Crosshead", "Load", "Time"],
+        &["mm", "N", "sec"],
+        &rows,
+    );
+    let d = tempfile::tempdir().unwrap();
+    let p = d.path().join("I8-3-1.txt");
+    std::fs::write(&p, s).unwrap();
+    let o = cablab()
+        .args(["analyze", &p.to_string_lossy()])
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2), "{o:?}");
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("the metadata 'Test: 20181130_Compression and Relaxation_Alginate 738' says compression, which cablab does not evaluate"),
+        "{err}"
+    );
+}
