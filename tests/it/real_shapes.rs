@@ -539,10 +539,11 @@ fn mts_793_buffers_without_time_are_one_record() {
             "\nData Acquisition\t\t\t\t\t\tTime:\t{:.6}\tSec\t7/8/2019 11:48:24 AM\n",
             10.007813 * (b + 1) as f64
         );
-        s += "Station 1 Displacement\tStation 1 Force\nin\tlbf\n";
+        // With a status channel that never moves (it continues by reading the same).
+        s += "Station 1 Displacement\tStation 1 Force\tStatus\nin\tlbf\t\n";
         for _ in 0..per {
             let x = 1e-3 * i as f64 + 2e-5 * ((i * 7919 % 5) as f64 - 2.0); // in
-            s += &format!("{x:.7e}\t{:.7e}\n", k * 1e-3 * i as f64);
+            s += &format!("{x:.7e}\t{:.7e}\t1\n", k * 1e-3 * i as f64);
             i += 1;
         }
     }

@@ -344,9 +344,9 @@ fn continues(a: &RawBlock, b: &RawBlock) -> bool {
 
 /// Blocks without a time column (an MTS 793 acquisition written in 10 s buffers, each under its
 /// own `Data Acquisition … Time: 10.007813 Sec` line, displacement and force only) continue one
-/// another when every column's first value in `b` lies within 10 of `a`'s median steps (at
-/// least 3 rows, a column that moves) of its last: one signal cut into buffers, not a new test
-/// starting from zero. Before, such a file was read as its first buffer: 10 s of a 473 s test.
+/// another when every column's first value in `b` lies within 10 of `a`'s median steps (`a` of
+/// at least 3 rows) of its last, or equals it for a column that does not move: one signal cut
+/// into buffers, not a new test starting from zero. Before, such a file was read as its first buffer: 10 s of a 473 s test.
 fn continues_without_time(a: &RawBlock, b: &RawBlock) -> bool {
     if a.rows < 3 || a.columns.is_empty() {
         return false;
@@ -361,8 +361,10 @@ fn continues_without_time(a: &RawBlock, b: &RawBlock) -> bool {
             .map(|w| (w[1] - w[0]).abs())
             .filter(|d| *d > 0.0)
             .collect();
+        // A channel that does not move (an event or a status column) continues when it reads
+        // the same across the cut.
         if steps.len() < 2 {
-            return false;
+            return steps.is_empty() && first == last;
         }
         steps.sort_by(|p, q| p.total_cmp(q));
         let step = steps[steps.len() / 2];
