@@ -724,19 +724,6 @@ pub fn control_reset_warning(rec: &TestRecord, curve: &Curve) -> Option<String> 
     if c.len() < 10 {
         return None;
     }
-    let median_step = |v: &[f64]| {
-        let d: Vec<f64> = v
-            .windows(2)
-            .map(|w| (w[1] - w[0]).abs())
-            .filter(|d| *d > 0.0)
-            .collect();
-        let m = cablab_measure::stats::median(&d);
-        if m.is_nan() {
-            0.0
-        } else {
-            m
-        }
-    };
     let (mc, mr) = (median_step(c), median_step(r));
     let (lo, hi) = c
         .iter()
@@ -797,6 +784,21 @@ pub fn control_reset_warning(rec: &TestRecord, curve: &Curve) -> Option<String> 
     ))
 }
 
+/// The median of the nonzero steps between consecutive samples of `v` (0 when none).
+fn median_step(v: &[f64]) -> f64 {
+    let d: Vec<f64> = v
+        .windows(2)
+        .map(|w| (w[1] - w[0]).abs())
+        .filter(|d| *d > 0.0)
+        .collect();
+    let m = cablab_measure::stats::median(&d);
+    if m.is_nan() {
+        0.0
+    } else {
+        m
+    }
+}
+
 /// A specimen-mounted control (an extensometer's travel or strain) that jumps back in one sample
 /// while the response goes on (the step over 20 × the control's median step and a quarter of
 /// the range it had reached, against its motion until then; the response's step within a tenth
@@ -804,8 +806,9 @@ pub fn control_reset_warning(rec: &TestRecord, curve: &Curve) -> Option<String> 
 /// extensometer was taken off or slipped, as a clip-on is before fracture. What follows is no
 /// measurement of the specimen — a real Bluehill export in Polish reads −0.133 after 0.044,
 /// which made the strain look transverse (correlation −0.64 over the whole record) and the rest
-/// of the test dozens of reversed cycles with a loop area of −24 J. The curve is cut before the
-/// jump and a warning names the row and the channels that run on.
+/// of the test dozens of reversed cycles with a loop area of −24 J. The curve is cut at the
+/// control's farthest reach before the jump (a slip that starts a few samples earlier goes too)
+/// and a warning names the row and the channels that run on.
 pub fn extensometer_removed(rec: &TestRecord, curve: &mut Curve) -> Option<String> {
     let ci = rec.channel_index(Role::Control)?;
     if rec.mount(ci) != cablab_ingest::Mount::Specimen {
@@ -816,19 +819,14 @@ pub fn extensometer_removed(rec: &TestRecord, curve: &mut Curve) -> Option<Strin
     if n < 20 {
         return None;
     }
-    let steps: Vec<f64> = c[..n]
-        .windows(2)
-        .map(|w| (w[1] - w[0]).abs())
-        .filter(|d| *d > 0.0)
-        .collect();
-    let mc = cablab_measure::stats::median(&steps);
+    let mc = median_step(&c[..n]);
     let (rlo, rhi) = r[..n]
         .iter()
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
             (a.min(v), b.max(v))
         });
-    // A control that never moves (or a NaN median) has no step to compare a jump with.
-    if mc.is_nan() || mc <= 0.0 {
+    // A control that never moves has no step to compare a jump with.
+    if mc <= 0.0 {
         return None;
     }
     let (mut lo, mut hi) = (c[0], c[0]);
