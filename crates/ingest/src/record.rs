@@ -346,7 +346,8 @@ fn continues(a: &RawBlock, b: &RawBlock) -> bool {
 /// own `Data Acquisition … Time: 10.007813 Sec` line, displacement and force only) continue one
 /// another when every column's first value in `b` lies within 10 of `a`'s median steps (`a` of
 /// at least 3 rows) of its last, or equals it for a column that does not move: one signal cut
-/// into buffers, not a new test starting from zero. Before, such a file was read as its first buffer: 10 s of a 473 s test.
+/// into buffers, not a new test starting from zero. Before, such a file was read as its first
+/// buffer: 10 s of a 473 s test.
 fn continues_without_time(a: &RawBlock, b: &RawBlock) -> bool {
     if a.rows < 3 || a.columns.is_empty() {
         return false;

@@ -251,7 +251,17 @@ fn read_numbers_under(
 ///
 /// Does not join the samples: each is its own test (time restarts at 0).
 fn side_by_side_samples(bytes: &[u8], eol: u8, sep: Separator, dec: u8) -> Option<RawTable> {
+    let mut spans = Vec::new();
+    let texts = |line: &[u8], spans: &mut Vec<(usize, usize)>| -> Vec<String> {
+        split(line, sep, spans);
+        spans
+            .iter()
+            .map(|&sp| cell_text_raw(line, sp).trim().to_string())
+            .collect()
+    };
     let mut lines = Vec::new();
+    // (names, units, titles, names line, units line, columns per sample, samples)
+    let mut layout = None;
     let mut pos = 0;
     while pos < bytes.len() {
         let end = memchr::memchr(eol, &bytes[pos..]).map_or(bytes.len(), |p| pos + p);
@@ -263,44 +273,22 @@ fn side_by_side_samples(bytes: &[u8], eol: u8, sep: Separator, dec: u8) -> Optio
         pos = end + 1;
         // Three header rows tell the layout: read no further for any other file.
         if lines.len() == 3 {
-            let mut sp = Vec::new();
-            let row = |l: &[u8], sp: &mut Vec<(usize, usize)>| -> Vec<String> {
-                split(l, sep, sp);
-                sp.iter()
-                    .map(|&x| cell_text_raw(l, x).trim().to_string())
-                    .collect()
-            };
-            let (a, b, c) = (
-                row(lines[0], &mut sp),
-                row(lines[1], &mut sp),
-                row(lines[2], &mut sp),
-            );
-            if mecmesin(&a, &b, &c).is_none() && trapezium(&a, &b, &c).is_none() {
-                return None;
-            }
+            let row0 = texts(lines[0], &mut spans);
+            let row1 = texts(lines[1], &mut spans);
+            let row2 = texts(lines[2], &mut spans);
+            layout = Some(match mecmesin(&row0, &row1, &row2) {
+                Some((k, m)) => (row0, row1, row2, 1, 2, k, m),
+                None => {
+                    let (k, m) = trapezium(&row0, &row1, &row2)?;
+                    (row1, row2, row0, 2, 3, k, m)
+                }
+            });
         }
     }
     if lines.len() < 5 {
         return None;
     }
-    let mut spans = Vec::new();
-    let texts = |line: &[u8], spans: &mut Vec<(usize, usize)>| -> Vec<String> {
-        split(line, sep, spans);
-        spans
-            .iter()
-            .map(|&sp| cell_text_raw(line, sp).trim().to_string())
-            .collect()
-    };
-    let row0 = texts(lines[0], &mut spans);
-    let row1 = texts(lines[1], &mut spans);
-    let row2 = texts(lines[2], &mut spans);
-    let (names, units, titles, names_line, units_line, k, m) = match mecmesin(&row0, &row1, &row2) {
-        Some((k, m)) => (row0, row1, row2, 1, 2, k, m),
-        None => {
-            let (k, m) = trapezium(&row0, &row1, &row2)?;
-            (row1, row2, row0, 2, 3, k, m)
-        }
-    };
+    let (names, units, titles, names_line, units_line, k, m) = layout?;
     let first = (3..lines.len()).find(|&i| !lines[i].iter().all(|b| b.is_ascii_whitespace()))?;
     let mut blocks: Vec<RawBlock> = (0..m)
         .map(|j| RawBlock {
