@@ -23,9 +23,24 @@ pub struct Curve {
     pub repeated_rows: usize,
     /// The record's row of each sample kept (an index into every channel of the record).
     pub rows: Vec<usize>,
+    /// The curve was cut before the record's end (an extensometer taken off): the test went on
+    /// beyond its last sample, so a bend at its very end is no yield it can show.
+    pub cut_short: bool,
 }
 
 impl Curve {
+    /// Ends the curve before sample `i` (an extensometer taken off there), marking it
+    /// [`Curve::cut_short`].
+    pub fn cut_at(&mut self, i: usize) {
+        self.control.truncate(i);
+        self.response.truncate(i);
+        if let Some(t) = self.time_s.as_mut() {
+            t.truncate(i);
+        }
+        self.rows.truncate(i);
+        self.cut_short = true;
+    }
+
     /// The warning for rows that repeat the one before them, time stamp included: the same
     /// sample written again (a logger's repeated record, a workbook's formula rows all showing
     /// one cached value). They carry no measurement of their own: a record of fewer than three
@@ -155,6 +170,20 @@ pub fn align_response_sign(curve: &mut Curve) -> (Option<String>, Option<String>
     if rho >= OPPOSITE_SIGNS_CORRELATION {
         return first_loading_against(curve, rho);
     }
+    // The first loading, up to the response's largest magnitude, rising with its control says
+    // the signs agree, whatever the rest does: a specimen that breaks while the control runs
+    // on (a bone bent to fracture, the punch travelling 148 rows past it while the force falls
+    // back) correlates against its control over the whole record.
+    if let Some(first) =
+        first_loading_correlation(c, r).filter(|f| *f >= -OPPOSITE_SIGNS_CORRELATION)
+    {
+        return (
+            Some(format!(
+                "the response falls as the control rises over the whole record (correlation {rho:.2}) but rises with it up to its largest magnitude (correlation {first:.2}): the signs agree, and what follows the peak (a break, a softening the control runs on through) is not reversed"
+            )),
+            None,
+        );
+    }
     let mr = r.iter().sum::<f64>() / n as f64;
     let area: f64 = (1..n)
         .map(|i| 0.5 * (r[i] + r[i - 1] - 2.0 * mr) * (c[i] - c[i - 1]))
@@ -200,18 +229,10 @@ pub fn align_response_sign(curve: &mut Curve) -> (Option<String>, Option<String>
 /// its force negative (correlation −0.79 to the peak, −0.37 over the record); read as they were,
 /// EI came out from the softening branch, 93 % low.
 fn first_loading_against(curve: &mut Curve, rho: f64) -> (Option<String>, Option<String>) {
-    let r = &curve.response;
-    let Some(peak) = (0..r.len())
-        .filter(|&i| r[i].is_finite())
-        .max_by(|&a, &b| r[a].abs().total_cmp(&r[b].abs()))
-    else {
+    let Some(first) = first_loading_correlation(&curve.control, &curve.response) else {
         return (None, None);
     };
-    if peak < 10 {
-        return (None, None);
-    }
-    let first = correlation(&curve.control[..=peak], &r[..=peak]).unwrap_or(0.0);
-    if first.is_nan() || first >= OPPOSITE_SIGNS_CORRELATION {
+    if first >= OPPOSITE_SIGNS_CORRELATION {
         return (None, None);
     }
     for v in &mut curve.response {
@@ -223,6 +244,18 @@ fn first_loading_against(curve: &mut Curve, rho: f64) -> (Option<String>, Option
         )),
         None,
     )
+}
+
+/// The correlation of the response with its control from the start to the response's largest
+/// magnitude, when that stretch holds at least 10 samples.
+fn first_loading_correlation(c: &[f64], r: &[f64]) -> Option<f64> {
+    let peak = (0..r.len())
+        .filter(|&i| r[i].is_finite())
+        .max_by(|&a, &b| r[a].abs().total_cmp(&r[b].abs()))?;
+    if peak < 10 {
+        return None;
+    }
+    correlation(&c[..=peak], &r[..=peak]).filter(|f| !f.is_nan())
 }
 
 /// Pearson's correlation of `r` on `c` from the least-squares line: the sign of the slope, the
@@ -713,6 +746,47 @@ pub fn gauge_length_warning(
     })
 }
 
+/// A warning when a length or diameter given (a flag, a pipeline's value) is not the file's own
+/// (its metadata) by more than 1 %: every sectional value then rests on the given one. A
+/// campaign's value for a file of several specimens (a sheet each, side by side) comes from one
+/// of them, and a typo is a number silently off. Not said of an extensometer's gauge length
+/// given where the metadata's length is the clamps' (the given one is then right).
+pub fn given_geometry_warning(
+    rec: &TestRecord,
+    kind: TestKind,
+    length_m: Option<f64>,
+    diameter_m: Option<f64>,
+) -> Vec<String> {
+    let off = |given: f64, own: f64| (given / own - 1.0).abs() > 0.01;
+    let mut out = Vec::new();
+    if let (Some(l), Some(own)) = (length_m, rec.specimen.free_length_m) {
+        let gauge = rec.extensometer_gauge_length().map(|(g, _, _)| g);
+        if off(l, own) && gauge.is_none_or(|g| off(l, g)) {
+            let what = if kind == TestKind::ThreePoint {
+                "support span"
+            } else {
+                "length"
+            };
+            out.push(format!(
+                "the {what} given, {:.4} mm, is not the file's own {:.4} mm (its metadata): the stiffness and every sectional value use the given one; were the file right, (EA), (GJ) or (EI) would be off by the ratio of the two ({:.3}; cubed in three-point)",
+                l * 1e3,
+                own * 1e3,
+                l / own
+            ));
+        }
+    }
+    if let (Some(d), Some(own)) = (diameter_m, rec.specimen.diameter_m) {
+        if off(d, own) {
+            out.push(format!(
+                "the diameter given, {:.4} mm, is not the file's own {:.4} mm (its metadata): the moduli use the given one (E scales with 1/d², G and the bending moduli with 1/d⁴)",
+                d * 1e3,
+                own * 1e3
+            ));
+        }
+    }
+    out
+}
+
 /// A warning when the control jumps between two samples while the response does not move
 /// back to where the record started (a step over 20 × the median step and 5 % of the control's
 /// range, landing within 5 % of the range of the first sample, the response's step within 3 × its
@@ -887,12 +961,7 @@ pub fn extensometer_removed(rec: &TestRecord, curve: &mut Curve) -> Option<Strin
         .map(|k| show(&rec.channels[k]))
         .collect();
     let total = n;
-    curve.control.truncate(i);
-    curve.response.truncate(i);
-    if let Some(t) = curve.time_s.as_mut() {
-        t.truncate(i);
-    }
-    curve.rows.truncate(i);
+    curve.cut_at(i);
     Some(format!(
         "the extensometer {} jumps from {} to {} {} at data row {row} (complete row {}) while the response goes on, and does not come back: taken off or slipped; the analysis ends at its farthest reach before it ({i} of {total} complete rows), the rest of the test is not analysed{}",
         show(ch),
@@ -905,6 +974,88 @@ pub fn extensometer_removed(rec: &TestRecord, curve: &mut Curve) -> Option<Strin
         } else {
             format!(" ({} runs on to the end: --control to analyse it)", others.join(", "))
         }
+    ))
+}
+
+/// A warning when a specimen-mounted control starts to follow the crosshead: over the first
+/// loading, at one sample its rate against the file's crosshead (machine travel) rises at least
+/// 5× and stays at least 3× what it was, while the force goes on rising against the crosshead
+/// as before (its rate within a factor 2). That is no material's doing (a yield bends the force
+/// against the crosshead) but the software's: Bluehill continues `Strain 1` from the crosshead
+/// once the clip-on extensometer is taken off, without a jump (a real flat-coupon export: after
+/// a 20 s pause at 0.19 % strain the strain ran 33× faster against the crosshead, 1/26 mm, the
+/// specimen's length; read as it was, a yield at 9,193 N on a coupon linear to 15,366 N). The
+/// curve is cut there, as for an extensometer that jumps back ([`extensometer_removed`]).
+pub fn strain_follows_crosshead(rec: &TestRecord, curve: &mut Curve) -> Option<String> {
+    use cablab_ingest::units::Dimension as D;
+    let ci = rec.channel_index(Role::Control)?;
+    if rec.mount(ci) != cablab_ingest::Mount::Specimen {
+        return None;
+    }
+    let ki = (0..rec.channels.len()).find(|&k| {
+        k != ci
+            && rec.channels[k].dimension == Some(D::Length)
+            && rec.mount(k) == cablab_ingest::Mount::Machine
+    })?;
+    let raw = rec.values(ki)?;
+    let x: Vec<f64> = curve
+        .rows
+        .iter()
+        .map(|&k| raw.get(k).copied().unwrap_or(f64::NAN))
+        .collect();
+    let (c, r) = (&curve.control, &curve.response);
+    let n = c.len().min(r.len()).min(x.len());
+    // The first loading: to the response's largest magnitude.
+    let peak = (0..n)
+        .filter(|&i| r[i].is_finite())
+        .max_by(|&a, &b| r[a].abs().total_cmp(&r[b].abs()))?;
+    let w = (peak / 50).max(5);
+    if peak < 4 * w || x[..=peak].iter().any(|v| !v.is_finite()) {
+        return None;
+    }
+    let sx = (x[peak] - x[0]).signum();
+    let rate = |a: usize, b: usize| {
+        let dx = sx * (x[b] - x[a]);
+        (dx > 0.0).then(|| ((c[b] - c[a]) / dx, (r[b] - r[a]) / dx))
+    };
+    // The window pair with the largest rise of the control's rate, the force's kept.
+    let mut best: Option<(f64, usize, f64, f64)> = None;
+    for i in w..=peak - w {
+        let (Some((a, fa)), Some((b, fb))) = (rate(i - w, i), rate(i, i + w)) else {
+            continue;
+        };
+        if a * b <= 0.0 || fa * fb <= 0.0 {
+            continue;
+        }
+        let rise = b / a;
+        let kept = fb / fa;
+        if rise >= 5.0 && (0.5..=2.0).contains(&kept) && best.is_none_or(|bb| rise > bb.0) {
+            best = Some((rise, i, a, b));
+        }
+    }
+    let (_, i, a, b) = best?;
+    // The sample where the control's own steps turn to the new rate (between the two means).
+    let mid = (b / a).sqrt();
+    let s = (i - w + 1..=i + w).find(|&j| {
+        let dx = sx * (x[j] - x[j - 1]);
+        dx > 0.0 && (c[j] - c[j - 1]) / dx / a >= mid
+    })?;
+    // And it stays: to the peak, the control runs at least 3× its earlier rate.
+    let (after, _) = rate(s - 1, peak)?;
+    if after / a < 3.0 {
+        return None;
+    }
+    let total = n;
+    let f_max = r[peak];
+    let row = curve.rows.get(s).map_or(s + 1, |&k| k + 1);
+    curve.cut_at(s);
+    Some(format!(
+        "the control {} follows the crosshead {} from data row {row} on: its rate against it rises {:.0}× at once while the force goes on rising against the crosshead as before — no yield, but the extensometer taken off and the software continuing the strain from the crosshead; the analysis ends there ({s} of {total} complete rows), the rest of the test is not analysed (the response goes on to {:.4e} {})",
+        show(&rec.channels[ci]),
+        show(&rec.channels[ki]),
+        b / a,
+        f_max,
+        rec.channels[rec.channel_index(Role::Response)?].si_unit
     ))
 }
 
@@ -955,6 +1106,12 @@ pub fn read_test(
         .extend(unitless_control_warning(&rec, kind, &geom));
     said.warnings
         .extend(gauge_length_warning(&rec, kind, &geom));
+    said.warnings.extend(given_geometry_warning(
+        &rec,
+        kind,
+        mm(t.length_mm),
+        mm(t.diameter_mm),
+    ));
     let mut curve = curve(&rec)?;
     said.notes.extend(sectional_control(
         &rec,
@@ -964,6 +1121,8 @@ pub fn read_test(
         &mut curve,
     )?);
     said.warnings.extend(extensometer_removed(&rec, &mut curve));
+    said.warnings
+        .extend(strain_follows_crosshead(&rec, &mut curve));
     said.warnings.extend(control_reset_warning(&rec, &curve));
     let (note, warning) = align_response_sign_of(&rec, kind, &mut curve);
     said.notes.extend(note);
@@ -1529,12 +1688,18 @@ pub fn check_roles(
     if kind == TestKind::Torsion {
         if let Some(i) = ci {
             let c = &rec.channels[i];
-            if !shear_named(&c.name) && c.dimension == Some(D::Angle) {
+            // A torsional extensometer by what it measures (`Shear Strain`) or by what it is
+            // (an MTS TestSuite export's `Torsional Epsilon 3550 Torsion` in degrees beside the
+            // actuator's `Torsional Angle`: Epsilon's axial–torsional extensometer).
+            let mounted = |k: usize| {
+                shear_named(&rec.channels[k].name) || rec.mount(k) == cablab_ingest::Mount::Specimen
+            };
+            if !mounted(i) && c.dimension == Some(D::Angle) {
                 if let Some(k) = (0..rec.channels.len()).find(|&k| {
                     let o = &rec.channels[k];
                     k != i
                         && o.role == Role::Other
-                        && shear_named(&o.name)
+                        && mounted(k)
                         && matches!(o.dimension, Some(D::Angle | D::Ratio))
                 }) {
                     said.warnings.push(format!(
@@ -1686,6 +1851,7 @@ mod tests {
             dropped_rows: 0,
             repeated_rows: 0,
             rows: vec![],
+            cut_short: false,
         }
     }
 

@@ -39,6 +39,7 @@ pub fn analyze_file(
         compliance_m_per_n: a.compliance,
         yield_method,
         flat_section: flat,
+        cut_short: curve.cut_short,
         ..Default::default()
     };
     if let Some(w) = &a.fit_window {

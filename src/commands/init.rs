@@ -59,6 +59,9 @@ pub struct Found {
     /// Why no length is needed, when the control is already the sectional variable (a strain
     /// in tension, a curvature in pure bending).
     pub length_free: Option<String>,
+    /// A workbook of several specimens, a sheet each, whose sheets state different lengths:
+    /// each test takes its own sheet's, listed here.
+    pub length_each: Option<String>,
 }
 
 impl Found {
@@ -68,7 +71,7 @@ impl Found {
         if self.kind.is_none() {
             g.push("kind");
         }
-        if self.length_mm.is_none() && self.length_free.is_none() {
+        if self.length_mm.is_none() && self.length_free.is_none() && self.length_each.is_none() {
             g.push(
                 if self.kind.as_ref().map(|k| k.value) == Some(TestKind::ThreePoint) {
                     "length_mm (support span)"
@@ -368,6 +371,51 @@ fn metadata_or_flag(
     })
 }
 
+/// For a workbook of several specimens, a sheet each: the lengths and the diameters its sheets'
+/// metadata state, in words, when they differ between sheets (`None` when they agree, or for
+/// any other file).
+fn per_sheet_geometry(
+    path: &Path,
+    opts: &cablab_ingest::ReadOptions,
+) -> (Option<String>, Option<Sourced<String>>) {
+    let Some(cablab_ingest::Specimens::Sheets(sheets)) = cablab_ingest::specimens_in_file(path)
+    else {
+        return (None, None);
+    };
+    /// A sheet's name, its length and its diameter (m).
+    type Own = (String, Option<f64>, Option<f64>);
+    let own: Vec<Own> = sheets
+        .into_iter()
+        .filter_map(|sheet| {
+            let o = cablab_ingest::ReadOptions {
+                sheet: Some(sheet.clone()),
+                ..opts.clone()
+            };
+            let r = cablab_ingest::read_path(path, &o).ok()?;
+            Some((sheet, r.specimen.free_length_m, r.specimen.diameter_m))
+        })
+        .collect();
+    let listed = |v: &dyn Fn(&Own) -> Option<f64>| {
+        let differ = own.windows(2).any(|w| v(&w[0]) != v(&w[1]));
+        differ.then(|| {
+            own.iter()
+                .map(|o| {
+                    v(o).map_or(format!("'{}' none", o.0), |m| {
+                        format!("'{}' {} mm", o.0, round_mm(m * 1e3))
+                    })
+                })
+                .collect::<Vec<_>>()
+                .join(", ")
+        })
+    };
+    let length = listed(&|o| o.1).map(|l| format!("each specimen's own sheet: {l}"));
+    let diameter = listed(&|o| o.2).map(|d| Sourced {
+        value: "diameter per specimen".into(),
+        from: format!("each sheet's metadata: {d}"),
+    });
+    (length, diameter)
+}
+
 /// A value from a command-line flag.
 fn flag(v: Option<f64>, name: &str) -> Option<Sourced<f64>> {
     v.map(|value| Sourced {
@@ -441,19 +489,31 @@ pub fn survey(paths: &[PathBuf], d: &InferArgs) -> Result<Survey, CliError> {
                 })
             })
         };
-        let length_mm = metadata_or_flag(&rec, rec.specimen.free_length_m, LENGTH_KEYS)
+        let mut length_mm = metadata_or_flag(&rec, rec.specimen.free_length_m, LENGTH_KEYS)
             .or_else(|| flag(d.length_mm, "--length-mm"));
-        let diameter_mm = metadata_or_flag(&rec, rec.specimen.diameter_m, DIAMETER_KEYS)
+        let mut diameter_mm = metadata_or_flag(&rec, rec.specimen.diameter_m, DIAMETER_KEYS)
             .or_else(|| flag(d.diameter_mm, "--diameter-mm"));
+        // Specimens a sheet each (a test each in the campaign) may state different lengths or
+        // diameters: a value of the pipeline would then be one sheet's for all. Each test
+        // takes its own sheet's instead.
+        let (length_each, diameter_each) = per_sheet_geometry(&path, &opts);
+        if length_each.is_some() {
+            length_mm = None;
+        }
+        if diameter_each.is_some() {
+            diameter_mm = None;
+        }
         let label = rec.specimen.label.clone().unwrap_or_else(|| {
             path.file_stem()
                 .map(|n| n.to_string_lossy().to_string())
                 .unwrap_or_default()
         });
-        let section = diameter_mm
-            .is_none()
-            .then(|| stated_section(&rec, kind.as_ref().map(|k| k.value)))
-            .flatten();
+        let section = diameter_each.or_else(|| {
+            diameter_mm
+                .is_none()
+                .then(|| stated_section(&rec, kind.as_ref().map(|k| k.value)))
+                .flatten()
+        });
         let specimen_type = match (&diameter_mm, &section) {
             (Some(dm), _) => Some(format!("{} {} mm", folder_name(&path), dm.value)),
             (None, Some(sec)) => Some(format!("{} {}", folder_name(&path), sec.value)),
@@ -471,6 +531,7 @@ pub fn survey(paths: &[PathBuf], d: &InferArgs) -> Result<Survey, CliError> {
         .map(String::from);
         s.found.push(Found {
             length_free,
+            length_each,
             path,
             kind,
             length_mm,
@@ -529,24 +590,34 @@ pub fn describe(s: &Survey) -> String {
         let kind = f.kind.as_ref().map_or("kind ?".to_string(), |k| {
             format!("{} ({})", k.value, k.from)
         });
-        let len = f.length_mm.as_ref().map_or("length ?".to_string(), |l| {
-            format!("length {} mm ({})", l.value, l.from)
-        });
+        let len = match (&f.length_mm, &f.length_each) {
+            (_, Some(each)) => format!("length {each}"),
+            (Some(l), None) => format!("length {} mm ({})", l.value, l.from),
+            (None, None) => "length ?".to_string(),
+        };
         let dia = match (&f.diameter_mm, &f.section) {
             (Some(x), _) => format!("diameter {} mm ({})", x.value, x.from),
             (None, Some(x)) => format!("section {} ({})", x.value, x.from),
             (None, None) => "diameter ?".to_string(),
         };
-        let specimen = match cablab_ingest::specimens_side_by_side(&f.path) {
-            Some(titles) => format!(
+        let listed = |titles: &[String]| {
+            titles
+                .iter()
+                .enumerate()
+                .map(|(i, t)| format!("#{} '{t}'", i + 1))
+                .collect::<Vec<_>>()
+                .join(", ")
+        };
+        let specimen = match cablab_ingest::specimens_in_file(&f.path) {
+            Some(cablab_ingest::Specimens::SideBySide(titles)) => format!(
                 "{} specimens side by side, a test each: {}",
                 titles.len(),
-                titles
-                    .iter()
-                    .enumerate()
-                    .map(|(i, t)| format!("#{} '{t}'", i + 1))
-                    .collect::<Vec<_>>()
-                    .join(", ")
+                listed(&titles)
+            ),
+            Some(cablab_ingest::Specimens::Sheets(sheets)) => format!(
+                "{} specimens, a sheet each, a test each: {}",
+                sheets.len(),
+                listed(&sheets)
             ),
             None => format!("specimen '{}'", f.label),
         };
@@ -807,10 +878,11 @@ pub fn render(s: &Survey, name: &str, root: Option<&str>, command: &str, gaps: G
             .as_ref()
             .map_or(String::new(), |k| k.value.as_str().to_string());
         let ty = f.specimen_type.clone().unwrap_or_default();
-        let len = f
-            .length_mm
-            .as_ref()
-            .map_or(String::new(), |l| l.value.to_string());
+        let len = match (&f.length_mm, &f.length_each) {
+            (_, Some(each)) => each.clone(),
+            (Some(l), None) => l.value.to_string(),
+            (None, None) => String::new(),
+        };
         let complete = f.gaps().is_empty();
         // Files with a gap get their own [[input]] so that each can be filled in.
         let key = if complete {
@@ -918,6 +990,13 @@ fn block(files: &[&Found], glob: &str, gaps: Gaps, cols: &Columns) -> String {
         }
     }
     match (&f0.length_mm, &f0.length_free) {
+        _ if f0.length_each.is_some() => {
+            let _ = writeln!(
+                t,
+                "# length_mm: {}",
+                f0.length_each.as_deref().unwrap_or_default()
+            );
+        }
         (Some(l), _) => {
             let _ = writeln!(t, "length_mm = {}  # {}", l.value, l.from);
         }

@@ -1077,22 +1077,29 @@ fn validate(file: PipelineFile, path: &Path, bytes: Vec<u8>, root: PathBuf) -> R
                     );
                 }
             }
-            // Specimens side by side in one file (Mecmesin, Trapezium): one test each, unless
-            // the pipeline picks a block.
-            let blocks: Vec<(String, Option<usize>)> = match (ov.block, &ov.sheet) {
-                (None, None) => match cablab_ingest::specimens_side_by_side(&p) {
-                    // Numbered to the same width, so that ids sort in block order.
-                    Some(titles) => {
-                        let w = titles.len().to_string().len();
-                        (1..=titles.len())
-                            .map(|k| (format!("{id}#{k:0w$}"), Some(k)))
-                            .collect()
-                    }
-                    None => vec![(id.clone(), None)],
-                },
-                _ => vec![(id.clone(), ov.block)],
+            // Specimens side by side in one file (Mecmesin, Trapezium) or a sheet each in a
+            // workbook (Bluehill's Excel export): one test each, numbered to the same width so
+            // that ids sort in file order, unless the pipeline picks a block or a sheet.
+            let numbered = |n: usize| {
+                let w = n.to_string().len();
+                let id = id.clone();
+                (1..=n).map(move |k| format!("{id}#{k:0w$}"))
             };
-            for (test_id, block) in blocks {
+            let blocks: Vec<(String, Option<usize>, Option<String>)> = match (ov.block, &ov.sheet) {
+                (None, None) => match cablab_ingest::specimens_in_file(&p) {
+                    Some(cablab_ingest::Specimens::SideBySide(titles)) => numbered(titles.len())
+                        .zip(1..)
+                        .map(|(t, k)| (t, Some(k), None))
+                        .collect(),
+                    Some(cablab_ingest::Specimens::Sheets(sheets)) => numbered(sheets.len())
+                        .zip(sheets)
+                        .map(|(t, s)| (t, None, Some(s)))
+                        .collect(),
+                    None => vec![(id.clone(), None, None)],
+                },
+                _ => vec![(id.clone(), ov.block, ov.sheet.clone())],
+            };
+            for (test_id, block, sheet) in blocks {
                 tests.push(PlannedTest {
                     id: test_id,
                     file_id: id.clone(),
@@ -1104,7 +1111,7 @@ fn validate(file: PipelineFile, path: &Path, bytes: Vec<u8>, root: PathBuf) -> R
                     free_length_m: ov.length_mm.or(g.length_mm).map(|l| l * 1e-3),
                     format: ov.format.clone().or_else(|| g.format.clone()),
                     block,
-                    sheet: ov.sheet.clone(),
+                    sheet,
                     units: units.clone(),
                     time: ov.time.clone().or_else(|| g.time.clone()),
                     control: ov.control.clone().or_else(|| g.control.clone()),

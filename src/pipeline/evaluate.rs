@@ -470,6 +470,12 @@ fn stages(
             .extend(crate::bridge::unitless_control_warning(&rec, t.kind, &g));
         out.warnings
             .extend(crate::bridge::gauge_length_warning(&rec, t.kind, &g));
+        out.warnings.extend(crate::bridge::given_geometry_warning(
+            &rec,
+            t.kind,
+            t.free_length_m,
+            t.diameter_m,
+        ));
         (g, f)
     } else {
         let g = cablab_measure::Geometry {
@@ -518,6 +524,8 @@ fn stages(
     out.warnings
         .extend(crate::bridge::extensometer_removed(&rec, &mut curve));
     out.warnings
+        .extend(crate::bridge::strain_follows_crosshead(&rec, &mut curve));
+    out.warnings
         .extend(crate::bridge::control_reset_warning(&rec, &curve));
     let (note, warning) = crate::bridge::align_response_sign_of(&rec, t.kind, &mut curve);
     out.notes.extend(note);
@@ -546,6 +554,7 @@ fn stages(
                 .map_err(|e: String| anyhow!("yield_method: {e}"))?,
             None => Default::default(),
         },
+        cut_short: curve.cut_short,
         ..Default::default()
     };
     let an = cablab_measure::analyze(
@@ -625,6 +634,22 @@ fn stages(
     if !out.needs.is_empty() {
         result["needs"] = serde_json::json!(out.needs);
         result["machine_stiffness"] = serde_json::json!(out.machine_stiffness);
+    }
+    // At the machine level the analysis ran on the stand-in l₀ = 1 m: its stiffness is the
+    // machine's, in the machine's units (not a sectional stiffness of a 1 m specimen), and its
+    // window is in the machine's control.
+    if let (Some(m), Some(st)) = (
+        &out.machine_stiffness,
+        result["analysis"]["stiffness"].as_object_mut(),
+    ) {
+        st.insert("value".into(), serde_json::json!(m.value));
+        st.insert("ci95".into(), serde_json::json!(m.ci95));
+        st.insert("unit".into(), serde_json::json!(m.unit));
+        st.insert(
+            "window_unit".into(),
+            serde_json::json!(t.kind.control_unit()),
+        );
+        st.insert("level".into(), serde_json::json!("machine"));
     }
     files.push(("result.json".into(), crate::output::to_json_bytes(&result)?));
     if c.file.reports.parquet {

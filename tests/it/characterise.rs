@@ -381,6 +381,16 @@ fn real_bluehill_cyclic_silicone_tension() {
         assert_eq!(cy.coincide, Some(false), "{cy:?}");
         assert_eq!(cy.residual_significant, Some(false), "{cy:?}");
     }
+    // Each cycle's peak as a strain too (JSON `peak_sectional`, in the unit of `residual` and
+    // the yield): 40 mm over a 100 mm free length is 0.4, beside the machine's 0.04 m.
+    let short = Geometry {
+        free_length_m: 0.1,
+        diameter_m: None,
+    };
+    for cy in &run(TestKind::Tension, &short, &c).cycles {
+        assert!(rel(cy.peak_control, 0.04) < 0.01, "{cy:?}");
+        assert!(rel(cy.peak_sectional, 0.4) < 0.01, "{cy:?}");
+    }
     // Open loops without permanent set: rate dependence, not plasticity.
     assert_eq!(a.behaviour, Behaviour::Other);
 }

@@ -597,3 +597,260 @@ fn a_compression_test_without_a_kind_is_refused_as_compression() {
         "{err}"
     );
 }
+
+/// A Bluehill export written in Polish (the layout of a real EN 14651 flexure export, no
+/// licence, so a twin): the specimen's dimensions are metadata lines `"Długość",…,"mm"`,
+/// `"Szerokość"`, `"Grubość"`, next to `Godzina;Przemieszczenie;Obciążenie`. Before, no key was
+/// read (only English, German, Spanish and Italian words), so the test fell to the machine
+/// level with every length asked for; now the length and the flat section are the file's.
+#[test]
+fn dimensions_named_in_other_languages_are_read() {
+    let (k, l0, w, t) = (2.0e6, 0.1, 10e-3, 2e-3); // N/m, m
+    for (length, width, thick) in [
+        ("Długość", "Szerokość", "Grubość"),     // Polish
+        ("Longueur", "Largeur", "Épaisseur"),    // French, bare length
+        ("Lengte", "Breedte", "Dikte"),          // Dutch
+        ("Comprimento", "Largura", "Espessura"), // Portuguese
+    ] {
+        let mut s = format!(
+            "\"Etykietka próbki\",\"P1\"\n\"{length}\",\"100\",\"mm\"\n\"{width}\",\"10\",\"mm\"\n\"{thick}\",\"2\",\"mm\"\n\n1,Godzina,Przemieszczenie,Obciążenie\n,(s),(mm),(N)\n"
+        );
+        for i in 0..=400 {
+            let u = 1e-3 * i as f64 / 400.0; // m
+            let f = k * u + 2.0 * ((i * 7919 % 5) as f64 - 2.0);
+            s += &format!("\"\",{:.2},{:.5},{:.3}\n", 0.1 * i as f64, u * 1e3, f);
+        }
+        let v = analyze_written("probka.csv", &s, &["--kind", "tension"]);
+        let ea = v["stiffness"]["value"].as_f64().unwrap();
+        assert!(
+            (ea / (k * l0) - 1.0).abs() < 0.01,
+            "{length}: EA {ea} against {} ({})",
+            k * l0,
+            v["notes"]
+        );
+        let e = v["modulus_pa"].as_f64().unwrap();
+        assert!(
+            (e / (k * l0 / (w * t)) - 1.0).abs() < 0.01,
+            "{length}: E {e} from the section {width} × {thick}: {}",
+            v["notes"]
+        );
+    }
+}
+
+/// An MTS TestSuite three-point export of a bone bent to fracture (the layout of a real export,
+/// no licence, so a twin): `Ch 1 Displacement` and `Ch 1 Force` both negative under load, and the
+/// punch running on for 148 rows after the fracture while the force falls back. Over the whole
+/// record the deflection correlates with the falling force (−0.53 on the real file), so the force
+/// was reversed as a sign convention and (EI) came from the fall: 0.47 × the author's stiffness.
+/// The first loading, up to the peak, says the signs agree: nothing is reversed.
+#[test]
+fn a_fracture_the_punch_runs_on_past_does_not_reverse_the_force() {
+    let k = 80e3; // N/m
+    let mut s = String::from(
+        "\u{feff}File Path: C:\\x\\Collect Data - (Timed).txt   \r\nTest: 3-point bend for mouse bone\r\nTest Run: R1\r\nDate: 10/26/2022 1:02:25 PM\r\n\r\n\r\nCh 1 Displacement \tCh 1 Force \tRunning Time \r\nmm\tkN\tsec\r\n",
+    );
+    let (rise, tail) = (60usize, 148usize);
+    for i in 0..=rise + tail {
+        let w = 0.25e-3 * i as f64 / rise as f64; // m, on past the fracture
+        let f = if i <= rise {
+            k * w
+        } else {
+            // Falls back after the fracture, to a tenth of the peak.
+            k * 0.25e-3 * (0.1 + 0.9 * (-((i - rise) as f64) / 6.0).exp())
+        } + 0.02 * ((i * 7919 % 5) as f64 - 2.0);
+        s += &format!(
+            "{:.6}\t{:.7}\t{:.3}\r\n",
+            -w * 1e3,
+            -f * 1e-3,
+            0.025 * i as f64
+        );
+    }
+    let v = analyze_written(
+        "Collect Data - (Timed).txt",
+        &s,
+        &["--kind", "three-point", "--length-mm", "6"],
+    );
+    let ei = v["stiffness"]["value"].as_f64().unwrap();
+    let want = k * 0.006f64.powi(3) / 48.0;
+    assert!((ei / want - 1.0).abs() < 0.03, "EI {ei} against {want}");
+    assert!(
+        v["notes"]
+            .to_string()
+            .contains("but rises with it up to its largest magnitude"),
+        "{}",
+        v["notes"]
+    );
+}
+
+/// A Bluehill ramp–hold relaxation test (the layout of a real export, no licence, so a twin):
+/// three ramps of the extension by 0.5 mm, each held for 295 s while the force relaxes (a
+/// standard linear solid: elastic 0.006 N/mm, viscous 0.034 N/mm, τ = 30 s), extension and load
+/// both logged negative. The third hold's relaxation fell below half the maximum and was
+/// reported as a break ("the specimen broke at sample 6513"; the real file: `behaviour: broken`).
+/// A fall while the control stands still is relaxation, not a break.
+#[test]
+fn stress_relaxation_in_a_hold_is_no_break() {
+    let mut s = String::from(
+        "Strain : Tensile strain (Extension) gauge length,\"100.00000\",mm\n\nTime,Extension,Load\n(s),(mm),(N)\n",
+    );
+    let (ke, kv, tau, dt) = (0.006, 0.034, 30.0, 0.1);
+    let (mut t, mut u, mut q) = (0.0f64, 0.0f64, 0.0f64);
+    let mut row = |t: f64, u: f64, q: f64| {
+        s += &format!("\"{t:.5}\",\"{:.5}\",\"{:.5}\"\n", -u, -(ke * u + q));
+    };
+    row(t, u, q);
+    for _ in 0..3 {
+        for _ in 0..50 {
+            let du = 0.5 / 50.0;
+            u += du;
+            t += dt;
+            q += kv * du - q * dt / tau;
+            row(t, u, q);
+        }
+        for _ in 0..2950 {
+            t += dt;
+            q -= q * dt / tau;
+            row(t, u, q);
+        }
+    }
+    let v = analyze_written("Specimen_RawData_1.csv", &s, &["--kind", "tension"]);
+    assert_ne!(v["behaviour"], "broken", "{}", v["notes"]);
+    assert!(v["break_point"].is_null(), "{}", v["break_point"]);
+    assert!(!v["notes"].to_string().contains("broke"), "{}", v["notes"]);
+}
+
+/// A Bluehill tension export whose clip-on extensometer is taken off during a pause (the
+/// layout of a real GPL export from pymechtest, tested through a twin): `Tensile strain
+/// (Strain 1)` in % runs on from the crosshead after the pause, 26× faster against it (1/L,
+/// L = 26 mm), with no jump, while the force goes on rising against the crosshead as before.
+/// Read as it was, the slope change was a yield (9,193 N on a coupon linear to 15,366 N). Now
+/// the analysis ends at the switch, with a warning that names both channels and the maximum.
+#[test]
+fn a_strain_that_starts_following_the_crosshead_ends_the_analysis() {
+    let (ea, l, compliance) = (5.0e6, 26.0, 2.0e-7); // N, mm, m/N of the load train
+    let mut s = String::from(
+        "Specimen number (included),1\nLength,\"26.00000\",mm\nSpecimen ID,\"0038\"\n\nTime,Extension,Load,Tensile strain (Strain 1)\n(s),(mm),(N),(%)\n",
+    );
+    let mut eps_at_switch = None;
+    for i in 0..=1400usize {
+        let f = 15.0 * i as f64; // N, to 21 kN
+        let eps = f / ea; // the specimen's strain
+        let x = (eps * l * 1e-3 + compliance * f) * 1e3; // crosshead, mm
+        let t = if i < 900 {
+            0.1 * i as f64
+        } else {
+            0.1 * i as f64 + 20.0
+        };
+        // From row 900 (after a 20 s pause) the strain is the crosshead's over L.
+        let shown = if i < 900 {
+            eps
+        } else {
+            let (e0, x0) = *eps_at_switch.get_or_insert((eps, x));
+            e0 + (x - x0) / l
+        };
+        let wiggle = 0.5 * ((i * 7919 % 5) as f64 - 2.0);
+        s += &format!(
+            "\"{t:.5}\",\"{x:.5}\",\"{:.4}\",\"{:.5}\"\n",
+            f + wiggle,
+            shown * 100.0
+        );
+    }
+    let v = analyze_written("Specimen_RawData_1.csv", &s, &["--kind", "tension"]);
+    let k = v["stiffness"]["value"].as_f64().unwrap();
+    assert!((k / ea - 1.0).abs() < 0.01, "EA {k} against {ea}");
+    assert!(v["yield"].is_null(), "{}", v["yield"]);
+    let w = v["warnings"].to_string();
+    assert!(
+        w.contains("the control 'Tensile strain (Strain 1)' (%) follows the crosshead 'Extension' (mm) from data row")
+            && w.contains("the response goes on to 2.0999e4 N"),
+        "{w}"
+    );
+}
+
+/// An MTS TestSuite torsion export with an Epsilon axial–torsional extensometer (the layout of
+/// a real teaching-lab export, no licence, so a twin): `Torsional Angle` (°, the actuator's),
+/// `Torsional Epsilon 3550 Torsion` (°, the extensometer's), `Torsional Torque` (in·lbf). The
+/// stiffness comes from the actuator's angle, 13× the specimen's on the real file; the warning
+/// that names the extensometer was not given, because its name says no "shear".
+#[test]
+fn a_torsional_epsilon_extensometer_beside_the_actuator_angle_is_named() {
+    let mut s = String::from(
+        "\u{feff}File Path: C:\\x\\DAQ- Time, … - (Timed).txt   \r\nTest: ASEN3112_20in-lb-return\r\nTest Run: Test Run 122\r\nDate: 1/30/2020 8:38:48 AM\r\n\r\n\r\nTime \tTorsional Angle \tTorsional Epsilon 3550 Torsion \tTorsional Torque \tAxial Epsilon 3550 Axial \r\nsec\t°\t°\tin·lbf\tin\r\n",
+    );
+    for i in 0..=200 {
+        let torque = 20.0 * i as f64 / 200.0; // in·lbf
+        s += &format!(
+            "{:.4}\t{:.5}\t{:.6}\t{:.4}\t{:.6}\r\n",
+            0.05 * i as f64,
+            48.0 + 0.4 * torque,
+            0.03 * torque,
+            torque + 0.01 * ((i * 7919 % 5) as f64 - 2.0),
+            0.0174
+        );
+    }
+    let v = analyze_written(
+        "DAQ-G1G2-OTW.txt",
+        &s,
+        &["--kind", "torsion", "--length-mm", "254"],
+    );
+    assert!(
+        v["warnings"].to_string().contains(
+            "the file's torsional extensometer 'Torsional Epsilon 3550 Torsion' (°) measures the specimen's own shear strain"
+        ),
+        "{}",
+        v["warnings"]
+    );
+}
+
+/// A TA ElectroForce WinTest three-point export (the layout of a real export, no licence, so a
+/// twin): 200-row scans separated by `Axial Counts\t0`, `Points` and `Scan Time` restarting
+/// every scan beside `Elapsed Time`, which runs on. The scan's clock was the time (a warning
+/// that it runs back 39 times, holds judged by sample index) and the window fell on the toe
+/// below the straight part (70.5 against 115.9 N/mm on the real file). Now `Elapsed Time` is
+/// the time and the window is the steeper straight part above the toe.
+#[test]
+fn a_wintest_scan_clock_gives_way_to_the_elapsed_time_and_the_toe_is_left_out() {
+    let mut s = String::from(
+        "C:\\Documents and Settings\\USERS\\x\\3.TXT\t\t\t\t\t\r\n\t\t\t\t\t\r\nAxial Counts\t0\t\t\t\t\r\nPoints\tElapsed Time \tScan Time \tDisp 1\tLoad 1 \tLoad 2 \r\n      \tSec          \tSec       \tmm    \tN      \tN      \r\n",
+    );
+    let (k, w_toe, w_end) = (115.0, 0.04, 0.087); // N/mm, mm
+    let n = 1800usize;
+    for i in 0..n {
+        if i > 0 && i % 200 == 0 {
+            s += "Axial Counts\t0\t\t\t\t\r\n";
+        }
+        let w = w_end * i as f64 / (n - 1) as f64;
+        // A toe whose slope rises from 40 % of k to k at w_toe, then the straight part.
+        let f = if w < w_toe {
+            k * (0.4 * w + 0.3 * w * w / w_toe)
+        } else {
+            k * (0.7 * w_toe + (w - w_toe))
+        };
+        s += &format!(
+            "{}\t{:.3}\t{:.3}\t{:.3}\t{:.2}\t-4.941\r\n",
+            i % 200 + 1,
+            0.005 * i as f64,
+            0.005 * (i % 200) as f64,
+            -w,
+            -f - 0.56
+        );
+    }
+    let v = analyze_written("3.txt", &s, &["--kind", "three-point", "--length-mm", "10"]);
+    let ei = v["stiffness"]["value"].as_f64().unwrap();
+    let got = 48.0 * ei / 0.01f64.powi(3) * 1e-3; // N/mm
+    assert!((got / k - 1.0).abs() < 0.03, "k {got} N/mm against {k}");
+    assert!(
+        v["notes"].to_string().contains(
+            "the time column 'Elapsed Time' runs on where 'Scan Time' goes back 8 time(s)"
+        ),
+        "{}",
+        v["notes"]
+    );
+    assert!(
+        !v["warnings"]
+            .to_string()
+            .contains("not strictly increasing"),
+        "{}",
+        v["warnings"]
+    );
+}

@@ -603,7 +603,8 @@ fn a_negative_loop_area_beyond_the_noise_is_warned_as_a_phase_lag() {
     assert!(
         a.warnings.iter().any(|w| w
             .contains("loop area negative beyond the noise in cycle(s) 1 (")
-            && w.contains("out of phase")),
+            && w.contains("out of phase")
+            && w.contains("the two columns are exchanged")),
         "{:?}",
         a.warnings
     );

@@ -249,3 +249,116 @@ sheet = "Probe 9"
         j["notes"]
     );
 }
+
+/// A workbook of several specimens, a sheet each with the same columns (a Bluehill series kept
+/// in Excel): `analyze` reads the longest and warns that it is one of three, naming the sheets;
+/// `--sheet` reads another with its own length and diameter (not another sheet's) and says so
+/// in a note; a campaign on the folder makes each sheet a test with its own dimensions, the
+/// results sheet none. Before, the longest sheet was the file's only test, with a note.
+#[test]
+fn specimens_a_sheet_each_are_a_test_each() {
+    let xlsx = root().join("tests/data/cablab__bluehill_specimen_sheets.xlsx");
+    let x = xlsx.to_string_lossy().into_owned();
+    let (code, v, _) = analyze_json(&x, &[]);
+    assert_eq!(code, Some(0));
+    let ea = v["stiffness"]["value"].as_f64().unwrap();
+    assert!((ea / 1.5e4 - 1.0).abs() < 0.005, "{ea}");
+    assert!(
+        v["warnings"].to_string().contains(
+            "the workbook holds 3 specimens, a sheet each with the same columns ('Specimen 1', 'Specimen 2', 'Specimen 3'): this is sheet 'Specimen 2'"
+        ),
+        "{}",
+        v["warnings"]
+    );
+    let (code, v, _) = analyze_json(&x, &["--sheet", "Specimen 3"]);
+    assert_eq!(code, Some(0));
+    let ea = v["stiffness"]["value"].as_f64().unwrap();
+    assert!((ea / 2.4e4 - 1.0).abs() < 0.005, "{ea}: its own 120 mm");
+    let e = v["modulus_pa"].as_f64().unwrap();
+    let area = std::f64::consts::PI * 1.25e-3f64.powi(2);
+    assert!(
+        (e / (2.4e4 / area) - 1.0).abs() < 0.005,
+        "{e}: its own 2.5 mm"
+    );
+    assert!(
+        !v["warnings"].to_string().contains("specimens"),
+        "{}",
+        v["warnings"]
+    );
+    assert!(
+        v["notes"]
+            .to_string()
+            .contains("as asked: one of 3 specimens"),
+        "{}",
+        v["notes"]
+    );
+    // A length given against the sheet's own is used, and said to be not the file's.
+    let (_, v, _) = analyze_json(&x, &["--sheet", "Specimen 1", "--length-mm", "110"]);
+    let ea = v["stiffness"]["value"].as_f64().unwrap();
+    assert!((ea / 1.1e4 - 1.0).abs() < 0.005, "{ea}");
+    assert!(
+        v["warnings"]
+            .to_string()
+            .contains("the length given, 110.0000 mm, is not the file's own 100.0000 mm"),
+        "{}",
+        v["warnings"]
+    );
+
+    let d = tempfile::tempdir().unwrap();
+    std::fs::create_dir(d.path().join("lab")).unwrap();
+    std::fs::copy(&xlsx, d.path().join("lab/series.xlsx")).unwrap();
+    let out = run_in(d.path(), &["run", "lab", "--no-diagnosis"]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    assert!(
+        err.contains("3 specimens, a sheet each, a test each: #1 'Specimen 1'"),
+        "{err}"
+    );
+    let dir = "lab";
+    let v: Value = serde_json::from_slice(
+        &std::fs::read(d.path().join(format!("reports/{dir}/summary.json"))).unwrap(),
+    )
+    .unwrap();
+    let tests = v["tests"].as_array().unwrap();
+    let ids: Vec<&str> = tests.iter().map(|t| t["id"].as_str().unwrap()).collect();
+    assert_eq!(
+        ids,
+        [
+            "lab/series.xlsx#1",
+            "lab/series.xlsx#2",
+            "lab/series.xlsx#3"
+        ]
+    );
+    for (t, (want, d_mm)) in tests
+        .iter()
+        .zip([(1.0e4, 2.0f64), (1.5e4, 2.0), (2.4e4, 2.5)])
+    {
+        let ea = t["stiffness"].as_f64().unwrap_or(f64::NAN);
+        assert!(
+            (ea / want - 1.0).abs() < 0.005,
+            "{}: {ea} against {want}",
+            t["id"]
+        );
+        let e = t["modulus_pa"].as_f64().unwrap_or(f64::NAN);
+        let area = std::f64::consts::PI * (0.5e-3 * d_mm).powi(2);
+        assert!(
+            (e / (want / area) - 1.0).abs() < 0.005,
+            "{}: E {e}",
+            t["id"]
+        );
+        let r: Value = serde_json::from_slice(
+            &std::fs::read(
+                d.path()
+                    .join(format!("reports/{dir}"))
+                    .join(t["report"].as_str().unwrap()),
+            )
+            .unwrap(),
+        )
+        .unwrap();
+        assert!(
+            !r["warnings"].to_string().contains("is not the file's own"),
+            "{}",
+            r["warnings"]
+        );
+    }
+}

@@ -103,9 +103,10 @@ pub enum IngestError {
         /// The largest magnitude in the column.
         largest: f64,
     },
-    /// A table of one row per cycle (statistic-named columns such as `Torque:Maximum`), not the
-    /// curve of a test: refused rather than analysed.
-    #[error("{file}:{line}: a per-cycle summary table, not a test curve: {detail}; export the raw data (every sample) instead, or look at it with `cablab inspect`")]
+    /// A table of one row per cycle (statistic-named columns such as `Torque:Maximum`) or per
+    /// specimen (result-named columns such as `max_force`, `stiffness`), not the curve of a
+    /// test: refused rather than analysed.
+    #[error("{file}:{line}: a summary table (a row per cycle or per specimen), not a test curve: {detail}; export the raw data (every sample) instead, or look at it with `cablab inspect`")]
     SummaryTable {
         /// File path or label.
         file: String,

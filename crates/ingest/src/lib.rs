@@ -55,7 +55,7 @@ pub struct ReadOptions {
     /// the unit table's.
     pub units: Vec<(String, String)>,
     /// Show rather than refuse (for `inspect`): a time/control/response column whose unit
-    /// cannot be read is kept (values as written, a warning), and a per-cycle summary table is
+    /// cannot be read is kept (values as written, a warning), and a summary table (a row per cycle or per specimen) is
     /// read (with a warning) instead of being refused as a curve.
     pub lenient: bool,
 }
@@ -162,17 +162,22 @@ fn parse_workbook(
         opts,
         Some(sheet.metadata),
     )?;
-    let note = sheet.note;
     rec.provenance.encoding = "workbook (xlsx, xls or ods)".into();
-    rec.notes.insert(
-        0,
-        Diagnostic {
-            file: source.into(),
-            line: None,
-            column: None,
-            message: note,
-        },
-    );
+    let said = Diagnostic {
+        file: source.into(),
+        line: None,
+        column: None,
+        message: sheet.note,
+    };
+    if sheet.warn {
+        rec.warnings.insert(0, said);
+    } else {
+        rec.notes.insert(0, said);
+    }
+    // A specimen on a sheet of its own is named by the sheet, unless it names itself.
+    if rec.specimen.label.is_none() {
+        rec.specimen.label = sheet.specimen_sheet;
+    }
     Ok(rec)
 }
 
@@ -192,6 +197,40 @@ fn sniff_binary(head: &[u8], source: &str) -> Result<(), IngestError> {
         offset: at,
         detail: "NUL byte in the first 64 KiB; refused before reading the rest".into(),
     })
+}
+
+/// The specimens one file holds, a test each in a campaign.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Specimens {
+    /// Side by side in a text export, by their titles in block order (`--block N` reads the
+    /// N-th): see [`specimens_side_by_side`].
+    SideBySide(Vec<String>),
+    /// One per sheet of a workbook with the same columns, by sheet name in workbook order
+    /// (`--sheet NAME` reads one).
+    Sheets(Vec<String>),
+}
+
+/// The specimens `path` holds when there are two or more: side by side in a text export (its
+/// first 64 KiB are read), or a sheet each in a workbook (the workbook is read). None for one
+/// specimen, any other layout or an unreadable file.
+pub fn specimens_in_file(path: &Path) -> Option<Specimens> {
+    if let Some(titles) = specimens_side_by_side(path) {
+        return Some(Specimens::SideBySide(titles));
+    }
+    let mut head = Vec::with_capacity(8);
+    {
+        use std::io::Read;
+        std::fs::File::open(path)
+            .ok()?
+            .take(8)
+            .read_to_end(&mut head)
+            .ok()?;
+    }
+    if !workbook::is_workbook(&head) {
+        return None;
+    }
+    let bytes = std::fs::read(path).ok()?;
+    workbook::specimen_sheets(&bytes).map(Specimens::Sheets)
 }
 
 /// The specimens a text export holds side by side (Mecmesin Emperor's `Sample 1,,,Sample 2`,

@@ -236,6 +236,39 @@ fn find_column(names: &[String], headers: &[String], given: &str) -> Option<usiz
 /// A column named for a per-cycle statistic: `Rotation:Maximum`, `Torque - Min`, `Load (mean)`,
 /// `Peak Load`... (a statistic word after a `:`, ` - `, `_` or in brackets, or a leading
 /// `Peak`/`Valley`/`Max.`/`Min.` word).
+/// A column name that is a test's result, not a channel: a stiffness, a strength, an energy,
+/// a yield or fracture value, a maximum force (`max_force`, `Fmax`, `E-Modul`, `Rp0.2`).
+fn is_result_name(name: &str) -> bool {
+    const WORDS: &[&str] = &[
+        "stiffness",
+        "modulus",
+        "strength",
+        "energy",
+        "yield",
+        "fracture",
+        "ultimate",
+        "toughness",
+        "fmax",
+        "emod",
+        "rp0",
+        "steifigkeit",
+        "festigkeit",
+        "streckgrenze",
+        "bruch",
+        "pyd",
+    ];
+    let l = name.trim().to_lowercase();
+    let tokens: Vec<&str> = l
+        .split(|c: char| !c.is_alphanumeric())
+        .filter(|t| !t.is_empty())
+        .collect();
+    let max_of = tokens.first().is_some_and(|t| *t == "max" || *t == "min") && tokens.len() > 1;
+    max_of
+        || tokens
+            .iter()
+            .any(|t| WORDS.iter().any(|w| t.starts_with(w)))
+}
+
 fn is_statistic_name(name: &str) -> bool {
     const STATS: &[&str] = &[
         "maximum",
@@ -830,9 +863,22 @@ pub(crate) fn build(
         };
     // A per-cycle trend table (one row per cycle, statistic-named columns) is not a curve.
     let stats: Vec<&String> = names.iter().filter(|n| is_statistic_name(n)).collect();
+    // Nor is a results table of one row per specimen (`max_force`, `stiffness`, `yield_force`,
+    // `fracture_disp`, ... beside the specimen's tags: a lab's own evaluation saved beside the
+    // raw exports, which folder mode would otherwise take for a test and fail on).
+    let results: Vec<&String> = names.iter().filter(|n| is_result_name(n)).collect();
+    let per_specimen = results.len() >= 3
+        && results.len() * 2 >= n.saturating_sub(2)
+        && block.rows <= 1000
+        && stats.len() < 2;
+    let (stats, what) = if per_specimen {
+        (results, "a result per specimen")
+    } else {
+        (stats, "a per-cycle statistic")
+    };
     if stats.len() >= 2 && stats.len() * 2 >= n.saturating_sub(2) {
         let detail = format!(
-            "{} of {n} columns name a per-cycle statistic ({}{})",
+            "{} of {n} columns name {what} ({}{})",
             stats.len(),
             stats
                 .iter()
@@ -854,14 +900,50 @@ pub(crate) fn build(
             line: Some(block.names_line),
             column: None,
             message: format!(
-                "a per-cycle summary table, not a test curve: {detail}; analysis refuses it"
+                "a summary table (a row per cycle or per specimen), not a test curve: {detail}; analysis refuses it"
             ),
         });
     }
     let ft = pick(&opts.time, "--time")?;
     let fc = pick(&opts.control, "--control")?;
     let fr = pick(&opts.response, "--response")?;
-    let (t, c, r) = assign_roles(&facts, ft, fc, fr, opts.kind);
+    let (mut t, c, r) = assign_roles(&facts, ft, fc, fr, opts.kind);
+    // A time that restarts (a scan's or a step's clock: ElectroForce WinTest's `Scan Time`
+    // back to 0 every 200 rows) gives way to one of the file's time columns that runs on
+    // (`Elapsed Time`), unless the time was named.
+    if let (None, Some(ti)) = (ft, t) {
+        // Steps back that last: a single low cell the clock resumes after (WinTest's scan
+        // separator `Axial Counts\t0` puts a 0 in the elapsed time's column) is no restart.
+        let restarts = |v: &[f64]| {
+            let f: Vec<f64> = v.iter().copied().filter(|x| x.is_finite()).collect();
+            (1..f.len())
+                .filter(|&i| f[i] < f[i - 1] && f.get(i + 1).is_none_or(|&next| next < f[i - 1]))
+                .count()
+        };
+        let back = restarts(&block.columns[ti]);
+        if back > 0 {
+            let on = (0..n).find(|&k| {
+                k != ti
+                    && Some(k) != c
+                    && Some(k) != r
+                    && facts[k].filled
+                    && facts[k].dimension == Some(crate::units::Dimension::Time)
+                    && restarts(&block.columns[k]) == 0
+            });
+            if let Some(k) = on {
+                notes.push(Diagnostic {
+                    file: source.clone(),
+                    line: Some(block.names_line),
+                    column: Some(k + 1),
+                    message: format!(
+                        "the time column '{}' runs on where '{}' goes back {back} time(s) (a scan's or a step's clock): '{}' is the time",
+                        names[k], names[ti], names[k]
+                    ),
+                });
+                t = Some(k);
+            }
+        }
+    }
     let mut roles = roles_of(n, t, c, r);
     for (role, &l) in roles.iter_mut().zip(&is_label) {
         if l {
@@ -966,14 +1048,18 @@ pub(crate) fn build(
         });
     }
 
-    // Time must run forward.
+    // Time must run forward, over the rows that are samples (a row without its control or
+    // response, such as WinTest's scan separator `Axial Counts\t0`, is none).
     if let Some(ti) = t {
         let col = &columns[ti];
         let (mut dec, mut rep) = (0usize, 0usize);
         let mut first: Option<(usize, f64, f64)> = None;
         let mut prev: Option<f64> = None;
+        let missing = |k: Option<usize>, row: usize| {
+            k.is_some_and(|k| columns[k].get(row).is_none_or(|v| v.is_nan()))
+        };
         for (row, &v) in col.iter().enumerate() {
-            if v.is_nan() {
+            if v.is_nan() || missing(c, row) || missing(r, row) {
                 continue;
             }
             if let Some(p) = prev {

@@ -225,6 +225,9 @@ fn control_score(c: &ChannelFacts, dim: Dimension) -> Option<i32> {
 /// German "Feindehnung"/"Dehnung", MayTec high-temperature extensometers.
 pub const SPECIMEN_MOUNTED: &[&str] = &[
     "extenso",
+    // Epsilon Technology's extensometers (`Torsional Epsilon 3550 Torsion`, `Axial Epsilon`).
+    "epsilon",
+    "torsiometer",
     "feindehnung",
     "dehnung",
     "maytec",
@@ -307,6 +310,9 @@ pub(crate) fn mount_of(
                 Mount::Unknown
             }
         }
+        // A torsional extensometer's angle (`Torsional Epsilon 3550 Torsion`, °) beside the
+        // actuator's.
+        Some(Dimension::Angle) if is_specimen_mounted(&n) => Mount::Specimen,
         _ => Mount::Unknown,
     }
 }
@@ -943,6 +949,13 @@ fn stated_flat_section(
             "épaisseur",
             "espesor",
             "spessore",
+            "espessura",
+            "grubość",
+            "tloušťka",
+            "dikte",
+            "tjocklek",
+            "paksuus",
+            "толщина",
         ])?;
         let w = find(&[
             "specimen width",
@@ -954,6 +967,13 @@ fn stated_flat_section(
             "ancho",
             "anchura",
             "larghezza",
+            "largura",
+            "szerokość",
+            "šířka",
+            "breedte",
+            "bredd",
+            "leveys",
+            "ширина",
         ])?;
         Some((
             cablab_core::RectangularSection {
@@ -1001,9 +1021,33 @@ const LENGTH_KEY_GROUPS: [&[&str]; 3] = [
         "auflagerabstand",
         "luz",
         "distanza appoggi",
+        "longueur libre",
+        "longueur entre mors",
+        "portée",
+        "entraxe",
+        "rozstaw podpór",
+        "długość swobodna",
+        "vzdálenost podpor",
+        "steunafstand",
+        "overspanning",
+        "vão",
+        "spännvidd",
     ],
     GAUGE_LENGTH_KEYS,
-    &["length", "länge", "longitud", "lunghezza"],
+    &[
+        "length",
+        "länge",
+        "longitud",
+        "lunghezza",
+        "longueur",
+        "comprimento",
+        "długość",
+        "délka",
+        "lengte",
+        "längd",
+        "pituus",
+        "длина",
+    ],
 ];
 
 /// Metadata keys of a gauge length (testXpert's `Messlänge Standardweg`, Bluehill's `Tensile
@@ -1015,6 +1059,12 @@ const GAUGE_LENGTH_KEYS: &[&str] = &[
     "messlänge",
     "parallel length",
     "longitud calibrada",
+    "longueur de référence",
+    "longueur utile",
+    "baza pomiarowa",
+    "długość pomiarowa",
+    "meetlengte",
+    "comprimento de referência",
     "original length",
     "initial length",
     "original gauge length",
@@ -1108,6 +1158,10 @@ pub(crate) fn specimen_from_metadata(
         "diámetro",
         "diametro",
         "średnica",
+        "diamètre",
+        "diâmetro",
+        "průměr",
+        "диаметр",
         "d0",
     ];
     let find = |keys: &[&str]| find_key(meta, keys);

@@ -215,6 +215,15 @@ static TABLE: &[Row] = &[
         0.0,
         false,
     ),
+    // MTS TestSuite's `Ch 2 Torque` in `kN·mm` (= N m).
+    (
+        &["kN·mm", "kNmm", "KNmm", "KN·mm"],
+        D::Torque,
+        "N m",
+        1.0,
+        0.0,
+        false,
+    ),
     (
         &[
             "in·lb", "in·lbf", "lb·in", "lbf·in", "inlb", "inlbf", "lbfin",
@@ -584,6 +593,9 @@ mod tests {
         }
         for s in ["kN·m", "kNm", "kN*m", "kN.m", "kN m"] {
             assert_eq!(f(s), 1e3, "{s}");
+        }
+        for s in ["kN·mm", "kNmm", "kN*mm", "kN.mm", "kN mm"] {
+            assert_eq!(f(s), 1.0, "{s}");
         }
         let inlb = 4.4482216152605 * 0.0254;
         for s in [

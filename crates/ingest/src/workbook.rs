@@ -32,6 +32,96 @@ pub struct SheetText {
     pub note: String,
     /// `(label, value)` pairs from the cells of every sheet.
     pub metadata: Vec<(String, String)>,
+    /// The sheet read, when it is one of several specimens, one per sheet (see
+    /// [`specimen_sheets`]): its name labels the specimen.
+    pub specimen_sheet: Option<String>,
+    /// The note is a warning: the workbook holds several specimens and the one read was not
+    /// asked for.
+    pub warn: bool,
+}
+
+/// What one sheet holds: rows of two or more numbers, and the text of the names row above
+/// the first of them (the last row before it with two or more text cells), trimmed and
+/// lower-cased.
+struct Survey {
+    numeric_rows: usize,
+    names: Option<String>,
+}
+
+fn survey(range: &calamine::Range<Data>) -> Survey {
+    let numbers = |r: &[Data]| {
+        r.iter()
+            .filter(|c| matches!(c, Data::Float(_) | Data::Int(_)))
+            .count()
+    };
+    let numeric_rows = range.rows().filter(|r| numbers(r) >= 2).count();
+    let mut names = None;
+    for r in range.rows() {
+        if numbers(r) >= 2 {
+            break;
+        }
+        let texts: Vec<String> = r
+            .iter()
+            .filter_map(|c| match c {
+                Data::String(t) if !t.trim().is_empty() => Some(t.trim().to_lowercase()),
+                _ => None,
+            })
+            .collect();
+        if texts.len() >= 2 {
+            names = Some(texts.join("\t"));
+        }
+    }
+    Survey {
+        numeric_rows,
+        names,
+    }
+}
+
+/// A sheet needs this many rows of numbers to be a specimen's record (a results sheet has one
+/// row per specimen, a record one per sample).
+const SPECIMEN_ROWS: usize = 10;
+
+/// The sheets (in workbook order) that hold one specimen each: the table sheet (the one with the
+/// most rows of numbers, ties: the first) and every other sheet whose table has the very same
+/// names row, each with at least [`SPECIMEN_ROWS`] rows of numbers, when there are two or more
+/// (Bluehill's Excel export writes each specimen's raw data on a sheet of its own). Empty
+/// otherwise.
+fn specimens_of(surveys: &[(String, Survey)]) -> Vec<String> {
+    let best = surveys
+        .iter()
+        .fold(None::<&(String, Survey)>, |b, s| match b {
+            Some(b) if b.1.numeric_rows >= s.1.numeric_rows => Some(b),
+            _ => Some(s),
+        });
+    let Some((_, best)) = best else {
+        return Vec::new();
+    };
+    let Some(names) = best.names.as_ref() else {
+        return Vec::new();
+    };
+    let same: Vec<String> = surveys
+        .iter()
+        .filter(|(_, s)| s.numeric_rows >= SPECIMEN_ROWS && s.names.as_ref() == Some(names))
+        .map(|(n, _)| n.clone())
+        .collect();
+    if same.len() >= 2 {
+        same
+    } else {
+        Vec::new()
+    }
+}
+
+/// The workbook's specimens, one per sheet (see [`specimens_of`]): their sheet names, when
+/// there are two or more; None for a workbook that cannot be read or holds one.
+pub fn specimen_sheets(bytes: &[u8]) -> Option<Vec<String>> {
+    let mut wb = calamine::open_workbook_auto_from_rs(Cursor::new(bytes)).ok()?;
+    let surveys: Vec<(String, Survey)> = wb
+        .sheet_names()
+        .into_iter()
+        .filter_map(|n| wb.worksheet_range(&n).ok().map(|r| (n, survey(&r))))
+        .collect();
+    let sheets = specimens_of(&surveys);
+    (!sheets.is_empty()).then_some(sheets)
 }
 
 /// Rows of a sheet other than the table sheet that are searched for labelled values and titles:
@@ -63,25 +153,21 @@ pub fn to_text(bytes: &[u8], source: &str, sheet: Option<&str>) -> Result<SheetT
     }
     let mut best: Option<(usize, String, calamine::Range<Data>)> = None;
     let mut other_meta: Vec<(String, Vec<(String, String)>)> = Vec::new();
+    let mut surveys: Vec<(String, Survey)> = Vec::new();
     for name in &names {
         let Ok(range) = wb.worksheet_range(name) else {
             continue;
         };
         other_meta.push((name.clone(), labelled(&range, OTHER_SHEET_ROWS, Some(name))));
-        let numeric_rows = range
-            .rows()
-            .filter(|r| {
-                r.iter()
-                    .filter(|c| matches!(c, Data::Float(_) | Data::Int(_)))
-                    .count()
-                    >= 2
-            })
-            .count();
+        let sv = survey(&range);
+        let numeric_rows = sv.numeric_rows;
+        surveys.push((name.clone(), sv));
         let chosen = sheet == Some(name.as_str());
         if chosen || (sheet.is_none() && numeric_rows > best.as_ref().map_or(0, |b| b.0)) {
             best = Some((numeric_rows, name.clone(), range));
         }
     }
+    let specimens = specimens_of(&surveys);
     let chosen_by_name = sheet.is_some();
     let Some((_, sheet, range)) = best else {
         return Err(err(format!(
@@ -108,14 +194,28 @@ pub fn to_text(bytes: &[u8], source: &str, sheet: Option<&str>) -> Result<SheetT
         }
         text.push('\n');
     }
+    // Another specimen's labelled values (its diameter, its label) are not this one's.
+    let one_of_several = specimens.contains(&sheet);
     let mut metadata = labelled(&range, usize::MAX, None);
     for (name, pairs) in other_meta {
-        if name != sheet {
+        if name != sheet && !(one_of_several && specimens.contains(&name)) {
             metadata.extend(pairs);
         }
     }
     let others: Vec<String> = names.iter().filter(|n| **n != sheet).cloned().collect();
-    let note = if others.is_empty() {
+    let note = if one_of_several && chosen_by_name {
+        format!(
+            "read from the workbook's sheet '{sheet}', as asked: one of {} specimens, a sheet each with the same columns ({})",
+            specimens.len(),
+            quoted(&specimens)
+        )
+    } else if one_of_several {
+        format!(
+            "the workbook holds {} specimens, a sheet each with the same columns ({}): this is sheet '{sheet}', the one with the most rows of numbers (ties: the first), only; --sheet NAME reads another (a campaign makes each a test of its own)",
+            specimens.len(),
+            quoted(&specimens)
+        )
+    } else if others.is_empty() {
         format!("read from the workbook's only sheet '{sheet}'")
     } else if chosen_by_name {
         format!(
@@ -132,6 +232,8 @@ pub fn to_text(bytes: &[u8], source: &str, sheet: Option<&str>) -> Result<SheetT
         text,
         note,
         metadata,
+        warn: one_of_several && !chosen_by_name,
+        specimen_sheet: one_of_several.then_some(sheet),
     })
 }
 

@@ -102,6 +102,10 @@ pub struct AnalyzeOptions {
     /// its A, I and Saint-Venant J_t and the default offset its outer fibre, in place of the
     /// round section of `Geometry::diameter_m` (None by default).
     pub flat_section: Option<cablab_core::RectangularSection>,
+    /// The record was cut short of the test's end (an extensometer taken off): a bend with
+    /// fewer than max(5, a tenth of the first loading's) samples beyond it is not shown by the
+    /// record, and is not taken as one (no yield, no threshold; false by default).
+    pub cut_short: bool,
 }
 
 /// What the numbers of a user-set fit window are.
@@ -255,6 +259,7 @@ impl Default for AnalyzeOptions {
             small_deflection_tolerance: 0.01,
             yield_method: YieldMethod::default(),
             flat_section: None,
+            cut_short: false,
         }
     }
 }
@@ -545,8 +550,10 @@ pub struct Analysis {
 ///   ([`CycleResult::loop_area_resolved`] false), the area is zero within resolution: a note;
 /// - otherwise (resolved, or not judged) the unloading lies above the loading beyond the noise:
 ///   the control and the response are out of phase (sensor or filter lag, a drifting response
-///   channel) or the control is not the specimen's: a warning, since the area is then no
-///   measure of anything.
+///   channel), the control is not the specimen's, or the two columns are exchanged (a real
+///   Walter+Bai export labels force and displacement crosswise; ∮ x dF = −∮ F dx, so read the
+///   other way round every such loop dissipates): a warning, since the area is then no measure
+///   of anything.
 ///
 /// Does not change the areas: they stay as measured.
 fn negative_loops(cyc: &[CycleResult], warnings: &mut Vec<String>, notes: &mut Vec<String>) {
@@ -571,7 +578,7 @@ fn negative_loops(cyc: &[CycleResult], warnings: &mut Vec<String>, notes: &mut V
     }
     if !beyond.is_empty() {
         warnings.push(format!(
-            "loop area negative beyond the noise in cycle(s) {}: a passive specimen cannot return more energy than it took, so the unloading lying above the loading means the control and response are out of phase (sensor or filter lag, a drifting response channel) or the control is not the specimen's; the area is not a dissipated energy",
+            "loop area negative beyond the noise in cycle(s) {}: a passive specimen cannot return more energy than it took, so the unloading lying above the loading means the control and response are out of phase (sensor or filter lag, a drifting response channel), the control is not the specimen's, or the two columns are exchanged (labelled crosswise: read the other way round, each of these loops would dissipate what it shows as negative; check which column holds the force with `cablab inspect`, then --control/--response); the area is not a dissipated energy",
             show(&beyond)
         ));
     }
@@ -720,11 +727,17 @@ pub fn analyze(
     // follows (the cycles' peaks, the yield), unlike the file's own maximum. Said when it moves
     // them by more than 2 % of the largest response (a real MTS 793 fatigue export starting at
     // −33 N, 3.4 %: every cycle's peak above the file's maximum).
-    if let Some(p) = offsets.and_then(|o| o.preload) {
+    if let Some(o) = offsets.filter(|o| o.preload.is_some()) {
+        let p = o.preload.unwrap_or_default();
         notes.push(format!(
-            "the record starts loaded, at {p:.4e} {} ({:.1} % of its largest value), without a rest before it: a preload, kept in the responses as the file records them (testXpert, Bluehill and TestSuite tare before the preload); the yield's offset line starts where the elastic line meets zero. Were the load cell not tared, every response would read high by that much",
+            "the record starts loaded, at {p:.4e} {} ({:.1} % of its largest value), without a rest before it: a preload, kept in the responses as the file records them (testXpert, Bluehill and TestSuite tare before the preload); {}; the yield's offset line starts where the elastic line meets zero. Were the load cell not tared, every response would read high by that much",
             kind.response_unit(),
-            100.0 * p.abs() / peak_before.max(f64::MIN_POSITIVE)
+            100.0 * p.abs() / peak_before.max(f64::MIN_POSITIVE),
+            if o.absolute_control {
+                "the control is kept as recorded too, since the first loading's elastic line meets zero load at its zero (it counts from zero load, not from the preload)".to_string()
+            } else {
+                format!("the control counts from its start ({:.4e} in the file, SI), where the preload was reached", o.control)
+            }
         ));
     }
     if let Some(o) = offsets.filter(|o| o.samples_at_rest == 0) {
@@ -1144,6 +1157,24 @@ pub fn analyze(
         .as_ref()
         .and_then(|e| material_bend(e.bend?, &fx, &fy))
         .map(unmap);
+    // A record cut short (an extensometer taken off while the test went on): a bend with fewer
+    // than max(5, a tenth of the first loading's) samples beyond it is where the record stops,
+    // not a bend it shows.
+    let mut bend_cut = None;
+    let bend = match bend {
+        Some(b) if opts.cut_short => {
+            let beyond = fw.iter().filter(|v| v.abs() > b.knee_x.abs()).count();
+            if beyond < (fw.len() / 10).max(5) {
+                bend_cut = Some(format!(
+                    "the record is cut short (see the warnings) {beyond} sample(s) past a bend of the first loading: not taken as a bend (a yield or a threshold) the record shows"
+                ));
+                None
+            } else {
+                Some(b)
+            }
+        }
+        other => other,
+    };
     let judged: Vec<&CycleResult> = cyc.iter().filter(|c| c.coincide.is_some()).collect();
     let reversible = !judged.is_empty()
         && judged
@@ -1205,10 +1236,10 @@ pub fn analyze(
             None
         }
         (None, _) => {
-            let reason = if elastic.is_some() {
-                "no bend in the virgin loading path beyond the noise"
-            } else {
-                "no elastic range on the first loading"
+            let reason = match (&bend_cut, elastic.is_some()) {
+                (Some(cut), _) => cut.as_str(),
+                (None, true) => "no bend in the virgin loading path beyond the noise",
+                (None, false) => "no elastic range on the first loading",
             };
             why.insert("yield".into(), reason.into());
             None
@@ -1278,12 +1309,14 @@ pub fn analyze(
             sample: k,
         }
     };
-    let break_point = find_break(&cm, &rm, serial.0.sigma, h_cm).map(|(j, work)| BreakPoint {
-        sample: j,
-        machine_control: control[j],
-        response_before: response[j - 1],
-        work_to_break: work,
-    });
+    let break_point = find_break(&cm, &rm, serial.0.sigma, h_cm)
+        .filter(|&(j, _)| !relaxed_while_held(&segments, &rm, j))
+        .map(|(j, work)| BreakPoint {
+            sample: j,
+            machine_control: control[j],
+            response_before: response[j - 1],
+            work_to_break: work,
+        });
     negative_loops(&cyc, &mut warnings, &mut notes);
     if let Some(b) = &break_point {
         notes.push(format!(
@@ -1458,6 +1491,7 @@ pub fn analyze(
             c.residual = c.residual.map(|v| sign * v);
             c.contact_loss_control = c.contact_loss_control.map(|v| sign * v);
             c.peak_control *= sign;
+            c.peak_sectional *= sign;
             c.peak_response *= sign;
             c
         })
@@ -1960,6 +1994,23 @@ fn find_break(cm: &[f64], rm: &[f64], sigma: f64, h: f64) -> Option<(usize, f64)
         .map(|i| 0.5 * (rm[i] + rm[i + 1]) * (cm[i + 1] - cm[i]))
         .sum();
     Some((j, work))
+}
+
+/// Whether the fall to the break level at sample `j` happened during a hold (a segment where
+/// the control stands still): a hold's stress relaxation (a ramp–hold test of soft tissue: the
+/// force halves in 110 samples at a constant extension), not a break, unless the response is
+/// gone within 3 samples of its last high (below a tenth of the maximum: a fracture while held).
+fn relaxed_while_held(segments: &[Segment], rm: &[f64], j: usize) -> bool {
+    let held = segments
+        .iter()
+        .any(|s| s.branch == Branch::Hold && s.start <= j && j < s.end);
+    if !held {
+        return false;
+    }
+    let top = rm[..j].iter().fold(f64::NEG_INFINITY, |m, &v| m.max(v));
+    let last_high = (0..j).rev().find(|&i| rm[i] >= 0.9 * top).unwrap_or(0);
+    let gone = j - last_high <= 3 && rm[j] < 0.1 * top;
+    !gone
 }
 
 /// Whether the response fell from 90 % of its maximum before sample `j` to the break level at

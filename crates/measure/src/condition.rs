@@ -1283,6 +1283,11 @@ pub struct Offsets {
     /// records it (a preload: see [`zero_offsets`]); absent otherwise.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub preload: Option<f64>,
+    /// With a preload: the control is kept as the file records it too (no control offset),
+    /// because the first loading's elastic line meets zero response at the file's zero control
+    /// (see [`zero_offsets`]).
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub absolute_control: bool,
 }
 
 /// A start load is a preload when it exceeds this many σ of the response's jitter…
@@ -1305,9 +1310,11 @@ const PRELOAD_SHARE: f64 = 0.01;
 /// response's sign) starts at a preload: testXpert, Bluehill and TestSuite tare the load cell
 /// before the preload and record from it, so the file's own zero is the force's zero and is kept
 /// ([`Offsets::preload`]); the control's zero is still taken (an extensometer zeroed at the
-/// preload). Subtracting it put every force — the yield, the cycles' peaks — low by the preload
-/// (a real testXpert export: 144 N, Rp0.2 6.6 % low). A start load of the other sign is no
-/// preload and is taken off.
+/// preload) unless the control too counts from zero load: its first loading's elastic line
+/// meets zero response at the file's zero control ([`Offsets::absolute_control`]: a digitised
+/// moment–curvature curve, a crosshead counted from contact). Subtracting the preload put every
+/// force — the yield, the cycles' peaks — low by it (a real testXpert export: 144 N, Rp0.2
+/// 6.6 % low). A start load of the other sign is no preload and is taken off.
 pub fn zero_offsets(control: &mut [f64], response: &mut [f64]) -> Offsets {
     let n = control.len().min(response.len());
     let cn = ChannelNoise::of(&control[..n]);
@@ -1330,6 +1337,7 @@ pub fn zero_offsets_with(
             response: 0.0,
             samples_at_rest: 0,
             preload: None,
+            absolute_control: false,
         };
     }
     let h = reversal_threshold_with(&control[..n], control_noise.jitter);
@@ -1407,6 +1415,9 @@ pub fn zero_offsets_with(
         && or.abs() > PRELOAD_SHARE * peak.abs())
     .then_some(or);
     let or = if preload.is_some() { 0.0 } else { or };
+    let absolute_control =
+        preload.is_some_and(|p| absolute_at_preload(&control[..n], &response[..n], p, peak));
+    let oc = if absolute_control { 0.0 } else { oc };
     control.iter_mut().for_each(|c| *c -= oc);
     response.iter_mut().for_each(|r| *r -= or);
     Offsets {
@@ -1414,7 +1425,42 @@ pub fn zero_offsets_with(
         response: or,
         samples_at_rest: rest,
         preload,
+        absolute_control,
     }
+}
+
+/// Whether a record that starts at preload `p` records its control from the same origin as its
+/// response: the first loading's elastic line (response against control, from the first sample
+/// until the response reaches 3 × the preload or 30 % of the peak) meets zero response within
+/// half the preload's own travel (p / slope) of the file's zero control, halfway between the two
+/// readings: at the file's zero (absolute), or a whole travel before it (zeroed at the preload). Then the file's
+/// control is absolute (a digitised moment–curvature curve, a crosshead that counts from
+/// contact) and taking its start off would put every position off by that travel; an
+/// extensometer zeroed at the preload meets zero response a whole preload travel before its
+/// zero, a crosshead that counts from its home position far from it. Where the travel is
+/// within the control's noise, either reading puts the control within that noise of the other.
+fn absolute_at_preload(control: &[f64], response: &[f64], p: f64, peak: f64) -> bool {
+    let n = control.len().min(response.len());
+    let reach = (3.0 * p.abs()).max(0.3 * peak.abs());
+    let j = (0..n)
+        .find(|&i| response[i].abs() >= reach)
+        .unwrap_or(n)
+        .max(3)
+        .min(n);
+    let (x, y) = (&control[..j], &response[..j]);
+    if x.len() < 3 || y.iter().chain(x).any(|v| !v.is_finite()) {
+        return false;
+    }
+    let Ok(line) = crate::stats::line_fit(x, y) else {
+        return false;
+    };
+    if !(line.slope.is_finite() && line.slope * p > 0.0) {
+        return false;
+    }
+    let travel = p / line.slope;
+    let (lo, hi) = min_max(control);
+    let meets_zero = -line.intercept / line.slope;
+    travel.abs() > 1e-9 * (hi - lo) && meets_zero.abs() <= 0.5 * travel.abs()
 }
 
 /// Removes the machine's compliance in series with the specimen: control − C·response
@@ -2250,6 +2296,21 @@ mod tests {
         assert_eq!(o.response, 0.0);
         assert!((o.preload.unwrap() - 2.0).abs() < 1e-9, "{o:?}");
         assert!((r[0] - 2.0).abs() < 1e-12 && c[0].abs() < 1e-9);
+        assert!(!o.absolute_control);
+        // The same preload on a control that counts from zero load (the elastic line r = 30 c
+        // meets zero at c = 0, the record starting at c = 2/30): both zeros are the file's.
+        let mut c: Vec<f64> = (0..50).map(|i| (2.0 + 3.0 * i as f64) / 30.0).collect();
+        let mut r: Vec<f64> = (0..50).map(|i| 2.0 + 3.0 * i as f64).collect();
+        let o = zero_offsets(&mut c, &mut r);
+        assert!(o.absolute_control && o.control == 0.0, "{o:?}");
+        assert!((o.preload.unwrap() - 2.0).abs() < 1e-9, "{o:?}");
+        assert!((c[0] - 2.0 / 30.0).abs() < 1e-12 && (r[0] - 2.0).abs() < 1e-12);
+        // An extensometer zeroed at the preload (starting at 0 with 2 on the load cell) meets
+        // zero load a whole preload travel before its zero: its start is the zero, as above.
+        let mut c: Vec<f64> = (0..50).map(|i| 0.1 * i as f64).collect();
+        let mut r: Vec<f64> = (0..50).map(|i| 2.0 + 3.0 * i as f64).collect();
+        let o = zero_offsets(&mut c, &mut r);
+        assert!(!o.absolute_control && o.preload.is_some(), "{o:?}");
         // Within the noise (σ 0.5: 10 σ = 5) a start load is an offset, whatever its sign.
         let clean: Vec<f64> = (0..2000).map(|i| 2.0 + 0.5 * i as f64).collect();
         let mut r = noisy(&clean, 0.5, 7);

@@ -553,7 +553,30 @@ fn trim_window(
         let mean_res =
             |p: usize, q: usize| (p..q).map(|i| y[i] - fit.at(x[i])).sum::<f64>() / (q - p) as f64;
         let (top, bottom) = (mean_res(b - block, b), mean_res(a, a + block));
-        if top.abs() > se && top.abs() >= bottom.abs() {
+        // A toe below a straight part (both ends above the window's line; the upper half at
+        // least 1.2 × as steep as the lower, and its two quarters within 10 % of each other's
+        // slope) loses its bottom first: the elastic line is the steeper part above the toe
+        // (ISO 527, ASTM D790 toe compensation). A window that stiffens throughout (a beam
+        // seating on its supports, a J-shaped tissue curve) has no straight part above, and
+        // is trimmed by the larger end as before.
+        let upper_straight = || {
+            let slope = |p: usize, q: usize| {
+                (q - p >= 2 * block)
+                    .then(|| line_fit(&x[p..q], &y[p..q]).ok().map(|f| f.slope))
+                    .flatten()
+            };
+            let (m, q3) = (a + (b - a) / 2, a + 3 * (b - a) / 4);
+            match (slope(a, m), slope(m, b), slope(m, q3), slope(q3, b)) {
+                (Some(lo), Some(up), Some(third), Some(top)) => {
+                    lo > 0.0 && up > 1.2 * lo && (top - third).abs() <= 0.1 * up
+                }
+                _ => false,
+            }
+        };
+        let toe_below = top > se && bottom > se && upper_straight();
+        if toe_below {
+            a += block;
+        } else if top.abs() > se && top.abs() >= bottom.abs() {
             b -= block;
         } else if bottom.abs() > se {
             a += block;

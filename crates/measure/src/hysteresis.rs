@@ -62,8 +62,12 @@ pub struct CycleResult {
     /// Three-point only: machine control (deflection, m) at which the punch lost contact on
     /// unloading (force at zero while the punch was still travelling back); null otherwise.
     pub contact_loss_control: Option<f64>,
-    /// Largest machine control and response of the cycle.
+    /// Largest machine control of the cycle (machine units, SI: m or rad), and the response
+    /// there.
     pub peak_control: f64,
+    /// The same point as a sectional control, in the unit of `residual` and of the yield's
+    /// control (strain, curvature 1/m, twist rad/m; deflection m for three-point).
+    pub peak_sectional: f64,
     /// Response at the peak control.
     pub peak_response: f64,
     /// All reasons for nulls as one string ("key: reason; ..."), or null.
@@ -193,6 +197,7 @@ pub fn cycles(inp: &CycleInputs) -> Vec<CycleResult> {
             branch_gap_area: None,
             contact_loss_control: None,
             peak_control: inp.control[ipk],
+            peak_sectional: inp.sectional[ipk],
             peak_response: inp.response[ipk],
             why: None,
             why_by_key: BTreeMap::new(),

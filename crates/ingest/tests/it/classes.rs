@@ -380,7 +380,10 @@ fn a_per_cycle_trend_table_is_refused_as_a_curve() {
     // inspect still shows it, with the reason as a warning.
     let r = read_lenient(&text, "trends.csv");
     assert_eq!(r.data.height(), 15);
-    assert!(warned(&r, &["per-cycle summary table"]));
+    assert!(warned(
+        &r,
+        &["a summary table (a row per cycle or per specimen)"]
+    ));
     // A curve whose columns merely mention a statistic elsewhere is not refused.
     let ok = "Time (s),Max Load Cell (N),Position (mm)\n0,1,0\n0.1,2,0.01\n0.2,3,0.02\n";
     assert!(read_bytes(ok.as_bytes(), "curve.csv", &ReadOptions::default()).is_ok());
