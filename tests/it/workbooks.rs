@@ -320,6 +320,9 @@ fn specimens_a_sheet_each_are_a_test_each() {
     )
     .unwrap();
     let tests = v["tests"].as_array().unwrap();
+    // Their group states no diameter of its own: the three are not all 2 mm.
+    let g = &v["groups"][0];
+    assert!(g["diameter_m"].is_null() && g["n"] == 3, "{g}");
     let ids: Vec<&str> = tests.iter().map(|t| t["id"].as_str().unwrap()).collect();
     assert_eq!(
         ids,

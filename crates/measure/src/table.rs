@@ -124,7 +124,13 @@ fn stats(specimen: &str, kind: TestKind, series: Option<String>, rs: &[&TableRow
         .collect();
     GroupStats {
         specimen: specimen.to_string(),
-        diameter_m: rs.iter().find_map(|r| r.diameter_m),
+        // The group's diameter when its tests share one; none when they differ (specimens a
+        // sheet each with their own diameters), rather than the first test's for all.
+        diameter_m: {
+            let mut ds = rs.iter().filter_map(|r| r.diameter_m);
+            let first = ds.next();
+            first.filter(|d| ds.all(|o| (o - d).abs() <= 1e-9 * d.abs()))
+        },
         kind,
         n: rs.len(),
         stiffness_mean: mean,
@@ -213,6 +219,16 @@ mod tests {
             (tor.n, tor.stiffness_sd, tor.stiffness_cov),
             (1, None, None)
         );
+        assert_eq!(t.diameter_m, Some(2.8e-3));
+        // A group whose tests state different diameters has none of its own.
+        let mut mixed = rows();
+        mixed[1].diameter_m = Some(3.1e-3);
+        let m = campaign_table(&mixed);
+        let mt = m
+            .iter()
+            .find(|x| x.specimen == mixed[1].specimen && x.kind == mixed[1].kind)
+            .unwrap();
+        assert_eq!(mt.diameter_m, None, "{mt:?}");
         let tp = &g[3];
         assert_eq!(tp.stiffness_unit, "N m^2");
         assert_eq!(tp.modulus_mean_pa, None);
