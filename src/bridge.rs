@@ -1059,6 +1059,78 @@ pub fn strain_follows_crosshead(rec: &TestRecord, curve: &mut Curve) -> Option<S
     ))
 }
 
+/// Where the rod model stops describing a record: after the response's largest magnitude, when
+/// the control runs on from there without turning back (by more than 5 % of its range: a
+/// fixture's jitter after a fracture is no unloading) while
+/// the response falls by more than a tenth of that peak and 10 σ of its noise — a tensile
+/// specimen necking or breaking, a wire or a bone failing, none of which the geometrically
+/// exact rod (uniform section, no fracture) has. Three-point bending softens by geometry after
+/// its peak, which the rod does have: there only a fall below half the peak (a break) counts.
+/// The sample after the peak (the diagnosis covers the record before it) and what the note
+/// says; None for a record that unloads after its peak or does not fall (every cyclic protocol
+/// that ends unloaded, every record that ends at its peak).
+pub fn diagnosable_end(kind: TestKind, curve: &Curve) -> Option<(usize, String)> {
+    let (c, r) = (&curve.control, &curve.response);
+    let n = c.len().min(r.len());
+    let k = (0..n)
+        .filter(|&i| r[i].is_finite() && c[i].is_finite())
+        .max_by(|&a, &b| r[a].abs().total_cmp(&r[b].abs()))?;
+    if k < 10 || n - k < 3 {
+        return None;
+    }
+    let (lo, hi) = c[..n]
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
+            (a.min(v), b.max(v))
+        });
+    let dir = (c[k] - c[0]).signum();
+    let back = 0.05 * (hi - lo);
+    let mut far = c[k] * dir;
+    let on = c[k..n].iter().all(|&v| {
+        far = far.max(v * dir);
+        v * dir >= far - back
+    });
+    if !on || dir == 0.0 {
+        return None;
+    }
+    let peak = r[k].abs();
+    let sign = r[k].signum();
+    let low = r[k..n]
+        .iter()
+        .filter(|v| v.is_finite())
+        .fold(f64::INFINITY, |m, &v| m.min(v * sign));
+    let sigma = cablab_measure::noise_level(&r[..n]);
+    let fall = peak - low;
+    let enough = if kind == TestKind::ThreePoint {
+        low < 0.5 * peak
+    } else {
+        fall > 0.1 * peak
+    };
+    if !(enough && fall > 10.0 * sigma) {
+        return None;
+    }
+    let what = match kind {
+        TestKind::Tension => "necking or fracture",
+        _ => "a failure or fracture",
+    };
+    Some((
+        k + 1,
+        format!(
+            "the response falls to {:.0} % of its largest value after it while the control runs on ({what}, which the rod model does not have): the diagnosis covers the record up to that peak ({} of {n} samples)",
+            (100.0 * low / peak).max(0.0),
+            k + 1
+        ),
+    ))
+}
+
+/// The curve before sample `end` (a copy).
+pub fn curve_before(curve: &Curve, end: usize) -> Curve {
+    let mut c = curve.clone();
+    c.cut_at(end);
+    c.cut_short = curve.cut_short;
+    c
+}
+
 /// Millimetres (as flags give lengths) to metres.
 fn mm(v: Option<f64>) -> Option<f64> {
     v.map(|x| x * 1e-3)
@@ -1928,6 +2000,60 @@ mod tests {
 
     /// A response that does not follow its control (a random file, a flat record) keeps its
     /// sign; one that runs against it is reversed, the note giving the correlation.
+    /// The record the rod model describes ends at a peak the response falls from while the
+    /// control runs on (necking, a fracture); not after an unloading, not at a three-point
+    /// rod's geometric softening (which the rod has), but at a three-point break.
+    #[test]
+    fn the_diagnosis_ends_where_the_specimen_necks_or_breaks() {
+        let curve = |c: Vec<f64>, r: Vec<f64>| Curve {
+            control: c,
+            response: r,
+            ..Default::default()
+        };
+        // Tension: rising to 100 at sample 60, then falling to 70 while the control runs on.
+        let c: Vec<f64> = (0..100).map(|i| 1e-4 * i as f64).collect();
+        let r: Vec<f64> = (0..100)
+            .map(|i| {
+                if i <= 60 {
+                    100.0 * (i as f64 / 60.0).sqrt()
+                } else {
+                    100.0 - 0.75 * (i - 60) as f64
+                }
+            })
+            .collect();
+        let (end, why) = diagnosable_end(TestKind::Tension, &curve(c.clone(), r.clone())).unwrap();
+        assert_eq!(end, 61);
+        assert!(
+            why.contains("necking or fracture") && why.contains("(61 of 100 samples)"),
+            "{why}"
+        );
+        // The same fall after the control turned back (an unloading): the model has it.
+        let back: Vec<f64> = (0..100)
+            .map(|i| {
+                if i <= 60 {
+                    c[i]
+                } else {
+                    c[60] - 1e-5 * (i - 60) as f64
+                }
+            })
+            .collect();
+        assert_eq!(
+            diagnosable_end(TestKind::Tension, &curve(back, r.clone())),
+            None
+        );
+        // Three-point: a fall to 70 % is geometry; to 20 %, a break.
+        assert_eq!(
+            diagnosable_end(TestKind::ThreePoint, &curve(c.clone(), r)),
+            None
+        );
+        let broken: Vec<f64> = (0..100)
+            .map(|i| if i <= 60 { i as f64 } else { 10.0 })
+            .collect();
+        let (end, why) = diagnosable_end(TestKind::ThreePoint, &curve(c, broken)).unwrap();
+        assert_eq!(end, 61);
+        assert!(why.contains("a failure or fracture"), "{why}");
+    }
+
     #[test]
     fn only_a_response_that_runs_against_its_control_is_reversed() {
         let c: Vec<f64> = (0..200).map(|i| (i as f64 * 0.1).sin()).collect();

@@ -28,6 +28,14 @@ pub fn diag_test(path: &std::path::Path, a: &DiagnoseArgs) -> Result<DiagTest, C
         curve,
         ..
     } = read.map_err(CliError::input)?;
+    // Past a necking or a fracture the rod model has nothing to say.
+    let curve = match crate::bridge::diagnosable_end(kind, &curve) {
+        Some((end, why)) => {
+            eprintln!("cablab: note: {}: {why}", path.display());
+            crate::bridge::curve_before(&curve, end)
+        }
+        None => curve,
+    };
     let (mut t, _) =
         crate::bridge::diag_test(kind, &geom, &curve, rec.specimen.label.clone(), None)
             .map_err(|e| CliError::input(anyhow::anyhow!("{}: {e:#}", path.display())))?;

@@ -774,6 +774,35 @@ fn model_part(
             contact_radii_given: radii_given,
             ..Default::default()
         };
+        // Past a necking or a fracture the rod model has nothing to say: the diagnosis covers
+        // the record up to the peak (the baseline above was calibrated on all of it, for the
+        // plots).
+        let before;
+        let tests = match crate::bridge::diagnosable_end(t.kind, curve) {
+            Some((end, why)) => {
+                out.notes.push(format!("diagnosis: {why}"));
+                let mut setup = cablab_rod::TestSetup::new(t.kind, geom.free_length_m);
+                setup.elements = c.file.model.elements;
+                if t.kind == TestKind::ThreePoint && radii_given {
+                    setup.set_contact_radii(
+                        1e-3 * model.support_radius_mm.unwrap_or(0.0),
+                        1e-3 * model.punch_radius_mm.unwrap_or(0.0),
+                        geom.diameter_m,
+                    );
+                }
+                before = crate::bridge::diag_test_from(
+                    t.kind,
+                    geom,
+                    &crate::bridge::curve_before(curve, end),
+                    Some(t.specimen.clone()),
+                    Some(setup),
+                    None,
+                )?
+                .0;
+                std::slice::from_ref(&before)
+            }
+            None => tests,
+        };
         let d = cablab_diagnose::diagnose(ctx, tests, &dopts).context("diagnosing the gap")?;
         if let Some(m) = &d.mesh {
             if let Some(from) = m.refined_from {
