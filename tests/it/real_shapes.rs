@@ -853,4 +853,19 @@ fn a_wintest_scan_clock_gives_way_to_the_elapsed_time_and_the_toe_is_left_out() 
         "{}",
         v["warnings"]
     );
+    // Its scan separators are said in a note, not warned as cells gone wrong.
+    assert!(
+        !v["warnings"]
+            .to_string()
+            .contains("text where a number belongs"),
+        "{}",
+        v["warnings"]
+    );
+    assert!(
+        v["notes"].to_string().contains(
+            "8 row(s) hold only 'Axial Counts' (and at most one number): separators between scans"
+        ),
+        "{}",
+        v["notes"]
+    );
 }

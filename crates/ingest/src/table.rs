@@ -80,6 +80,9 @@ struct RowStats {
     first_short: Option<usize>,
     text_cells: usize,
     first_text: Option<(usize, usize, String)>,
+    /// Every row with text so far held the first one's text alone, in its column, beside at
+    /// most one number (a scan separator such as WinTest's `Axial Counts\t0`).
+    text_rows_separators: bool,
     missing: usize,
     first_missing: Option<(usize, usize)>,
 }
@@ -1100,9 +1103,16 @@ impl<'a> Engine<'a> {
         }
         if text > 0 {
             stats.text_cells += text;
-            if stats.first_text.is_none() {
-                let (c, t) = first_text.unwrap_or((0, String::new()));
-                stats.first_text = Some((line_no, c, t));
+            let (c, t) = first_text.unwrap_or((0, String::new()));
+            let alone = text == 1 && num <= 1;
+            match &stats.first_text {
+                None => {
+                    stats.text_rows_separators = alone;
+                    stats.first_text = Some((line_no, c, t));
+                }
+                Some((_, c0, t0)) => {
+                    stats.text_rows_separators &= alone && *c0 == c && *t0 == t;
+                }
             }
         }
         if missing > 0 {
@@ -1179,7 +1189,24 @@ impl<'a> Engine<'a> {
                 ),
             });
         }
-        if let Some((l, c, t)) = st.first_text {
+        if let Some((l, c, t)) = st
+            .first_text
+            .clone()
+            .filter(|_| st.text_rows_separators && st.text_cells >= 2)
+        {
+            // Rows that repeat one text alone beside at most one number are separators, not
+            // samples with a cell gone wrong: a note.
+            self.out.notes.push(Diagnostic {
+                file: src.clone(),
+                line: Some(l),
+                column: Some(c),
+                message: format!(
+                    "block {idx}: {} row(s) hold only '{}' (and at most one number): separators between scans (as WinTest's `Axial Counts`), not samples",
+                    st.text_cells,
+                    shorten(&t, 30)
+                ),
+            });
+        } else if let Some((l, c, t)) = st.first_text {
             let name = block
                 .header_cells
                 .get(c.saturating_sub(1))
