@@ -1432,13 +1432,13 @@ pub fn zero_offsets_with(
 /// Whether a record that starts at preload `p` records its control from the same origin as its
 /// response: the first loading's elastic line (response against control, from the first sample
 /// until the response reaches 3 × the preload or 30 % of the peak) meets zero response within
-/// half the preload's own travel (p / slope) of the file's zero control, halfway between the two
-/// readings: at the file's zero (absolute), or a whole travel before it (zeroed at the preload). Then the file's
-/// control is absolute (a digitised moment–curvature curve, a crosshead that counts from
-/// contact) and taking its start off would put every position off by that travel; an
-/// extensometer zeroed at the preload meets zero response a whole preload travel before its
-/// zero, a crosshead that counts from its home position far from it. Where the travel is
-/// within the control's noise, either reading puts the control within that noise of the other.
+/// half the preload's own travel (p / slope) of the file's zero control — halfway between the
+/// two readings, at the file's zero (absolute) or a whole travel before it (zeroed at the
+/// preload). Then the file's control is absolute (a digitised moment–curvature curve, a
+/// crosshead that counts from contact) and taking its start off would put every position off by
+/// that travel; a crosshead that counts from its home position meets zero response far from
+/// its zero. Where the travel is within the control's noise, either reading puts the control
+/// within that noise of the other.
 fn absolute_at_preload(control: &[f64], response: &[f64], p: f64, peak: f64) -> bool {
     let n = control.len().min(response.len());
     let reach = (3.0 * p.abs()).max(0.3 * peak.abs());

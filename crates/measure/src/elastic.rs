@@ -567,8 +567,8 @@ fn trim_window(
             };
             let (m, q3) = (a + (b - a) / 2, a + 3 * (b - a) / 4);
             match (slope(a, m), slope(m, b), slope(m, q3), slope(q3, b)) {
-                (Some(lo), Some(up), Some(third), Some(top)) => {
-                    lo > 0.0 && up > 1.2 * lo && (top - third).abs() <= 0.1 * up
+                (Some(lower), Some(upper), Some(q3_slope), Some(q4_slope)) => {
+                    lower > 0.0 && upper > 1.2 * lower && (q4_slope - q3_slope).abs() <= 0.1 * upper
                 }
                 _ => false,
             }
