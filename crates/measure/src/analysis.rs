@@ -1080,7 +1080,7 @@ pub fn analyze(
         })
     });
     let control_resolution = crate::condition::resolution(&c);
-    let cyc = cycles(&CycleInputs {
+    let mut cyc = cycles(&CycleInputs {
         control: &cm,
         sectional: &xs,
         response: &rm,
@@ -1317,6 +1317,29 @@ pub fn analyze(
             response_before: response[j - 1],
             work_to_break: work,
         });
+    // A specimen that broke: the peak of the cycle it broke in is where its response peaked
+    // before the break, not the punch or crosshead running on over the broken pieces (a bone's
+    // cycle peak read 1.08 N at the end of the stroke, its maximum 19.65 N).
+    if let Some(b) = &break_point {
+        for cy in cyc.iter_mut() {
+            let before: Vec<usize> = segments
+                .iter()
+                .filter(|s| s.cycle == cy.index)
+                .flat_map(|s| s.start..s.end.min(b.sample))
+                .collect();
+            let reaches_past = segments
+                .iter()
+                .any(|s| s.cycle == cy.index && s.end > b.sample);
+            if let (true, Some(&k)) = (
+                reaches_past,
+                before.iter().max_by(|&&i, &&j| rm[i].total_cmp(&rm[j])),
+            ) {
+                cy.peak_control = cm[k];
+                cy.peak_sectional = xs[k];
+                cy.peak_response = rm[k];
+            }
+        }
+    }
     negative_loops(&cyc, &mut warnings, &mut notes);
     if let Some(b) = &break_point {
         notes.push(format!(

@@ -63,7 +63,8 @@ pub struct CycleResult {
     /// unloading (force at zero while the punch was still travelling back); null otherwise.
     pub contact_loss_control: Option<f64>,
     /// Largest machine control of the cycle (machine units, SI: m or rad), and the response
-    /// there.
+    /// there; in the cycle a specimen broke in, where its response peaked before the break
+    /// (set by [`crate::analyze`]).
     pub peak_control: f64,
     /// The same point as a sectional control, in the unit of `residual` and of the yield's
     /// control (strain, curvature 1/m, twist rad/m; deflection m for three-point).
