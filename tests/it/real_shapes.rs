@@ -687,7 +687,10 @@ fn a_fracture_the_punch_runs_on_past_does_not_reverse_the_force() {
         v["cycles"][0]["peak_response"].as_f64().unwrap(),
         v["max_response"]["response"].as_f64().unwrap(),
     );
-    assert!(peak / max > 0.9, "cycle peak {peak} against the maximum {max}");
+    assert!(
+        peak / max > 0.9,
+        "cycle peak {peak} against the maximum {max}"
+    );
 }
 
 /// A Bluehill ramp–hold relaxation test (the layout of a real export, no licence, so a twin):
