@@ -62,6 +62,8 @@ pub struct Found {
     /// A workbook of several specimens, a sheet each, whose sheets state different lengths:
     /// each test takes its own sheet's, listed here.
     pub length_each: Option<String>,
+    /// The specimens the file holds, a test each, when there are two or more.
+    pub specimens: Option<cablab_ingest::Specimens>,
 }
 
 impl Found {
@@ -376,23 +378,27 @@ fn metadata_or_flag(
 /// any other file).
 fn per_sheet_geometry(
     path: &Path,
+    specimens: Option<&cablab_ingest::Specimens>,
     opts: &cablab_ingest::ReadOptions,
 ) -> (Option<String>, Option<Sourced<String>>) {
-    let Some(cablab_ingest::Specimens::Sheets(sheets)) = cablab_ingest::specimens_in_file(path)
-    else {
+    let Some(cablab_ingest::Specimens::Sheets(sheets)) = specimens else {
         return (None, None);
     };
     /// A sheet's name, its length and its diameter (m).
     type Own = (String, Option<f64>, Option<f64>);
     let own: Vec<Own> = sheets
-        .into_iter()
+        .iter()
         .filter_map(|sheet| {
             let o = cablab_ingest::ReadOptions {
                 sheet: Some(sheet.clone()),
                 ..opts.clone()
             };
             let r = cablab_ingest::read_path(path, &o).ok()?;
-            Some((sheet, r.specimen.free_length_m, r.specimen.diameter_m))
+            Some((
+                sheet.clone(),
+                r.specimen.free_length_m,
+                r.specimen.diameter_m,
+            ))
         })
         .collect();
     let listed = |v: &dyn Fn(&Own) -> Option<f64>| {
@@ -496,7 +502,8 @@ pub fn survey(paths: &[PathBuf], d: &InferArgs) -> Result<Survey, CliError> {
         // Specimens a sheet each (a test each in the campaign) may state different lengths or
         // diameters: a value of the pipeline would then be one sheet's for all. Each test
         // takes its own sheet's instead.
-        let (length_each, diameter_each) = per_sheet_geometry(&path, &opts);
+        let specimens = cablab_ingest::specimens_in_file(&path);
+        let (length_each, diameter_each) = per_sheet_geometry(&path, specimens.as_ref(), &opts);
         if length_each.is_some() {
             length_mm = None;
         }
@@ -532,6 +539,7 @@ pub fn survey(paths: &[PathBuf], d: &InferArgs) -> Result<Survey, CliError> {
         s.found.push(Found {
             length_free,
             length_each,
+            specimens,
             path,
             kind,
             length_mm,
@@ -608,16 +616,16 @@ pub fn describe(s: &Survey) -> String {
                 .collect::<Vec<_>>()
                 .join(", ")
         };
-        let specimen = match cablab_ingest::specimens_in_file(&f.path) {
+        let specimen = match &f.specimens {
             Some(cablab_ingest::Specimens::SideBySide(titles)) => format!(
                 "{} specimens side by side, a test each: {}",
                 titles.len(),
-                listed(&titles)
+                listed(titles)
             ),
             Some(cablab_ingest::Specimens::Sheets(sheets)) => format!(
                 "{} specimens, a sheet each, a test each: {}",
                 sheets.len(),
-                listed(&sheets)
+                listed(sheets)
             ),
             None => format!("specimen '{}'", f.label),
         };

@@ -781,21 +781,12 @@ fn model_part(
         let tests = match crate::bridge::diagnosable_end(t.kind, curve) {
             Some((end, why)) => {
                 out.notes.push(format!("diagnosis: {why}"));
-                let mut setup = cablab_rod::TestSetup::new(t.kind, geom.free_length_m);
-                setup.elements = c.file.model.elements;
-                if t.kind == TestKind::ThreePoint && radii_given {
-                    setup.set_contact_radii(
-                        1e-3 * model.support_radius_mm.unwrap_or(0.0),
-                        1e-3 * model.punch_radius_mm.unwrap_or(0.0),
-                        geom.diameter_m,
-                    );
-                }
                 before = crate::bridge::diag_test_from(
                     t.kind,
                     geom,
                     &crate::bridge::curve_before(curve, end),
                     Some(t.specimen.clone()),
-                    Some(setup),
+                    dtest.rod_setup.clone(),
                     None,
                 )?
                 .0;

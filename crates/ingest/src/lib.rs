@@ -55,8 +55,8 @@ pub struct ReadOptions {
     /// the unit table's.
     pub units: Vec<(String, String)>,
     /// Show rather than refuse (for `inspect`): a time/control/response column whose unit
-    /// cannot be read is kept (values as written, a warning), and a summary table (a row per cycle or per specimen) is
-    /// read (with a warning) instead of being refused as a curve.
+    /// cannot be read is kept (values as written, a warning), and a summary table (a row per
+    /// cycle or per specimen) is read (with a warning) instead of being refused as a curve.
     pub lenient: bool,
 }
 
@@ -214,23 +214,12 @@ pub enum Specimens {
 /// first 64 KiB are read), or a sheet each in a workbook (the workbook is read). None for one
 /// specimen, any other layout or an unreadable file.
 pub fn specimens_in_file(path: &Path) -> Option<Specimens> {
-    if let Some(titles) = specimens_side_by_side(path) {
-        return Some(Specimens::SideBySide(titles));
+    let head = file_head(path)?;
+    if workbook::is_workbook(&head) {
+        let bytes = std::fs::read(path).ok()?;
+        return workbook::specimen_sheets(&bytes).map(Specimens::Sheets);
     }
-    let mut head = Vec::with_capacity(8);
-    {
-        use std::io::Read;
-        std::fs::File::open(path)
-            .ok()?
-            .take(8)
-            .read_to_end(&mut head)
-            .ok()?;
-    }
-    if !workbook::is_workbook(&head) {
-        return None;
-    }
-    let bytes = std::fs::read(path).ok()?;
-    workbook::specimen_sheets(&bytes).map(Specimens::Sheets)
+    side_by_side_in(head).map(Specimens::SideBySide)
 }
 
 /// The specimens a text export holds side by side (Mecmesin Emperor's `Sample 1,,,Sample 2`,
@@ -239,6 +228,15 @@ pub fn specimens_in_file(path: &Path) -> Option<Specimens> {
 /// layout. Reads the first 64 KiB only: a campaign asks this of every file it plans, so that
 /// each specimen becomes a test of its own.
 pub fn specimens_side_by_side(path: &Path) -> Option<Vec<String>> {
+    let head = file_head(path)?;
+    if workbook::is_workbook(&head) {
+        return None;
+    }
+    side_by_side_in(head)
+}
+
+/// The first 64 KiB of a file.
+fn file_head(path: &Path) -> Option<Vec<u8>> {
     use std::io::Read;
     let mut head = Vec::with_capacity(1 << 16);
     std::fs::File::open(path)
@@ -246,9 +244,11 @@ pub fn specimens_side_by_side(path: &Path) -> Option<Vec<String>> {
         .take(1 << 16)
         .read_to_end(&mut head)
         .ok()?;
-    if workbook::is_workbook(&head) {
-        return None;
-    }
+    Some(head)
+}
+
+/// [`specimens_side_by_side`] of a text file's first 64 KiB.
+fn side_by_side_in(mut head: Vec<u8>) -> Option<Vec<String>> {
     // Cut at the last line end, so that no half row is read.
     if head.len() == 1 << 16 {
         let end = head.iter().rposition(|&b| b == b'\n' || b == b'\r')?;

@@ -233,9 +233,6 @@ fn find_column(names: &[String], headers: &[String], given: &str) -> Option<usiz
         .or_else(|| names.iter().position(|n| n.eq_ignore_ascii_case(g)))
 }
 
-/// A column named for a per-cycle statistic: `Rotation:Maximum`, `Torque - Min`, `Load (mean)`,
-/// `Peak Load`... (a statistic word after a `:`, ` - `, `_` or in brackets, or a leading
-/// `Peak`/`Valley`/`Max.`/`Min.` word).
 /// A column name that is a test's result, not a channel: a stiffness, a strength, an energy,
 /// a yield or fracture value, a maximum force (`max_force`, `Fmax`, `E-Modul`, `Rp0.2`).
 fn is_result_name(name: &str) -> bool {
@@ -269,6 +266,9 @@ fn is_result_name(name: &str) -> bool {
             .any(|t| WORDS.iter().any(|w| t.starts_with(w)))
 }
 
+/// A column named for a per-cycle statistic: `Rotation:Maximum`, `Torque - Min`, `Load (mean)`,
+/// `Peak Load`... (a statistic word after a `:`, ` - `, `_` or in brackets, or a leading
+/// `Peak`/`Valley`/`Max.`/`Min.` word).
 fn is_statistic_name(name: &str) -> bool {
     const STATS: &[&str] = &[
         "maximum",
