@@ -132,12 +132,9 @@ pub fn run(a: DiagnoseArgs) -> CmdResult {
         print_json(&d)?;
     } else {
         println!("{}", crate::pipeline::evaluate::words(&d));
-        if let Some(w) = d
-            .verdict
-            .unexplained
-            .as_ref()
-            .or(d.verdict.remainder.as_ref())
-        {
+        // `verdict.unexplained` says again what the words above and the table below say (where,
+        // what narrowed it, what was tried); the remainder of a named set is said only here.
+        if let Some(w) = d.verdict.remainder.as_ref() {
             println!();
             println!("{w}");
         }

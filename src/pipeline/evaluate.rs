@@ -1003,6 +1003,13 @@ pub fn words(d: &cablab_diagnose::Diagnosis) -> String {
             vec![]
         },
         holdout_fallback: d.verdict.holdout_fallback.clone(),
+        single_loading: d.verdict.single_loading.clone(),
+        narrowed: d.verdict.narrowed.as_ref().map(|n| {
+            (
+                n.effects.iter().map(|e| e.as_str().to_string()).collect(),
+                n.gap_after_rel,
+            )
+        }),
         set_steps: if is_set {
             d.verdict
                 .steps

@@ -702,6 +702,9 @@ fn section(out_dir: &Path, o: &TestOutcome) -> TestSection {
         "curve.svg" => "measured curve by cycle, elastic fit, yield point, loops; simulated baseline and residual".to_string(),
         "gap_where.svg" => "where the gap lies: share of the squared residual".to_string(),
         "gap_which.svg" => gap_which_caption(&o.named_on_training),
+        "gap_waterfall.svg" if o.verdict.as_deref() == Some("unexplained") => {
+            "how far the best effects tried narrow the gap: not to the noise floor, so the verdict is unexplained".to_string()
+        }
         "gap_waterfall.svg" => "how far the gap shrinks, down to the noise floor".to_string(),
         "gap_span.svg" => "where along the span: share of the squared residual (three-point)".to_string(),
         other => other.to_string(),

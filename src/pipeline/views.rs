@@ -295,11 +295,14 @@ pub fn gap_svgs(
                 (format!("{sign}{}", r.effect.as_str()), r.gap_after_rel)
             }));
         }
-        // A set of effects: the waterfall over the set search's steps.
-        _ if d.verdict.steps.len() > 1 => {
-            let set: Vec<cablab_report::gap::SetStep> = d
-                .verdict
-                .steps
+        // A set of effects: the waterfall over the set search's steps; for `unexplained`, over
+        // the steps of what narrowed the gap without closing it.
+        _ if d.verdict.steps.len() > 1 || d.verdict.narrowed.is_some() => {
+            let rungs = match &d.verdict.narrowed {
+                Some(n) => &n.steps,
+                None => &d.verdict.steps,
+            };
+            let set: Vec<cablab_report::gap::SetStep> = rungs
                 .iter()
                 .map(|r| cablab_report::gap::SetStep {
                     step: r.step.to_string(),

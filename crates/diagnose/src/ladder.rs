@@ -6,8 +6,8 @@ use crate::floors::{resolution_floor, rounding_like};
 use crate::model::{DiagTest, ModelSpec};
 use crate::options::{Context, DiagnoseOptions};
 use crate::select::{
-    applicable, choose, compare, fit_failure, ic, ic_tolerance, n_eff_of, score, simpler, Scored,
-    NOISE_FLOOR_FIT,
+    applicable_to, choose, compare, fit_failure, ic, ic_tolerance, n_eff_of, score, simpler,
+    Scored, NOISE_FLOOR_FIT,
 };
 use cablab_core::Effect;
 use rayon::prelude::*;
@@ -115,7 +115,7 @@ pub(crate) fn climb(
             closed = Some(x);
             break;
         }
-        let cands: Vec<Effect> = applicable(ctx, kind, &cur.model)
+        let cands: Vec<Effect> = applicable_to(ctx, tests, kind, &cur.model)
             .into_iter()
             .filter(|e| allowed.is_none_or(|c| c.contains(e)))
             .collect();
@@ -305,7 +305,7 @@ pub(crate) fn exchange(
         let Some(reduced) = model_of(base, &rest) else {
             continue;
         };
-        for inn in applicable(ctx, kind, &reduced) {
+        for inn in applicable_to(ctx, tests, kind, &reduced) {
             if inn == out || members.contains(&inn) || allowed.is_some_and(|c| !c.contains(&inn)) {
                 continue;
             }

@@ -211,6 +211,24 @@ pub(crate) fn score(
     ))
 }
 
+/// [`applicable`] to these tests: on records that are each one loading without an unloading
+/// ([`crate::diagnose::one_loading`]), not kinematic hardening on a law with isotropic hardening.
+/// Its back stress acts only on a reversal; along one loading its linear hardening adds to the
+/// isotropic one, so it is the baseline with another hardening modulus, and anything it seems
+/// to improve is its calibration ending elsewhere, not the data.
+pub fn applicable_to(
+    ctx: Context,
+    tests: &[DiagTest],
+    kind: TestKind,
+    base: &ModelSpec,
+) -> Vec<Effect> {
+    let mut v = applicable(ctx, kind, base);
+    if !tests.is_empty() && tests.iter().all(crate::diagnose::one_loading) {
+        v.retain(|e| *e != Effect::KinematicHardening);
+    }
+    v
+}
+
 /// Effects that apply to `kind` on top of `base` (law extensions from the catalog, test-level
 /// effects of the rig), excluding what the model already has.
 pub fn applicable(ctx: Context, kind: TestKind, base: &ModelSpec) -> Vec<Effect> {

@@ -58,6 +58,14 @@ pub struct DiagnosisSummary {
     /// predicted (`verdict.holdout_fallback`): those words.
     #[serde(default)]
     pub holdout_fallback: Option<String>,
+    /// Every test is one loading without an unloading and the verdict names an effect that
+    /// shapes a loading curve (`verdict.single_loading`): those words.
+    #[serde(default)]
+    pub single_loading: Option<String>,
+    /// For `unexplained`: the effects that narrowed the gap without closing it and the held-out
+    /// relative gap their model leaves (`verdict.narrowed`).
+    #[serde(default)]
+    pub narrowed: Option<(Vec<String>, f64)>,
 }
 
 /// A held-out gap within this factor of the noise floor counts as "at the noise floor" in words.
@@ -67,6 +75,17 @@ const NEAR_NOISE: f64 = 1.5;
 /// (training and held-out samples) says that the held-out cycle does not show what the earlier
 /// ones do (the factor at which "How far" calls a gap closed).
 const WHOLE_RECORD_ABOVE: f64 = 1.25;
+
+/// A noise level as a percentage with at least two significant digits below 1 % (a strain
+/// gauge's 0.031 % is not "0.0 %").
+fn fmt_noise(fraction: f64) -> String {
+    let decimals = match fraction.abs() {
+        x if x >= 0.001 || x == 0.0 => 1,
+        x if x >= 0.0001 => 2,
+        _ => 3,
+    };
+    fmt_percent(fraction, decimals)
+}
 
 /// What an effect of the vocabulary means, in words (unknown names are returned as given).
 pub fn effect_words(effect: &str) -> String {
@@ -141,7 +160,7 @@ pub fn diagnosis_words(s: &DiagnosisSummary) -> String {
                  as the held-out one would pin those parameters down (or diagnose with \
                  `--holdout within-reach`, which holds out a cycle the others reach).",
                 fmt_percent(s.gap_before_rel, 1),
-                fmt_percent(s.noise_rel, 1),
+                fmt_noise(s.noise_rel),
                 s.extrapolation.as_deref().unwrap_or_default()
             ));
             if s.candidates_skipped {
@@ -162,7 +181,7 @@ pub fn diagnosis_words(s: &DiagnosisSummary) -> String {
                  {} of the largest measured response, against a noise level of {}. No unmodelled \
                  effect is needed to explain {}.",
                 fmt_percent(s.gap_before_rel, 1),
-                fmt_percent(s.noise_rel, 1),
+                fmt_noise(s.noise_rel),
                 if whole.is_some() {
                     "the held-out cycle"
                 } else {
@@ -192,12 +211,28 @@ pub fn diagnosis_words(s: &DiagnosisSummary) -> String {
         ("unexplained", _) => paras.push(format!(
             "Which: unexplained. The {baseline}'s held-out gap is {} of the largest measured \
              response, well above the noise level of {}, and no effect of the vocabulary closes \
-             it. Look for what the candidates do not cover: scatter between specimens diagnosed \
-             together beyond their own stiffness and yield (diagnose them one by one), a fixture \
-             or data problem (a slipping grip, a broken wire), or an effect outside the \
-             vocabulary.",
+             it.{} Look for what the candidates do not cover: scatter between specimens \
+             diagnosed together beyond their own stiffness and yield (diagnose them one by one), \
+             a fixture or data problem (a slipping grip, a broken wire), or an effect outside \
+             the vocabulary.",
             fmt_percent(s.gap_before_rel, 1),
-            fmt_percent(s.noise_rel, 1)
+            fmt_noise(s.noise_rel),
+            match &s.narrowed {
+                Some((set, after)) => {
+                    let names: Vec<String> = set.iter().map(|e| e.replace('_', " ")).collect();
+                    format!(
+                        " The best {} found, {}, narrows it to {}, still {:.1} times the noise \
+                         level: {} may be there, but something outside {} is as large.",
+                        if set.len() == 1 { "effect" } else { "set" },
+                        join_and(&names),
+                        fmt_percent(*after, 1),
+                        after / s.noise_rel,
+                        if set.len() == 1 { "it" } else { "they" },
+                        if set.len() == 1 { "it" } else { "them" },
+                    )
+                }
+                None => String::new(),
+            }
         )),
         ("none", _) | ("", _) => paras.push(format!(
             "Which: none of the candidates. The {baseline}'s held-out gap is {} of the largest \
@@ -207,7 +242,7 @@ pub fn diagnosis_words(s: &DiagnosisSummary) -> String {
              (diagnose them one by one), a fixture or data problem, or an effect outside the \
              vocabulary.",
             fmt_percent(s.gap_before_rel, 1),
-            fmt_percent(s.noise_rel, 1)
+            fmt_noise(s.noise_rel)
         )),
         (effect, after) => {
             let mut p = if s.set.len() > 1 {
@@ -269,21 +304,21 @@ pub fn diagnosis_words(s: &DiagnosisSummary) -> String {
                 if reached {
                     p.push_str(&format!(
                         ", down to the noise floor ({}).",
-                        fmt_percent(s.noise_rel, 1)
+                        fmt_noise(s.noise_rel)
                     ));
                 } else if let Some(x) = &s.extrapolation {
                     // The set closes the rest itself once refitted on every cycle.
                     p.push_str(&format!(
                         "; {:.1} points remain above the noise floor ({}), but {x}.",
                         (after - s.noise_rel) * 100.0,
-                        fmt_percent(s.noise_rel, 1)
+                        fmt_noise(s.noise_rel)
                     ));
                 } else {
                     p.push_str(&format!(
                         "; {:.1} points remain above the noise floor ({}), so part of the gap is \
                          still unexplained.",
                         (after - s.noise_rel) * 100.0,
-                        fmt_percent(s.noise_rel, 1)
+                        fmt_noise(s.noise_rel)
                     ));
                 }
             }
@@ -293,6 +328,9 @@ pub fn diagnosis_words(s: &DiagnosisSummary) -> String {
             }
             paras.push(p);
         }
+    }
+    if let Some(w) = &s.single_loading {
+        paras.push(w.clone());
     }
     let equivalent: Vec<&str> = s
         .equivalent
@@ -305,10 +343,14 @@ pub fn diagnosis_words(s: &DiagnosisSummary) -> String {
             .iter()
             .map(|e| e.replace('_', " ").replace('+', " + "))
             .collect();
-        let mut p = format!(
-            "Equally good on the held-out data: {}. These tests cannot tell them apart.",
-            names.join(", ")
-        );
+        let mut p = if s.single_loading.is_some() {
+            format!("Not told apart by one loading: {}.", names.join(", "))
+        } else {
+            format!(
+                "Equally good on the held-out data: {}. These tests cannot tell them apart.",
+                names.join(", ")
+            )
+        };
         let mut said: Vec<&str> = Vec::new();
         for exp in &s.separating {
             if !said.contains(&exp.as_str()) {
@@ -354,6 +396,62 @@ mod tests {
             w.contains("explains the gap best. Named on the training cycles."),
             "{w}"
         );
+    }
+
+    /// An `unexplained` gap that a set narrowed says which set and how far, in words.
+    #[test]
+    fn unexplained_says_what_narrowed_the_gap_without_closing_it() {
+        let mut s = DiagnosisSummary {
+            baseline_law: "elastoplastic".into(),
+            gap_before_rel: 0.30,
+            verdict_effect: "unexplained".into(),
+            noise_rel: 0.001,
+            ..Default::default()
+        };
+        assert!(!diagnosis_words(&s).contains("narrows"));
+        s.narrowed = Some((vec!["sensor_drift".into(), "viscoelasticity".into()], 0.09));
+        let w = diagnosis_words(&s);
+        assert!(
+            w.contains(
+                "The best set found, sensor drift and viscoelasticity, narrows it to \
+                 9.0\u{a0}%, still 90.0 times the noise level"
+            ),
+            "{w}"
+        );
+    }
+
+    /// One loading: the words on what it cannot tell apart follow "Which", and the effects it
+    /// adds are not called "equally good on the held-out data".
+    #[test]
+    fn one_loading_says_what_it_cannot_tell_apart_not_equally_good() {
+        let mut s = DiagnosisSummary {
+            baseline_law: "elastoplastic".into(),
+            gap_before_rel: 0.03,
+            verdict_effect: "friction_hysteresis".into(),
+            gap_after_rel: Some(0.0033),
+            equivalent: vec!["viscoelasticity".into()],
+            separating: vec!["an unloading and reloading cycle from near the peak".into()],
+            noise_rel: 0.003,
+            ..Default::default()
+        };
+        let w = diagnosis_words(&s);
+        assert!(
+            w.contains("Equally good on the held-out data: viscoelasticity."),
+            "{w}"
+        );
+        s.single_loading = Some("The record is one loading without an unloading.".into());
+        let w = diagnosis_words(&s);
+        let paras: Vec<&str> = w.split("\n\n").collect();
+        assert_eq!(
+            paras[1..],
+            [
+                "The record is one loading without an unloading.",
+                "Not told apart by one loading: viscoelasticity. To separate them: an unloading \
+                 and reloading cycle from near the peak."
+            ],
+            "{w}"
+        );
+        assert!(paras[0].starts_with("Which: friction hysteresis"), "{w}");
     }
 
     #[test]
@@ -488,6 +586,8 @@ mod tests {
             set: vec![],
             set_steps: vec![],
             holdout_fallback: None,
+            single_loading: None,
+            narrowed: None,
         };
         let w = diagnosis_words(&s);
         assert!(
@@ -623,6 +723,8 @@ mod tests {
         );
         let without = diagnosis_words(&DiagnosisSummary {
             holdout_fallback: None,
+            single_loading: None,
+            narrowed: None,
             ..s
         });
         assert!(!without.contains("Held out:"), "{without}");

@@ -196,6 +196,8 @@ pub fn kinematic_hardening_verdict() -> DiagnosisSummary {
         set: vec![],
         set_steps: vec![],
         holdout_fallback: None,
+        single_loading: None,
+        narrowed: None,
     }
 }
 
