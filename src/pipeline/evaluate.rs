@@ -718,6 +718,24 @@ fn model_part(
         catalog: &Registry,
         rod: Some(&rod),
     };
+    // Past a necking or a fracture the rod model has nothing to say: the baseline is calibrated
+    // and the diagnosis runs on the record up to the peak (`bridge::diagnosable_end`).
+    let cut = crate::bridge::diagnosable_end(t.kind, curve);
+    let before = match &cut {
+        Some((end, _)) => Some(
+            crate::bridge::diag_test_from(
+                t.kind,
+                geom,
+                &crate::bridge::curve_before(curve, *end),
+                Some(t.specimen.clone()),
+                dtest.rod_setup.clone(),
+                None,
+            )?
+            .0,
+        ),
+        None => None,
+    };
+    let fitted: &[cablab_diagnose::DiagTest] = before.as_ref().map_or(tests, std::slice::from_ref);
     if c.file.model.calibrate {
         let model = ModelSpec::law(&c.file.model.baseline);
         // The characterisation gives good starting values (stiffness, yield): one warm start
@@ -727,23 +745,48 @@ fn model_part(
             warm: warm_start(t.kind, &c.file.model.baseline, an),
             ..Default::default()
         };
-        let cal = cablab_diagnose::calibrate(ctx, tests, &model, &copts)
+        let cal = cablab_diagnose::calibrate(ctx, fitted, &model, &copts)
             .context("calibrating the baseline")?;
-        // The model of the measurement: the simulated response (the calibration's replay of
-        // its parameters) in the file's sign convention, plus the offset taken off.
-        let sim: Vec<f64> = cal.simulated().last().map_or_else(Vec::new, |s| {
+        // The fit's own replay, or, fitted before a fracture, its parameters replayed over the
+        // whole record for the plots (the rod goes on carrying load where the specimen broke).
+        let replay = match &before {
+            None => cal.simulated().last().cloned(),
+            Some(_) => {
+                cablab_diagnose::model::ModelForward::new(tests, &model, ctx.catalog, ctx.rod)
+                    .and_then(|f| f.simulate_all(cal.values()))
+                    .context("replaying the calibrated baseline over the whole record")?
+                    .pop()
+            }
+        };
+        // The model of the measurement: the simulated response in the file's sign convention,
+        // plus the offset taken off.
+        let sim: Vec<f64> = replay.map_or_else(Vec::new, |s| {
             s.iter()
                 .map(|v| response_sign * v + offsets.response)
                 .collect()
         });
         let scale = curve.response.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-        let rms = (sim
+        // The baseline's gap over what it was fitted to.
+        let upto = cut
+            .as_ref()
+            .map_or(sim.len(), |(end, _)| *end)
+            .min(sim.len());
+        let rms = (sim[..upto]
             .iter()
             .zip(&curve.response)
             .map(|(s, m)| (m - s).powi(2))
             .sum::<f64>()
-            / sim.len().max(1) as f64)
+            / upto.max(1) as f64)
             .sqrt();
+        if let Some((end, _)) = &cut {
+            out.notes.push(format!(
+                "calibration: the baseline is fitted to the record up to the response's peak \
+                 ({end} of {} samples; after it the specimen necks or breaks, which the rod \
+                 model does not have) and replayed over the whole record for the plots; the \
+                 baseline gap is over the fitted part",
+                curve.control.len()
+            ));
+        }
         out.baseline_gap_rel = (scale > 0.0).then(|| rms / scale);
         out.calibration = Some(serde_json::to_value(&cal)?);
         *simulated = Some(sim);
@@ -774,27 +817,11 @@ fn model_part(
             contact_radii_given: radii_given,
             ..Default::default()
         };
-        // Past a necking or a fracture the rod model has nothing to say: the diagnosis covers
-        // the record up to the peak (the baseline above was calibrated on all of it, for the
-        // plots).
-        let before;
-        let tests = match crate::bridge::diagnosable_end(t.kind, curve) {
-            Some((end, why)) => {
-                out.notes.push(format!("diagnosis: {why}"));
-                before = crate::bridge::diag_test_from(
-                    t.kind,
-                    geom,
-                    &crate::bridge::curve_before(curve, end),
-                    Some(t.specimen.clone()),
-                    dtest.rod_setup.clone(),
-                    None,
-                )?
-                .0;
-                std::slice::from_ref(&before)
-            }
-            None => tests,
-        };
-        let d = cablab_diagnose::diagnose(ctx, tests, &dopts).context("diagnosing the gap")?;
+        // Past a necking or a fracture: the record up to the peak, as the calibration above.
+        if let Some((_, why)) = &cut {
+            out.notes.push(format!("diagnosis: {why}"));
+        }
+        let d = cablab_diagnose::diagnose(ctx, fitted, &dopts).context("diagnosing the gap")?;
         if let Some(m) = &d.mesh {
             if let Some(from) = m.refined_from {
                 out.notes.push(format!(
@@ -962,7 +989,17 @@ pub fn words(d: &cablab_diagnose::Diagnosis) -> String {
             .find(|e| e.effect == verdict)
             .map(|e| e.gap_after_rel)
     };
-    let top = d.located.first().map(|l| (l.where_.clone(), l.share));
+    // "Where" in words follows the chart's breakdown (cycle and branch), with the control range
+    // beside it; the first entry of `located` is the largest share of any breakdown.
+    let first_by = |by: &str| {
+        d.located
+            .iter()
+            .find(|l| l.by == by)
+            .map(|l| (l.where_.clone(), l.share))
+    };
+    let top =
+        first_by("cycle_branch").or_else(|| d.located.first().map(|l| (l.where_.clone(), l.share)));
+    let top_range = first_by("control_range");
     cablab_report::words::diagnosis_words(&cablab_report::words::DiagnosisSummary {
         baseline_law: d.baseline.law.clone(),
         gap_before_rel: d.baseline.gap_heldout_rel,
@@ -988,6 +1025,7 @@ pub fn words(d: &cablab_diagnose::Diagnosis) -> String {
             .collect(),
         noise_rel: d.verdict.noise_rel,
         top_location: top,
+        top_range,
         candidates_skipped: d.candidates_skipped.is_some(),
         gap_all_rel: Some(d.baseline.gap_rel),
         on_training: d.verdict.on_training.clone(),

@@ -333,14 +333,14 @@ pub fn one_loading(t: &DiagTest) -> bool {
 }
 
 /// When every test is [`one_loading`] and the verdict's set has a member of [`LOADING_SHAPE`]
-/// (viscoelasticity included when no test holds): the other members of that group that remove
-/// at least [`MIN_EXPLAINED_SHARE`] of the gap's excess from a fit that did not fail, and the
-/// words for `verdict.single_loading`.
+/// (viscoelasticity included when no test holds): the first such member, the other members of
+/// that group that remove at least [`MIN_EXPLAINED_SHARE`] of the gap's excess from a fit that
+/// did not fail, and the words for `verdict.single_loading`.
 fn single_loading_words(
     tests: &[DiagTest],
     set: &[Effect],
     effects: &[EffectScore],
-) -> Option<(Vec<Effect>, String)> {
+) -> Option<(Effect, Vec<Effect>, String)> {
     if tests.is_empty() || !tests.iter().all(one_loading) {
         return None;
     }
@@ -402,7 +402,7 @@ fn single_loading_words(
             ", viscoelasticity relaxes at a hold"
         }
     );
-    Some((alike, words))
+    Some((named[0], alike, words))
 }
 
 /// "a", "a and b", "a, b and c".
@@ -1204,12 +1204,12 @@ fn diagnose_held_out(
     let single_loading = if set.is_empty() {
         None
     } else {
-        single_loading_words(tests, &set, &effects).map(|(alike, words)| {
+        single_loading_words(tests, &set, &effects).map(|(shaping, alike, words)| {
             for e in alike {
                 if !choice.equivalent.contains(&e) {
                     choice.equivalent.push(e);
                     separating.push(Separation {
-                        effects: [set[0], e],
+                        effects: [shaping, e],
                         experiment: ONE_LOADING_SEPARATION,
                     });
                 }
@@ -1771,7 +1771,8 @@ fn unexplained_words(
         s.push_str(&format!(
             " The best {} found, {}, narrows it to {:.1} times the noise floor but does not \
              close it (a model that leaves {NOT_CLOSED_GAP} times the floor or more is no \
-             explanation): {} may be there, but something outside {} is as large.",
+             explanation): {} may be there, but what is left is not noise and no candidate \
+             accounts for it.",
             if n.effects.len() == 1 {
                 "effect"
             } else {
@@ -1780,7 +1781,6 @@ fn unexplained_words(
             names.join(" + "),
             n.gap_after_over_noise,
             if n.effects.len() == 1 { "it" } else { "they" },
-            if n.effects.len() == 1 { "it" } else { "them" },
         ));
     }
     if let Some(top) = located.iter().find(|l| l.by != "span").or(located.first()) {

@@ -24,8 +24,13 @@ pub struct DiagnosisSummary {
     pub separating: Vec<String>,
     /// Noise floor, relative.
     pub noise_rel: f64,
-    /// The location with the largest residual share and that share (`cycle 3 unloading`, 0.41).
+    /// The location with the largest residual share and that share (`cycle 3 unloading`, 0.41):
+    /// of the breakdown the "Where" chart draws (by cycle and branch).
     pub top_location: Option<(String, f64)>,
+    /// The control range with the largest residual share and that share (`amplitude 75–100 %
+    /// of the largest`, 0.8), said beside it.
+    #[serde(default)]
+    pub top_range: Option<(String, f64)>,
     /// The candidates were not calibrated: the baseline already fits to the noise floor.
     #[serde(default)]
     pub candidates_skipped: bool,
@@ -146,8 +151,14 @@ pub fn diagnosis_words(s: &DiagnosisSummary) -> String {
         ));
     }
     if let Some((place, share)) = &s.top_location {
+        let range = s.top_range.as_ref().map_or(String::new(), |(r, f)| {
+            format!(
+                "; by control range, {} of it lies at {r}",
+                fmt_percent(*f, 0)
+            )
+        });
         paras.push(format!(
-            "Where: the largest share of the squared residual, {}, lies in {}.",
+            "Where: the largest share of the squared residual, {}, lies in {}{range}.",
             fmt_percent(*share, 0),
             place
         ));
@@ -222,13 +233,13 @@ pub fn diagnosis_words(s: &DiagnosisSummary) -> String {
                     let names: Vec<String> = set.iter().map(|e| e.replace('_', " ")).collect();
                     format!(
                         " The best {} found, {}, narrows it to {}, still {:.1} times the noise \
-                         level: {} may be there, but something outside {} is as large.",
+                         level: {} may be there, but what is left is not noise and no candidate \
+                         accounts for it.",
                         if set.len() == 1 { "effect" } else { "set" },
                         join_and(&names),
                         fmt_percent(*after, 1),
                         after / s.noise_rel,
                         if set.len() == 1 { "it" } else { "they" },
-                        if set.len() == 1 { "it" } else { "them" },
                     )
                 }
                 None => String::new(),
@@ -394,6 +405,31 @@ mod tests {
         assert!(!w.contains("How far"), "{w}");
         assert!(
             w.contains("explains the gap best. Named on the training cycles."),
+            "{w}"
+        );
+    }
+
+    /// "Where" names the chart's breakdown (cycle and branch) and the control range beside it.
+    #[test]
+    fn where_names_the_cycle_and_branch_and_the_control_range_beside_it() {
+        let mut s = DiagnosisSummary {
+            verdict_effect: "none".into(),
+            top_location: Some(("cycle 1 unloading".into(), 0.999)),
+            ..Default::default()
+        };
+        let w = diagnosis_words(&s);
+        assert!(
+            w.starts_with("Where: the largest share of the squared residual, 100\u{a0}%, lies in cycle 1 unloading."),
+            "{w}"
+        );
+        s.top_range = Some(("amplitude 75–100 % of the largest".into(), 0.8));
+        let w = diagnosis_words(&s);
+        assert!(
+            w.starts_with(
+                "Where: the largest share of the squared residual, 100\u{a0}%, lies in cycle 1 \
+                 unloading; by control range, 80\u{a0}% of it lies at amplitude 75–100 % of the \
+                 largest."
+            ),
             "{w}"
         );
     }
@@ -578,6 +614,7 @@ mod tests {
             ],
             noise_rel: 0.01,
             top_location: None,
+            top_range: None,
             candidates_skipped: false,
             gap_all_rel: None,
             on_training: None,

@@ -188,6 +188,7 @@ pub fn kinematic_hardening_verdict() -> DiagnosisSummary {
         separating: vec!["cycles with reversed loading and growing amplitude".into()],
         noise_rel: 0.009,
         top_location: Some(("cycle 3 unloading".into(), 0.41)),
+        top_range: None,
         candidates_skipped: false,
         gap_all_rel: None,
         on_training: None,
