@@ -787,6 +787,116 @@ pub fn given_geometry_warning(
     out
 }
 
+/// A modulus the file states as a result of the machine's software (Bluehill's `Modulus
+/// (Automatic Young's)`, testXpert's `E-Modul`), in Pa, with the metadata key it came from.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StatedModulus {
+    /// The metadata key, as written.
+    pub key: String,
+    /// The value, Pa.
+    pub pa: f64,
+}
+
+/// The modulus the file's metadata states for `kind`'s modulus: a key naming a Young's (or, for
+/// torsion, a shear) modulus whose value carries a stress unit the unit table knows. A value
+/// whose separators are ambiguous (one `,` or `.` before exactly three digits: `210.000` is 210
+/// or 210,000) or that has no unit is not read: a cross-check must not guess.
+pub fn stated_modulus(rec: &TestRecord, kind: TestKind) -> Option<StatedModulus> {
+    rec.metadata.iter().find_map(|(key, value)| {
+        let k = key.to_lowercase();
+        let modulus = ["modulus", "modul", "young", "módulo", "modulo", "emod"]
+            .iter()
+            .any(|w| k.contains(w));
+        let shear = k.contains("shear") || k.contains("schub") || k.contains("cisaill");
+        // The bounds of the software's modulus window carry a stress unit too (`Modulus start
+        // stress`, `Beginn E-Modul`): not a modulus.
+        let bound = k
+            .split(|c: char| !c.is_alphanumeric())
+            .any(|t| BOUND_WORDS.contains(&t));
+        if !modulus || bound || shear != (kind == TestKind::Torsion) || k.contains("secant") {
+            return None;
+        }
+        let v = value.trim();
+        let end = v
+            .find(|c: char| !(c.is_ascii_digit() || matches!(c, ',' | '.' | '-' | '+')))
+            .unwrap_or(v.len());
+        let (num, unit) = (v[..end].trim(), v[end..].trim());
+        let info = cablab_ingest::units::lookup(unit)?;
+        if info.dimension != cablab_ingest::units::Dimension::Pressure {
+            return None;
+        }
+        let seps: Vec<(usize, char)> = num
+            .char_indices()
+            .filter(|(_, c)| matches!(c, ',' | '.'))
+            .collect();
+        let plain = match seps.as_slice() {
+            [] => num.to_string(),
+            [(i, _)] if num.len() - i - 1 == 3 => return None,
+            [(_, _)] => num.replace(',', "."),
+            [.., (i, last)] => {
+                // The last separator is the decimal one; the others group thousands.
+                let other = if *last == '.' { ',' } else { '.' };
+                if seps[..seps.len() - 1].iter().any(|(_, c)| *c != other) {
+                    return None;
+                }
+                format!("{}.{}", num[..*i].replace(other, ""), &num[i + 1..])
+            }
+        };
+        let x: f64 = plain.parse().ok()?;
+        let pa = x * info.factor;
+        (pa.is_finite() && pa > 0.0).then(|| StatedModulus {
+            key: key.clone(),
+            pa,
+        })
+    })
+}
+
+/// Words of a metadata key that make it a bound of a modulus window, not a modulus.
+const BOUND_WORDS: &[&str] = &[
+    "start", "end", "begin", "beginn", "ende", "from", "to", "upper", "lower", "limit", "window",
+    "grenze", "obere", "untere", "von", "bis", "début", "debut", "fin", "min", "max", "stress",
+    "strain", "load", "force", "spannung", "dehnung", "kraft",
+];
+
+/// How far a modulus (Pa) may differ from the one the file states before it is warned.
+pub const STATED_MODULUS_TOLERANCE: f64 = 0.05;
+
+/// The modulus found here against the one the file states ([`stated_modulus`]): a warning when
+/// they differ by more than [`STATED_MODULUS_TOLERANCE`] (the machine's software fitted another
+/// range, or took another section or length: the two numbers are not the same thing, and a
+/// reader comparing reports must know which is which), a note when they agree.
+pub fn stated_modulus_check(
+    stated: Option<&StatedModulus>,
+    modulus_pa: Option<f64>,
+) -> Option<(bool, String)> {
+    let (st, ours) = (stated?, modulus_pa.filter(|m| m.is_finite() && *m > 0.0)?);
+    let off = ours / st.pa - 1.0;
+    let gpa = |p: f64| p / 1e9;
+    Some(if off.abs() > STATED_MODULUS_TOLERANCE {
+        (
+            true,
+            format!(
+                "modulus: {:.1} GPa here, the file states {:.1} GPa ('{}'): {:+.1} %. The machine's software fitted another range or method, or used another section or length; compare its modulus window with the fit window here before comparing the numbers",
+                gpa(ours),
+                gpa(st.pa),
+                st.key,
+                100.0 * off
+            ),
+        )
+    } else {
+        (
+            false,
+            format!(
+                "modulus: {:.1} GPa here agrees with the {:.1} GPa the file states ('{}') within {:.1} %",
+                gpa(ours),
+                gpa(st.pa),
+                st.key,
+                100.0 * off.abs()
+            ),
+        )
+    })
+}
+
 /// A warning when the control jumps between two samples while the response does not move
 /// back to where the record started (a step over 20 × the median step and 5 % of the control's
 /// range, landing within 5 % of the range of the first sample, the response's step within 3 × its
@@ -1798,6 +1908,76 @@ mod tests {
             ..Default::default()
         };
         cablab_ingest::read_bytes(bytes, name, &opts).unwrap()
+    }
+
+    /// A Bluehill export (its layout: metadata lines `key,"value",unit` above the table) with
+    /// one metadata line for the modulus.
+    fn bluehill_with(key: &str, value: &str, unit: &str) -> Vec<u8> {
+        let mut s = format!(
+            "Specimen number (included),1\n{key},\"{value}\",{unit}\nThickness,\"2.00000\",mm\n\
+             Width,\"10.00000\",mm\n\nTime,Extension,Load\n(s),(mm),(N)\n"
+        );
+        for i in 0..40 {
+            let x = 0.001 * i as f64;
+            s.push_str(&format!(
+                "\"{:.3}\",\"{x:.5}\",\"{:.3}\"\n",
+                0.1 * i as f64,
+                4e4 * x
+            ));
+        }
+        s.into_bytes()
+    }
+
+    /// The modulus a file states is read from its metadata with its unit, thousands separators
+    /// told from the decimal one, and not read when the separators are ambiguous, when it has no
+    /// unit, when the key is a bound of the software's window, or when it is the other kind's
+    /// modulus.
+    #[test]
+    fn a_stated_modulus_is_read_with_its_unit_and_never_guessed() {
+        let get = |key: &str, value: &str, unit: &str, kind: TestKind| {
+            stated_modulus(&read(&bluehill_with(key, value, unit), "m.csv", kind), kind)
+                .map(|m| m.pa)
+        };
+        let t = TestKind::Tension;
+        let close = |a: Option<f64>, b: f64| a.is_some_and(|a| (a / b - 1.0).abs() < 1e-12);
+        assert!(close(
+            get("Modulus (Automatic Young's)", "242,370.29658", "MPa", t),
+            242.37029658e9
+        ));
+        assert!(close(get("E-Modul", "210000", "MPa", t), 210e9));
+        assert!(close(get("E-Modul", "1.234.567,8", "kPa", t), 1.2345678e9));
+        assert!(close(get("Young's modulus", "210,5", "GPa", t), 210.5e9));
+        assert!(close(
+            get("Shear modulus", "80", "GPa", TestKind::Torsion),
+            80e9
+        ));
+        assert_eq!(get("E-Modul", "210.000", "MPa", t), None);
+        assert_eq!(get("E-Modul", "210000", "", t), None);
+        assert_eq!(get("Modulus start stress", "10", "MPa", t), None);
+        assert_eq!(get("Shear modulus", "80", "GPa", t), None);
+        assert_eq!(
+            get("Young's modulus", "210", "GPa", TestKind::Torsion),
+            None
+        );
+    }
+
+    /// More than 5 % apart is a warning that names both numbers and the key; within it, a note.
+    #[test]
+    fn a_modulus_off_the_stated_one_is_warned() {
+        let st = StatedModulus {
+            key: "Modulus (Automatic Young's)".into(),
+            pa: 242.4e9,
+        };
+        let (warn, w) = stated_modulus_check(Some(&st), Some(261.8e9)).unwrap();
+        assert!(warn, "{w}");
+        assert!(
+            w.starts_with("modulus: 261.8 GPa here, the file states 242.4 GPa ('Modulus (Automatic Young's)'): +8.0 %"),
+            "{w}"
+        );
+        let (warn, n) = stated_modulus_check(Some(&st), Some(250.0e9)).unwrap();
+        assert!(!warn && n.contains("within 3.1 %"), "{n}");
+        assert!(stated_modulus_check(None, Some(250e9)).is_none());
+        assert!(stated_modulus_check(Some(&st), None).is_none());
     }
 
     /// A tension log on the machine travel whose time stamp repeats once: the reader's warning

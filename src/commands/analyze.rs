@@ -57,6 +57,14 @@ pub fn analyze_file(
         &ao,
     )
     .map_err(|e| CliError::input(anyhow::anyhow!("{}: {e}", a.file.display())))?;
+    match crate::bridge::stated_modulus_check(
+        crate::bridge::stated_modulus(&rec, kind).as_ref(),
+        an.modulus_pa,
+    ) {
+        Some((true, w)) => an.warnings.push(w),
+        Some((false, n)) => an.notes.push(n),
+        None => {}
+    }
     let mut all = said.warnings.clone();
     all.append(&mut an.warnings);
     an.warnings = all;

@@ -532,6 +532,7 @@ fn stages(
     out.warnings.extend(warning);
     out.warnings.extend(curve.repeated_rows_warning());
     out.rows = Some(curve.control.len());
+    let stated = crate::bridge::stated_modulus(&rec, t.kind);
     drop(rec);
     done(0);
 
@@ -566,6 +567,11 @@ fn stages(
         &ao,
     )?;
     fill_analysis(out, &an);
+    match crate::bridge::stated_modulus_check(stated.as_ref(), an.modulus_pa) {
+        Some((true, w)) => out.warnings.push(w),
+        Some((false, n)) => out.notes.push(n),
+        None => {}
+    }
     if machine_level {
         to_machine_level(out, t.kind, &geom, &an);
     }

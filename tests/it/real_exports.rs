@@ -725,6 +725,14 @@ fn bluehill_flexure_span_and_section_from_group_keys() {
             .any(|w| w.contains("span") || w.contains("flat section")),
         "{w:?}"
     );
+    // The file states Bluehill's own modulus (30.0 GPa): this one agrees, and says so.
+    assert!(
+        n.iter().any(|n| n.starts_with(
+            "modulus: 30.1 GPa here agrees with the 30.0 GPa the file states ('Modulus (Automatic Young's)"
+        )),
+        "{n:?}"
+    );
+    assert!(!w.iter().any(|w| w.starts_with("modulus:")), "{w:?}");
 }
 
 /// A file whose own names say compression (the GBK Bluehill fixture: `压缩应变 (位移)`,
@@ -855,4 +863,56 @@ fn a_start_at_a_preload_keeps_the_files_zero() {
         d["offsets"]
     );
     assert!(!d["notes"].to_string().contains("starts loaded"));
+}
+
+/// A campaign over an export whose stated modulus is not the one found here (the Bluehill
+/// flexure fixture with its `Modulus (Automatic Young's)` line changed to 27 GPa): the test's
+/// warnings in the run say so beside the number, as `analyze` does.
+#[test]
+fn a_campaign_warns_a_modulus_off_the_one_the_file_states() {
+    let d = tempfile::tempdir().unwrap();
+    let ex = d.path().join("ex");
+    std::fs::create_dir_all(&ex).unwrap();
+    let text = std::fs::read_to_string(
+        crate::common::root().join(data("cablab__bluehill_flexure_three_point.csv")),
+    )
+    .unwrap()
+    .replace("\"30000.00000\",MPa", "\"27000.00000\",MPa");
+    std::fs::write(ex.join("flexure.csv"), text).unwrap();
+    let o = assert_cmd::Command::cargo_bin("cablab")
+        .unwrap()
+        .current_dir(d.path())
+        .env("CI", "1")
+        .args([
+            "run",
+            "ex",
+            "--kind",
+            "three-point",
+            "--name",
+            "r",
+            "--no-diagnosis",
+        ])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let s: Value =
+        serde_json::from_slice(&std::fs::read(d.path().join("reports/r/summary.json")).unwrap())
+            .unwrap();
+    let t = &s["tests"][0];
+    let r: Value = serde_json::from_slice(
+        &std::fs::read(
+            d.path()
+                .join("reports/r")
+                .join(t["report"].as_str().unwrap()),
+        )
+        .unwrap(),
+    )
+    .unwrap();
+    let w = strings(&r["warnings"]);
+    assert!(
+        w.iter().any(|w| w.starts_with(
+            "modulus: 30.1 GPa here, the file states 27.0 GPa ('Modulus (Automatic Young's)"
+        ) && w.contains("+11.")),
+        "{w:?}"
+    );
 }
