@@ -1340,3 +1340,66 @@ fn one_loading_names_the_shape_and_says_which_mechanisms_it_cannot_tell_apart() 
         .any(|e| e.effect == Effect::KinematicHardening));
     assert!(!effects.iter().any(|e| e.0 == Effect::KinematicHardening));
 }
+
+/// A control history built from `steps` (a ramp by its increment, or a hold of 5 samples at 0),
+/// in direction `sign`, with a jitter of up to `jitter` of its range on every sample.
+fn ramps(steps: &[f64], sign: f64, jitter: &[f64]) -> DiagTest {
+    let mut c = vec![0.0];
+    for &d in steps {
+        let last = *c.last().unwrap();
+        if d == 0.0 {
+            c.extend(std::iter::repeat_n(last, 5));
+        } else {
+            c.extend((1..=10).map(|k| last + d * k as f64 / 10.0));
+        }
+    }
+    let range: f64 = steps.iter().sum();
+    for (i, v) in c.iter_mut().enumerate() {
+        *v = sign * (*v + range * jitter[i % jitter.len()]);
+    }
+    DiagTest {
+        kind: TestKind::Tension,
+        free_length_m: 0.1,
+        diameter_m: None,
+        time_s: (0..c.len()).map(|i| i as f64).collect(),
+        response: c.clone(),
+        control: c,
+        labels: vec![],
+        specimen: None,
+        rod_setup: None,
+    }
+}
+
+mod one_loading_props {
+    use super::ramps;
+    use proptest::prelude::*;
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(64))]
+
+        /// Over generated loadings (ramps and holds in either direction, sample jitter up to
+        /// 2 % of the range): one loading whatever the steps; with a return by more than 15 % of
+        /// the range appended, never.
+        #[test]
+        fn one_loading_holds_for_any_ramps_and_holds_and_fails_on_any_real_return(
+            steps in proptest::collection::vec(prop_oneof![Just(0.0), 0.01f64..1.0], 1..12),
+            up in any::<bool>(),
+            jitter in proptest::collection::vec(-0.02f64..0.02, 1..7),
+            back in 0.15f64..1.0,
+        ) {
+            let sign = if up { 1.0 } else { -1.0 };
+            let range: f64 = steps.iter().sum();
+            prop_assume!(range > 0.05);
+            prop_assert!(crate::diagnose::one_loading(&ramps(&steps, sign, &jitter)));
+            let mut with_return = steps.clone();
+            with_return.push(0.0);
+            let mut t = ramps(&with_return, sign, &[0.0]);
+            let last = *t.control.last().unwrap();
+            t.control
+                .extend((1..=10).map(|k| last - sign * back * range * k as f64 / 10.0));
+            t.response = t.control.clone();
+            t.time_s = (0..t.control.len()).map(|i| i as f64).collect();
+            prop_assert!(!crate::diagnose::one_loading(&t));
+        }
+    }
+}
