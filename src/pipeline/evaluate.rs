@@ -755,22 +755,36 @@ fn model_part(
             .context("calibrating the baseline")?;
         // The fit's own replay, or, fitted before a fracture, its parameters replayed over the
         // whole record for the plots (the rod goes on carrying load where the specimen broke).
+        // A replay that fails past the fracture (a rod driven far beyond what it was fitted to)
+        // leaves the plots without a simulated curve, not the test without its results.
         let replay = match &before {
             None => cal.simulated().last().cloned(),
             Some(_) => {
-                cablab_diagnose::model::ModelForward::new(tests, &model, ctx.catalog, ctx.rod)
+                match cablab_diagnose::model::ModelForward::new(tests, &model, ctx.catalog, ctx.rod)
                     .and_then(|f| f.simulate_all(cal.values()))
-                    .context("replaying the calibrated baseline over the whole record")?
-                    .pop()
+                {
+                    Ok(mut all) => all.pop(),
+                    Err(e) => {
+                        out.notes.push(format!(
+                            "calibration: the baseline fitted before the fracture could not be \
+                             replayed past it ({e}): the plots show no simulated curve"
+                        ));
+                        None
+                    }
+                }
             }
         };
         // The model of the measurement: the simulated response in the file's sign convention,
         // plus the offset taken off.
-        let sim: Vec<f64> = replay.map_or_else(Vec::new, |s| {
-            s.iter()
-                .map(|v| response_sign * v + offsets.response)
-                .collect()
-        });
+        let sim: Vec<f64> = replay.as_ref().map_or_else(
+            || cal.simulated().last().cloned().unwrap_or_default(),
+            |s| s.clone(),
+        );
+        let sim: Vec<f64> = sim
+            .iter()
+            .map(|v| response_sign * v + offsets.response)
+            .collect();
+        let plotted = replay.is_some() || before.is_none();
         let scale = curve.response.iter().fold(0.0f64, |m, v| m.max(v.abs()));
         // The baseline's gap over what it was fitted to.
         let upto = cut
@@ -788,14 +802,20 @@ fn model_part(
             out.notes.push(format!(
                 "calibration: the baseline is fitted to the record up to the response's peak \
                  ({end} of {} samples; after it the specimen necks or breaks, which the rod \
-                 model does not have) and replayed over the whole record for the plots; the \
-                 baseline gap is over the fitted part",
-                curve.control.len()
+                 model does not have){}; the baseline gap is over the fitted part",
+                curve.control.len(),
+                if plotted {
+                    " and replayed over the whole record for the plots"
+                } else {
+                    ""
+                }
             ));
         }
         out.baseline_gap_rel = (scale > 0.0).then(|| rms / scale);
         out.calibration = Some(serde_json::to_value(&cal)?);
-        *simulated = Some(sim);
+        if plotted {
+            *simulated = Some(sim);
+        }
     } else {
         out.why.push("calibrate: disabled in [model]".into());
     }
