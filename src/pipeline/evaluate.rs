@@ -726,19 +726,27 @@ fn model_part(
     };
     // Past a necking or a fracture the rod model has nothing to say: the baseline is calibrated
     // and the diagnosis runs on the record up to the peak (`bridge::diagnosable_end`).
-    let cut = crate::bridge::diagnosable_end(t.kind, curve);
+    // A part before the peak too short to condition is no part: the whole record, as before.
+    let mut cut = crate::bridge::diagnosable_end(t.kind, curve);
     let before = match &cut {
-        Some((end, _)) => Some(
-            crate::bridge::diag_test_from(
-                t.kind,
-                geom,
-                &crate::bridge::curve_before(curve, *end),
-                Some(t.specimen.clone()),
-                dtest.rod_setup.clone(),
-                None,
-            )?
-            .0,
-        ),
+        Some((end, _)) => match crate::bridge::diag_test_from(
+            t.kind,
+            geom,
+            &crate::bridge::curve_before(curve, *end),
+            Some(t.specimen.clone()),
+            dtest.rod_setup.clone(),
+            None,
+        ) {
+            Ok((b, ..)) => Some(b),
+            Err(e) => {
+                out.notes.push(format!(
+                    "the record before the response's peak could not be taken apart ({e}): the \
+                     baseline is calibrated and diagnosed on the whole record"
+                ));
+                cut = None;
+                None
+            }
+        },
         None => None,
     };
     let fitted: &[cablab_diagnose::DiagTest] = before.as_ref().map_or(tests, std::slice::from_ref);
@@ -801,9 +809,14 @@ fn model_part(
         if let Some((end, _)) = &cut {
             out.notes.push(format!(
                 "calibration: the baseline is fitted to the record up to the response's peak \
-                 ({end} of {} samples; after it the specimen necks or breaks, which the rod \
-                 model does not have){}; the baseline gap is over the fitted part",
+                 ({end} of {} samples; after it the specimen {}, which the rod model does not \
+                 have){}; the baseline gap is over the fitted part",
                 curve.control.len(),
+                if t.kind == TestKind::Tension {
+                    "necks or breaks"
+                } else {
+                    "fails or breaks"
+                },
                 if plotted {
                     " and replayed over the whole record for the plots"
                 } else {
