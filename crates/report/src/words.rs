@@ -355,7 +355,7 @@ pub fn diagnosis_words(s: &DiagnosisSummary) -> String {
             .map(|e| e.replace('_', " ").replace('+', " + "))
             .collect();
         let mut p = if s.single_loading.is_some() {
-            format!("Not told apart by one loading: {}.", names.join(", "))
+            format!("Not told apart by these tests: {}.", names.join(", "))
         } else {
             format!(
                 "Equally good on the held-out data: {}. These tests cannot tell them apart.",
@@ -456,8 +456,9 @@ mod tests {
         );
     }
 
-    /// One loading: the words on what it cannot tell apart follow "Which", and the effects it
-    /// adds are not called "equally good on the held-out data".
+    /// One loading: the words on what it cannot tell apart follow "Which", and the equivalents
+    /// (the effects it adds beside those the held-out score could not tell apart) are not called
+    /// "equally good on the held-out data".
     #[test]
     fn one_loading_says_what_it_cannot_tell_apart_not_equally_good() {
         let mut s = DiagnosisSummary {
@@ -482,7 +483,7 @@ mod tests {
             paras[1..],
             [
                 "The record is one loading without an unloading.",
-                "Not told apart by one loading: viscoelasticity. To separate them: an unloading \
+                "Not told apart by these tests: viscoelasticity. To separate them: an unloading \
                  and reloading cycle from near the peak."
             ],
             "{w}"
