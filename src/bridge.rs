@@ -797,66 +797,12 @@ pub struct StatedModulus {
     pub pa: f64,
 }
 
-/// The modulus the file's metadata states for `kind`'s modulus: a key naming a Young's (or, for
-/// torsion, a shear) modulus whose value carries a stress unit the unit table knows. A value
-/// whose separators are ambiguous (one `,` or `.` before exactly three digits: `210.000` is 210
-/// or 210,000) or that has no unit is not read: a cross-check must not guess.
+/// The modulus the file's metadata states for `kind`'s modulus (a shear modulus for torsion,
+/// Young's otherwise): [`cablab_ingest::stated_modulus`].
 pub fn stated_modulus(rec: &TestRecord, kind: TestKind) -> Option<StatedModulus> {
-    rec.metadata.iter().find_map(|(key, value)| {
-        let k = key.to_lowercase();
-        let modulus = ["modulus", "modul", "young", "módulo", "modulo", "emod"]
-            .iter()
-            .any(|w| k.contains(w));
-        let shear = k.contains("shear") || k.contains("schub") || k.contains("cisaill");
-        // The bounds of the software's modulus window carry a stress unit too (`Modulus start
-        // stress`, `Beginn E-Modul`): not a modulus.
-        let bound = k
-            .split(|c: char| !c.is_alphanumeric())
-            .any(|t| BOUND_WORDS.contains(&t));
-        if !modulus || bound || shear != (kind == TestKind::Torsion) || k.contains("secant") {
-            return None;
-        }
-        let v = value.trim();
-        let end = v
-            .find(|c: char| !(c.is_ascii_digit() || matches!(c, ',' | '.' | '-' | '+')))
-            .unwrap_or(v.len());
-        let (num, unit) = (v[..end].trim(), v[end..].trim());
-        let info = cablab_ingest::units::lookup(unit)?;
-        if info.dimension != cablab_ingest::units::Dimension::Pressure {
-            return None;
-        }
-        let seps: Vec<(usize, char)> = num
-            .char_indices()
-            .filter(|(_, c)| matches!(c, ',' | '.'))
-            .collect();
-        let plain = match seps.as_slice() {
-            [] => num.to_string(),
-            [(i, _)] if num.len() - i - 1 == 3 => return None,
-            [(_, _)] => num.replace(',', "."),
-            [.., (i, last)] => {
-                // The last separator is the decimal one; the others group thousands.
-                let other = if *last == '.' { ',' } else { '.' };
-                if seps[..seps.len() - 1].iter().any(|(_, c)| *c != other) {
-                    return None;
-                }
-                format!("{}.{}", num[..*i].replace(other, ""), &num[i + 1..])
-            }
-        };
-        let x: f64 = plain.parse().ok()?;
-        let pa = x * info.factor;
-        (pa.is_finite() && pa > 0.0).then(|| StatedModulus {
-            key: key.clone(),
-            pa,
-        })
-    })
+    cablab_ingest::stated_modulus(&rec.metadata, kind == TestKind::Torsion)
+        .map(|(pa, key)| StatedModulus { key, pa })
 }
-
-/// Words of a metadata key that make it a bound of a modulus window, not a modulus.
-const BOUND_WORDS: &[&str] = &[
-    "start", "end", "begin", "beginn", "ende", "from", "to", "upper", "lower", "limit", "window",
-    "grenze", "obere", "untere", "von", "bis", "début", "debut", "fin", "min", "max", "stress",
-    "strain", "load", "force", "spannung", "dehnung", "kraft",
-];
 
 /// How far a modulus (Pa) may differ from the one the file states before it is warned.
 pub const STATED_MODULUS_TOLERANCE: f64 = 0.05;
@@ -1947,6 +1893,19 @@ mod tests {
         assert!(close(get("E-Modul", "210000", "MPa", t), 210e9));
         assert!(close(get("E-Modul", "1.234.567,8", "kPa", t), 1.2345678e9));
         assert!(close(get("Young's modulus", "210,5", "GPa", t), 210.5e9));
+        // The unit in the key, and a group prefix.
+        assert!(close(get("E-Modul [GPa]", "210", "", t), 210e9));
+        assert!(close(
+            get(
+                "Modulus (Automatic Young's) : Modulus (Automatic Young's)",
+                "30000.00000",
+                "MPa",
+                t
+            ),
+            30e9
+        ));
+        assert_eq!(get("Secant modulus", "200", "GPa", t), None);
+        assert_eq!(get("E-Modul", "1,23,4", "GPa", t), None);
         assert!(close(
             get("Shear modulus", "80", "GPa", TestKind::Torsion),
             80e9

@@ -761,12 +761,13 @@ fn model_part(
         };
         let cal = cablab_diagnose::calibrate(ctx, fitted, &model, &copts)
             .context("calibrating the baseline")?;
-        // The fit's own replay, or, fitted before a fracture, its parameters replayed over the
-        // whole record for the plots (the rod goes on carrying load where the specimen broke).
+        // Fitted before a fracture, its parameters replayed over the whole record for the plots
+        // (the rod goes on carrying load where the specimen broke); otherwise the fit's own
+        // replay, not simulated again.
         // A replay that fails past the fracture (a rod driven far beyond what it was fitted to)
         // leaves the plots without a simulated curve, not the test without its results.
         let replay = match &before {
-            None => cal.simulated().last().cloned(),
+            None => None,
             Some(_) => {
                 match cablab_diagnose::model::ModelForward::new(tests, &model, ctx.catalog, ctx.rod)
                     .and_then(|f| f.simulate_all(cal.values()))
@@ -784,11 +785,11 @@ fn model_part(
         };
         // The model of the measurement: the simulated response in the file's sign convention,
         // plus the offset taken off.
-        let sim: Vec<f64> = replay.as_ref().map_or_else(
-            || cal.simulated().last().cloned().unwrap_or_default(),
-            |s| s.clone(),
-        );
-        let sim: Vec<f64> = sim
+        let raw = replay
+            .as_deref()
+            .or(cal.simulated().last().map(Vec::as_slice))
+            .unwrap_or_default();
+        let sim: Vec<f64> = raw
             .iter()
             .map(|v| response_sign * v + offsets.response)
             .collect();

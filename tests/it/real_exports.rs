@@ -77,6 +77,22 @@ fn strings(v: &Value) -> Vec<String> {
         .collect()
 }
 
+/// The test of a campaign's `summary.json` whose id contains `part`.
+fn summary_test<'a>(s: &'a Value, part: &str) -> &'a Value {
+    s["tests"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|t| t["id"].as_str().unwrap().contains(part))
+        .unwrap()
+}
+
+/// The `result.json` a summary test points to, under the campaign's report folder `reports`.
+fn test_result(reports: &std::path::Path, t: &Value) -> Value {
+    serde_json::from_slice(&std::fs::read(reports.join(t["report"].as_str().unwrap())).unwrap())
+        .unwrap()
+}
+
 pub(crate) fn within(x: f64, target: f64, rel: f64) -> bool {
     (x / target - 1.0).abs() <= rel
 }
@@ -490,35 +506,12 @@ fn a_campaign_over_real_exports_uses_the_specimen_mounted_channel() {
     let s: Value =
         serde_json::from_slice(&std::fs::read(d.path().join("reports/r/summary.json")).unwrap())
             .unwrap();
-    let by = |part: &str| {
-        s["tests"]
-            .as_array()
-            .unwrap()
-            .iter()
-            .find(|t| t["id"].as_str().unwrap().contains(part))
-            .unwrap()["stiffness"]
-            .as_f64()
-            .unwrap()
-    };
+    let by = |part: &str| summary_test(&s, part)["stiffness"].as_f64().unwrap();
     assert!(within(by("uiuc"), 7.5e6, 0.05), "{:e}", by("uiuc"));
     // The UIUC steel necks and breaks: the baseline is calibrated on its 266 samples up to the
     // force maximum, as the diagnosis is (not dragged by the necking: F_y 25.6 kN, H 9.8 kN on
     // the whole record, 21.7 kN and 79 kN before it), and replayed over all 381 for the plots.
-    let uiuc = s["tests"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .find(|t| t["id"].as_str().unwrap().contains("uiuc"))
-        .unwrap();
-    let r: Value = serde_json::from_slice(
-        &std::fs::read(
-            d.path()
-                .join("reports/r")
-                .join(uiuc["report"].as_str().unwrap()),
-        )
-        .unwrap(),
-    )
-    .unwrap();
+    let r = test_result(&d.path().join("reports/r"), summary_test(&s, "uiuc"));
     assert_eq!(r["calibration"]["n_fit"], 266, "{}", r["calibration"]);
     assert!(
         r["notes"]
@@ -530,12 +523,7 @@ fn a_campaign_over_real_exports_uses_the_specimen_mounted_channel() {
     assert!(within(by("mdb1pct"), 1.37e6, 0.04), "{:e}", by("mdb1pct"));
     // The testXpert file states its cross-section (6.3812 mm²), not a diameter: nothing is
     // missing (no "diameter_mm" in `needs`), and E = (EA)/A with the stated area.
-    let t = s["tests"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .find(|t| t["id"].as_str().unwrap().contains("mdb1pct"))
-        .unwrap();
+    let t = summary_test(&s, "mdb1pct");
     assert!(t.get("needs").is_none(), "{t}");
     let e = t["modulus_pa"].as_f64().unwrap();
     assert!(within(e, by("mdb1pct") / 6.3812e-6, 1e-9), "{e:e}");
@@ -549,12 +537,10 @@ fn a_campaign_over_real_exports_uses_the_specimen_mounted_channel() {
             .is_none_or(|v| v.as_array().unwrap().is_empty()),
         "{t}"
     );
-    let result = d
-        .path()
-        .join("reports/r")
-        .join(t["report"].as_str().unwrap());
-    let dir = result.parent().unwrap();
-    let r: Value = serde_json::from_slice(&std::fs::read(&result).unwrap()).unwrap();
+    let reports = d.path().join("reports/r");
+    let r = test_result(&reports, t);
+    let dir = reports.join(t["report"].as_str().unwrap());
+    let dir = dir.parent().unwrap();
     let v = &r["diagnosis"]["verdict"];
     let n = &v["narrowed"];
     assert!(n["gap_after_over_noise"].as_f64().unwrap() >= 3.0, "{v}");
@@ -898,16 +884,7 @@ fn a_campaign_warns_a_modulus_off_the_one_the_file_states() {
     let s: Value =
         serde_json::from_slice(&std::fs::read(d.path().join("reports/r/summary.json")).unwrap())
             .unwrap();
-    let t = &s["tests"][0];
-    let r: Value = serde_json::from_slice(
-        &std::fs::read(
-            d.path()
-                .join("reports/r")
-                .join(t["report"].as_str().unwrap()),
-        )
-        .unwrap(),
-    )
-    .unwrap();
+    let r = test_result(&d.path().join("reports/r"), &s["tests"][0]);
     let w = strings(&r["warnings"]);
     assert!(
         w.iter().any(|w| w.starts_with(

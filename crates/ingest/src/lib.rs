@@ -26,7 +26,7 @@ pub use format::{Format, UnknownFormat};
 pub use record::{
     BlockInfo, Channel, InspectChannel, InspectReport, MetadataObject, Provenance, TestRecord,
 };
-pub use roles::{strain_by_name, KindEvidence, Mount};
+pub use roles::{stated_modulus, strain_by_name, KindEvidence, Mount};
 
 use cablab_core::TestKind;
 use sha2::{Digest, Sha256};

@@ -850,6 +850,70 @@ fn area_m2(key: &str, value: &str) -> Option<f64> {
     (info.dimension == Dimension::Area && v > 0.0).then_some(v * info.factor)
 }
 
+/// A modulus the machine's software states in the metadata, as a result of its own (Bluehill's
+/// `Modulus (Automatic Young's)`, testXpert's `E-Modul`): Young's, or with `shear` a shear
+/// modulus, in Pa, and the key it came from. The unit is the value's (`242,370.29658 MPa`) or
+/// the key's (`E-Modul [GPa]`) and must be a stress; keys that bound the software's modulus
+/// window (`Modulus start stress`, `Beginn E-Modul`) and secant moduli are not it. The number is
+/// read by the cell reader ([`crate::tokenize::parse_cell`]) with the decimal mark the number
+/// itself shows (the last of two marks; a mark repeated groups thousands); one mark before
+/// exactly three digits (`210.000`: 210 or 210,000) is ambiguous, and a cross-check must not
+/// guess: `None`.
+pub fn stated_modulus(meta: &[(String, String)], shear: bool) -> Option<(f64, String)> {
+    const MODULUS: &[&str] = &["modulus", "modul", "young", "módulo", "modulo", "emod"];
+    const SHEAR: &[&str] = &["shear", "schub", "cisaill"];
+    const BOUND: &[&str] = &[
+        "start", "end", "begin", "beginn", "ende", "from", "to", "upper", "lower", "limit",
+        "window", "grenze", "obere", "untere", "von", "bis", "début", "debut", "fin", "min", "max",
+        "stress", "strain", "load", "force", "spannung", "dehnung", "kraft", "secant", "sekante",
+        "sécante",
+    ];
+    meta.iter().find_map(|(key, value)| {
+        let k = norm_key(key);
+        let bound = k
+            .split(|c: char| !c.is_alphanumeric())
+            .any(|t| BOUND.contains(&t));
+        if !MODULUS.iter().any(|w| k.contains(w))
+            || bound
+            || SHEAR.iter().any(|w| k.contains(w)) != shear
+        {
+            return None;
+        }
+        let mut parts = value.split_whitespace();
+        let num = parts.next()?;
+        let unit = parts
+            .next()
+            .map(|u| u.to_string())
+            .or_else(|| key_unit(key))?;
+        let info = lookup(&unit)?;
+        if info.dimension != Dimension::Pressure {
+            return None;
+        }
+        let marks: Vec<(usize, u8)> = num
+            .bytes()
+            .enumerate()
+            .filter(|(_, b)| matches!(b, b',' | b'.'))
+            .collect();
+        let dec = match marks.as_slice() {
+            [] => b'.',
+            [(i, _)] if num.len() - i - 1 == 3 => return None,
+            [(_, m)] => *m,
+            [.., (_, last)] if marks.iter().all(|(_, m)| m == last) => {
+                if *last == b'.' {
+                    b','
+                } else {
+                    b'.'
+                }
+            }
+            [.., (_, last)] => *last,
+        };
+        match crate::tokenize::parse_cell(num.as_bytes(), dec) {
+            crate::tokenize::Cell::Num(v) if v > 0.0 => Some((v * info.factor, key.clone())),
+            _ => None,
+        }
+    })
+}
+
 /// The specimen's cross-section area from the metadata, m²: stated (testXpert `Cross-section`,
 /// `Section`, `Querschnitt`, `Area`, with an area unit), else a flat specimen's thickness ×
 /// width (`Specimen thickness` and `Specimen width`, `Dicke`/`Breite`, `Épaisseur`/`Largeur`,
