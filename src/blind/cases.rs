@@ -28,6 +28,70 @@ pub struct BlindCase {
     /// The files the virtual lab wrote for the tests, in the same order: (file name, bytes), so
     /// that a caller can diagnose what the readers get back from them.
     pub files: Vec<(String, Vec<u8>)>,
+    /// The same tests without the rig's noise, to measure how far each withheld effect shows
+    /// above it ([`super::score::imprints`]); `None` when the generator could not give them.
+    pub clean: Option<Clean>,
+}
+
+/// A case's tests as the rig would log them without noise: the truth model's response on the
+/// machine's control, with the drift, the offsets and the compliance kept (they are effects or
+/// the rig's state, not noise), and what the rig added on top of that per test.
+#[derive(Debug, Clone)]
+pub struct Clean {
+    /// The noise-free tests, in the order of [`BlindCase::tests`].
+    pub tests: Vec<DiagTest>,
+    /// RMS of what the rig added to each test's reading besides the drift: the response's
+    /// Gaussian or AR(1) noise, quantisation, hum and spikes, and the control's noise and
+    /// rounding through the initial stiffness, in quadrature (response units).
+    pub noise: Vec<f64>,
+}
+
+impl Clean {
+    /// Add the noise-free twin of `measured`, a test the virtual lab generated from `spec` as
+    /// `out`. `false` (nothing added) when the export is decimated (the truth then has more rows
+    /// than the file).
+    pub fn push(
+        &mut self,
+        spec: &SynthSpec,
+        out: &cablab_synth::SynthOutput,
+        measured: &DiagTest,
+    ) -> bool {
+        let (t, m) = (&out.truth, &out.measured);
+        let n = t.response_si.len();
+        if m.response_si.len() != n || t.control_machine_si.len() != n || t.time_s.len() != n {
+            return false;
+        }
+        let a = &spec.artefacts;
+        let response: Vec<f64> = t
+            .time_s
+            .iter()
+            .zip(&t.response_si)
+            .map(|(ti, r)| r + a.drift_per_s * ti + a.response_offset)
+            .collect();
+        let control: Vec<f64> = t
+            .control_machine_si
+            .iter()
+            .map(|c| c + a.control_offset)
+            .collect();
+        let rms = |a: &[f64], b: &[f64]| {
+            (a.iter().zip(b).map(|(x, r)| (x - r).powi(2)).sum::<f64>() / n.max(1) as f64).sqrt()
+        };
+        // The control's noise and rounding reach the residual through the stiffness, as the
+        // diagnosis' floor counts them (`cablab_diagnose::floors::noise_floor`).
+        let k = cablab_diagnose::model::initial_slope(&control, &response).unwrap_or(0.0);
+        let (sr, sc) = (
+            rms(&m.response_si, &response),
+            k * rms(&m.control_si, &control),
+        );
+        self.noise.push(sr.hypot(sc));
+        self.tests.push(DiagTest {
+            time_s: t.time_s.clone(),
+            control,
+            response,
+            ..measured.clone()
+        });
+        true
+    }
 }
 
 /// Nominal specimen of a kind for the blind cases (the chapter's cable): free length, stiffness
@@ -311,6 +375,10 @@ pub fn generate_with_slip(
     };
     let mut tests = Vec::new();
     let mut files = Vec::new();
+    let mut clean = Some(Clean {
+        tests: vec![],
+        noise: vec![],
+    });
     for (i, &len) in lengths.iter().enumerate() {
         // The longer specimen runs the same strain history (control scaled with its length);
         // three-point keeps w/l₀ instead (the same shape; curvatures fall as 1/l₀).
@@ -361,17 +429,21 @@ pub fn generate_with_slip(
             rod_setup = Some(st);
         }
         files.push((out.file_name.clone(), out.bytes.clone()));
-        tests.push(DiagTest {
+        let test = DiagTest {
             kind,
             free_length_m: len,
             diameter_m: Some(2.8e-3),
-            time_s: out.measured.time_s,
-            control: out.measured.control_si,
-            response: out.measured.response_si,
+            time_s: out.measured.time_s.clone(),
+            control: out.measured.control_si.clone(),
+            response: out.measured.response_si.clone(),
             labels: vec![],
             specimen: Some(format!("blind-{i}")),
             rod_setup,
-        });
+        };
+        if !clean.as_mut().is_some_and(|c| c.push(&spec, &out, &test)) {
+            clean = None;
+        }
+        tests.push(test);
     }
     let label = if truths.is_empty() {
         Effect::None.to_string()
@@ -393,6 +465,7 @@ pub fn generate_with_slip(
         layout: format!("{layout:?}"),
         tests,
         files,
+        clean,
     })
 }
 

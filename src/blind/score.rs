@@ -62,10 +62,146 @@ pub struct CaseOutcome {
     /// (`diagnosis.contact`), in units of the noise floor.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub contact_over_noise: Option<f64>,
+    /// How far each proper subset of the withheld effects, calibrated on the case's noise-free
+    /// record, leaves it unexplained ([`imprints`]): the baseline alone first. Empty for a null
+    /// case or when the generator gave no noise-free record.
+    pub imprints: Vec<Imprint>,
+    /// The verdict at the record's resolution ([`at_resolution`]): right, or it names only
+    /// withheld effects and leaves out only those whose imprint, once the named ones are
+    /// modelled, is below [`RESOLUTION`] × the noise. `None` when the imprints were not measured.
+    pub right_at_resolution: Option<bool>,
+    /// The diagnosis' noise floor on the first test over the noise the rig added to it
+    /// ([`super::cases::Clean::noise`]): above 1 the floor reads the noise high and hides
+    /// effects of that size.
+    pub floor_over_true_noise: Option<f64>,
+    /// Why the imprints could not be measured (a calibration on the noise-free record failed).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub imprint_error: Option<String>,
     /// Wall time of the diagnosis, s.
     pub seconds: f64,
     /// Why the diagnosis failed, if it did.
     pub error: Option<String>,
+}
+
+/// What a subset of a case's withheld effects leaves of its noise-free record.
+#[derive(Debug, Clone, Serialize)]
+pub struct Imprint {
+    /// The effects modelled beside the baseline (a proper subset of the withheld ones; empty:
+    /// the baseline alone).
+    pub modelled: Vec<Effect>,
+    /// RMS of (noise-free record − the model calibrated on all of it) over the held-out samples
+    /// (the diagnosis' default split) / the noise the rig added.
+    pub held_over_noise: f64,
+    /// The same over every sample.
+    pub whole_over_noise: f64,
+}
+
+/// The systematic misfit, in units of the noise, below which a model "fits to the noise floor"
+/// by the diagnosis' own rule: a held-out gap of `NOISE_FLOOR_FIT` × the noise is noise plus a
+/// systematic part of √(NOISE_FLOOR_FIT² − 1) ≈ 0.46 of it. A withheld effect whose imprint on
+/// the noise-free record stays below this, on the held-out cycle and over the whole record, is
+/// below what the record resolves: no rule can name it without naming noise as well.
+pub const RESOLUTION: f64 = 0.458_257_569_495_584;
+
+/// The imprint of each proper subset of `truths` on the noise-free record `clean` (the
+/// baseline `baseline` calibrated with the subset's effects, on every sample, with the rig's
+/// noise as the weights): the baseline alone first, then each single member of a pair.
+/// Calibrated from a few starts without the diagnosis' nested starts, so a subset may be
+/// judged to fit worse than it can; that only makes fewer effects count as unresolved.
+pub fn imprints(
+    ctx: Context,
+    clean: &super::cases::Clean,
+    truths: &[Effect],
+    opts: &DiagnoseOptions,
+) -> Result<Vec<Imprint>, String> {
+    let baseline = opts.baseline.as_str();
+    use cablab_diagnose::{calibrate, CalibrateOptions, HoldoutPolicy, ModelSpec};
+    if truths.is_empty() {
+        return Ok(vec![]);
+    }
+    let (_, held) = cablab_diagnose::holdout::split(&clean.tests, &HoldoutPolicy::LastCycle)
+        .map_err(|e| e.to_string())?;
+    let mut subsets: Vec<Vec<Effect>> = vec![vec![]];
+    if truths.len() == 2 {
+        subsets.push(vec![truths[0]]);
+        subsets.push(vec![truths[1]]);
+    }
+    // The diagnosis' own settings (its starts, fit options and profiled response offset).
+    let copts = CalibrateOptions {
+        starts: if clean.tests[0].kind == cablab_core::TestKind::ThreePoint {
+            opts.rod_starts + 1
+        } else {
+            opts.starts + 2
+        },
+        seed: opts.seed,
+        fit: opts.fit,
+        noise: Some(
+            clean
+                .noise
+                .iter()
+                .map(|n| n.max(f64::MIN_POSITIVE))
+                .collect(),
+        ),
+        free_offset: opts.free_offset,
+        ..Default::default()
+    };
+    let mut out: Vec<Imprint> = Vec::with_capacity(subsets.len());
+    let mut warm = None;
+    for modelled in subsets {
+        let model = modelled
+            .iter()
+            .fold(ModelSpec::law(baseline), |m, e| m.with(*e));
+        // Each subset starts from the fitted baseline as well (its extension switched off), so
+        // that it fits no worse than the baseline does.
+        let opts = CalibrateOptions {
+            warm: warm.clone(),
+            ..copts.clone()
+        };
+        let cal = calibrate(ctx, &clean.tests, &model, &opts)
+            .map_err(|e| format!("{}: {e}", model.label()))?;
+        let (mut held_ss, mut held_n, mut all_ss, mut all_n) = (0.0, 0usize, 0.0, 0usize);
+        for (ti, t) in clean.tests.iter().enumerate() {
+            let sim = &cal.simulated()[ti];
+            let off = cal.response_offset.get(ti).copied().unwrap_or(0.0);
+            let sigma = clean.noise[ti].max(f64::MIN_POSITIVE);
+            let r = |i: usize| (t.response[i] - sim[i] - off) / sigma;
+            for i in 0..t.response.len() {
+                all_ss += r(i).powi(2);
+                all_n += 1;
+            }
+            for &i in held.get(ti).map_or(&[][..], Vec::as_slice) {
+                held_ss += r(i).powi(2);
+                held_n += 1;
+            }
+        }
+        if modelled.is_empty() {
+            warm = Some(cal.params.clone());
+        }
+        out.push(Imprint {
+            modelled,
+            held_over_noise: (held_ss / held_n.max(1) as f64).sqrt(),
+            whole_over_noise: (all_ss / all_n.max(1) as f64).sqrt(),
+        });
+    }
+    Ok(out)
+}
+
+/// Whether the verdict's set `named` (empty for `none`) is right at the record's resolution:
+/// it names only withheld effects, and the model of what it names leaves an imprint below
+/// [`RESOLUTION`] on the held-out cycle and over the whole record (the withheld effects it
+/// leaves out do not show above the noise). The full set is always right; `None` when the
+/// imprint of `named` was not measured.
+pub fn at_resolution(named: &[Effect], truths: &[Effect], imprints: &[Imprint]) -> Option<bool> {
+    if !named.iter().all(|e| truths.contains(e)) {
+        return Some(false);
+    }
+    if same_set(named, truths) {
+        return Some(true);
+    }
+    imprints
+        .iter()
+        .find(|i| same_set(&i.modelled, named))
+        .map(|i| i.held_over_noise.max(i.whole_over_noise) < RESOLUTION)
 }
 
 /// How one pair of withheld effects fared over its noise levels and draws.
@@ -98,6 +234,25 @@ pub struct Shrink {
     pub within_1_5: f64,
 }
 
+/// The blind check's shares at the records' resolution ([`at_resolution`]), beside the strict
+/// ones: a case counts as right when its verdict is right (or reported equivalent), or names
+/// only withheld effects and leaves out only what its record does not show above the noise.
+#[derive(Debug, Clone, Serialize)]
+pub struct AtResolution {
+    /// Pair cases with measured imprints, and those right at resolution.
+    pub pairs: (usize, usize),
+    /// Single-effect cases with measured imprints, and those right at resolution.
+    pub singles: (usize, usize),
+    /// Withheld effects (cases with effects) the noise-free record shows below [`RESOLUTION`]
+    /// with the baseline alone: a `none` is the rules' answer.
+    pub invisible: usize,
+    /// Pairs of which one member, once the other is modelled, leaves an imprint below
+    /// [`RESOLUTION`].
+    pub pairs_one_member_resolved: usize,
+    /// Cases right at resolution that the strict count does not call right, by name.
+    pub recounted: Vec<String>,
+}
+
 /// The scored matrix.
 #[derive(Debug, Clone, Serialize)]
 pub struct BlindReport {
@@ -122,6 +277,9 @@ pub struct BlindReport {
     pub null_false_claims: usize,
     /// Gap shrink where the right effect was found.
     pub shrink: Shrink,
+    /// The shares again with the effects the records do not resolve allowed to go unnamed
+    /// ([`at_resolution`]); `None` when no case has its imprints measured.
+    pub at_resolution: Option<AtResolution>,
     /// Total wall time, s.
     pub seconds: f64,
 }
@@ -178,6 +336,10 @@ pub fn run_matrix_observed(
                 equivalent_sets: vec![],
                 rod_numerics_over_noise: None,
                 contact_over_noise: None,
+                imprints: vec![],
+                right_at_resolution: None,
+                imprint_error: None,
+                floor_over_true_noise: None,
                 seconds: 0.0,
                 error: None,
             };
@@ -242,6 +404,33 @@ pub fn run_matrix_observed(
                 Err(e) => o.error = Some(e.to_string()),
             }
             o.seconds = t.elapsed().as_secs_f64();
+            if let Some(clean) = &c.clean {
+                o.floor_over_true_noise = cablab_diagnose::floors::noise_floor(&c.tests)
+                    .first()
+                    .zip(clean.noise.first())
+                    .map(|(f, n)| f / n.max(f64::MIN_POSITIVE));
+                match imprints(ctx, clean, &c.truths, opts) {
+                    Ok(i) => o.imprints = i,
+                    Err(e) => o.imprint_error = Some(e),
+                }
+                o.right_at_resolution = match o.verdict {
+                    None | Some(Effect::Unexplained) => Some(false),
+                    Some(_) if o.right_or_equivalent => Some(true),
+                    Some(Effect::None) if !c.truths.is_empty() => {
+                        at_resolution(&[], &c.truths, &o.imprints)
+                    }
+                    Some(Effect::None) => Some(true),
+                    Some(v) => at_resolution(
+                        if o.effects.is_empty() {
+                            std::slice::from_ref(&v)
+                        } else {
+                            &o.effects
+                        },
+                        &c.truths,
+                        &o.imprints,
+                    ),
+                };
+            }
             on_case(&o);
             o
         })
@@ -311,7 +500,39 @@ pub fn run_matrix_observed(
         .collect();
     let within = after.iter().filter(|&&a| a <= 1.5).count() as f64 / after.len().max(1) as f64;
     let max_after = after.iter().copied().fold(f64::NAN, f64::max);
+    let measured: Vec<&CaseOutcome> = outcomes
+        .iter()
+        .filter(|o| o.right_at_resolution.is_some() && !o.truths.is_empty())
+        .collect();
+    let count = |n: usize| {
+        let of: Vec<&&CaseOutcome> = measured.iter().filter(|o| o.truths.len() == n).collect();
+        let right = of
+            .iter()
+            .filter(|o| o.right_at_resolution == Some(true))
+            .count();
+        (of.len(), right)
+    };
+    let below = |i: &Imprint| i.held_over_noise.max(i.whole_over_noise) < RESOLUTION;
+    let at_res = (!measured.is_empty()).then(|| AtResolution {
+        pairs: count(2),
+        singles: count(1),
+        invisible: measured
+            .iter()
+            .filter(|o| o.imprints.first().is_some_and(below))
+            .count(),
+        pairs_one_member_resolved: measured
+            .iter()
+            .filter(|o| o.truths.len() == 2 && o.imprints.iter().skip(1).any(below))
+            .filter(|o| !o.imprints.first().is_some_and(below))
+            .count(),
+        recounted: measured
+            .iter()
+            .filter(|o| o.right_at_resolution == Some(true) && !o.right_or_equivalent)
+            .map(|o| o.name.clone())
+            .collect(),
+    });
     BlindReport {
+        at_resolution: at_res,
         pairs: pair_rows.into_values().collect(),
         pairs_right_share,
         singles_right_share,
@@ -436,6 +657,14 @@ pub fn render(r: &BlindReport) -> String {
         "gap shrink where the right effect was found ({} cases): held-out gap / noise floor median {:.2} -> {:.2}, max after {:.2}, within 1.5x noise: {:.1} %",
         sh.n, sh.median_before_over_noise, sh.median_after_over_noise, sh.max_after_over_noise, 100.0 * sh.within_1_5
     );
+    if let Some(a) = &r.at_resolution {
+        let pct = |(n, k): (usize, usize)| 100.0 * k as f64 / n.max(1) as f64;
+        let _ = writeln!(
+            s,
+            "at the records' resolution (an effect whose noise-free imprint, once the named ones are modelled, stays below {RESOLUTION:.2} x the noise may go unnamed): pairs {}/{} ({:.1} %), single effects {}/{} ({:.1} %); {} cases whose effects the baseline alone fits below it, {} pairs with one member below it",
+            a.pairs.1, a.pairs.0, pct(a.pairs), a.singles.1, a.singles.0, pct(a.singles), a.invisible, a.pairs_one_member_resolved
+        );
+    }
     let mut kinds: Vec<TestKind> = r.outcomes.iter().map(|o| o.kind).collect();
     kinds.sort_by_key(|k| TestKind::ALL.iter().position(|a| a == k));
     kinds.dedup();
@@ -489,9 +718,25 @@ pub fn render(r: &BlindReport) -> String {
                 .iter()
                 .map(|g| g.map_or("-".to_string(), |g| format!("{g:.2}")))
                 .collect();
+            let imprints: Vec<String> = o
+                .imprints
+                .iter()
+                .map(|i| {
+                    format!(
+                        "{} {:.2}/{:.2}",
+                        if i.modelled.is_empty() {
+                            "baseline".to_string()
+                        } else {
+                            super::cases::set_label(&i.modelled)
+                        },
+                        i.held_over_noise,
+                        i.whole_over_noise
+                    )
+                })
+                .collect();
             let _ = writeln!(
                 s,
-                "  {:<48} verdict {:<22} equivalent [{}] gap/noise {:.2} -> {:.2}{}{}",
+                "  {:<48} verdict {:<22} equivalent [{}] gap/noise {:.2} -> {:.2}{}{}{}",
                 o.name,
                 v,
                 eq.join(", "),
@@ -502,6 +747,20 @@ pub fn render(r: &BlindReport) -> String {
                 } else {
                     String::new()
                 },
+                match o.right_at_resolution {
+                    _ if imprints.is_empty() => String::new(),
+                    r => format!(
+                        "; noise-free imprint held-out/whole: {}{}{}",
+                        imprints.join(", "),
+                        o.floor_over_true_noise
+                            .map_or(String::new(), |f| format!(", floor/true noise {f:.2}")),
+                        if r == Some(true) {
+                            " — right at resolution"
+                        } else {
+                            ""
+                        }
+                    ),
+                },
                 o.error
                     .as_ref()
                     .map_or(String::new(), |e| format!(" error: {e}"))
@@ -509,4 +768,51 @@ pub fn render(r: &BlindReport) -> String {
         }
     }
     s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn imprint(modelled: &[Effect], held: f64, whole: f64) -> Imprint {
+        Imprint {
+            modelled: modelled.to_vec(),
+            held_over_noise: held,
+            whole_over_noise: whole,
+        }
+    }
+
+    /// A verdict is right at resolution when it names only withheld effects and what it leaves
+    /// out does not show above the noise once what it names is modelled, on the held-out cycle
+    /// and over the whole record alike.
+    #[test]
+    fn what_a_verdict_may_leave_out_is_what_the_record_does_not_show() {
+        use Effect::{KinematicHardening as K, SensorDrift as D, Viscoelasticity as V};
+        let pair = [K, V];
+        let imprints = [
+            imprint(&[], 6.0, 5.0),
+            imprint(&[K], 3.0, 2.5),
+            imprint(&[V], 0.30, 0.40),
+        ];
+        // The pair itself, in either order.
+        assert_eq!(at_resolution(&[V, K], &pair, &imprints), Some(true));
+        // The Maxwell branch alone leaves the hardening below 0.46 σ: right at resolution.
+        assert_eq!(at_resolution(&[V], &pair, &imprints), Some(true));
+        // The hardening alone leaves the Maxwell branch at 3 σ: not.
+        assert_eq!(at_resolution(&[K], &pair, &imprints), Some(false));
+        // `none` with 6 σ left: not.
+        assert_eq!(at_resolution(&[], &pair, &imprints), Some(false));
+        // An effect that is not there is never right.
+        assert_eq!(at_resolution(&[V, D], &pair, &imprints), Some(false));
+        // The whole record counts as much as the held-out cycle.
+        let late = [imprint(&[], 0.2, 0.9)];
+        assert_eq!(at_resolution(&[], &[K], &late), Some(false));
+        let faint = [imprint(&[], 0.2, 0.3)];
+        assert_eq!(at_resolution(&[], &[K], &faint), Some(true));
+        // Not measured: no answer.
+        assert_eq!(at_resolution(&[], &[K], &[]), None);
+        // The threshold is the diagnosis' own "fits to the noise floor".
+        let f = cablab_diagnose::select::NOISE_FLOOR_FIT;
+        assert!((RESOLUTION - (f * f - 1.0).sqrt()).abs() < 1e-12);
+    }
 }

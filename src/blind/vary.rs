@@ -351,6 +351,10 @@ pub fn vary_case(kinds: &[TestKind], seed: u64) -> Result<VaryCase, String> {
     };
     let mut tests = Vec::new();
     let mut files = Vec::new();
+    let mut clean = Some(super::cases::Clean {
+        tests: vec![],
+        noise: vec![],
+    });
     let mut true_noise = 0.0;
     for (i, &len) in lengths.iter().enumerate() {
         // The longer specimen runs the same strain history (control scaled with its length).
@@ -398,10 +402,13 @@ pub fn vary_case(kinds: &[TestKind], seed: u64) -> Result<VaryCase, String> {
             rod_setup: None,
         };
         (t.time_s, t.control, t.response) = (
-            out.measured.time_s,
-            out.measured.control_si,
-            out.measured.response_si,
+            out.measured.time_s.clone(),
+            out.measured.control_si.clone(),
+            out.measured.response_si.clone(),
         );
+        if !clean.as_mut().is_some_and(|c| c.push(&spec, &out, &t)) {
+            clean = None;
+        }
         tests.push(t);
     }
     let label = if truths.is_empty() {
@@ -422,6 +429,7 @@ pub fn vary_case(kinds: &[TestKind], seed: u64) -> Result<VaryCase, String> {
             layout: format!("{layout:?}"),
             tests,
             files,
+            clean,
         },
         tags,
         true_noise,
@@ -763,6 +771,10 @@ mod tests {
             equivalent_sets: vec![],
             rod_numerics_over_noise: None,
             contact_over_noise: None,
+            imprints: vec![],
+            right_at_resolution: None,
+            imprint_error: None,
+            floor_over_true_noise: None,
             seconds: 0.0,
             error: None,
         }

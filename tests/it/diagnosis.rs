@@ -376,3 +376,108 @@ fn viscoelasticity_with_piecewise_elasticity_in_torsion_is_found_from_the_law_re
     );
     assert!(d.verdict.remainder.is_none());
 }
+
+/// The blind check's yardstick for effects a record cannot show (`blind::score::imprints`): the
+/// noise the rig added is what the diagnosis' floor reads on a white-noise log; a Maxwell branch
+/// of the standard size stands far above it; every subset of a pair, warm-started from the
+/// fitted baseline, fits the noise-free record no worse than the baseline does; and a varied
+/// case whose kinematic hardening the record does not show (vary293: the baseline fits its
+/// noise-free record exactly) counts its `none` as right at resolution, not as a miss.
+#[test]
+fn the_blind_checks_imprints_measure_what_a_record_can_show() {
+    use cablab::blind::cases::generate_set_at;
+    use cablab::blind::score::{at_resolution, imprints, RESOLUTION};
+    let opts = DiagnoseOptions::default();
+
+    let null = case(Effect::None, 1);
+    let clean = null
+        .clean
+        .as_ref()
+        .expect("the generator gives the noise-free record");
+    let floor = cablab_diagnose::floors::noise_floor(&null.tests)[0];
+    let ratio = floor / clean.noise[0];
+    assert!((0.85..1.15).contains(&ratio), "floor / noise added {ratio}");
+    assert!(imprints(ctx(), clean, &[], &opts).unwrap().is_empty());
+
+    let visco = case(Effect::Viscoelasticity, 2);
+    let i = imprints(ctx(), visco.clean.as_ref().unwrap(), &visco.truths, &opts).unwrap();
+    assert_eq!(i.len(), 1);
+    assert!(i[0].modelled.is_empty());
+    assert!(
+        i[0].held_over_noise > 3.0 && i[0].whole_over_noise > 3.0,
+        "{i:?}"
+    );
+    assert_eq!(at_resolution(&[], &visco.truths, &i), Some(false));
+
+    let pair = [Effect::KinematicHardening, Effect::Viscoelasticity];
+    let c = generate_set_at(TestKind::Tension, &pair, 0.003, 3, Layout::TestXpert, 30.0).unwrap();
+    let i = imprints(ctx(), c.clean.as_ref().unwrap(), &pair, &opts).unwrap();
+    let modelled: Vec<&[Effect]> = i.iter().map(|x| x.modelled.as_slice()).collect();
+    assert_eq!(
+        modelled,
+        [
+            &[][..],
+            &[Effect::KinematicHardening][..],
+            &[Effect::Viscoelasticity][..]
+        ]
+    );
+    for x in &i[1..] {
+        assert!(
+            x.whole_over_noise <= i[0].whole_over_noise * (1.0 + 1e-6),
+            "{i:?}"
+        );
+    }
+
+    let v = cablab::blind::vary::vary_case(
+        &[TestKind::Tension, TestKind::Torsion, TestKind::PureBending],
+        293,
+    )
+    .unwrap();
+    assert_eq!(v.case.truths, [Effect::KinematicHardening]);
+    let i = imprints(ctx(), v.case.clean.as_ref().unwrap(), &v.case.truths, &opts).unwrap();
+    assert!(
+        i[0].held_over_noise.max(i[0].whole_over_noise) < RESOLUTION,
+        "{i:?}"
+    );
+    assert_eq!(at_resolution(&[], &v.case.truths, &i), Some(true));
+}
+
+/// The varied case of `seed`, which carries `tag`, read to a noise floor within 10 % of the noise
+/// its rig added (`Clean::noise`); and its verdict when `named` is given.
+fn floor_reads_the_noise_added(seed: u64, tag: &str, named: Option<Effect>) {
+    let kinds = [TestKind::Tension, TestKind::Torsion, TestKind::PureBending];
+    let v = cablab::blind::vary::vary_case(&kinds, seed).unwrap();
+    assert!(v.tags.contains(&tag), "vary{seed}: {:?}", v.tags);
+    let floor = cablab_diagnose::floors::noise_floor(&v.case.tests)[0];
+    let added = v.case.clean.as_ref().unwrap().noise[0];
+    assert!(
+        (0.9..1.1).contains(&(floor / added)),
+        "vary{seed}: floor {floor} against the noise added {added}"
+    );
+    if let Some(e) = named {
+        let d = diagnose(ctx(), &v.case.tests, &DiagnoseOptions::default()).unwrap();
+        assert_eq!(d.verdict.effect, e, "{}", v.case.name);
+    }
+}
+
+/// Mains hum near the logger's Nyquist frequency is noise the residuals carry at its RMS, not at
+/// the twice-as-large scale their second differences give it: the varied family's hum cases
+/// vary187 (50 Hz on a 93.7 Hz logger, friction hysteresis at 1.1 % noise) and vary265 (with
+/// logger spikes) read the noise 1.77× and 1.40× too high before the floor took the tone off
+/// (`floors::noise_floor`), which hid an effect that shows 0.6–0.9 noise units above it; now
+/// the floor is the noise the rig added within 10 %, and vary187's friction is named.
+#[test]
+fn a_mains_hum_is_counted_at_its_rms_in_the_noise_floor() {
+    floor_reads_the_noise_added(187, "hum", Some(Effect::FrictionHysteresis));
+    floor_reads_the_noise_added(265, "hum", None);
+}
+
+/// A response quantised to noise of one to three counts: the MAD of its second differences is a
+/// whole number of counts and read vary26's noise (pure bending, friction hysteresis, 0.78 %
+/// noise on a coarse ADC) 1.18× too high, so a friction 0.95 noise units above the noise over
+/// the record was `none`. Read from the differences' RMS below `MAD_COUNTS` counts the floor is
+/// the noise the rig added within 10 % and the friction is named.
+#[test]
+fn a_reading_of_a_few_counts_has_its_noise_read_from_the_rms() {
+    floor_reads_the_noise_added(26, "quant", Some(Effect::FrictionHysteresis));
+}

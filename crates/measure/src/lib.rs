@@ -27,6 +27,7 @@ pub mod rate;
 pub mod sectional;
 pub mod stats;
 pub mod table;
+pub mod tone;
 
 pub use analysis::{
     analyze, default_yield_offset, Analysis, AnalyzeOptions, Behaviour, BreakPoint, FitWindowUnit,
