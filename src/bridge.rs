@@ -41,6 +41,59 @@ impl Curve {
         self.cut_short = true;
     }
 
+    /// A steady tone on the response ([`cablab_measure::tone::steady_tone`]: mains hum, a pump's
+    /// or a fan's vibration), said with its frequency and its size: the diagnosis counts it in
+    /// the noise floor at its RMS, and a lab may want to find its source. With a time column the
+    /// frequency is in Hz as logged, and when it is where 50 or 60 Hz mains land after the
+    /// logger's rate folds them (within half a percent of that rate), it says so.
+    pub fn tone_note(&self, kind: TestKind) -> Option<String> {
+        let tone = cablab_measure::tone::steady_tone(&self.response)?;
+        let peak = self.response.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        let cycles = tone.omega / std::f64::consts::TAU;
+        // The logger's rate: the mean step over the record, which time stamps rounded to the
+        // millisecond do not bias (93.74 Hz written as 0.011 s steps), unless pauses make it
+        // differ from the median step by a tenth.
+        let rate = self.time_s.as_deref().and_then(|t| {
+            let steps: Vec<f64> = t.windows(2).map(|w| w[1] - w[0]).collect();
+            let median = cablab_measure::stats::median(&steps);
+            let mean = (t[t.len() - 1] - t[0]) / steps.len().max(1) as f64;
+            let dt = if (mean / median - 1.0).abs() < 0.1 {
+                mean
+            } else {
+                median
+            };
+            (dt > 0.0).then(|| 1.0 / dt)
+        });
+        // Three significant digits.
+        let sig = |x: f64| {
+            let d = (2 - x.abs().log10().floor() as i32).clamp(0, 12) as usize;
+            format!("{x:.d$}")
+        };
+        let at = match rate {
+            Some(fs) => {
+                let f = cycles * fs;
+                let mains = [50.0, 60.0].into_iter().find(|&m: &f64| {
+                    let alias = (m - (m / fs).round() * fs).abs();
+                    (alias - f).abs() < 0.005 * fs
+                });
+                match mains {
+                    Some(m) if (f - m).abs() < 0.005 * fs => format!("{f:.2} Hz: {m:.0} Hz mains hum"),
+                    Some(m) => format!(
+                        "{f:.2} Hz as logged: {m:.0} Hz mains hum, folded by the logger's {fs:.2} Hz rate"
+                    ),
+                    None => format!("{f:.2} Hz as logged (or that plus a multiple of the logger's {fs:.2} Hz rate)"),
+                }
+            }
+            None => format!("{cycles:.3} cycles per sample"),
+        };
+        Some(format!(
+            "a steady tone on the response at {at}, {} {} RMS ({:.2} % of the largest response): the diagnosis counts it in the noise floor at its RMS, beside the random noise",
+            sig(tone.rms()),
+            kind.response_unit(),
+            100.0 * tone.rms() / peak.max(f64::MIN_POSITIVE),
+        ))
+    }
+
     /// The warning for rows that repeat the one before them, time stamp included: the same
     /// sample written again (a logger's repeated record, a workbook's formula rows all showing
     /// one cached value). They carry no measurement of their own: a record of fewer than three
@@ -1256,6 +1309,7 @@ pub fn read_test(
     said.notes.extend(note);
     said.warnings.extend(warning);
     said.warnings.extend(curve.repeated_rows_warning());
+    said.notes.extend(curve.tone_note(kind));
     Ok(ReadTest {
         rec,
         kind,
@@ -2063,6 +2117,36 @@ mod tests {
             repeated_rows: 0,
             rows: vec![],
             cut_short: false,
+        }
+    }
+
+    /// A 60 Hz hum logged at 100 Hz shows at 40 Hz: the note names the mains it came from and its
+    /// size; without a time column it gives the frequency per sample; a curve without a tone
+    /// gets no note.
+    #[test]
+    fn a_mains_hum_on_the_response_is_noted_with_its_source() {
+        assert_eq!(cyclic_curve(true).tone_note(TestKind::Torsion), None);
+        for clock in [true, false] {
+            let mut c = cyclic_curve(clock);
+            for (i, r) in c.response.iter_mut().enumerate() {
+                *r += 0.02 * (std::f64::consts::TAU * 60.0 * 0.01 * i as f64 + 0.3).sin();
+            }
+            let note = c.tone_note(TestKind::Torsion).expect("a tone");
+            let rms: f64 = note
+                .split(" N m RMS")
+                .next()
+                .and_then(|h| h.rsplit(' ').next())
+                .and_then(|v| v.parse().ok())
+                .expect("an RMS in N m");
+            assert!((rms / (0.02 / 2f64.sqrt()) - 1.0).abs() < 0.02, "{note}");
+            if clock {
+                assert!(
+                    note.contains("40.00 Hz as logged: 60 Hz mains hum, folded by the logger's 100.00 Hz rate"),
+                    "{note}"
+                );
+            } else {
+                assert!(note.contains("0.400 cycles per sample"), "{note}");
+            }
         }
     }
 

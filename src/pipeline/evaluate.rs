@@ -531,6 +531,7 @@ fn stages(
     out.notes.extend(note);
     out.warnings.extend(warning);
     out.warnings.extend(curve.repeated_rows_warning());
+    out.notes.extend(curve.tone_note(t.kind));
     out.rows = Some(curve.control.len());
     let stated = crate::bridge::stated_modulus(&rec, t.kind);
     drop(rec);
