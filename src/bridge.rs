@@ -41,13 +41,13 @@ impl Curve {
         self.cut_short = true;
     }
 
-    /// A steady tone on the response ([`cablab_measure::tone::steady_tone`]: mains hum, a pump's
+    /// A steady tone on the response ([`cablab_measure::tone::pick_up`]: mains hum, a pump's
     /// or a fan's vibration), said with its frequency and its size: the diagnosis counts it in
     /// the noise floor at its RMS, and a lab may want to find its source. With a time column the
     /// frequency is in Hz as logged, and when it is where 50 or 60 Hz mains land after the
     /// logger's rate folds them (within half a percent of that rate), it says so.
     pub fn tone_note(&self, kind: TestKind) -> Option<String> {
-        let tone = cablab_measure::tone::steady_tone(&self.response)?;
+        let tone = cablab_measure::tone::pick_up(&self.response, &self.control)?;
         let peak = self.response.iter().fold(0.0f64, |m, v| m.max(v.abs()));
         let cycles = tone.omega / std::f64::consts::TAU;
         // The logger's rate: the mean step over the record, which time stamps rounded to the

@@ -153,11 +153,11 @@ pub fn imprints(
             .fold(ModelSpec::law(baseline), |m, e| m.with(*e));
         // Each subset starts from the fitted baseline as well (its extension switched off), so
         // that it fits no worse than the baseline does.
-        let opts = CalibrateOptions {
+        let fit_opts = CalibrateOptions {
             warm: warm.clone(),
             ..copts.clone()
         };
-        let cal = calibrate(ctx, &clean.tests, &model, &opts)
+        let cal = calibrate(ctx, &clean.tests, &model, &fit_opts)
             .map_err(|e| format!("{}: {e}", model.label()))?;
         let (mut held_ss, mut held_n, mut all_ss, mut all_n) = (0.0, 0usize, 0.0, 0usize);
         for (ti, t) in clean.tests.iter().enumerate() {
@@ -248,7 +248,7 @@ pub struct AtResolution {
     pub invisible: usize,
     /// Pairs of which one member, once the other is modelled, leaves an imprint below
     /// [`RESOLUTION`].
-    pub pairs_one_member_resolved: usize,
+    pub pairs_one_member_below: usize,
     /// Cases right at resolution that the strict count does not call right, by name.
     pub recounted: Vec<String>,
 }
@@ -520,7 +520,7 @@ pub fn run_matrix_observed(
             .iter()
             .filter(|o| o.imprints.first().is_some_and(below))
             .count(),
-        pairs_one_member_resolved: measured
+        pairs_one_member_below: measured
             .iter()
             .filter(|o| o.truths.len() == 2 && o.imprints.iter().skip(1).any(below))
             .filter(|o| !o.imprints.first().is_some_and(below))
@@ -662,7 +662,7 @@ pub fn render(r: &BlindReport) -> String {
         let _ = writeln!(
             s,
             "at the records' resolution (an effect whose noise-free imprint, once the named ones are modelled, stays below {RESOLUTION:.2} x the noise may go unnamed): pairs {}/{} ({:.1} %), single effects {}/{} ({:.1} %); {} cases whose effects the baseline alone fits below it, {} pairs with one member below it",
-            a.pairs.1, a.pairs.0, pct(a.pairs), a.singles.1, a.singles.0, pct(a.singles), a.invisible, a.pairs_one_member_resolved
+            a.pairs.1, a.pairs.0, pct(a.pairs), a.singles.1, a.singles.0, pct(a.singles), a.invisible, a.pairs_one_member_below
         );
     }
     let mut kinds: Vec<TestKind> = r.outcomes.iter().map(|o| o.kind).collect();

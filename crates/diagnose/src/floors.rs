@@ -45,16 +45,17 @@ pub const MAD_COUNTS: f64 = 3.0;
 /// one to three): the floor is then the same fit over lags on the differences' RMS
 /// ([`cablab_measure::condition::serial_noise_rms`]), the reading's whole error.
 ///
-/// A steady tone on the response (mains hum aliased by the logger's rate, a pump's vibration:
-/// [`cablab_measure::tone::steady_tone`]) is taken off before these estimates, which would read
-/// it through the second differences at up to twice its RMS near the Nyquist frequency, and
-/// counted at its RMS in quadrature: it is in every residual as it is. Does not see noise
-/// slower than the longest lag (a hum aliased to a slow wave): it stays in the gap.
+/// A steady tone on the response that the machine did not drive (mains hum aliased by the
+/// logger's rate, a pump's vibration: [`cablab_measure::tone::pick_up`]) is taken off before
+/// these estimates, which would read it through the second differences at up to twice its RMS
+/// near the Nyquist frequency, and counted at its RMS in quadrature: it is in every residual as
+/// it is. Does not see noise slower than the longest lag (a hum aliased to a slow wave): it
+/// stays in the gap.
 pub fn noise_floor(tests: &[DiagTest]) -> Vec<f64> {
     tests
         .iter()
         .map(|t| {
-            let tone = cablab_measure::tone::steady_tone(&t.response);
+            let tone = cablab_measure::tone::pick_up(&t.response, &t.control);
             let untoned = tone.map(|tn| tn.removed_from(&t.response));
             let response = untoned.as_deref().unwrap_or(&t.response);
             // `noise_level` and `serial_noise` of the response: its lag-1 scale is the former.

@@ -16,6 +16,9 @@
 //! when it is steady (the two halves of the record give the same amplitude within a quarter)
 //! and above what random noise leaves in the autocovariance.
 //!
+//! [`pick_up`] keeps a tone only when the machine did not drive it: small beside the response's
+//! range, and not on the control at the same frequency.
+//!
 //! Does not find a tone slower than a sixth of the logger's rate (ω < π/3: there the second
 //! differences hide it rather than inflate it, and the test's own curve competes with it), a
 //! tone whose frequency wanders by more than about one cycle over the record, or several tones
@@ -221,6 +224,32 @@ pub fn steady_tone(signal: &[f64]) -> Option<Tone> {
     })
 }
 
+/// Share of the response's range (peak to peak) a pick-up may reach: a steady sinusoid larger
+/// than this is the test's own loading (a fatigue test logged at a few samples per cycle), not
+/// a hum on its load cell.
+pub const PICK_UP_SHARE: f64 = 0.1;
+
+/// A steady tone on `response` that the machine did not drive ([`steady_tone`]): none when its
+/// RMS exceeds [`PICK_UP_SHARE`] of the response's range, or when `control` carries a steady
+/// tone of the same frequency (within a hundredth of a radian per sample): a sinusoidal
+/// loading fast enough for the logger to see it at a few samples per cycle is the test, and
+/// taking it off the response as if it were noise would leave nothing for a model to explain.
+pub fn pick_up(response: &[f64], control: &[f64]) -> Option<Tone> {
+    let tone = steady_tone(response)?;
+    let (lo, hi) = response
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &v| {
+            (l.min(v), h.max(v))
+        });
+    if tone.rms() > PICK_UP_SHARE * (hi - lo) {
+        return None;
+    }
+    if steady_tone(control).is_some_and(|c| (c.omega - tone.omega).abs() < 0.01) {
+        return None;
+    }
+    Some(tone)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -325,6 +354,35 @@ mod tests {
         assert_eq!(steady_tone(&y), None);
         // Too short.
         assert_eq!(steady_tone(&white[..300]), None);
+    }
+
+    /// A sinusoidal loading at five samples per cycle (a 10 Hz fatigue test logged at 50 Hz) is a
+    /// steady tone on the response, and on the control that drives it: no pick-up. The same
+    /// response with a hum on it and a control without one is a pick-up again only while the
+    /// hum is small beside the response's range.
+    #[test]
+    fn a_driven_oscillation_is_the_test_not_a_pick_up() {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
+        let n = 5_000;
+        let w = std::f64::consts::TAU / 5.0;
+        let control: Vec<f64> = (0..n).map(|j| 1e-3 * (w * j as f64).sin()).collect();
+        let response: Vec<f64> = control
+            .iter()
+            .map(|c| {
+                let e: f64 = rng.sample(StandardNormal);
+                2e5 * c + 0.5 * e
+            })
+            .collect();
+        assert!(steady_tone(&response).is_some());
+        assert_eq!(pick_up(&response, &control), None);
+        // A ramp-and-hold test with a hum that is a third of its range: no pick-up either.
+        let (noisy, tone) = record(20_000, 93.74, 0.5, 25.0, 50.0, 7);
+        let y: Vec<f64> = noisy.iter().zip(&tone).map(|(a, b)| a + b).collect();
+        let ramp: Vec<f64> = (0..y.len()).map(|j| j as f64).collect();
+        assert_eq!(pick_up(&y, &ramp), None);
+        let (noisy, tone) = record(20_000, 93.74, 0.5, 0.8, 50.0, 7);
+        let y: Vec<f64> = noisy.iter().zip(&tone).map(|(a, b)| a + b).collect();
+        assert!(pick_up(&y, &ramp).is_some());
     }
 
     #[test]
