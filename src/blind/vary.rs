@@ -547,12 +547,13 @@ pub fn render(r: &BlindReport, meta: &BTreeMap<String, Meta>) -> String {
         s,
         "varied family: classes (right: the set or an equivalent, none on a null; partial: part \
          of a pair, nothing outside it; missed: none with effects present; unexpl: unexplained; \
-         wrong: an effect named that is not there, or an error); floor/true noise: the \
-         diagnosis' noise floor over the noise the generator added, median (range)"
+         wrong: an effect named that is not there, or an error); at res: right at the records' \
+         resolution (`score::at_resolution`); floor/true noise: the diagnosis' noise floor over \
+         the noise the generator added, median (range)"
     );
     let _ = writeln!(
         s,
-        "{:<13} {:>4} {:>6} {:>8} {:>7} {:>7} {:>6}  {:>22}  {:>13}",
+        "{:<13} {:>4} {:>6} {:>8} {:>7} {:>7} {:>6} {:>7}  {:>22}  {:>13}",
         "cases",
         "n",
         "right",
@@ -560,6 +561,7 @@ pub fn render(r: &BlindReport, meta: &BTreeMap<String, Meta>) -> String {
         "missed",
         "unexpl",
         "wrong",
+        "at res",
         "floor/true noise",
         "gap after"
     );
@@ -594,9 +596,13 @@ pub fn render(r: &BlindReport, meta: &BTreeMap<String, Meta>) -> String {
                 after.len()
             )
         };
+        let at_res = of
+            .iter()
+            .filter(|o| o.right_at_resolution == Some(true))
+            .count();
         let _ = writeln!(
             s,
-            "{:<13} {:>4} {:>6} {:>8} {:>7} {:>7} {:>6}  {:>5.2} ({:.2}–{:.2})  {:>13}",
+            "{:<13} {:>4} {:>6} {:>8} {:>7} {:>7} {:>6} {:>7}  {:>5.2} ({:.2}–{:.2})  {:>13}",
             label,
             of.len(),
             c[0],
@@ -604,6 +610,7 @@ pub fn render(r: &BlindReport, meta: &BTreeMap<String, Meta>) -> String {
             c[2],
             c[3],
             c[4],
+            at_res,
             med,
             lo,
             hi,
