@@ -53,22 +53,20 @@ impl Curve {
         // The logger's rate: the mean step over the record, which time stamps rounded to the
         // millisecond do not bias (93.74 Hz written as 0.011 s steps), unless pauses make it
         // differ from the median step by a tenth.
-        let rate = self.time_s.as_deref().and_then(|t| {
-            let steps: Vec<f64> = t.windows(2).map(|w| w[1] - w[0]).collect();
-            let median = cablab_measure::stats::median(&steps);
-            let mean = (t[t.len() - 1] - t[0]) / steps.len().max(1) as f64;
-            let dt = if (mean / median - 1.0).abs() < 0.1 {
-                mean
-            } else {
-                median
-            };
-            (dt > 0.0).then(|| 1.0 / dt)
-        });
-        // Three significant digits.
-        let sig = |x: f64| {
-            let d = (2 - x.abs().log10().floor() as i32).clamp(0, 12) as usize;
-            format!("{x:.d$}")
-        };
+        let rate = self
+            .time_s
+            .as_deref()
+            .filter(|t| t.len() > 1)
+            .and_then(|t| {
+                let median = median_step(t);
+                let mean = (t[t.len() - 1] - t[0]) / (t.len() - 1) as f64;
+                let dt = if (mean / median - 1.0).abs() < 0.1 {
+                    mean
+                } else {
+                    median
+                };
+                (dt > 0.0).then(|| 1.0 / dt)
+            });
         let at = match rate {
             Some(fs) => {
                 let f = cycles * fs;
@@ -88,7 +86,7 @@ impl Curve {
         };
         Some(format!(
             "a steady tone on the response at {at}, {} {} RMS ({:.2} % of the largest response): the diagnosis counts it in the noise floor at its RMS, beside the random noise",
-            sig(tone.rms()),
+            cablab_report::text::fmt_num(tone.rms(), 3),
             kind.response_unit(),
             100.0 * tone.rms() / peak.max(f64::MIN_POSITIVE),
         ))

@@ -97,6 +97,23 @@ pub(crate) fn within(x: f64, target: f64, rel: f64) -> bool {
     (x / target - 1.0).abs() <= rel
 }
 
+/// `cablab run ex --name r ARGS…` in `dir` (the folder `ex` holding the files), asserted to
+/// succeed; its `summary.json` and what it printed on stderr.
+fn run_campaign(dir: &std::path::Path, args: &[&str]) -> (Value, String) {
+    let o = assert_cmd::Command::cargo_bin("cablab")
+        .unwrap()
+        .current_dir(dir)
+        .env("CI", "1")
+        .args(["run", "ex", "--name", "r"])
+        .args(args)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr).into_owned();
+    assert!(o.status.success(), "{err}");
+    let summary = std::fs::read(dir.join("reports/r/summary.json")).unwrap();
+    (serde_json::from_slice(&summary).unwrap(), err)
+}
+
 fn machine_flag(w: &[String]) -> bool {
     w.iter()
         .any(|w| w.contains("machine travel") && w.contains("lower bound"))
@@ -495,17 +512,7 @@ fn a_campaign_over_real_exports_uses_the_specimen_mounted_channel() {
     ] {
         std::fs::copy(crate::common::root().join(data(n)), ex.join(n)).unwrap();
     }
-    let o = assert_cmd::Command::cargo_bin("cablab")
-        .unwrap()
-        .current_dir(d.path())
-        .env("CI", "1")
-        .args(["run", "ex", "--kind", "tension", "--name", "r"])
-        .output()
-        .unwrap();
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let s: Value =
-        serde_json::from_slice(&std::fs::read(d.path().join("reports/r/summary.json")).unwrap())
-            .unwrap();
+    let (s, err) = run_campaign(d.path(), &["--kind", "tension"]);
     let by = |part: &str| summary_test(&s, part)["stiffness"].as_f64().unwrap();
     assert!(within(by("uiuc"), 7.5e6, 0.05), "{:e}", by("uiuc"));
     // The UIUC steel necks and breaks: the baseline is calibrated on its 266 samples up to the
@@ -559,7 +566,6 @@ fn a_campaign_over_real_exports_uses_the_specimen_mounted_channel() {
         assert!(svg.contains(name.as_str()), "{name} not drawn");
     }
     // Folder mode's own listing says where the section came from instead of "diameter ?".
-    let err = String::from_utf8_lossy(&o.stderr);
     assert!(
         err.contains("section cross-section 6.3812 mm² (the file's metadata)"),
         "{err}"
@@ -865,25 +871,7 @@ fn a_campaign_warns_a_modulus_off_the_one_the_file_states() {
     .unwrap()
     .replace("\"30000.00000\",MPa", "\"27000.00000\",MPa");
     std::fs::write(ex.join("flexure.csv"), text).unwrap();
-    let o = assert_cmd::Command::cargo_bin("cablab")
-        .unwrap()
-        .current_dir(d.path())
-        .env("CI", "1")
-        .args([
-            "run",
-            "ex",
-            "--kind",
-            "three-point",
-            "--name",
-            "r",
-            "--no-diagnosis",
-        ])
-        .output()
-        .unwrap();
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let s: Value =
-        serde_json::from_slice(&std::fs::read(d.path().join("reports/r/summary.json")).unwrap())
-            .unwrap();
+    let (s, _) = run_campaign(d.path(), &["--kind", "three-point", "--no-diagnosis"]);
     let r = test_result(&d.path().join("reports/r"), &s["tests"][0]);
     let w = strings(&r["warnings"]);
     assert!(

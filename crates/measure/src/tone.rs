@@ -86,10 +86,8 @@ pub fn steady_tone(signal: &[f64]) -> Option<Tone> {
         .windows(3)
         .map(|w| w[2] - 2.0 * w[1] + w[0])
         .collect();
-    let mut abs: Vec<f64> = d.iter().map(|v| v.abs()).collect();
-    let mid = abs.len() / 2;
-    abs.select_nth_unstable_by(mid, f64::total_cmp);
-    let scale = abs[mid] / 0.674_489_750_196_081_7;
+    let abs: Vec<f64> = d.iter().map(|v| v.abs()).collect();
+    let scale = crate::stats::median(&abs) / 0.674_489_750_196_081_7;
     if !(scale > 0.0) {
         return None;
     }
