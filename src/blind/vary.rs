@@ -48,8 +48,11 @@ pub struct VaryCase {
     /// `rate-change`, `white`, `ar1`, `quant`, `spikes`, `hum`, `short` < 5k samples, `long`
     /// > 20k samples, `weak` (an effect at < 0.6 × the standard magnitude)).
     pub tags: Vec<&'static str>,
-    /// The noise the generator added to the response, RMS over the first test (Gaussian noise,
-    /// hum and spikes together), response units: what the diagnosis' noise floor estimates.
+    /// What the rig added to the first test's reading, RMS in response units: what the
+    /// diagnosis' noise floor estimates. The response's Gaussian or AR(1) noise, quantisation, hum
+    /// and spikes, and the control's noise and rounding through the stiffness, as the noise-free
+    /// twin counts them ([`super::cases::Clean::noise`]); the response's part alone when there is
+    /// no twin (a decimated export).
     pub true_noise: f64,
 }
 
@@ -410,6 +413,12 @@ pub fn vary_case(kinds: &[TestKind], seed: u64) -> Result<VaryCase, String> {
             clean = None;
         }
         tests.push(t);
+    }
+    // The control's rounding reaches the residual through the stiffness as the response's noise
+    // does (a 0.1 µm count on a 0.025 mm stroke: twice the response's noise), and the floor
+    // counts both: so does the figure it is compared with.
+    if let Some(first) = clean.as_ref().and_then(|c| c.noise.first()) {
+        true_noise = *first;
     }
     let label = if truths.is_empty() {
         Effect::None.to_string()
