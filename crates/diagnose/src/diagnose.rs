@@ -333,7 +333,8 @@ pub fn one_loading(t: &DiagTest) -> bool {
 }
 
 /// When every test is [`one_loading`] and the verdict's set has a member of [`LOADING_SHAPE`]
-/// (viscoelasticity included when no test holds): the first such member, the other members of
+/// (viscoelasticity included when no test holds, and a sensor drift when besides every control
+/// runs at a steady rate, [`steady_rate`]): the first such member, the other members of
 /// that group that remove at least [`MIN_EXPLAINED_SHARE`] of the gap's excess from a fit that
 /// did not fail, and the words for `verdict.single_loading`.
 fn single_loading_words(
@@ -349,8 +350,14 @@ fn single_loading_words(
             .iter()
             .any(|l| l.branch == crate::model::Branch::Hold)
     });
-    let shaping =
-        |e: Effect| LOADING_SHAPE.contains(&e) || (!holds && e == Effect::Viscoelasticity);
+    // A drift on a loading at a steady rate is a term linear in the control, which the shape
+    // and the stiffness take up as well: only a hold or a change of rate tells it apart.
+    let steady = !holds && tests.iter().all(steady_rate);
+    let shaping = |e: Effect| {
+        LOADING_SHAPE.contains(&e)
+            || (!holds && e == Effect::Viscoelasticity)
+            || (steady && e == Effect::SensorDrift)
+    };
     let named: Vec<Effect> = set.iter().copied().filter(|&e| shaping(e)).collect();
     if named.is_empty() {
         return None;
@@ -396,13 +403,18 @@ fn single_loading_words(
          path, plasticity leaves a permanent set{}): an unloading and reloading cycle from near \
          the peak would tell which it is.",
         names(&named),
-        if holds {
-            ""
-        } else {
-            ", viscoelasticity relaxes at a hold"
+        match (holds, steady) {
+            (true, _) => "",
+            (false, false) => ", viscoelasticity relaxes at a hold",
+            (false, true) => ", viscoelasticity relaxes at a hold and a drift runs on through it",
         }
     );
     Some((named[0], alike, words))
+}
+
+/// Whether the control of `t` runs at a steady rate: a straight line in time (r² ≥ 0.99).
+pub(crate) fn steady_rate(t: &DiagTest) -> bool {
+    cablab_measure::linear_fit(&t.time_s, &t.control).is_ok_and(|l| l.r2 >= 0.99)
 }
 
 /// "a", "a and b", "a, b and c".

@@ -1321,9 +1321,39 @@ fn one_loading_names_the_shape_and_says_which_mechanisms_it_cannot_tell_apart() 
     {
         assert!(d.verdict.equivalent.contains(&s.effects[1]));
         assert!(!d.verdict.effects.contains(&s.effects[1]));
-        assert_ne!(s.effects[1], Effect::SensorDrift);
+        // A drift at this steady rate is a term linear in the control: it may be listed (a hold
+        // or a change of rate would tell it); a compliance never is.
         assert_ne!(s.effects[1], Effect::MachineCompliance);
     }
+    // The ramp runs at a steady rate; one with a change of rate does not.
+    assert!(crate::diagnose::steady_rate(&tension_with(
+        "elastoplastic",
+        &TRUTH,
+        None,
+        clean(),
+        vec![Step::Ramp {
+            to: 4.0 * u_y,
+            rate: u_y / 4.0,
+        }],
+        50.0,
+    )));
+    assert!(!crate::diagnose::steady_rate(&tension_with(
+        "elastoplastic",
+        &TRUTH,
+        None,
+        clean(),
+        vec![
+            Step::Ramp {
+                to: 0.5 * u_y,
+                rate: u_y / 40.0,
+            },
+            Step::Ramp {
+                to: 4.0 * u_y,
+                rate: u_y,
+            },
+        ],
+        50.0,
+    )));
     let cyclic = tension(
         "elastoplastic",
         &TRUTH,
