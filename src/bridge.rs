@@ -199,13 +199,14 @@ pub const LOOP_SHARE_AGAINST_FLIP: f64 = 0.02;
 /// negative against a positive elongation, a crosshead counted downwards): the Pearson
 /// correlation of the two over the complete rows is below [`OPPOSITE_SIGNS_CORRELATION`] while
 /// the loops, in the file's signs, take up no energy (enclosed area at most
-/// [`LOOP_SHARE_AGAINST_FLIP`] of the range box). The response's sign is reversed, so that every
-/// stiffness comes out positive, and the note (first) says so; a record whose response does not
+/// [`LOOP_SHARE_AGAINST_FLIP`] of the range box). The channel that counts negative is reversed
+/// ([`reverse_the_negative`]: the travel counted downwards, the force logged negative; the
+/// response when that does not tell), so that every stiffness comes out positive and a force
+/// logged positive keeps its sign, and the note (first) says so; a record whose response does not
 /// follow its control (noise, a random file) is left alone. A response that runs against its
 /// control while its loops do take up energy is no passive specimen's in either sign
 /// convention (a response a quarter period or more out of phase: a soft specimen driven fast,
 /// where the grip's inertia, ∝ −ü, dominates): left as it is, with the warning (second).
-/// Reported values (force, moment) are then in the control's sign convention.
 pub fn align_response_sign(curve: &mut Curve) -> (Option<String>, Option<String>) {
     let n = curve.control.len();
     if n < 3 {
@@ -259,15 +260,35 @@ pub fn align_response_sign(curve: &mut Curve) -> (Option<String>, Option<String>
             )),
         );
     }
-    for r in &mut curve.response {
-        *r = -*r;
-    }
+    let which = reverse_the_negative(curve);
     (
         Some(format!(
-            "the response falls as the control rises (correlation {rho:.2}): the two channels count in opposite sign conventions (a tensile force logged negative, a travel counted downwards), so the response's sign is reversed and the stiffness is positive"
+            "the response falls as the control rises (correlation {rho:.2}): the two channels count in opposite sign conventions (a tensile force logged negative, a travel counted downwards), so {which} and the stiffness is positive"
         )),
         None,
     )
+}
+
+/// Of two channels that count in opposite sign conventions, reverse the one that runs negative
+/// ([`runs_negative`]): a travel counted downwards under a force logged positive is the
+/// travel's convention, and the forces, moments and yield points are the file's own; a force
+/// logged negative in tension is the force's. The response when that does not tell (a two-sided
+/// cyclic record, where either will do). Says which, for the note.
+fn reverse_the_negative(curve: &mut Curve) -> &'static str {
+    let control_only = runs_negative(&curve.control) && !runs_negative(&curve.response);
+    let v = if control_only {
+        &mut curve.control
+    } else {
+        &mut curve.response
+    };
+    for x in v.iter_mut() {
+        *x = -*x;
+    }
+    if control_only {
+        "the control's sign is reversed (the response keeps the file's)"
+    } else {
+        "the response's sign is reversed"
+    }
 }
 
 /// [`align_response_sign`] where the whole record does not say (correlation `rho` above
@@ -286,12 +307,10 @@ fn first_loading_against(curve: &mut Curve, rho: f64) -> (Option<String>, Option
     if first >= OPPOSITE_SIGNS_CORRELATION {
         return (None, None);
     }
-    for v in &mut curve.response {
-        *v = -*v;
-    }
+    let which = reverse_the_negative(curve);
     (
         Some(format!(
-            "the response falls as the control rises up to its largest magnitude (correlation {first:.2} there, {rho:.2} over the whole record, which softens after its peak): the two channels count in opposite sign conventions, so the response's sign is reversed and the stiffness is positive"
+            "the response falls as the control rises up to its largest magnitude (correlation {first:.2} there, {rho:.2} over the whole record, which softens after its peak): the two channels count in opposite sign conventions, so {which} and the stiffness is positive"
         )),
         None,
     )
@@ -324,6 +343,35 @@ fn correlation(c: &[f64], r: &[f64]) -> Option<f64> {
 /// out about 1/ν too large once reversed. It is not reversed; the warning says so and names the
 /// file's strain columns that rise with the force. (note, warning) as `align_response_sign`.
 pub fn align_response_sign_of(
+    rec: &TestRecord,
+    kind: TestKind,
+    curve: &mut Curve,
+) -> (Option<String>, Option<String>) {
+    let compressed = compression_in_tension(kind, curve);
+    let (note, warning) = align_sign_of(rec, kind, curve);
+    (note, warning.or(compressed))
+}
+
+/// A record read as tension whose control and response both run negative ([`runs_negative`]:
+/// the travel closing, the force pushing): a compression test, or tension logged in a
+/// compression sign convention. Nothing is reversed (the stiffness comes out positive either way); the warning says what the
+/// values' signs mean, since cablab has no compression kind and a compression record's yield
+/// and "break" are buckling and crushing, not a tensile specimen's.
+fn compression_in_tension(kind: TestKind, curve: &Curve) -> Option<String> {
+    (kind == TestKind::Tension
+        && curve.control.len() >= 3
+        && runs_negative(&curve.control)
+        && runs_negative(&curve.response))
+    .then(|| {
+        "read as tension, but the control and the response both run negative (the travel \
+             closing, the force pushing): a compression test, or tension logged in a compression \
+             sign convention — cablab evaluates tension, so the forces and elongations are \
+             reported with the file's signs and a compression record's yield is not a tensile one"
+            .to_string()
+    })
+}
+
+fn align_sign_of(
     rec: &TestRecord,
     kind: TestKind,
     curve: &mut Curve,
@@ -778,10 +826,13 @@ pub fn gauge_length_warning(
     kind: TestKind,
     geom: &cablab_measure::Geometry,
 ) -> Option<String> {
+    let i = rec.channel_index(Role::Control)?;
+    if let Some(w) = gauge_not_length(rec, i, geom) {
+        return Some(w);
+    }
     if kind != TestKind::Tension {
         return None;
     }
-    let i = rec.channel_index(Role::Control)?;
     let (k, gauge) = same_extensometer_strain(rec, i)?;
     let ratio = geom.free_length_m / gauge;
     ((ratio - 1.0).abs() > 0.02).then(|| {
@@ -793,6 +844,31 @@ pub fn gauge_length_warning(
             gauge * 1e3,
             rec.channels[k].name,
             gauge * 1e3
+        )
+    })
+}
+
+/// A warning when the length a travel `i` not known to be measured on the specimen (the
+/// crosshead, an actuator) is divided by is the file's gauge length while the file also states a
+/// different plain length (`TestRecord::gauge_beside_length`): which one the travel
+/// spans is not written down, and the stiffness scales with it (a Bluehill CSV with `Length 32
+/// mm` and `Gauge length 25 mm`: (EA) 22 % low had the length been the 32 mm between the grips).
+fn gauge_not_length(rec: &TestRecord, i: usize, geom: &cablab_measure::Geometry) -> Option<String> {
+    if rec.mount(i) == cablab_ingest::Mount::Specimen
+        || rec.channels[i].dimension != Some(cablab_ingest::units::Dimension::Length)
+    {
+        return None;
+    }
+    let (g, gkv, l, lkv) = rec.gauge_beside_length()?;
+    ((geom.free_length_m / g - 1.0).abs() < 1e-9).then(|| {
+        format!(
+            "the travel {} is divided by the file's '{gkv}' (an extensometer's gauge length), but \
+             the file also says '{lkv}', and the travel is not known to be measured on the \
+             specimen: over {} mm the stiffness would be {:.2} × this one; pass --length-mm with \
+             the length the travel spans (between the grips)",
+            show(&rec.channels[i]),
+            cablab_report::text::fmt_num(l * 1e3, 4),
+            l / g,
         )
     })
 }
@@ -1084,6 +1160,33 @@ pub fn extensometer_removed(rec: &TestRecord, curve: &mut Curve) -> Option<Strin
     ))
 }
 
+/// The control, when it is measured on the specimen, and the first travel of the machine's
+/// (crosshead, actuator) beside it: their channel indices.
+fn specimen_control_and_crosshead(rec: &TestRecord) -> Option<(usize, usize)> {
+    let ci = rec.channel_index(Role::Control)?;
+    if rec.mount(ci) != cablab_ingest::Mount::Specimen {
+        return None;
+    }
+    let ki = (0..rec.channels.len()).find(|&k| {
+        k != ci
+            && rec.channels[k].dimension == Some(cablab_ingest::units::Dimension::Length)
+            && rec.mount(k) == cablab_ingest::Mount::Machine
+    })?;
+    Some((ci, ki))
+}
+
+/// Channel `k`'s SI values on the curve's rows (NaN where a cell is missing).
+fn on_curve_rows(rec: &TestRecord, curve: &Curve, k: usize) -> Option<Vec<f64>> {
+    let raw = rec.values(k)?;
+    Some(
+        curve
+            .rows
+            .iter()
+            .map(|&j| raw.get(j).copied().unwrap_or(f64::NAN))
+            .collect(),
+    )
+}
+
 /// A warning when a specimen-mounted control starts to follow the crosshead: over the first
 /// loading, at one sample its rate against the file's crosshead (machine travel) rises at least
 /// 5× and stays at least 3× what it was, while the force goes on rising against the crosshead
@@ -1094,22 +1197,8 @@ pub fn extensometer_removed(rec: &TestRecord, curve: &mut Curve) -> Option<Strin
 /// specimen's length; read as it was, a yield at 9,193 N on a coupon linear to 15,366 N). The
 /// curve is cut there, as for an extensometer that jumps back ([`extensometer_removed`]).
 pub fn strain_follows_crosshead(rec: &TestRecord, curve: &mut Curve) -> Option<String> {
-    use cablab_ingest::units::Dimension as D;
-    let ci = rec.channel_index(Role::Control)?;
-    if rec.mount(ci) != cablab_ingest::Mount::Specimen {
-        return None;
-    }
-    let ki = (0..rec.channels.len()).find(|&k| {
-        k != ci
-            && rec.channels[k].dimension == Some(D::Length)
-            && rec.mount(k) == cablab_ingest::Mount::Machine
-    })?;
-    let raw = rec.values(ki)?;
-    let x: Vec<f64> = curve
-        .rows
-        .iter()
-        .map(|&k| raw.get(k).copied().unwrap_or(f64::NAN))
-        .collect();
+    let (ci, ki) = specimen_control_and_crosshead(rec)?;
+    let x = on_curve_rows(rec, curve, ki)?;
     let (c, r) = (&curve.control, &curve.response);
     let n = c.len().min(r.len()).min(x.len());
     // The first loading: to the response's largest magnitude.
@@ -1163,6 +1252,58 @@ pub fn strain_follows_crosshead(rec: &TestRecord, curve: &mut Curve) -> Option<S
         b / a,
         f_max,
         rec.channels[rec.channel_index(Role::Response)?].si_unit
+    ))
+}
+
+/// Shortest and longest gauge length a specimen-mounted strain and the machine's travel may imply
+/// between them before [`strain_against_travel`] says one of their units is wrong (m): a clip-on
+/// extensometer's 10 mm less a tenth, a 20 m rope.
+pub const IMPLIED_GAUGE_M: (f64, f64) = (1e-3, 20.0);
+
+/// A warning when a specimen-mounted strain control and the machine's travel cannot both be
+/// right: over the first loading (to the response's largest magnitude) the travel rises by
+/// Δu while the strain rises by Δε, so the length between the grips would be Δu/Δε (the load
+/// train's compliance only lengthens it), and that is outside [`IMPLIED_GAUGE_M`]. A real
+/// Bluehill CSV whose `Strain (%)` values were 1000× what the unit says (8 % where the 50 mm
+/// bar had stretched 1.9 µm) implied 0.02 mm: its EA came out 1000× low and its yield at 555 %
+/// strain, without a word.
+pub fn strain_against_travel(rec: &TestRecord, curve: &Curve) -> Option<String> {
+    let (ci, ki) = specimen_control_and_crosshead(rec)?;
+    if rec.channels[ci].dimension != Some(cablab_ingest::units::Dimension::Ratio) {
+        return None;
+    }
+    // The channels as the file has them (the curve's control may be an elongation by now).
+    let (u, c) = (
+        on_curve_rows(rec, curve, ki)?,
+        on_curve_rows(rec, curve, ci)?,
+    );
+    let r = &curve.response;
+    let n = c.len().min(r.len()).min(u.len());
+    let peak = (0..n)
+        .filter(|&i| r[i].is_finite())
+        .max_by(|&a, &b| r[a].abs().total_cmp(&r[b].abs()))?;
+    if peak < 10 {
+        return None;
+    }
+    let (du, de) = (u[peak] - u[0], c[peak] - c[0]);
+    if !(du.is_finite() && de.is_finite()) || de.abs() < 1e-9 || du.abs() < 1e-12 {
+        return None;
+    }
+    let l = (du / de).abs();
+    if (IMPLIED_GAUGE_M.0..=IMPLIED_GAUGE_M.1).contains(&l) {
+        return None;
+    }
+    Some(format!(
+        "the strain {} rises by {:.4e} while the machine's travel {} rises by {:.4e} m up to the \
+         largest response: together they make the specimen {} mm long between the grips, which \
+         no specimen is — one of the two channels' units is wrong (a strain logged in per mille \
+         or ×1000, a travel in µm); the stiffness and the strains come from {} as read",
+        show(&rec.channels[ci]),
+        de,
+        show(&rec.channels[ki]),
+        du,
+        cablab_report::text::fmt_num(l * 1e3, 3),
+        show(&rec.channels[ci]),
     ))
 }
 
@@ -1302,6 +1443,7 @@ pub fn read_test(
     said.warnings.extend(extensometer_removed(&rec, &mut curve));
     said.warnings
         .extend(strain_follows_crosshead(&rec, &mut curve));
+    said.warnings.extend(strain_against_travel(&rec, &curve));
     said.warnings.extend(control_reset_warning(&rec, &curve));
     let (note, warning) = align_response_sign_of(&rec, kind, &mut curve);
     said.notes.extend(note);
@@ -1548,18 +1690,33 @@ pub fn three_point_signs(kind: TestKind, control: &[f64], response: &[f64]) -> (
     if kind != TestKind::ThreePoint {
         return (1.0, 1.0);
     }
-    let sign_at_peak = |v: &[f64]| {
-        let peak = v
-            .iter()
-            .copied()
-            .fold(0.0f64, |m, x| if x.abs() > m.abs() { x } else { m });
-        if peak < 0.0 {
-            -1.0
-        } else {
-            1.0
-        }
-    };
     (sign_at_peak(control), sign_at_peak(response))
+}
+
+/// A channel that runs negative: its most negative reading more than twice as far from zero as
+/// its most positive one (a one-sided test in a negative convention; not a two-sided cycle, nor a
+/// preload or a rebound of the other sign).
+fn runs_negative(v: &[f64]) -> bool {
+    let (lo, hi) = v
+        .iter()
+        .filter(|x| x.is_finite())
+        .fold((0.0f64, 0.0f64), |(a, b), &x| (a.min(x), b.max(x)));
+    -lo > 2.0 * hi
+}
+
+/// The sign of a channel's reading of largest magnitude (+1 for an empty or all-zero one), so
+/// that a small opposite excursion (a preload, a rebound) does not decide it.
+fn sign_at_peak(v: &[f64]) -> f64 {
+    let peak = v
+        .iter()
+        .copied()
+        .filter(|x| x.is_finite())
+        .fold(0.0f64, |m, x| if x.abs() > m.abs() { x } else { m });
+    if peak < 0.0 {
+        -1.0
+    } else {
+        1.0
+    }
 }
 
 /// [`diag_test`], with the offsets and segments of the characterisation when given (`cond`,
@@ -2293,11 +2450,56 @@ mod tests {
         };
         let note = align_response_sign(&mut against).0.unwrap();
         assert!(note.contains("correlation -1.00"), "{note}");
+        assert!(note.contains("the response's sign is reversed"), "{note}");
         assert!(against
             .response
             .iter()
             .zip(&c)
             .all(|(r, x)| (r - (3.0 * x - 0.01)).abs() < 1e-12));
+        // A tension test whose travel counts downwards under a force logged positive (a TestSuite
+        // export's `_Extension`): the travel is reversed, the forces stay the file's.
+        let travel: Vec<f64> = (0..200).map(|i| -1e-5 * i as f64).collect();
+        let force: Vec<f64> = travel.iter().map(|u| -8e6 * u + 0.3).collect();
+        let mut down = Curve {
+            control: travel.clone(),
+            response: force.clone(),
+            ..Default::default()
+        };
+        let note = align_response_sign(&mut down).0.unwrap();
+        assert!(note.contains("the control's sign is reversed"), "{note}");
+        assert_eq!(down.response, force);
+        assert!(down.control.iter().zip(&travel).all(|(a, b)| *a == -b));
+        // The force logged negative under a rising travel: the force is reversed.
+        let mut neg = Curve {
+            control: force.clone(),
+            response: travel.clone(),
+            ..Default::default()
+        };
+        assert!(align_response_sign(&mut neg)
+            .0
+            .unwrap()
+            .contains("the response's sign is reversed"));
+        assert!(neg.response.iter().all(|v| *v >= 0.0));
+    }
+
+    /// Tension read from a record whose two channels both run negative (a compression test, a
+    /// compression sign convention) is warned about, and nothing is reversed; one negative
+    /// channel is a sign convention (reversed, no warning), and other kinds are not tension.
+    #[test]
+    fn both_channels_negative_in_tension_is_warned_about() {
+        let travel: Vec<f64> = (0..50).map(|i| -1e-5 * i as f64).collect();
+        let force: Vec<f64> = travel.iter().map(|u| 9e5 * u).collect();
+        let pushed = Curve {
+            control: travel.clone(),
+            response: force.clone(),
+            ..Default::default()
+        };
+        let w = compression_in_tension(TestKind::Tension, &pushed).unwrap();
+        assert!(w.contains("both run negative"), "{w}");
+        assert_eq!(compression_in_tension(TestKind::Torsion, &pushed), None);
+        let mut pulled = pushed.clone();
+        pulled.response.iter_mut().for_each(|v| *v = -*v);
+        assert_eq!(compression_in_tension(TestKind::Tension, &pulled), None);
     }
 
     /// A three-point test in any sign convention is turned to the rod's (deflection and force

@@ -24,7 +24,12 @@ pub fn analysis_text(file: &str, an: &Analysis) -> String {
                 st.ci95[1],
                 st.window[0],
                 st.window[1],
-                st.window_unit,
+                // A strain's unit is "1": the window is named by its variable instead.
+                if st.window_unit == "1" {
+                    "(strain)"
+                } else {
+                    st.window_unit
+                },
                 if st.window_automatic { ", automatic" } else { "" }
             );
         }

@@ -28,6 +28,16 @@ pub fn run(a: ConvertArgs) -> CmdResult {
     for n in &rec.notes {
         eprintln!("cablab: note: {}", n.located());
     }
+    // The output's folder is made as `run` makes its report folder (only once the record is read).
+    if let Some(d) = a.output.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(d).map_err(|e| {
+            CliError::input(anyhow::anyhow!(
+                "-o {}: cannot make its folder {}: {e}",
+                a.output.display(),
+                d.display()
+            ))
+        })?;
+    }
     if ext == "parquet" {
         rec.write_parquet(&a.output).map_err(CliError::failed)?;
     } else {

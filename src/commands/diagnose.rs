@@ -69,8 +69,25 @@ pub fn diag_test(path: &std::path::Path, a: &DiagnoseArgs) -> Result<DiagTest, C
     Ok(t)
 }
 
-/// Run `cablab diagnose`.
+/// Run `cablab diagnose`. With `--json`, a failure prints `{files, error}` on stdout as
+/// `analyze --json` prints its own (the message also on stderr, the exit code unchanged).
 pub fn run(a: DiagnoseArgs) -> CmdResult {
+    let r = diagnose_files(&a);
+    if let (Err(e), true) = (&r, a.json) {
+        #[derive(serde::Serialize)]
+        struct Failed {
+            files: Vec<String>,
+            error: String,
+        }
+        print_json(&Failed {
+            files: a.files.iter().map(|f| f.display().to_string()).collect(),
+            error: format!("{e:#}"),
+        })?;
+    }
+    r
+}
+
+fn diagnose_files(a: &DiagnoseArgs) -> CmdResult {
     // With `--kind`, a wrong baseline is refused before any file is read.
     if let Some(k) = a.test.kind {
         cablab_laws::try_param_specs(TestKind::from(k), &a.baseline)
@@ -90,7 +107,7 @@ pub fn run(a: DiagnoseArgs) -> CmdResult {
     let tests = a
         .files
         .iter()
-        .map(|f| diag_test(f, &a))
+        .map(|f| diag_test(f, a))
         .collect::<Result<Vec<_>, _>>()?;
     // A joint diagnosis is of one kind: files whose kinds were read from them must agree.
     let kind = tests.first().map_or(TestKind::Unknown, |t| t.kind);

@@ -14,6 +14,22 @@ pub fn run(a: InspectArgs) -> CmdResult {
     // The file's own kind takes the channel roles as `analyze` will (a flexure file's crosshead,
     // not its strain; `bridge::read_test` reads it again the same way), and an extensometer's
     // travel gives way to its own strain as there.
+    // Else a kind word in the file's name, as `analyze`, `diagnose` and folder mode take it
+    // (`bridge::kind_of_file`).
+    if kind.is_none() && rec.kind == cablab_core::TestKind::Unknown {
+        let control = rec
+            .channel_index(cablab_core::Role::Control)
+            .and_then(|i| rec.channels[i].dimension);
+        let name = a
+            .file
+            .file_name()
+            .map(|n| n.to_string_lossy().to_string())
+            .unwrap_or_default();
+        if let Some(k) = crate::commands::init::kind_from_name(&name, control) {
+            rec.kind = k.value;
+            rec.kind_reason = format!("the {}", k.from);
+        }
+    }
     if kind.is_none() && rec.kind != cablab_core::TestKind::Unknown {
         opts.kind = Some(rec.kind);
         let reason = std::mem::take(&mut rec.kind_reason);

@@ -115,6 +115,12 @@ pub(crate) fn print_run(r: &runner::RunReport, next: &str) -> ExitCode {
             eprintln!("cablab: FAILED {}: {e}", o.id);
         }
     }
+    for (id, earlier) in crate::pipeline::campaign::duplicate_inputs(&r.outcomes) {
+        eprintln!(
+            "cablab: warning: {}",
+            crate::pipeline::campaign::duplicate_words(&id, &earlier)
+        );
+    }
     let model_failed: Vec<_> = r
         .outcomes
         .iter()

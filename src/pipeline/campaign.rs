@@ -161,6 +161,32 @@ fn rel(from: &Path, to: &Path) -> String {
     }
 }
 
+/// Tests whose input file has the same bytes as an earlier test's (campaign order): (id, the
+/// earlier test's id). Two exports of two specimens never agree to the byte (their noise
+/// differs): a file copied into the campaign twice would count one specimen as two, halve its
+/// series' spread and weigh its mean, so the run says so.
+pub fn duplicate_inputs(outcomes: &[TestOutcome]) -> Vec<(String, String)> {
+    let mut first: std::collections::HashMap<&str, &str> = std::collections::HashMap::new();
+    let mut out = Vec::new();
+    for o in outcomes.iter().filter(|o| !o.input_sha256.is_empty()) {
+        match first.get(o.input_sha256.as_str()) {
+            Some(earlier) => out.push((o.id.clone(), earlier.to_string())),
+            None => {
+                first.insert(&o.input_sha256, &o.id);
+            }
+        }
+    }
+    out
+}
+
+/// The words for one of [`duplicate_inputs`]: what the run does with it and what to do.
+pub fn duplicate_words(id: &str, earlier: &str) -> String {
+    format!(
+        "{id} has the same bytes as {earlier}: both are evaluated and counted in their series, as \
+         two specimens; remove one if it is a copy of the same test"
+    )
+}
+
 /// Write summary, tables, plots, report and manifest into `out_dir`.
 pub fn write_campaign_outputs(
     c: &Campaign,
@@ -265,6 +291,7 @@ pub fn write_campaign_outputs(
         "n_tests": outcomes.len(),
         "n_failed": outcomes.iter().filter(|o| o.error.is_some()).count(),
         "skipped": c.skipped.iter().map(|(id, why)| serde_json::json!({"id": id, "why": why})).collect::<Vec<_>>(),
+        "duplicates": duplicate_inputs(outcomes).iter().map(|(id, same)| serde_json::json!({"id": id, "same_bytes_as": same})).collect::<Vec<_>>(),
         "groups": groups,
         "piecewise": table2,
         "tests": tests,

@@ -526,6 +526,8 @@ fn stages(
     out.warnings
         .extend(crate::bridge::strain_follows_crosshead(&rec, &mut curve));
     out.warnings
+        .extend(crate::bridge::strain_against_travel(&rec, &curve));
+    out.warnings
         .extend(crate::bridge::control_reset_warning(&rec, &curve));
     let (note, warning) = crate::bridge::align_response_sign_of(&rec, t.kind, &mut curve);
     out.notes.extend(note);

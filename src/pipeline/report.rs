@@ -482,6 +482,12 @@ pub fn html(
     for (id, why) in &c.skipped {
         summary.push(format!("Skipped {id}: {why}"));
     }
+    for (id, earlier) in super::campaign::duplicate_inputs(outcomes) {
+        summary.push(format!(
+            "Warning: {}.",
+            super::campaign::duplicate_words(&id, &earlier)
+        ));
+    }
     // Campaign-level diagnosis: the verdicts per series, counted; the words are in each test's
     // section.
     let mut diag = String::new();

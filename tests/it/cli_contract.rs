@@ -418,6 +418,24 @@ fn inspect_strips_units_from_names_and_warns_on_text_cells() {
     );
 }
 
+/// A file whose contents do not say its kind but whose name does: `inspect` reports the kind
+/// from the name, as `analyze`, `diagnose` and folder mode take it; a name without a kind word
+/// leaves it unknown.
+#[test]
+fn inspect_takes_the_kind_from_the_file_name_as_analyze_does() {
+    let dir = tempfile::tempdir().unwrap();
+    let body =
+        "Time (s),Displacement (mm),Force (N)\n0,0,0\n0.1,0.01,5\n0.2,0.02,10\n0.3,0.03,15\n";
+    for (name, kind) in [("wire_tension_1.csv", "tension"), ("wire_1.csv", "unknown")] {
+        let p = dir.path().join(name);
+        std::fs::write(&p, body).unwrap();
+        let out = run(&["inspect", p.to_str().unwrap(), "--json"]);
+        assert_eq!(out.code, 0, "{}", out.stderr);
+        let r: Value = serde_json::from_str(&out.stdout).unwrap();
+        assert_eq!(r["kind"], kind, "{name}");
+    }
+}
+
 /// Every demo file (raw_data/, three layouts): `inspect` reports the layout the virtual lab wrote,
 /// the kind from the metadata and TRUTH.toml's row count; the label is in the metadata.
 #[test]
@@ -586,6 +604,18 @@ fn convert_writes_si_csv_and_parquet_and_nothing_on_error() {
         names_in(dir.path()),
         ["junk.bin", "raw.csv", "x.csv", "x.parquet"]
     );
+
+    // An output in a folder that does not exist yet: the folder is made, as `run` makes its
+    // report folder, and the record written there.
+    let nested = dir.path().join("out/si/raw.csv");
+    let out = run(&[
+        "convert",
+        raw.to_str().unwrap(),
+        "-o",
+        nested.to_str().unwrap(),
+    ]);
+    assert_eq!(out.code, 0, "{}", out.stderr);
+    assert_eq!(read_csv(&nested).1.len(), 3);
 }
 
 /// Outputs are ordinary files (0644 like every other cablab output), not the temporary file's
@@ -1173,6 +1203,23 @@ fn diagnose_unknown_baseline_exits_2() {
         "diagnose {DEMO_TENSION} --kind tension --baseline bogus_law"
     )));
     assert!(msg.contains("bogus_law"), "{msg}");
+}
+
+/// With `--json`, a diagnosis that cannot run (tests of two kinds) prints `{files, error}` on
+/// stdout, as `analyze --json` does, and still exits 2 with the message on stderr.
+#[test]
+fn diagnose_json_failure_is_json() {
+    let r = run(&cmd(&format!(
+        "diagnose {DEMO_TENSION} raw_data/cable/torsion_360deg_1.dat --json"
+    )));
+    assert_eq!(r.code, 2, "{}", r.stderr);
+    let v: serde_json::Value = serde_json::from_str(&r.stdout).expect("JSON on stdout");
+    assert_eq!(v["files"].as_array().map(Vec::len), Some(2), "{v}");
+    let e = v["error"].as_str().unwrap();
+    assert!(
+        e.contains("one kind") && r.stderr.contains("one kind"),
+        "{e}"
+    );
 }
 
 // ------------------------------------------------------------------------------ 6. bad input

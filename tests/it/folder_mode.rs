@@ -687,3 +687,53 @@ fn specimens_side_by_side_are_a_test_each() {
     let v = run_in(d.path(), &["verify", "reports/lab/manifest.json"]);
     assert_eq!(v.code, 0, "{}{}", v.stdout, v.stderr);
 }
+
+/// A file copied into the campaign twice counts one specimen as two (its series' spread comes out
+/// zero): both are still evaluated, and the run says which has the same bytes as which, on the
+/// terminal, in `summary.json` and in the report; two different files of one series are not
+/// flagged.
+#[test]
+fn a_file_copied_twice_is_named_as_a_duplicate() {
+    let tmp = tempfile::tempdir().unwrap();
+    let src = root().join("raw_data/cable");
+    copy(
+        &src.join("tension_40N_1.TXT"),
+        &tmp.path().join("in/tension_40N_1.TXT"),
+    );
+    copy(
+        &src.join("tension_40N_1.TXT"),
+        &tmp.path().join("in/copy_of_40N_1.TXT"),
+    );
+    copy(
+        &src.join("tension_40N_2.csv"),
+        &tmp.path().join("in/tension_40N_2.csv"),
+    );
+    let o = run_in(tmp.path(), &["run", "in", "-q", "--no-diagnosis"]);
+    assert_eq!(o.code, 0, "{}", o.stderr);
+    assert!(
+        o.stderr.contains("has the same bytes as")
+            && o.stderr.matches("has the same bytes as").count() == 1,
+        "{}",
+        o.stderr
+    );
+    let s: Value =
+        serde_json::from_slice(&std::fs::read(tmp.path().join("reports/in/summary.json")).unwrap())
+            .unwrap();
+    assert_eq!(s["n_tests"], 3);
+    let d = s["duplicates"].as_array().unwrap();
+    assert_eq!(d.len(), 1, "{d:?}");
+    let pair = [
+        d[0]["id"].as_str().unwrap(),
+        d[0]["same_bytes_as"].as_str().unwrap(),
+    ];
+    assert!(
+        pair.iter().any(|p| p.ends_with("copy_of_40N_1.TXT")),
+        "{pair:?}"
+    );
+    assert!(
+        pair.iter().any(|p| p.ends_with("/tension_40N_1.TXT")),
+        "{pair:?}"
+    );
+    let html = std::fs::read_to_string(tmp.path().join("reports/in/index.html")).unwrap();
+    assert!(html.contains("has the same bytes as"));
+}

@@ -887,3 +887,107 @@ fn a_four_point_force_deflection_log_is_refused_saying_why() {
         "{err}"
     );
 }
+
+/// A Bluehill-style CSV whose `Strain (%)` was written 1000× what its unit says, beside the
+/// machine's `Extension (mm)` (the layout of a public export whose values were mangled so; this
+/// file is generated here): the two imply a specimen 0.05 mm long between the grips, and the
+/// warning says one unit is wrong. The same file with the strain as its unit says is not warned
+/// about, and gives a stiffness 1000× that of the mangled one.
+#[test]
+fn a_strain_unit_that_the_travel_contradicts_is_warned_about() {
+    let dir = tempfile::tempdir().unwrap();
+    let write = |name: &str, strain_scale: f64| {
+        let (gauge, ea) = (0.05, 2.5e7); // 50 mm, N
+        let mut s = String::from("Time (s),Extension (mm),Strain (%),Load (kN)\n");
+        for i in 0..=200 {
+            let eps = 4e-3 * i as f64 / 200.0;
+            let force = ea * eps.min(2e-3) + 0.02 * ea * (eps - 2e-3).max(0.0);
+            let ext_mm = 1e3 * (gauge * eps + force / 5e7);
+            s.push_str(&format!(
+                "{},{:.6},{:.6},{:.5}\n",
+                0.1 * i as f64,
+                ext_mm,
+                100.0 * eps * strain_scale,
+                force / 1e3
+            ));
+        }
+        let p = dir.path().join(name);
+        std::fs::write(&p, s).unwrap();
+        p
+    };
+    let analyzed = |p: &Path| {
+        analyze_ok(
+            p,
+            &[
+                "--kind",
+                "tension",
+                "--length-mm",
+                "50",
+                "--diameter-mm",
+                "12",
+            ],
+        )
+    };
+    let grips = |v: &Value| {
+        v["warnings"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .filter_map(|w| w.as_str())
+            .find(|w| w.contains("long between the grips"))
+            .map(str::to_string)
+    };
+    let bad = analyzed(&write("mangled.csv", 1000.0));
+    let w = grips(&bad).expect("a warning on the strain's unit");
+    assert!(w.contains("'Strain'") && w.contains("'Extension'"), "{w}");
+    let good = analyzed(&write("right.csv", 1.0));
+    assert_eq!(grips(&good), None, "{}", good["warnings"]);
+    let (k_bad, k_good) = (
+        bad["stiffness"]["value"].as_f64().unwrap(),
+        good["stiffness"]["value"].as_f64().unwrap(),
+    );
+    assert!((k_good / 2.5e7 - 1.0).abs() < 0.02, "EA {k_good}");
+    assert!(
+        (k_good / k_bad / 1000.0 - 1.0).abs() < 0.02,
+        "{k_good} {k_bad}"
+    );
+}
+
+/// The demo's Bluehill tension file with a `Gauge length` of 25 mm written beside its `Length`
+/// of 32 mm: the crosshead travel is divided by the gauge length (the reader's rule), and the
+/// warning gives the other length and the factor the stiffness would change by; the file as it
+/// is (one length) is not warned about, and its stiffness is that factor above.
+#[test]
+fn a_gauge_length_beside_a_length_under_a_crosshead_is_warned_about() {
+    let dir = tempfile::tempdir().unwrap();
+    let src = std::fs::read_to_string(crate::common::root().join(DEMO_TENSION)).unwrap();
+    let mut lines: Vec<&str> = src.lines().collect();
+    let at = lines
+        .iter()
+        .position(|l| l.starts_with("\"Length\""))
+        .unwrap()
+        + 1;
+    lines.insert(at, "\"Gauge length\",\"25\",\"mm\"");
+    let gauged = dir.path().join("gauged.csv");
+    std::fs::write(&gauged, lines.join("\n") + "\n").unwrap();
+    let analyzed = |p: &Path| analyze_ok(p, &[]);
+    let warned = |v: &Value| {
+        v["warnings"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .filter_map(|w| w.as_str())
+            .any(|w| {
+                w.contains("'Gauge length: 25 mm'")
+                    && w.contains("'Length: 32 mm'")
+                    && w.contains("1.28 ×")
+            })
+    };
+    let g = analyzed(&gauged);
+    assert!(warned(&g), "{}", g["warnings"]);
+    let plain = analyzed(&crate::common::root().join(DEMO_TENSION));
+    assert!(!warned(&plain));
+    let ratio =
+        plain["stiffness"]["value"].as_f64().unwrap() / g["stiffness"]["value"].as_f64().unwrap();
+    assert!((ratio - 32.0 / 25.0).abs() < 1e-6, "{ratio}");
+}

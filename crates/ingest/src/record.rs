@@ -1320,6 +1320,13 @@ impl TestRecord {
         crate::roles::extensometer_gauge_length(&self.metadata, &self.channels[i].name)
     }
 
+    /// The metadata's gauge length beside a different plain length, the specimen's length taken
+    /// from the former with no free length stated: `(gauge m, "key: value", length m, "key:
+    /// value")`.
+    pub fn gauge_beside_length(&self) -> Option<(f64, String, f64, String)> {
+        crate::roles::gauge_beside_length(&self.metadata)
+    }
+
     /// Index of the channel with `role` (first one).
     pub fn channel_index(&self, role: Role) -> Option<usize> {
         self.channels.iter().position(|c| c.role == role)

@@ -1114,6 +1114,29 @@ const LENGTH_KEY_GROUPS: [&[&str]; 3] = [
     ],
 ];
 
+/// The metadata's gauge length and its plain length when the specimen's length was taken from
+/// the former while the latter says otherwise (by more than 2 %), with no free length or span
+/// stated: `(gauge m, "key: value", length m, "key: value")`. Which of the two the machine's
+/// travel spans is not written down (a `Length` may be the whole specimen or the length between
+/// the grips), so the record's reader takes the gauge length and the caller says so.
+pub fn gauge_beside_length(meta: &[(String, String)]) -> Option<(f64, String, f64, String)> {
+    if find_key(meta, LENGTH_KEY_GROUPS[0]).is_some() {
+        return None;
+    }
+    let (gk, gv) = find_key(meta, LENGTH_KEY_GROUPS[1])?;
+    let (lk, lv) = find_key(meta, LENGTH_KEY_GROUPS[2])?;
+    let (g, _) = length_m(&gk, &gv)?;
+    let (l, _) = length_m(&lk, &lv)?;
+    ((l / g - 1.0).abs() > 0.02).then(|| {
+        (
+            g,
+            format!("{}: {}", gk.trim(), gv.trim()),
+            l,
+            format!("{}: {}", lk.trim(), lv.trim()),
+        )
+    })
+}
+
 /// Metadata keys of a gauge length (testXpert's `Messlänge Standardweg`, Bluehill's `Tensile
 /// strain gauge length`, ...).
 const GAUGE_LENGTH_KEYS: &[&str] = &[

@@ -1016,6 +1016,9 @@ pub fn analyze(
     let mut stiffness = stiffness;
     if let Some(s) = stiffness.as_mut() {
         s.warnings = stiffness_doubts(s);
+        if let Some(e) = elastic.as_ref().filter(|e| e.automatic) {
+            s.warnings.extend(stiff_start(&fx, &fy, e, serial.0.phi));
+        }
         warnings.extend(s.warnings.iter().map(|w| format!("stiffness: {w}")));
     }
 
@@ -1661,6 +1664,52 @@ fn refuse_stiffness(s: &Stiffness, first_rise: f64, sigma_r: f64) -> Option<Stri
     None
 }
 
+/// Largest share of the first loading's peak response at which an automatic window may end
+/// before [`stiff_start`] looks past it.
+pub const STIFF_START_SHARE: f64 = 0.1;
+
+/// The automatic window `e` on the first loading (`x`, `y`) when it is only the loading's stiff
+/// start: it ends below [`STIFF_START_SHARE`] of the peak response, and past it a straight
+/// stretch at least three times as long, over at least three times the response, with r² ≥ 0.99
+/// and a slope below 0.8 × the window's, runs on to the bend. An extensometer's knife edges
+/// seating, or a preload settling, make such a start; a piecewise-elastic law's first slope does
+/// too (which the window then rightly is), so nothing is changed: the warning gives the other
+/// stretch's range, in percent of the peak as `--fit-window` takes it, and its slope. Seen on two
+/// real exports: a Bluehill aluminium test (17 samples below 5 % of the peak, E 167 GPa; the
+/// stretch after it 78 GPa) and the steel 1045 extensometer record (0–0.05 % strain, 313 GPa for
+/// the reference's 250).
+fn stiff_start(x: &[f64], y: &[f64], e: &ElasticRange, phi: f64) -> Option<String> {
+    let peak = y.iter().fold(0.0f64, |m, v| m.max(*v));
+    let (a, b) = e.window_idx;
+    if !(peak > 0.0) || b < 1 || b > y.len() || y[b - 1] > STIFF_START_SHARE * peak {
+        return None;
+    }
+    let (rx, ry) = (&x[b..], &y[b..]);
+    if rx.len() < 30 {
+        return None;
+    }
+    let next = auto_elastic_range_ar1(rx, ry, phi).ok()?;
+    let (c, d) = next.window_idx;
+    let span = |lo: usize, hi: usize, v: &[f64]| v[hi - 1] - v[lo];
+    let longer = next.fit.n >= 3 * e.fit.n && span(c, d, ry) >= 3.0 * span(a, b, y);
+    let ratio = next.fit.slope / e.fit.slope;
+    if !(longer && next.fit.r2 >= 0.99 && ratio < 0.8 && ratio > 0.0) {
+        return None;
+    }
+    let pct = |v: f64| (100.0 * v / peak).round();
+    let (q0, q1) = (pct(ry[c]), pct(ry[d - 1]));
+    Some(format!(
+        "the automatic window ends at {:.0} % of the first loading's peak response: it is the \
+         loading's stiff start (an extensometer seating, a preload settling, or a first elastic \
+         slope); the longer straight stretch after it, {q0:.0}–{q1:.0} % of the peak ({} samples, \
+         r² {:.4}), has {ratio:.2} × its slope: if the start is not the specimen's, pass \
+         --fit-window {q0:.0}%,{q1:.0}%",
+        pct(y[b - 1]),
+        next.fit.n,
+        next.fit.r2,
+    ))
+}
+
 /// Doubts about a stiffness that is printed: a negative value, a 95 % interval that contains
 /// zero, a poor straight-line fit (r² < 0.99), few samples (< 20), a wide interval (half-width
 /// > 5 % of the value).
@@ -2068,5 +2117,57 @@ mod flat_section_tests {
         assert!((off(TestKind::Tension) - 0.002).abs() < 1e-15);
         // Without a section or a diameter, bending has no default.
         assert!(default_yield_offset_in(TestKind::PureBending, &g, None).is_err());
+    }
+}
+
+#[cfg(test)]
+mod stiff_start_tests {
+    use super::*;
+
+    /// A first loading with a stiff start: slope 2.1 k up to 4 % of the peak, then k to a bend at
+    /// 60 % and a plastic slope after it (a Bluehill aluminium test's extensometer seating).
+    fn seated(start_share: f64) -> (Vec<f64>, Vec<f64>) {
+        let (k, peak) = (1.0e6, 1000.0);
+        let y1 = start_share * peak;
+        let x1 = y1 / (2.1 * k);
+        let x2 = x1 + (0.6 * peak - y1) / k;
+        let n = 600;
+        let x: Vec<f64> = (0..n).map(|i| 1.6e-3 * i as f64 / n as f64).collect();
+        let y = x
+            .iter()
+            .enumerate()
+            .map(|(i, &v)| {
+                let clean = if v < x1 {
+                    2.1 * k * v
+                } else if v < x2 {
+                    y1 + k * (v - x1)
+                } else {
+                    0.6 * peak + 0.05 * k * (v - x2)
+                };
+                clean + 0.2 * (((i * 7919) % 101) as f64 / 50.0 - 1.0)
+            })
+            .collect();
+        (x, y)
+    }
+
+    /// The stiff start is warned about with the stretch after it (its range in percent of the
+    /// peak, as `--fit-window` takes it, and its slope over the window's); a first loading whose
+    /// window reaches past a tenth of the peak is not.
+    #[test]
+    fn a_window_on_the_stiff_start_names_the_stretch_after_it() {
+        let (x, y) = seated(0.04);
+        let e = auto_elastic_range_ar1(&x, &y, 0.0).unwrap();
+        let w = stiff_start(&x, &y, &e, 0.0).expect("a stiff start");
+        assert!(w.contains("--fit-window"), "{w}");
+        let ratio: f64 = w
+            .split(" × its slope")
+            .next()
+            .and_then(|h| h.rsplit(' ').next())
+            .and_then(|r| r.parse().ok())
+            .unwrap();
+        assert!((ratio - 1.0 / 2.1).abs() < 0.05, "{w}");
+        let (x, y) = seated(0.3);
+        let e = auto_elastic_range_ar1(&x, &y, 0.0).unwrap();
+        assert_eq!(stiff_start(&x, &y, &e, 0.0), None);
     }
 }
