@@ -499,6 +499,31 @@ pub fn survey(paths: &[PathBuf], d: &InferArgs) -> Result<Survey, CliError> {
             .or_else(|| flag(d.length_mm, "--length-mm"));
         let mut diameter_mm = metadata_or_flag(&rec, rec.specimen.diameter_m, DIAMETER_KEYS)
             .or_else(|| flag(d.diameter_mm, "--diameter-mm"));
+        // A flag is for the files that do not say: where a file says otherwise, its own value
+        // is taken, and the user is told (the same flag to `analyze` overrides the file).
+        let unused = |given: Option<f64>, taken: &Option<Sourced<f64>>, flag: &str| {
+            let (g, t) = (given?, taken.as_ref()?);
+            ((t.value / g - 1.0).abs() > 0.01).then(|| {
+                format!(
+                    "{flag} {g} is not used for this file: it says {} mm ({}); the flag is for \
+                     files that do not say — to override the file, write the value in a \
+                     pipeline (`cablab init`, then edit it)",
+                    t.value, t.from
+                )
+            })
+        };
+        notes.extend(unused(d.length_mm, &length_mm, "--length-mm"));
+        notes.extend(unused(d.diameter_mm, &diameter_mm, "--diameter-mm"));
+        if let (Some(given), Some(k)) = (d.kind, kind.as_ref()) {
+            let given: TestKind = given.into();
+            if given != k.value {
+                notes.push(format!(
+                    "--kind {given} is not used for this file: it says {} ({}); the flag is for \
+                     files that do not say",
+                    k.value, k.from
+                ));
+            }
+        }
         // Specimens a sheet each (a test each in the campaign) may state different lengths or
         // diameters: a value of the pipeline would then be one sheet's for all. Each test
         // takes its own sheet's instead.

@@ -737,3 +737,50 @@ fn a_file_copied_twice_is_named_as_a_duplicate() {
     let html = std::fs::read_to_string(tmp.path().join("reports/in/index.html")).unwrap();
     assert!(html.contains("has the same bytes as"));
 }
+
+/// A `--length-mm`, `--diameter-mm` or `--kind` given to folder mode is for the files that do not
+/// say: a file that says otherwise keeps its own value (the stiffness is the file's), and the
+/// terminal says the flag was not used for it and how to override the file.
+#[test]
+fn a_flag_a_file_contradicts_is_said_to_be_unused() {
+    let tmp = tempfile::tempdir().unwrap();
+    let src = root().join("raw_data/cable/tension_40N_1.TXT");
+    copy(&src, &tmp.path().join("in/tension_40N_1.TXT"));
+    let o = run_in(
+        tmp.path(),
+        &[
+            "run",
+            "in",
+            "-q",
+            "--no-diagnosis",
+            "--length-mm",
+            "64",
+            "--diameter-mm",
+            "3.5",
+            "--kind",
+            "torsion",
+        ],
+    );
+    assert_eq!(o.code, 0, "{}", o.stderr);
+    for flag in ["--length-mm 64", "--diameter-mm 3.5", "--kind torsion"] {
+        assert!(
+            o.stderr
+                .contains(&format!("{flag} is not used for this file")),
+            "{flag}: {}",
+            o.stderr
+        );
+    }
+    let k = stiffness_by_file(&tmp.path().join("reports/in/summary.json"));
+    let ea = k["tension_40N_1.TXT"];
+    assert!((ea / 7.96e4 - 1.0).abs() < 0.02, "EA {ea}");
+    // The flag that agrees with the file is not mentioned.
+    let o = run_in(
+        tmp.path(),
+        &["run", "in", "-q", "--no-diagnosis", "--length-mm", "32"],
+    );
+    assert!(
+        !o.stderr.contains("is not used for this file"),
+        "{}",
+        o.stderr
+    );
+}
