@@ -354,9 +354,10 @@ pub fn align_response_sign_of(
 
 /// A record read as tension whose control and response both run negative ([`runs_negative`]:
 /// the travel closing, the force pushing): a compression test, or tension logged in a
-/// compression sign convention. Nothing is reversed (the stiffness comes out positive either way); the warning says what the
-/// values' signs mean, since cablab has no compression kind and a compression record's yield
-/// and "break" are buckling and crushing, not a tensile specimen's.
+/// compression sign convention. Nothing is reversed (the stiffness comes out positive either
+/// way); the warning says what the values' signs mean, since cablab has no compression kind and
+/// a compression record's yield and "break" are buckling and crushing, not a tensile
+/// specimen's.
 fn compression_in_tension(kind: TestKind, curve: &Curve) -> Option<String> {
     (kind == TestKind::Tension
         && curve.control.len() >= 3

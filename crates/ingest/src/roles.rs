@@ -538,6 +538,9 @@ pub(crate) fn kind_from_text(texts: &[&str]) -> Option<(TestKind, String)> {
                 "traccion",
                 "trazione",
                 "traction",
+                // Polish: `Odkształcenie przy rozciąganiu` (the strain in tension), `próba
+                // rozciągania` (a tensile test).
+                "rozciągan",
             ],
         ),
         (
@@ -593,12 +596,51 @@ pub(crate) fn kind_from_text(texts: &[&str]) -> Option<(TestKind, String)> {
                 }
             }
         }
+        for (k, code) in KIND_STANDARDS {
+            if names_standard(&l, code) && !found.iter().any(|(f, _)| f == k) {
+                found.push((*k, format!("metadata names the standard '{code}'")));
+            }
+        }
     }
     if found.len() == 1 {
         found.pop()
     } else {
         None
     }
+}
+
+/// Test standards a machine's software writes into a file's metadata (`Norm: DIN EN ISO 6892-1`,
+/// `Norma: EN 14651`), each for one kind: metallic tensile tests (ISO 6892-1, ASTM E8, E111),
+/// plastics and composites in tension (ISO 527, ASTM D638, D3039), three-point flexure (ISO 178,
+/// ASTM D790, EN 14651's notched fibre-concrete beam, ISO 14125) and wire torsion (ISO 7800). A
+/// code counts only as a whole number (`iso 1783` is not ISO 178), lower case.
+const KIND_STANDARDS: &[(TestKind, &str)] = &[
+    (TestKind::Tension, "iso 6892"),
+    (TestKind::Tension, "en 6892"),
+    (TestKind::Tension, "astm e8"),
+    (TestKind::Tension, "astm e111"),
+    (TestKind::Tension, "iso 527"),
+    (TestKind::Tension, "astm d638"),
+    (TestKind::Tension, "astm d3039"),
+    (TestKind::Tension, "d3039"),
+    (TestKind::Tension, "d638"),
+    (TestKind::ThreePoint, "iso 178"),
+    (TestKind::ThreePoint, "astm d790"),
+    (TestKind::ThreePoint, "d790"),
+    (TestKind::ThreePoint, "en 14651"),
+    (TestKind::ThreePoint, "iso 14125"),
+    (TestKind::Torsion, "iso 7800"),
+];
+
+/// Whether lower-case `text` names the standard `code` as a whole: no letter or digit right
+/// before it, no digit right after it (`astm d638-14` and `iso 6892-1` count, `iso 1783` and
+/// `ad638` do not).
+fn names_standard(text: &str, code: &str) -> bool {
+    text.match_indices(code).any(|(a, _)| {
+        let before = text[..a].chars().next_back();
+        let after = text[a + code.len()..].chars().next();
+        before.is_none_or(|c| !c.is_alphanumeric()) && after.is_none_or(|c| !c.is_ascii_digit())
+    })
 }
 
 /// Test kind from the channel dimensions, where they leave no doubt: torque against angle with no
@@ -1537,6 +1579,29 @@ mod tests {
         );
         assert!(kind_from_text(&["Kraftgeregelt 3,9 kN/s"]).is_none());
         assert!(kind_from_text(&["tension", "torsion"]).is_none());
+        // Polish tension words, and standards named in the metadata.
+        assert_eq!(
+            kind_from_text(&["Odkształcenie przy rozciąganiu"])
+                .unwrap()
+                .0,
+            TestKind::Tension
+        );
+        for (text, kind) in [
+            ("Norma:    EN 14651", TestKind::ThreePoint),
+            ("Prüfnorm: DIN EN ISO 6892-1:2020", TestKind::Tension),
+            ("Method: ASTM D638-14 Type I", TestKind::Tension),
+            ("ISO 178", TestKind::ThreePoint),
+            ("Drahtprüfung nach ISO 7800", TestKind::Torsion),
+        ] {
+            let (k, why) = kind_from_text(&[text]).unwrap();
+            assert_eq!(k, kind, "{text}");
+            assert!(why.contains("standard"), "{why}");
+        }
+        for text in ["Probe 16892-1", "ISO 1783", "order AD638", "EN 146510"] {
+            assert!(kind_from_text(&[text]).is_none(), "{text}");
+        }
+        // A standard of one kind beside a word of another: no kind.
+        assert!(kind_from_text(&["ISO 178", "tensile"]).is_none());
     }
 
     #[test]
