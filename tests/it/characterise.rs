@@ -559,5 +559,14 @@ fn real_wavematrix_torsion() {
         assert!(k < 0.0, "{name}: torque falls as the rotation rises");
         assert!(k.abs() > 0.1 && k.abs() < 1.0, "{name}: |k| {k}");
         assert!(a.warnings.iter().any(|w| w.contains("not positive")));
+        // A negative slope is no elastic behaviour, however well its loops close.
+        assert!(
+            !matches!(
+                a.behaviour,
+                Behaviour::LinearElastic | Behaviour::PiecewiseLinearElastic
+            ),
+            "{name}: {}",
+            a.behaviour.as_str()
+        );
     }
 }

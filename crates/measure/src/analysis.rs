@@ -1184,10 +1184,13 @@ pub fn analyze(
             .iter()
             .all(|c| c.coincide == Some(true) && c.residual_significant != Some(true));
     let permanent = cyc.iter().any(|c| c.residual_significant == Some(true));
+    // A slope that is not positive is no elastic behaviour (a response against its control that
+    // no sign convention explains, warned above): `other`, not `linear_elastic`.
+    let positive = stiffness.as_ref().is_some_and(|s| s.value > 0.0);
     let behaviour = if judged.is_empty() {
         notes.push("no unloading to judge reversibility by".into());
-        monotonic_class(bend.is_some(), stiffness.is_some(), &mut warnings)
-    } else if reversible && stiffness.is_some() {
+        monotonic_class(bend.is_some(), positive, &mut warnings)
+    } else if reversible && positive {
         if bend.is_some() {
             Behaviour::PiecewiseLinearElastic
         } else {
