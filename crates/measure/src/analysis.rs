@@ -1677,10 +1677,11 @@ pub const STIFF_START_SHARE: f64 = 0.1;
 /// and a slope below 0.8 × the window's, runs on to the bend. An extensometer's knife edges
 /// seating, or a preload settling, make such a start; a piecewise-elastic law's first slope does
 /// too (which the window then rightly is), so nothing is changed: the warning gives the other
-/// stretch's range, in percent of the peak as `--fit-window` takes it, and its slope. Seen on two
-/// real exports: a Bluehill aluminium test (17 samples below 5 % of the peak, E 167 GPa; the
-/// stretch after it 78 GPa) and the steel 1045 extensometer record (0–0.05 % strain, 313 GPa for
-/// the reference's 250).
+/// stretch's range, in percent of the peak as `--fit-window` takes it, and its slope. Seen on a
+/// real Bluehill aluminium export (17 samples up to 6 % of the peak, E 167 GPa; the stretch after
+/// it, 6–36 %, 78 GPa). The steel 1045 extensometer record's window (0–0.05 % strain, E 313 GPa
+/// for the reference's 250) reaches 18 % of its peak on a curve that softens throughout: not
+/// this case, and not warned this way.
 fn stiff_start(x: &[f64], y: &[f64], e: &ElasticRange, phi: f64) -> Option<String> {
     let peak = y.iter().fold(0.0f64, |m, v| m.max(*v));
     let (a, b) = e.window_idx;
