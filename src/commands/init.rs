@@ -487,6 +487,16 @@ pub fn survey(paths: &[PathBuf], d: &InferArgs) -> Result<Survey, CliError> {
                 value: rec.kind,
                 from: rec.kind_reason.clone(),
             })
+        } else if by_name.is_none() && compression_word(&name).is_some() {
+            // The name says compression: `--kind` is for files that do not say, and this one is
+            // left out as a compression test (`no_kind_why`), as without the flag.
+            if let Some(k) = d.kind {
+                notes.push(format!(
+                    "--kind {} is not used for this file: its name says compression",
+                    TestKind::from(k)
+                ));
+            }
+            None
         } else {
             by_name.or_else(|| {
                 d.kind.map(|k| Sourced {
@@ -707,6 +717,20 @@ fn gap_list(s: &Survey) -> Option<(usize, String)> {
     Some((by.values().map(Vec::len).sum(), m))
 }
 
+/// The word of a file name (any case) that says the test is a compression test, at the start of
+/// a word of the name (`druckversuch_3`, `Compression-2`; not `Ausdruck_01`).
+fn compression_word(name: &str) -> Option<&'static str> {
+    let name = name.to_lowercase();
+    ["compression", "druck", "compress"].into_iter().find(|w| {
+        name.match_indices(*w).any(|(a, _)| {
+            name[..a]
+                .chars()
+                .next_back()
+                .is_none_or(|c| !c.is_alphabetic())
+        })
+    })
+}
+
 /// Why a file whose kind nothing states is left out of a folder-mode run: a compression test
 /// (its name says so) is not one of cablab's kinds; otherwise the kind is simply not stated.
 pub fn no_kind_why(f: &Found) -> String {
@@ -715,11 +739,8 @@ pub fn no_kind_why(f: &Found) -> String {
         .file_name()
         .unwrap_or_default()
         .to_string_lossy()
-        .to_lowercase();
-    match ["compression", "druck", "compress"]
-        .iter()
-        .find(|w| name.contains(*w))
-    {
+        .to_string();
+    match compression_word(&name) {
         Some(w) => format!(
             "a compression test (file name '{w}'): cablab evaluates tension, torsion, three_point and pure_bending"
         ),

@@ -784,3 +784,50 @@ fn a_flag_a_file_contradicts_is_said_to_be_unused() {
         o.stderr
     );
 }
+
+/// `--kind` is for the files that do not say: a file whose name says compression is still left
+/// out as a compression test (a torsion forced on a concrete cylinder's export failed its kind
+/// check), with a note that the flag was not used; a name that only contains the letters
+/// (`Ausdruck`, a printout) takes the flag.
+#[test]
+fn kind_given_does_not_turn_a_compression_file_into_a_test() {
+    let tmp = tempfile::tempdir().unwrap();
+    copy(
+        &root().join("tests/data/bam__mts793_cube_compression.dat"),
+        &tmp.path().join("in/bam__mts793_cube_compression.dat"),
+    );
+    let rows: String = (0..=60)
+        .map(|i| {
+            let a = 0.5 * i as f64;
+            format!("{},{a},{}\n", 0.1 * i as f64, 0.002 * a)
+        })
+        .collect();
+    std::fs::write(
+        tmp.path().join("in/Ausdruck_01.csv"),
+        format!("Time (s),Angle (deg),Torque (N.m)\n{rows}"),
+    )
+    .unwrap();
+    let o = run_in(
+        tmp.path(),
+        &["run", "in", "-q", "--no-diagnosis", "--kind", "torsion"],
+    );
+    assert_eq!(o.code, 0, "{}", o.stderr);
+    assert!(
+        o.stderr
+            .contains("--kind torsion is not used for this file: its name says compression")
+            && o.stderr
+                .contains("skipped in/bam__mts793_cube_compression.dat: a compression test"),
+        "{}",
+        o.stderr
+    );
+    let s: Value =
+        serde_json::from_slice(&std::fs::read(tmp.path().join("reports/in/summary.json")).unwrap())
+            .unwrap();
+    let tests = s["tests"].as_array().unwrap();
+    assert_eq!(tests.len(), 1, "{s}");
+    assert_eq!(tests[0]["kind"], "torsion", "{s}");
+    assert!(tests[0]["id"]
+        .as_str()
+        .unwrap()
+        .ends_with("Ausdruck_01.csv"));
+}
