@@ -1460,6 +1460,22 @@ pub fn read_test(
     })
 }
 
+/// The kind a kind word in `path`'s file name gives `rec` (read from that file), with its control
+/// channel's dimension to judge it by (`init::kind_from_name`).
+pub fn kind_from_file_name(
+    rec: &TestRecord,
+    path: &std::path::Path,
+) -> Option<crate::commands::init::Sourced<TestKind>> {
+    let control = rec
+        .channel_index(cablab_core::Role::Control)
+        .and_then(|i| rec.channels[i].dimension);
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().to_string())
+        .unwrap_or_default();
+    crate::commands::init::kind_from_name(&name, control)
+}
+
 /// The kind of a file read without `--kind`, as `cablab run PATH...` and `cablab init` find it:
 /// the file's own word (its test-type metadata, its channels' units), else a kind its name
 /// states; an error naming the file when neither does. Where it came from goes to the notes and
@@ -1479,14 +1495,7 @@ pub fn kind_of_file(
         ));
         return Ok((rec.kind, rec.kind_reason));
     }
-    let control = rec
-        .channel_index(cablab_core::Role::Control)
-        .and_then(|i| rec.channels[i].dimension);
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().to_string())
-        .unwrap_or_default();
-    match crate::commands::init::kind_from_name(&name, control) {
+    match kind_from_file_name(&rec, path) {
         Some(k) => {
             said.notes.push(format!(
                 "{}: kind {} from the {}",

@@ -17,15 +17,7 @@ pub fn run(a: InspectArgs) -> CmdResult {
     // Else a kind word in the file's name, as `analyze`, `diagnose` and folder mode take it
     // (`bridge::kind_of_file`).
     if kind.is_none() && rec.kind == cablab_core::TestKind::Unknown {
-        let control = rec
-            .channel_index(cablab_core::Role::Control)
-            .and_then(|i| rec.channels[i].dimension);
-        let name = a
-            .file
-            .file_name()
-            .map(|n| n.to_string_lossy().to_string())
-            .unwrap_or_default();
-        if let Some(k) = crate::commands::init::kind_from_name(&name, control) {
+        if let Some(k) = crate::bridge::kind_from_file_name(&rec, &a.file) {
             rec.kind = k.value;
             rec.kind_reason = format!("the {}", k.from);
         }
