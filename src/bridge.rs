@@ -720,16 +720,16 @@ pub fn sectional_control(
 /// millimetres (CCFatigue's `Machine_Displacement`, mm by its convention, written without a
 /// unit); the stiffness would otherwise be a thousand times off with only the "no unit" line
 /// beside it. The warning says what the millimetre reading would be and how to state it.
+///
+/// An angle control taken as radians is judged the same way: a torsion test whose surface
+/// shear strain γ = θ r / l₀ would pass 500 % (wires twisted to fracture, ISO 7800, reach about
+/// 100–300 %), a pure-bending test whose ends would turn by more than a full turn. Such an
+/// angle is almost surely in degrees.
 pub fn unitless_control_warning(
     rec: &TestRecord,
     kind: TestKind,
     geom: &cablab_measure::Geometry,
 ) -> Option<String> {
-    let (limit, what, word) = match kind {
-        TestKind::Tension => (1.0, "free length", "tension"),
-        TestKind::ThreePoint => (0.5, "support span", "three-point bending"),
-        _ => return None,
-    };
     let i = rec.channel_index(Role::Control)?;
     let ch = &rec.channels[i];
     if !ch.unit.is_empty() || ch.dimension.is_some() {
@@ -743,12 +743,48 @@ pub fn unitless_control_warning(
             (a.min(v), b.max(v))
         });
     let l0 = geom.free_length_m;
-    let share = (hi - lo) / l0;
+    let range = hi - lo;
+    let as_degrees = |what: String| {
+        format!(
+            "the control '{}' has no unit and, taken as radians, turns by {:.4} rad ({:.1} turns): {what}; if it is in degrees ({:.4} rad), state --unit '{}=deg'",
+            ch.name,
+            range,
+            range / std::f64::consts::TAU,
+            range.to_radians(),
+            ch.name
+        )
+    };
+    match kind {
+        TestKind::Torsion => {
+            let gamma = range * 0.5 * geom.diameter_m? / l0;
+            return (gamma.is_finite() && gamma > 5.0).then(|| {
+                as_degrees(format!(
+                    "a surface shear strain of {:.0} % over the {:.4} mm length, which no torsion test reaches",
+                    100.0 * gamma,
+                    l0 * 1e3
+                ))
+            });
+        }
+        TestKind::PureBending => {
+            return (range.is_finite() && range > std::f64::consts::TAU).then(|| {
+                as_degrees(
+                    "more than a full turn, which no bending rig turns a specimen's end by".into(),
+                )
+            });
+        }
+        _ => {}
+    }
+    let (limit, what, word) = match kind {
+        TestKind::Tension => (1.0, "free length", "tension"),
+        TestKind::ThreePoint => (0.5, "support span", "three-point bending"),
+        _ => return None,
+    };
+    let share = range / l0;
     (share.is_finite() && share > limit).then(|| {
         format!(
             "the control '{}' has no unit and, taken as metres, moves {:.4} m, {:.0} % of the {:.4} mm {what}: no {word} test goes that far; if it is in mm ({:.3} %), state --unit '{}=mm'",
             ch.name,
-            hi - lo,
+            range,
             100.0 * share,
             l0 * 1e3,
             0.1 * share,
@@ -878,7 +914,9 @@ fn gauge_not_length(rec: &TestRecord, i: usize, geom: &cablab_measure::Geometry)
 /// (its metadata) by more than 1 %: every sectional value then rests on the given one. A
 /// campaign's value for a file of several specimens (a sheet each, side by side) comes from one
 /// of them, and a typo is a number silently off. Not said of an extensometer's gauge length
-/// given where the metadata's length is the clamps' (the given one is then right).
+/// given where the metadata's length is the clamps' (the given one is then right). A diameter
+/// given for a tension test whose file states only its cross-section is checked against that
+/// area.
 pub fn given_geometry_warning(
     rec: &TestRecord,
     kind: TestKind,
@@ -909,6 +947,26 @@ pub fn given_geometry_warning(
                 "the diameter given, {:.4} mm, is not the file's own {:.4} mm (its metadata): the moduli use the given one (E scales with 1/d², G and the bending moduli with 1/d⁴)",
                 d * 1e3,
                 own * 1e3
+            ));
+        }
+    }
+    // A tension test's stated cross-section (testXpert's `S0`, Bluehill's `Area`), which the
+    // modulus uses when no diameter is given.
+    if let (Some(d), None, Some(a), TestKind::Tension) = (
+        diameter_m,
+        rec.specimen.diameter_m,
+        rec.cross_section_m2,
+        kind,
+    ) {
+        let given = std::f64::consts::PI * d * d / 4.0;
+        if off(given, a) {
+            out.push(format!(
+                "the diameter given, {:.4} mm ({:.4} mm²), is not the file's own cross-section {:.4} mm² (its metadata; a round diameter of {:.4} mm): the modulus uses the given one, {:.3}× the file's E",
+                d * 1e3,
+                given * 1e6,
+                a * 1e6,
+                (4.0 * a / std::f64::consts::PI).sqrt() * 1e3,
+                a / given
             ));
         }
     }
@@ -1315,6 +1373,10 @@ pub fn strain_against_travel(rec: &TestRecord, curve: &Curve) -> Option<String> 
 /// specimen necking or breaking, a wire or a bone failing, none of which the geometrically
 /// exact rod (uniform section, no fracture) has. Three-point bending softens by geometry after
 /// its peak, which the rod does have: there only a fall below half the peak (a break) counts.
+/// A cyclic record that broke in a later, smaller cycle than its largest (a fatigue block whose
+/// amplitude rises and falls) is cut the same way at the peak of its last loading
+/// ([`cablab_measure::last_loading_peak`]), when that peak reaches a quarter of the largest and the
+/// response is then gone: below half the peak within max(5, 2 % of the record) samples.
 /// The sample after the peak (the diagnosis covers the record before it) and what the note
 /// says; None for a record that unloads after its peak or does not fall (every cyclic protocol
 /// that ends unloaded, every record that ends at its peak).
@@ -1324,50 +1386,81 @@ pub fn diagnosable_end(kind: TestKind, curve: &Curve) -> Option<(usize, String)>
     let k = (0..n)
         .filter(|&i| r[i].is_finite() && c[i].is_finite())
         .max_by(|&a, &b| r[a].abs().total_cmp(&r[b].abs()))?;
-    if k < 10 || n - k < 3 {
-        return None;
-    }
     let (lo, hi) = c[..n]
         .iter()
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
             (a.min(v), b.max(v))
         });
-    let dir = (c[k] - c[0]).signum();
     let back = 0.05 * (hi - lo);
-    let mut far = c[k] * dir;
-    let on = c[k..n].iter().all(|&v| {
-        far = far.max(v * dir);
-        v * dir >= far - back
-    });
-    if !on || dir == 0.0 {
-        return None;
-    }
-    let peak = r[k].abs();
-    let sign = r[k].signum();
-    let low = r[k..n]
-        .iter()
-        .filter(|v| v.is_finite())
-        .fold(f64::INFINITY, |m, &v| m.min(v * sign));
     let sigma = cablab_measure::noise_level(&r[..n]);
-    let fall = peak - low;
-    let enough = if kind == TestKind::ThreePoint {
-        low < 0.5 * peak
-    } else {
-        fall > 0.1 * peak
+    let sign = r[k].signum();
+    // The fall after the peak at `p`, while the control runs on in `dir`: its lowest response
+    // (times `sign`), when the control never turns back from there.
+    let fall_after = |p: usize, dir: f64| -> Option<f64> {
+        if p < 10 || n - p < 3 || dir == 0.0 {
+            return None;
+        }
+        let mut far = c[p] * dir;
+        let on = c[p..n].iter().all(|&v| {
+            far = far.max(v * dir);
+            v * dir >= far - back
+        });
+        on.then(|| {
+            r[p..n]
+                .iter()
+                .filter(|v| v.is_finite())
+                .fold(f64::INFINITY, |m, &v| m.min(v * sign))
+        })
     };
-    if !(enough && fall > 10.0 * sigma) {
-        return None;
-    }
+    let dir = (c[k] - c[0]).signum();
+    let broke = |p: usize, low: f64| {
+        let peak = r[p] * sign;
+        let fall = peak - low;
+        let enough = if kind == TestKind::ThreePoint {
+            low < 0.5 * peak
+        } else {
+            fall > 0.1 * peak
+        };
+        enough && fall > 10.0 * sigma
+    };
+    let end = fall_after(k, dir)
+        .filter(|&low| broke(k, low))
+        .map(|low| (k, low))
+        .or_else(|| {
+            // A cyclic record that broke in a later, smaller cycle than its largest (a fatigue
+            // block's falling amplitude): the peak of its last loading, when it reaches a
+            // quarter of the largest and the response is then gone (below half that peak)
+            // within max(5, 2 % of the record) samples of its last 90 %.
+            let oriented: Vec<f64> = c[..n].iter().map(|v| v * dir).collect();
+            let signed: Vec<f64> = r[..n].iter().map(|v| v * sign).collect();
+            let p = cablab_measure::last_loading_peak(&oriented, &signed, back)?;
+            let peak = r[p] * sign;
+            if p == k || peak < 0.25 * r[k].abs() {
+                return None;
+            }
+            let low = fall_after(p, dir)?;
+            let gone = (p..n).find(|&i| r[i] * sign < 0.5 * peak)?;
+            let last_high = (p..gone).rev().find(|&i| r[i] * sign >= 0.9 * peak)?;
+            (low < 0.5 * peak && broke(p, low) && gone - last_high <= (n / 50).max(5))
+                .then_some((p, low))
+        });
+    let (p, low) = end?;
+    let peak = r[p] * sign;
+    let of = if p == k {
+        "its largest value after it"
+    } else {
+        "the peak of its last loading (a later cycle than its largest) after that peak"
+    };
     let what = match kind {
         TestKind::Tension => "necking or fracture",
         _ => "a failure or fracture",
     };
     Some((
-        k + 1,
+        p + 1,
         format!(
-            "the response falls to {:.0} % of its largest value after it while the control runs on ({what}, which the rod model does not have): the diagnosis covers the record up to that peak ({} of {n} samples)",
+            "the response falls to {:.0} % of {of} while the control runs on ({what}, which the rod model does not have): the diagnosis covers the record up to that peak ({} of {n} samples)",
             (100.0 * low / peak).max(0.0),
-            k + 1
+            p + 1
         ),
     ))
 }
@@ -2440,6 +2533,73 @@ mod tests {
         let (end, why) = diagnosable_end(TestKind::ThreePoint, &curve(c, broken)).unwrap();
         assert_eq!(end, 61);
         assert!(why.contains("a failure or fracture"), "{why}");
+    }
+
+    /// A fatigue block: ten sine cycles whose amplitude rises and falls, the specimen breaking
+    /// at the peak of its eighth (smaller than the fifth's): the diagnosis ends at that peak.
+    /// The same record without the break (it ends unloaded), or with a gradual fall over the
+    /// last loading instead of a fracture, is diagnosed to its end.
+    #[test]
+    fn a_cyclic_record_that_breaks_in_a_smaller_cycle_ends_at_that_peak() {
+        let curve = |c: Vec<f64>, r: Vec<f64>| Curve {
+            control: c,
+            response: r,
+            ..Default::default()
+        };
+        let per = 200usize;
+        let amp =
+            |i: usize| 1.0 + 0.6 * (std::f64::consts::PI * i as f64 / (10 * per) as f64).sin();
+        // Minimum at 0, peaks at the middle of each cycle.
+        let c: Vec<f64> = (0..10 * per)
+            .map(|i| amp(i) * 0.5 * (1.0 - (std::f64::consts::TAU * i as f64 / per as f64).cos()))
+            .collect();
+        let r: Vec<f64> = c.iter().map(|&x| 100.0 * x).collect();
+        assert_eq!(
+            diagnosable_end(TestKind::Tension, &curve(c.clone(), r.clone())),
+            None
+        );
+        // Ending in an unloading whose response falls from 30 % of the largest to zero over
+        // the last 4 % of the control's travel (a piecewise-linear cable, stiff near zero, as
+        // the demo's Bowden pure-bending tests end): no break.
+        let top = c.iter().fold(0.0f64, |m, &v| m.max(v));
+        let knee = 0.04 * top;
+        let stiff: Vec<f64> = c
+            .iter()
+            .map(|&x| {
+                if x < knee {
+                    30.0 * top * x / knee
+                } else {
+                    30.0 * top + 70.0 * (x - knee) / 0.96
+                }
+            })
+            .collect();
+        assert_eq!(
+            diagnosable_end(TestKind::PureBending, &curve(c.clone(), stiff)),
+            None
+        );
+        let peak8 = (7 * per..8 * per)
+            .max_by(|&a, &b| c[a].total_cmp(&c[b]))
+            .unwrap();
+        // Broken: the control jumps on, the force is gone.
+        let mut cb = c[..=peak8].to_vec();
+        let mut rb = r[..=peak8].to_vec();
+        cb.extend((1..40).map(|i| c[peak8] + 0.05 * i as f64));
+        rb.extend((1..40).map(|i| 0.3 * ((i * 7) % 5) as f64));
+        let (end, why) =
+            diagnosable_end(TestKind::Tension, &curve(cb.clone(), rb.clone())).unwrap();
+        assert_eq!(end, peak8 + 1, "{why}");
+        assert!(why.contains("the peak of its last loading"), "{why}");
+        // Three-point takes the same fracture.
+        assert_eq!(
+            diagnosable_end(TestKind::ThreePoint, &curve(cb, rb)).map(|e| e.0),
+            Some(peak8 + 1)
+        );
+        // A gradual fall (over 100 samples) while the control runs on: not cut.
+        let mut rg = r[..=peak8].to_vec();
+        let mut cg = c[..=peak8].to_vec();
+        cg.extend((1..100).map(|i| c[peak8] + 0.005 * i as f64));
+        rg.extend((1..100).map(|i| r[peak8] * (1.0 - 0.0095 * i as f64)));
+        assert_eq!(diagnosable_end(TestKind::Tension, &curve(cg, rg)), None);
     }
 
     #[test]

@@ -507,8 +507,16 @@ pub fn survey(paths: &[PathBuf], d: &InferArgs) -> Result<Survey, CliError> {
         };
         let mut length_mm = metadata_or_flag(&rec, rec.specimen.free_length_m, LENGTH_KEYS)
             .or_else(|| flag(d.length_mm, "--length-mm"));
+        // A section the file states for this kind (a tension test's cross-section, a flat
+        // b × h) is the file saying its section: the diameter flag is not for it.
+        let stated = stated_section(&rec, kind.as_ref().map(|k| k.value));
         let mut diameter_mm = metadata_or_flag(&rec, rec.specimen.diameter_m, DIAMETER_KEYS)
-            .or_else(|| flag(d.diameter_mm, "--diameter-mm"));
+            .or_else(|| {
+                stated
+                    .is_none()
+                    .then(|| flag(d.diameter_mm, "--diameter-mm"))
+                    .flatten()
+            });
         // A flag is for the files that do not say: where a file says otherwise, its own value
         // is taken, and the user is told (the same flag to `analyze` overrides the file).
         let unused = |given: Option<f64>, taken: &Option<Sourced<f64>>, flag: &str| {
@@ -524,6 +532,14 @@ pub fn survey(paths: &[PathBuf], d: &InferArgs) -> Result<Survey, CliError> {
         };
         notes.extend(unused(d.length_mm, &length_mm, "--length-mm"));
         notes.extend(unused(d.diameter_mm, &diameter_mm, "--diameter-mm"));
+        if let (Some(g), None, Some(sec)) = (d.diameter_mm, &diameter_mm, &stated) {
+            notes.push(format!(
+                "--diameter-mm {g} is not used for this file: it states its {} ({}); the flag \
+                 is for files that do not say — to override the file, write the value in a \
+                 pipeline (`cablab init`, then edit it)",
+                sec.value, sec.from
+            ));
+        }
         if let (Some(given), Some(k)) = (d.kind, kind.as_ref()) {
             let given: TestKind = given.into();
             if given != k.value {
@@ -550,12 +566,7 @@ pub fn survey(paths: &[PathBuf], d: &InferArgs) -> Result<Survey, CliError> {
                 .map(|n| n.to_string_lossy().to_string())
                 .unwrap_or_default()
         });
-        let section = diameter_each.or_else(|| {
-            diameter_mm
-                .is_none()
-                .then(|| stated_section(&rec, kind.as_ref().map(|k| k.value)))
-                .flatten()
-        });
+        let section = diameter_each.or_else(|| diameter_mm.is_none().then_some(stated).flatten());
         let specimen_type = match (&diameter_mm, &section) {
             (Some(dm), _) => Some(format!("{} {} mm", folder_name(&path), dm.value)),
             (None, Some(sec)) => Some(format!("{} {}", folder_name(&path), sec.value)),

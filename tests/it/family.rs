@@ -122,6 +122,27 @@ fn stiffness_interval_is_calibrated_on_correlated_noise() {
     );
 }
 
+/// The analysis of a tension curve of free length `l0` (no diameter).
+fn tension(
+    l0: f64,
+    t: &[f64],
+    c: &[f64],
+    r: &[f64],
+) -> Result<Analysis, cablab_measure::MeasureError> {
+    let geom = Geometry {
+        free_length_m: l0,
+        diameter_m: None,
+    };
+    analyze(
+        TestKind::Tension,
+        &geom,
+        Some(t),
+        c,
+        r,
+        &AnalyzeOptions::default(),
+    )
+}
+
 /// Break detection under white and AR(1) noise (issue 12.5) on 48 generated monotonic tension
 /// tests (`break_case`): every fracture is found at its first fallen row (±1) with the work to
 /// break within 2 % and the class `broken`; tests stopped at their maximum or softening
@@ -131,19 +152,8 @@ fn breaks_are_found_and_not_faked_by_correlated_noise() {
     let (mut found, mut clean) = (0, 0);
     for seed in 0..48u64 {
         let c = break_case(seed);
-        let geom = Geometry {
-            free_length_m: c.free_length_m,
-            diameter_m: None,
-        };
-        let a = analyze(
-            TestKind::Tension,
-            &geom,
-            Some(&c.time_s),
-            &c.control,
-            &c.response,
-            &AnalyzeOptions::default(),
-        )
-        .unwrap_or_else(|e| panic!("seed {seed}: {e}"));
+        let a = tension(c.free_length_m, &c.time_s, &c.control, &c.response)
+            .unwrap_or_else(|e| panic!("seed {seed}: {e}"));
         match (c.break_sample, a.break_point.as_ref()) {
             (Some(j), Some(b)) => {
                 found += 1;
@@ -184,18 +194,8 @@ fn breaks_are_found_and_not_faked_by_correlated_noise() {
                 p
             })
             .collect();
-        let a = analyze(
-            TestKind::Tension,
-            &Geometry {
-                free_length_m: c.free_length_m,
-                diameter_m: None,
-            },
-            Some(&c.time_s),
-            &c.control,
-            &noise,
-            &AnalyzeOptions::default(),
-        )
-        .unwrap_or_else(|e| panic!("seed {seed}: {e}"));
+        let a = tension(c.free_length_m, &c.time_s, &c.control, &noise)
+            .unwrap_or_else(|e| panic!("seed {seed}: {e}"));
         assert!(a.break_point.is_none(), "seed {seed}: {:?}", a.break_point);
     }
 }
@@ -625,4 +625,69 @@ fn family_debug_seeds() {
             Err(e) => println!("seed {seed}: {e}"),
         }
     }
+}
+
+/// Breaks in cyclic records (`cyclic_break_case`, 64 cases): triangles and sines, the
+/// amplitude constant, rising, falling or rising and falling (the largest cycle is often not
+/// the last), white and AR(1) noise. A fracture on the last loading is found at its first
+/// fallen row (±1), the class is `broken`, and the diagnosis ends at that loading's peak
+/// (`bridge::diagnosable_end`); a record that ends unloaded, at a peak or softening gradually
+/// has no break and, unless it softens (necking, which the diagnosis leaves out), is diagnosed
+/// to its end. A sine's rounded reversals are never holds (its last rows, where a record
+/// stops at or breaks near a top, may be). `CYCLIC_SEEDS=600` runs more cases (600 pass).
+#[test]
+fn breaks_in_cyclic_records_are_found_where_the_last_loading_fails() {
+    use cablab_synth::family::{cyclic_break_case, CyclicEnd};
+    let mut seen = std::collections::BTreeMap::new();
+    let seeds: u64 = std::env::var("CYCLIC_SEEDS")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(64);
+    for seed in 0..seeds {
+        let c = cyclic_break_case(seed);
+        let a = tension(c.free_length_m, &c.time_s, &c.control, &c.response)
+            .unwrap_or_else(|e| panic!("seed {seed}: {e}"));
+        let what = format!(
+            "seed {seed} ({:?}, sine {}, φ {:.2})",
+            c.end, c.sine, c.noise_ar1
+        );
+        *seen.entry(format!("{:?}", c.end)).or_insert(0) += 1;
+        let curve = cablab::bridge::Curve {
+            control: c.control.clone(),
+            response: c.response.clone(),
+            ..Default::default()
+        };
+        let cut = cablab::bridge::diagnosable_end(TestKind::Tension, &curve).map(|e| e.0);
+        match (c.break_sample, a.break_point.as_ref()) {
+            (Some(j), Some(b)) => {
+                assert!(b.sample.abs_diff(j) <= 1, "{what}: {} vs {j}", b.sample);
+                assert_eq!(a.behaviour.as_str(), "broken", "{what}");
+                let k = c.last_peak.unwrap();
+                let end = cut.unwrap_or_else(|| panic!("{what}: no cut"));
+                assert!(
+                    end <= j && end + c.per_cycle / 4 >= k,
+                    "{what}: cut {end}, peak {k}"
+                );
+            }
+            (None, None) => {
+                assert_ne!(a.behaviour.as_str(), "broken", "{what}");
+                if c.end != CyclicEnd::Softens {
+                    assert_eq!(cut, None, "{what}");
+                }
+            }
+            (t, b) => panic!("{what}: truth {t:?}, found {b:?}"),
+        }
+        if c.sine {
+            let holds: Vec<_> = a
+                .segments
+                .iter()
+                .filter(|s| s.branch == cablab_measure::Branch::Hold)
+                // A record stopped at a sine's top, or breaking near one, stands nearly still
+                // for its last few rows: a hold there is the record's end, no reversal.
+                .filter(|s| s.end < c.control.len() && c.last_peak.is_none_or(|k| s.start + 10 < k))
+                .collect();
+            assert!(holds.is_empty(), "{what}: {holds:?}");
+        }
+    }
+    assert!(seen.values().all(|&n| n >= 10), "{seen:?}");
 }

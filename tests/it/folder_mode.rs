@@ -785,6 +785,50 @@ fn a_flag_a_file_contradicts_is_said_to_be_unused() {
     );
 }
 
+/// A tension file that states its cross-section (testXpert's `S0`, 6.3812 mm²) says its section:
+/// folder mode's `--diameter-mm` is not used for it (a 5 mm flag made the steel's modulus
+/// 69.8 GPa, its own section gives 214.9, as `analyze` reads it), and the terminal says so.
+/// `analyze` takes the flag over the file, with a warning that gives the factor.
+#[test]
+fn a_stated_cross_section_is_not_overridden_by_the_diameter_flag() {
+    let tmp = tempfile::tempdir().unwrap();
+    let name = "hilhorst__testxpert_tension_mdb1pct_en.TRA";
+    copy(
+        &root().join("tests/data").join(name),
+        &tmp.path().join("in").join(name),
+    );
+    let o = run_in(
+        tmp.path(),
+        &["run", "in", "-q", "--no-diagnosis", "--diameter-mm", "5"],
+    );
+    assert_eq!(o.code, 0, "{}", o.stderr);
+    assert!(
+        o.stderr.contains(
+            "--diameter-mm 5 is not used for this file: it states its cross-section 6.3812 mm²"
+        ),
+        "{}",
+        o.stderr
+    );
+    let v: Value =
+        serde_json::from_slice(&std::fs::read(tmp.path().join("reports/in/summary.json")).unwrap())
+            .unwrap();
+    let e = v["tests"][0]["modulus_pa"].as_f64().unwrap();
+    let ea = v["tests"][0]["stiffness"].as_f64().unwrap();
+    assert!((e / (ea / 6.3812e-6) - 1.0).abs() < 1e-6, "E {e}, EA {ea}");
+    assert!((e / 214.9e9 - 1.0).abs() < 0.01, "E {e}");
+    // `analyze` takes the flag over the file, and warns with the factor.
+    let path = format!("in/{name}");
+    let o = run_in(tmp.path(), &["analyze", &path, "--diameter-mm", "5"]);
+    assert_eq!(o.code, 0, "{}", o.stderr);
+    assert!(
+        o.stdout.contains(
+            "the diameter given, 5.0000 mm (19.6350 mm²), is not the file's own cross-section 6.3812 mm²"
+        ) && o.stdout.contains("0.325× the file's E"),
+        "{}",
+        o.stdout
+    );
+}
+
 /// `--kind` is for the files that do not say: a file whose name says compression is still left
 /// out as a compression test (a torsion forced on a concrete cylinder's export failed its kind
 /// check), with a note that the flag was not used; a name that only contains the letters

@@ -495,3 +495,83 @@ fn a_headerless_table_is_read_with_columns_named_by_position() {
         v["stiffness"]
     );
 }
+
+/// A unit-less angle taken as radians: a torsion record twisted 0–900 (degrees, as a Bluehill
+/// torsion export writes them when its unit row is lost) would be 143 turns, a surface shear
+/// strain of 1350 % on a 3 mm wire over 100 mm; a warning gives the degrees reading, and stated
+/// as degrees the warning is gone and (GJ) is 180/π × larger. A pure-bending record's ends
+/// turning by more than a full turn are warned too; 0–0.9 rad is not.
+#[test]
+fn a_unitless_angle_no_test_could_make_is_flagged_with_its_degrees_reading() {
+    let d = tempfile::tempdir().unwrap();
+    let write = |name: &str, top: f64| {
+        let mut s = String::from("time,angle,torque\n");
+        for i in 0..600 {
+            let a = top * (if i < 300 { i } else { 600 - i }) as f64 / 300.0;
+            s += &format!("{:.1},{a:.5},{:.6}\n", 0.1 * i as f64, 0.01 * a);
+        }
+        let p = d.path().join(name);
+        std::fs::write(&p, s).unwrap();
+        p.to_string_lossy().into_owned()
+    };
+    let deg = write("twist.csv", 900.0);
+    let geom = ["--length-mm", "100", "--diameter-mm", "3", "--json"];
+    let args = |f: &str, kind: &'static str, extra: &[&'static str]| {
+        let mut a = vec![
+            "analyze".to_string(),
+            f.to_string(),
+            "--kind".into(),
+            kind.into(),
+        ];
+        a.extend(geom.iter().chain(extra).map(|s| s.to_string()));
+        a
+    };
+    let call = |a: Vec<String>| {
+        let a: Vec<&str> = a.iter().map(|s| s.as_str()).collect();
+        run(None, &a)
+    };
+    let (code, rad, err) = call(args(&deg, "torsion", &[]));
+    assert_eq!(code, Some(0), "{err}");
+    let w = warnings(&rad).join("\n");
+    assert!(
+        w.contains(
+            "'angle' has no unit and, taken as radians, turns by 900.0000 rad (143.2 turns)"
+        ) && w.contains("surface shear strain of 1350 %")
+            && w.contains("if it is in degrees (15.7080 rad), state --unit 'angle=deg'"),
+        "{w}"
+    );
+    let (code, degrees, err) = call(args(&deg, "torsion", &["--unit", "angle=deg"]));
+    assert_eq!(code, Some(0), "{err}");
+    assert!(
+        !warnings(&degrees)
+            .iter()
+            .any(|w| w.contains("taken as radians")),
+        "{:?}",
+        warnings(&degrees)
+    );
+    let (a, b) = (
+        rad["stiffness"]["value"].as_f64().unwrap(),
+        degrees["stiffness"]["value"].as_f64().unwrap(),
+    );
+    assert!(
+        within(b, a * 180.0 / std::f64::consts::PI, 1e-4),
+        "{a:e} {b:e}"
+    );
+    let (_, bent, _) = call(args(&deg, "pure-bending", &[]));
+    assert!(
+        warnings(&bent)
+            .iter()
+            .any(|w| w.contains("more than a full turn")),
+        "{:?}",
+        warnings(&bent)
+    );
+    let small = write("small.csv", 0.9);
+    for kind in ["torsion", "pure-bending"] {
+        let (_, v, _) = call(args(&small, kind, &[]));
+        assert!(
+            !warnings(&v).iter().any(|w| w.contains("taken as radians")),
+            "{kind}: {:?}",
+            warnings(&v)
+        );
+    }
+}

@@ -1103,6 +1103,7 @@ pub(crate) fn build(
     let (kind, kind_reason) = match opts.kind {
         Some(k) => (k, KIND_SET_BY_FLAG.to_string()),
         None => kind_from_text(&texts)
+            .or_else(|| crate::roles::kind_from_channel_names(&names))
             .or_else(|| kind_from_channels(&dims, c, r))
             .unwrap_or((
                 TestKind::Unknown,

@@ -645,6 +645,40 @@ fn names_standard(text: &str, code: &str) -> bool {
 
 /// Test kind from the channel dimensions, where they leave no doubt: torque against angle with no
 /// force channel is torsion; moment against curvature is pure bending.
+/// Test kind from the channel names, where they name exactly one kind: a stress or strain
+/// channel named for its test (`Tensile stress`, Bluehill's `Tensile strain (Extension)`,
+/// German `Zugspannung` and `Zugdehnung`, `Flexure stress` for three-point flexure). Only such
+/// compounds count: a channel named `Torsion angle` beside an axial force is an axial–torsion
+/// test, and `Biegespannung` (bending stress) does not tell three-point from four-point.
+pub(crate) fn kind_from_channel_names(names: &[String]) -> Option<(TestKind, String)> {
+    const WORDS: &[(TestKind, &str)] = &[
+        (TestKind::Tension, "tensile stress"),
+        (TestKind::Tension, "tensile strain"),
+        (TestKind::Tension, "zugspannung"),
+        (TestKind::Tension, "zugdehnung"),
+        (TestKind::Tension, "contrainte de traction"),
+        (TestKind::Tension, "déformation en traction"),
+        (TestKind::ThreePoint, "flexure stress"),
+        (TestKind::ThreePoint, "flexure strain"),
+        (TestKind::ThreePoint, "flexural stress"),
+        (TestKind::ThreePoint, "flexural strain"),
+    ];
+    let mut found: Vec<(TestKind, String)> = Vec::new();
+    for name in names {
+        let l = name.to_lowercase();
+        for (k, w) in WORDS {
+            if l.contains(w) && !found.iter().any(|(f, _)| f == k) {
+                found.push((*k, format!("the channel '{name}' is named for it")));
+            }
+        }
+    }
+    if found.len() == 1 {
+        found.pop()
+    } else {
+        None
+    }
+}
+
 pub(crate) fn kind_from_channels(
     dims: &[Option<Dimension>],
     control: Option<usize>,
@@ -1602,6 +1636,37 @@ mod tests {
         }
         // A standard of one kind beside a word of another: no kind.
         assert!(kind_from_text(&["ISO 178", "tensile"]).is_none());
+    }
+
+    /// A stress or strain channel named for its test gives the kind (a German Bluehill export:
+    /// `Zeit;Traversenweg;Last;Dehnung 1;Zugspannung`); a bending stress or a torsion angle
+    /// beside an axial force does not, nor do channels named for two kinds.
+    #[test]
+    fn channels_named_for_their_test_give_the_kind() {
+        let names = |v: &[&str]| v.iter().map(|s| s.to_string()).collect::<Vec<_>>();
+        let (k, why) = kind_from_channel_names(&names(&[
+            "Zeit",
+            "Traversenweg",
+            "Last",
+            "Dehnung 1",
+            "Zugspannung",
+        ]))
+        .unwrap();
+        assert_eq!(k, TestKind::Tension);
+        assert!(why.contains("'Zugspannung'"), "{why}");
+        assert_eq!(
+            kind_from_channel_names(&names(&["Flexure stress", "Flexure strain (Extension)"]))
+                .unwrap()
+                .0,
+            TestKind::ThreePoint
+        );
+        for v in [
+            &["Zeit", "Biegespannung", "Durchbiegung"][..],
+            &["Axial Force", "Torsion Angle", "Torque"],
+            &["Tensile stress", "Flexure strain"],
+        ] {
+            assert!(kind_from_channel_names(&names(v)).is_none(), "{v:?}");
+        }
     }
 
     #[test]

@@ -38,8 +38,10 @@
 //!   at different rates whose stiffness near their reversals differs beyond what a drifting
 //!   sensor explains ([`crate::rate`]) → `rate_dependent` over `other` and `elastoplastic`;
 //! * an abrupt break (the response falls from 90 % of its maximum below [`BREAK_DROP`] of it
-//!   within 5 samples or 2 % of the record, and stays there) → `broken`, whatever came before
-//!   it (the yield point and stiffness are still reported).
+//!   within 5 samples or 2 % of the record, and stays there; in a cyclic record that breaks in
+//!   a later, smaller cycle than its largest, the same from the peak of its last loading,
+//!   [`last_loading_peak`]) → `broken`, whatever came before it (the yield point and stiffness
+//!   are still reported).
 //!
 //! Noise: the response noise is modelled as AR(1) over the whole record
 //! ([`crate::condition::serial_noise`] of response − k · control), so serially correlated
@@ -380,8 +382,9 @@ pub struct YieldPoint {
     pub branch: Branch,
 }
 
-/// A break: after its maximum the response falls below [`BREAK_DROP`] of it and stays there
-/// while the control does not go back (a monotonic test to fracture; an unloading is no break).
+/// A break: after its maximum (or, in a cyclic test, after the peak of the last cycle, when
+/// that fall is abrupt) the response falls below [`BREAK_DROP`] of it and stays there while
+/// the control does not go back (a test to fracture; an unloading is no break).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct BreakPoint {
     /// First sample (0-based complete row) below the drop level.
@@ -1315,14 +1318,14 @@ pub fn analyze(
             sample: k,
         }
     };
-    let break_point = find_break(&cm, &rm, serial.0.sigma, h_cm)
-        .filter(|&(j, _)| !relaxed_while_held(&segments, &rm, j))
-        .map(|(j, work)| BreakPoint {
-            sample: j,
-            machine_control: control[j],
-            response_before: response[j - 1],
-            work_to_break: work,
-        });
+    let found_break = find_break(&cm, &rm, serial.0.sigma, h_cm)
+        .filter(|&(j, _, _)| !relaxed_while_held(&segments, &rm, j));
+    let break_point = found_break.map(|(j, work, _)| BreakPoint {
+        sample: j,
+        machine_control: control[j],
+        response_before: response[j - 1],
+        work_to_break: work,
+    });
     // A specimen that broke: the peak of the cycle it broke in is where its response peaked
     // before the break, not the punch or crosshead running on over the broken pieces (a bone's
     // cycle peak read 1.08 N at the end of the stroke, its maximum 19.65 N).
@@ -1347,9 +1350,19 @@ pub fn analyze(
         }
     }
     negative_loops(&cyc, &mut warnings, &mut notes);
-    if let Some(b) = &break_point {
+    if let (Some(b), Some((_, _, k))) = (&break_point, found_break) {
+        let top = rm.iter().fold(f64::NEG_INFINITY, |m, &v| m.max(v));
+        let of = if rm[k] < top {
+            let cycle = segments
+                .iter()
+                .find(|s| s.start <= k && k < s.end)
+                .map_or(0, |s| s.cycle);
+            format!("the peak of its last loading (cycle {cycle}, not its largest)")
+        } else {
+            "its maximum".to_string()
+        };
         notes.push(format!(
-            "the specimen broke at sample {} (control {:.4e}): the response fell below {:.0} % of its maximum and stayed there",
+            "the specimen broke at sample {} (control {:.4e}): the response fell below {:.0} % of {of} and stayed there",
             b.sample,
             b.machine_control,
             100.0 * BREAK_DROP
@@ -1395,7 +1408,7 @@ pub fn analyze(
     // An abrupt break overrides the class (the yield and the threshold above were judged
     // without it). A gradual fall (a wire sliding through three-point supports, necking) keeps
     // its class and the break warning.
-    let behaviour = if break_point.is_some_and(|b| break_is_abrupt(&rm, b.sample)) {
+    let behaviour = if found_break.is_some_and(|(j, _, k)| break_is_abrupt(&rm, k, j)) {
         Behaviour::Broken
     } else {
         behaviour
@@ -2037,11 +2050,77 @@ fn offset_yield(
 ///   early and a cycle to a larger deflection unloads below half that peak while the
 ///   deflection is still beyond the peak's).
 ///
+/// When the maximum has no such break after it, the peak of the record's last loading
+/// ([`last_loading_peak`]) is judged the same way, if it reaches a quarter of the maximum and the
+/// response falls from 90 % of it to the drop level within max(5, 2 % of the record) samples:
+/// a cyclic test that broke in a later, smaller cycle than its largest (a fatigue block's
+/// falling amplitude).
+///
 /// The break sample is the first sample of that sustained stretch below the drop level.
 /// Returns it and the work ∫ rm d(cm) up to it.
-fn find_break(cm: &[f64], rm: &[f64], sigma: f64, h: f64) -> Option<(usize, f64)> {
+fn find_break(cm: &[f64], rm: &[f64], sigma: f64, h: f64) -> Option<(usize, f64, usize)> {
     let n = rm.len();
     let k = (0..n).max_by(|&a, &b| rm[a].total_cmp(&rm[b]))?;
+    let from = |k: usize| break_after(cm, rm, sigma, h, k).map(|(j, work)| (j, work, k));
+    from(k).or_else(|| {
+        // A cyclic test that broke in a later cycle than its largest (a fatigue block whose
+        // amplitude rises and falls, a wire that fails at the end of a campaign of cycles):
+        // the peak of the record's last loading, when it is a quarter of the maximum or more
+        // and the response is gone from it within the abrupt-break samples (a gradual fall at
+        // the end of a cyclic record is left alone).
+        let k2 = last_loading_peak(cm, rm, h)?;
+        if k2 == k || rm[k2] < 0.25 * rm[k] {
+            return None;
+        }
+        from(k2).filter(|&(j, _, _)| break_is_abrupt(rm, k2, j))
+    })
+}
+
+/// The first sample of the record's last advance (`control` with its first motion positive):
+/// the final stretch in which the control never goes back from the furthest value it reached
+/// by more than `back`. Missing samples are skipped.
+pub fn last_advance(control: &[f64], back: f64) -> usize {
+    let mut low = f64::INFINITY;
+    let mut i = control.len();
+    while i > 0 {
+        let v = control[i - 1];
+        if v.is_finite() {
+            if v > low + back {
+                break;
+            }
+            low = low.min(v);
+        }
+        i -= 1;
+    }
+    i
+}
+
+/// The largest response of the record's last loading (`control`, `response` with the first
+/// motion positive): the peak within its [`last_advance`] (allowing back-offs of `back`),
+/// when the control rose into that peak by a tenth of its range or more. None when the record
+/// ends in an unloading (whose last stretch within `back` is no advance).
+pub fn last_loading_peak(control: &[f64], response: &[f64], back: f64) -> Option<usize> {
+    let n = control.len().min(response.len());
+    let s = last_advance(&control[..n], back);
+    let k = (s..n)
+        .filter(|&i| response[i].is_finite())
+        .max_by(|&a, &b| response[a].total_cmp(&response[b]))?;
+    let (lo, hi) = control[..n]
+        .iter()
+        .filter(|v| v.is_finite())
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
+            (a.min(v), b.max(v))
+        });
+    let from = control[s..=k]
+        .iter()
+        .filter(|v| v.is_finite())
+        .fold(f64::INFINITY, |m, &v| m.min(v));
+    (control[k] - from >= 0.1 * (hi - lo)).then_some(k)
+}
+
+/// [`find_break`] from the response peak at `k`.
+fn break_after(cm: &[f64], rm: &[f64], sigma: f64, h: f64, k: usize) -> Option<(usize, f64)> {
+    let n = rm.len();
     let top = rm[k];
     if !(top > 0.0 && top > 10.0 * sigma) {
         return None;
@@ -2089,11 +2168,11 @@ fn relaxed_while_held(segments: &[Segment], rm: &[f64], j: usize) -> bool {
     !gone
 }
 
-/// Whether the response fell from 90 % of its maximum before sample `j` to the break level at
-/// `j` within max(5, 2 % of the record) samples: a fracture, not a gradual loss of load.
-fn break_is_abrupt(rm: &[f64], j: usize) -> bool {
-    let top = rm[..j].iter().fold(f64::NEG_INFINITY, |m, &v| m.max(v));
-    let last_high = (0..j).rev().find(|&i| rm[i] >= 0.9 * top).unwrap_or(0);
+/// Whether the response fell from 90 % of the peak at `k` (the maximum, or the last cycle's
+/// peak the break came from) to the break level at `j` within max(5, 2 % of the record)
+/// samples: a fracture, not a gradual loss of load.
+fn break_is_abrupt(rm: &[f64], k: usize, j: usize) -> bool {
+    let last_high = (k..j).rev().find(|&i| rm[i] >= 0.9 * rm[k]).unwrap_or(k);
     j - last_high <= (rm.len() / 50).max(5)
 }
 

@@ -862,7 +862,10 @@ pub const CREEP_FRACTION: f64 = 0.05;
 
 /// [`holds`], where, when `response` is given, a stretch also has to be still: its control must
 /// not creep across the band (the means of its second and fourth fifths differ by less than
-/// [`CREEP_FRACTION`] of the band: a slow, smooth ramp is never a hold), and the response must not rise away from zero by more than its reversal
+/// [`CREEP_FRACTION`] of the band: a slow, smooth ramp is never a hold) nor turn in it (the
+/// middle fifth's mean stands off the mean of the second and fourth by less than the same: a
+/// sine's rounded reversal dwells in the band longer than a sharp turn, yet is no hold), and
+/// the response must not rise away from zero by more than its reversal
 /// threshold or a tenth of its range (an elastic rise under a nearly still control, as a
 /// specimen-mounted extensometer sees it, is loading, not a hold). A response that relaxes
 /// towards zero at a still control is a hold (relaxation).
@@ -942,11 +945,21 @@ fn holds_still_with(
         // enter and leave the band) differ by a quarter of the band; a steady ramp across the
         // band makes 0.4 of it.
         let f = (j - i) / 5;
-        if f >= 1
-            && (mean(&pc, i + 3 * f, i + 4 * f) - mean(&pc, i + f, i + 2 * f)).abs()
-                > (CREEP_FRACTION * threshold).max(6.0 * sigma_c / (f as f64).sqrt())
-        {
-            return false;
+        if f >= 1 {
+            // Fifths centred in the stretch (the samples a whole fifth leaves over split
+            // between its ends): on a short stretch the rounding would otherwise shift them
+            // towards its start, and a rounded turn whose apex sits there looks still.
+            let o = i + (j - i - 5 * f) / 2;
+            let fifth = |q: usize| mean(&pc, o + q * f, o + (q + 1) * f);
+            let (m2, m3, m4) = (fifth(1), fifth(2), fifth(3));
+            let tol = (CREEP_FRACTION * threshold).max(6.0 * sigma_c / (f as f64).sqrt());
+            // Creep, and a rounded turn: a sine's reversal stays in the band longer than a
+            // sharp turn would, but its middle fifth stands off the mean of its second and
+            // fourth (a parabola's by 0.16 of the band; a monotone creep's by at most half
+            // the creep test's difference, a still control's by noise).
+            if (m4 - m2).abs() > tol || (m3 - 0.5 * (m2 + m4)).abs() > tol {
+                return false;
+            }
         }
         let k = ((e - i) / 10).max(1);
         mean(p, e - k, e).abs() - mean(p, i, i + k).abs() <= hr
@@ -2178,6 +2191,38 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// A force-controlled sine (0.25 Hz at 100 Hz: 400 samples per cycle, the amplitude
+    /// ramped up and down as a fatigue block does, the control's noise 10⁻⁴ of it) turns
+    /// slowly at its reversals: each stays in the reversal band far longer than a sharp turn
+    /// would. No reversal is a hold; a real dwell after the sine still is, with its relaxing
+    /// response.
+    #[test]
+    fn a_sines_rounded_reversals_are_no_holds() {
+        let n = 20 * 400;
+        let amp = |i: usize| 1.0 + 0.5 * (std::f64::consts::PI * i as f64 / n as f64).sin();
+        let mut c: Vec<f64> = (0..n)
+            .map(|i| 2.0 + amp(i) * (std::f64::consts::TAU * i as f64 / 400.0).sin())
+            .collect();
+        let mut r: Vec<f64> = c.iter().map(|&x| 500.0 * x).collect();
+        let (hold_at, dwell) = (c.len(), 600);
+        c.extend(std::iter::repeat_n(2.0, dwell));
+        r.extend((0..dwell).map(|i| 1000.0 * (0.7 + 0.3 * (-(i as f64) / 150.0).exp())));
+        let c = noisy(&c, 1e-4, 3);
+        let r = noisy(&r, 0.05, 4);
+        let t: Vec<f64> = (0..c.len()).map(|i| 0.01 * i as f64).collect();
+        let segs = segment(Some(&t), &c, &r).unwrap();
+        let holds: Vec<&Segment> = segs.iter().filter(|s| s.branch == Branch::Hold).collect();
+        assert_eq!(holds.len(), 1, "{holds:?}");
+        assert!(
+            holds[0].start >= hold_at - 20 && holds[0].end > hold_at + dwell / 2,
+            "{holds:?}"
+        );
+        assert!(
+            segs.iter().map(|s| s.cycle).max().unwrap() >= 20,
+            "{segs:?}"
+        );
     }
 
     /// The original two-pass `holds` (band grown from every start), kept as the reference.

@@ -306,3 +306,61 @@ fn a_three_point_window_stays_within_the_small_deflection_range() {
     // The interval is wider than the fit's own: it spans the wider window's slope.
     assert!((s.ci95[1] - s.ci95[0]) / s.value > 0.01, "{s:?}");
 }
+
+/// An MTS 793 fatigue export (a polymer tensile bar under a 0.25 Hz force sine at 100 Hz, its
+/// amplitude ramped up over the block and down again, the bar breaking at the peak of cycle
+/// 42 of 44 while the actuator jumps on): before, the sine's rounded reversals were read as 83
+/// holds whose force "relaxed" (behaviour `rate_dependent`), and the fracture's four samples
+/// as glitches with no break (the maximum, in cycle 22, has unloadings after it).
+#[test]
+fn a_fatigue_block_that_breaks_in_a_late_cycle_has_no_holds_and_a_break() {
+    let (per, cycles) = (400usize, 44usize);
+    let n = per * cycles;
+    let mut rng = ChaCha8Rng::seed_from_u64(77);
+    let white = Normal::new(0.0, 1.0).unwrap();
+    let amp = |i: usize| 0.55 + 0.45 * (std::f64::consts::PI * i as f64 / n as f64).sin();
+    let phase = |i: usize| std::f64::consts::TAU * i as f64 / per as f64;
+    // Force (N) under control; the travel (mm) follows it with a little viscous lag.
+    let force: Vec<f64> = (0..n)
+        .map(|i| 1000.0 * amp(i) * 0.5 * (1.0 - phase(i).cos()))
+        .collect();
+    let brk = (41 * per..42 * per)
+        .max_by(|&a, &b| force[a].total_cmp(&force[b]))
+        .unwrap();
+    let mut c = Vec::new();
+    let mut r = Vec::new();
+    for (i, f) in force.iter().enumerate().take(brk + 1) {
+        let lag = 0.02 * amp(i) * 0.5 * (1.0 - (phase(i) - 0.05).cos());
+        c.push(1e-3 * (10.0 + 2.0 * f / 1000.0 + lag) + 2e-7 * white.sample(&mut rng));
+        r.push(f + 1.5 * white.sample(&mut rng));
+    }
+    let at = c[brk];
+    for i in 1..45 {
+        c.push(at + 1e-3 * (0.2 * i as f64).min(5.0));
+        r.push(
+            if i < 6 {
+                300.0 * (-(i as f64)).exp()
+            } else {
+                0.0
+            } + 1.5 * white.sample(&mut rng),
+        );
+    }
+    let t: Vec<f64> = (0..c.len()).map(|i| 0.01 * i as f64).collect();
+    let a = run(TestKind::Tension, 0.1, Some(&t), &c, &r);
+    // No reversal is a hold (the machine standing still after the fracture, and the last few
+    // samples into the peak it broke at, may be).
+    let holds: Vec<_> = a
+        .segments
+        .iter()
+        .filter(|s| s.branch == Branch::Hold)
+        .collect();
+    assert!(holds.iter().all(|s| s.start + 10 >= brk), "{holds:?}");
+    let b = a.break_point.expect("the break in the late cycle");
+    assert!(
+        (brk + 1..brk + 4).contains(&b.sample),
+        "{} vs {brk}",
+        b.sample
+    );
+    assert_eq!(a.behaviour, Behaviour::Broken);
+    assert!(a.cycles.len() >= cycles - 3, "{}", a.cycles.len());
+}

@@ -108,6 +108,26 @@ fn log_uniform(rng: &mut ChaCha8Rng, lo: f64, hi: f64) -> f64 {
     (rng.random_range(lo.ln()..hi.ln())).exp()
 }
 
+/// `clean` plus stationary AR(1) noise of marginal σ `sd` and coefficient `phi` (0: white), one
+/// standard normal draw per sample from `rng`.
+fn with_ar1_noise(rng: &mut ChaCha8Rng, clean: &[f64], sd: f64, phi: f64) -> Vec<f64> {
+    use rand_distr::{Distribution, StandardNormal};
+    let mut p = 0.0f64;
+    clean
+        .iter()
+        .enumerate()
+        .map(|(i, c)| {
+            let e: f64 = StandardNormal.sample(rng);
+            p = if i == 0 {
+                e
+            } else {
+                phi * p + (1.0 - phi * phi).sqrt() * e
+            };
+            c + sd * p
+        })
+        .collect()
+}
+
 /// The case of `seed` (see the module doc for the distributions).
 pub fn family_case(seed: u64) -> FamilyCase {
     let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0x5EED_FA41_1700_0012);
@@ -365,7 +385,6 @@ pub struct BreakCase {
 ///
 /// Does not make cyclic, compressive or three-point tests.
 pub fn break_case(seed: u64) -> BreakCase {
-    use rand_distr::{Distribution, StandardNormal};
     let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0xB4EA_C0DE_0012_0005);
     let l0 = rng.random_range(0.05..0.3);
     let ea = log_uniform(&mut rng, 2e3, 2e5);
@@ -426,21 +445,7 @@ pub fn break_case(seed: u64) -> BreakCase {
             .map(|i| 0.5 * (clean[i] + clean[i + 1]) * (strain[i + 1] - strain[i]) * l0)
             .sum()
     });
-    let sd = noise_rel * top;
-    let mut p = 0.0f64;
-    let response: Vec<f64> = clean
-        .iter()
-        .enumerate()
-        .map(|(i, c)| {
-            let e: f64 = StandardNormal.sample(&mut rng);
-            p = if i == 0 {
-                e
-            } else {
-                phi * p + (1.0 - phi * phi).sqrt() * e
-            };
-            c + sd * p
-        })
-        .collect();
+    let response = with_ar1_noise(&mut rng, &clean, noise_rel * top, phi);
     let rate_hz = 10.0;
     BreakCase {
         time_s: (0..clean.len()).map(|i| i as f64 / rate_hz).collect(),
@@ -450,6 +455,173 @@ pub fn break_case(seed: u64) -> BreakCase {
         break_sample,
         max_response: top,
         work_to_break,
+        noise_ar1: phi,
+    }
+}
+
+/// How a [`CyclicBreakCase`] ends.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum CyclicEnd {
+    /// At the end of its last unloading (no break).
+    Unloaded,
+    /// Stopped at the peak of its last loading (no break).
+    AtPeak,
+    /// The specimen breaks on its last loading: the force is gone within 1–3 rows while the
+    /// crosshead runs on.
+    Breaks,
+    /// The force falls gradually, to 70–95 % of the last loading's peak, while the crosshead
+    /// runs on (damage, a wire slipping in its grip; no fracture).
+    Softens,
+}
+
+/// A cyclic tension test (a fatigue block or a cable's load cycles) whose last cycle may end in
+/// a fracture: the truth of the break detection on records whose largest cycle is not their
+/// last.
+#[derive(Debug, Clone)]
+pub struct CyclicBreakCase {
+    /// Time, s.
+    pub time_s: Vec<f64>,
+    /// Elongation, m.
+    pub control: Vec<f64>,
+    /// Force, N, with the noise.
+    pub response: Vec<f64>,
+    /// Free length, m.
+    pub free_length_m: f64,
+    /// How it ends.
+    pub end: CyclicEnd,
+    /// First sample below half the last loading's noise-free peak (the analysis' drop level),
+    /// for [`CyclicEnd::Breaks`].
+    pub break_sample: Option<usize>,
+    /// The sample of the last loading's noise-free peak ([`CyclicEnd::Breaks`] and
+    /// [`CyclicEnd::Softens`]: the last sample before the fall).
+    pub last_peak: Option<usize>,
+    /// Sine cycles (else triangles).
+    pub sine: bool,
+    /// Samples per cycle.
+    pub per_cycle: usize,
+    /// AR(1) coefficient of the noise (0: white).
+    pub noise_ar1: f64,
+}
+
+/// The cyclic case of `seed`: 4–30 one-sided cycles (zero to peak elongation and back, a
+/// tension–tension block) of a linear specimen (E A of 2·10³–2·10⁵ N), triangles or sines of
+/// 60–600 rows per cycle, the amplitude constant, rising, falling or rising and falling again
+/// (a fatigue block: never below 40 % of its largest), response noise of 0.05–1 % of the largest
+/// force, white or AR(1) (φ = 0.3–0.95, 40 % of the cases). It ends unloaded, stopped at a peak,
+/// broken on its last loading (at 70–100 % of the way up; the force gone to 0–20 % within 1–3
+/// rows while the crosshead runs on for 5–40 rows) or softening gradually to 70–95 % of that
+/// peak, a quarter each.
+pub fn cyclic_break_case(seed: u64) -> CyclicBreakCase {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0xC1C1_B4EA_0013_0001);
+    let l0 = rng.random_range(0.05..0.3);
+    let ea = log_uniform(&mut rng, 2e3, 2e5);
+    let cycles = rng.random_range(4..=30usize);
+    let per = log_uniform(&mut rng, 60.0, 600.0) as usize;
+    let sine = rng.random_bool(0.5);
+    let schedule = rng.random_range(0..4u8);
+    let end = match rng.random_range(0..4u8) {
+        0 => CyclicEnd::Unloaded,
+        1 => CyclicEnd::AtPeak,
+        2 => CyclicEnd::Breaks,
+        _ => CyclicEnd::Softens,
+    };
+    let strain_top = rng.random_range(0.002..0.01);
+    let noise_rel = log_uniform(&mut rng, 5e-4, 1e-2);
+    let phi = if rng.random_bool(0.4) {
+        rng.random_range(0.3..0.95)
+    } else {
+        0.0
+    };
+    let up_to = rng.random_range(0.7..=1.0f64);
+    let drop_rows = rng.random_range(1..=3usize);
+    let residual = rng.random_range(0.0..0.2);
+    let run_on = rng.random_range(5..=40usize);
+    let soft_to = rng.random_range(0.7..0.95);
+    let amp = |c: usize| -> f64 {
+        let x = c as f64 / (cycles - 1) as f64;
+        match schedule {
+            0 => 1.0,
+            1 => 0.4 + 0.6 * x,
+            2 => 1.0 - 0.6 * x,
+            _ => 0.4 + 0.6 * (std::f64::consts::PI * x).sin(),
+        }
+    };
+    // One cycle's shape at phase p in [0, 1): 0 → 1 → 0.
+    let shape = |p: f64| -> f64 {
+        if sine {
+            0.5 * (1.0 - (std::f64::consts::TAU * p).cos())
+        } else if p < 0.5 {
+            2.0 * p
+        } else {
+            2.0 - 2.0 * p
+        }
+    };
+    let mut strain: Vec<f64> = Vec::new();
+    for c in 0..cycles - 1 {
+        for i in 0..per {
+            strain.push(strain_top * amp(c) * shape(i as f64 / per as f64));
+        }
+    }
+    // The last cycle: its loading, then what the end makes of it.
+    let last = strain_top * amp(cycles - 1);
+    let rise = per / 2;
+    let (mut break_sample, mut last_peak) = (None, None);
+    let mut clean: Vec<f64>;
+    match end {
+        CyclicEnd::Unloaded => {
+            for i in 0..=per {
+                strain.push(last * shape((i % per) as f64 / per as f64));
+            }
+            clean = strain.iter().map(|e| ea * e).collect();
+        }
+        CyclicEnd::AtPeak => {
+            for i in 0..=rise {
+                strain.push(last * shape(i as f64 / per as f64));
+            }
+            clean = strain.iter().map(|e| ea * e).collect();
+        }
+        CyclicEnd::Breaks | CyclicEnd::Softens => {
+            let stop = ((rise as f64 * up_to) as usize).max(rise / 2);
+            for i in 0..=stop {
+                strain.push(last * shape(i as f64 / per as f64));
+            }
+            clean = strain.iter().map(|e| ea * e).collect();
+            let k = clean.len() - 1;
+            let top = clean[k];
+            let step = last / rise as f64;
+            let tail = if end == CyclicEnd::Breaks {
+                run_on
+            } else {
+                rise.max(20)
+            };
+            for i in 1..=tail {
+                strain.push(strain[k] + step * i as f64);
+                clean.push(if end == CyclicEnd::Breaks {
+                    let t = (i as f64 / drop_rows as f64).min(1.0);
+                    top * (1.0 - t * (1.0 - residual))
+                } else {
+                    top * (1.0 - (1.0 - soft_to) * i as f64 / tail as f64)
+                });
+            }
+            last_peak = Some(k);
+            if end == CyclicEnd::Breaks {
+                break_sample = (k + 1..clean.len()).find(|&i| clean[i] < 0.5 * top);
+            }
+        }
+    }
+    let largest = clean.iter().fold(0.0f64, |m, &v| m.max(v));
+    let response = with_ar1_noise(&mut rng, &clean, noise_rel * largest, phi);
+    let rate_hz = per as f64 / 4.0;
+    CyclicBreakCase {
+        time_s: (0..clean.len()).map(|i| i as f64 / rate_hz).collect(),
+        control: strain.iter().map(|e| e * l0).collect(),
+        response,
+        free_length_m: l0,
+        end,
+        break_sample,
+        last_peak,
+        sine,
+        per_cycle: per,
         noise_ar1: phi,
     }
 }
