@@ -9,6 +9,7 @@
 //!
 //! Everything past this crate is SI. This crate does no physics and prints nothing.
 
+pub mod clock;
 pub mod decode;
 pub mod error;
 pub mod format;

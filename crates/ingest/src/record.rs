@@ -494,6 +494,61 @@ fn one_row_columns_to_metadata(
     }
 }
 
+/// A text column of clock times (a logger's time of day, `12:00:01.5`; [`crate::clock`]) in a
+/// record with no other time channel becomes the time: seconds from its first row, named
+/// `clock time` (a name such as `Timestamp` or `Uhrzeit` is never taken for a time, since as
+/// numbers those are dates or hhmmss codes), with a note. Read as text, the record had no time,
+/// and rates and holds were counted in samples.
+fn clock_time_column(
+    block: &mut RawBlock,
+    names: &mut [String],
+    units: &mut [String],
+    notes: &mut Vec<Diagnostic>,
+    source: &str,
+) {
+    let timed = (0..names.len()).any(|i| {
+        block.label_slot.get(i).is_none_or(|s| s.is_none())
+            && (lookup(&units[i]).is_some_and(|u| u.dimension == Dimension::Time)
+                || crate::roles::named_time(&names[i]))
+    });
+    if timed {
+        return;
+    }
+    let Some((slot, col, secs)) = block
+        .labels
+        .iter()
+        .enumerate()
+        .find_map(|(slot, (c, texts))| crate::clock::clock_column(texts).map(|s| (slot, *c, s)))
+    else {
+        return;
+    };
+    let first = block.labels[slot]
+        .1
+        .iter()
+        .find(|t| !t.trim().is_empty())
+        .cloned();
+    block.labels.remove(slot);
+    for s in block.label_slot.iter_mut().flatten() {
+        if *s > slot {
+            *s -= 1;
+        }
+    }
+    block.label_slot[col] = None;
+    block.columns[col] = secs;
+    notes.push(Diagnostic {
+        file: source.into(),
+        line: Some(block.names_line),
+        column: Some(col + 1),
+        message: format!(
+            "the column '{}' holds clock times ({}, …): read as the time, in seconds from its first row, as 'clock time'",
+            names[col],
+            first.unwrap_or_default()
+        ),
+    });
+    names[col] = "clock time".into();
+    units[col] = "s".into();
+}
+
 /// Builds the record from what a reader found.
 pub(crate) fn build(
     mut raw: RawTable,
@@ -686,6 +741,7 @@ pub(crate) fn build(
             message: format!("repeated column name; this one is called '{}'", names[i]),
         });
     }
+    clock_time_column(&mut block, &mut names, &mut units, &mut notes, &source);
     let is_label: Vec<bool> = (0..n)
         .map(|i| block.label_slot.get(i).is_some_and(|s| s.is_some()))
         .collect();

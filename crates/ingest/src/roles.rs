@@ -130,6 +130,12 @@ fn best(scores: impl Iterator<Item = (usize, Option<i32>)>, taken: &[usize]) -> 
     b.map(|(_, i)| i)
 }
 
+/// Whether a column's name says time (and is not a date, time of day or stamp).
+pub(crate) fn named_time(name: &str) -> bool {
+    let n = name.to_lowercase();
+    !has(&n, NOT_TIME) && (has(&n, TIME_WORDS) || n == "t")
+}
+
 fn time_score(c: &ChannelFacts) -> Option<i32> {
     let n = c.name.to_lowercase();
     if has(&n, NOT_TIME) {

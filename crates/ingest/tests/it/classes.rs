@@ -409,3 +409,56 @@ fn parquet_carries_units_roles_and_the_file_metadata() {
     let has = |s: &str| bytes.windows(s.len()).any(|w| w == s.as_bytes());
     assert!(has("cablab.unit_written.Force") && has("kN") && has("meta.Specimen") && has("A7"));
 }
+
+/// A logger's time of day written as text (`hh:mm:ss.fff`, the date before it, past midnight):
+/// before, a label column and no time, so rates and holds were counted in samples. It is the
+/// time now, in seconds from its first row; beside a numeric `Time (s)` it stays a label.
+#[test]
+fn a_clock_time_column_is_the_time_when_nothing_else_is() {
+    let mut text = String::from("Timestamp;Weg [mm];Kraft [N]\n");
+    for i in 0..50 {
+        let t = 86_395.0 + 0.25 * i as f64; // from 23:59:55 on, past midnight
+        let day = (t / 86_400.0).floor();
+        let s = t - 86_400.0 * day;
+        text += &format!(
+            "2024-05-0{} {:02}:{:02}:{:06.3};{:.3};{:.2}\n",
+            1 + day as u32,
+            (s / 3600.0) as u32,
+            ((s % 3600.0) / 60.0) as u32,
+            s % 60.0,
+            0.01 * i as f64,
+            5.0 * i as f64
+        );
+    }
+    let r = read(&text, "logger.csv");
+    let ti = r.channel_index(Role::Time).expect("a time channel");
+    assert_eq!(r.channels[ti].name, "clock time");
+    let t = col(&r, "clock time");
+    assert_eq!(t.len(), 50);
+    assert!(
+        t.iter()
+            .enumerate()
+            .all(|(i, v)| (v - 0.25 * i as f64).abs() < 1e-9),
+        "{t:?}"
+    );
+    assert!(noted(
+        &r,
+        &["'Timestamp' holds clock times", "2024-05-01 23:59:55.000"]
+    ));
+    // Beside a numeric time, the stamp stays text and the numeric one is the time.
+    let both: String = text
+        .lines()
+        .enumerate()
+        .map(|(i, l)| {
+            if i == 0 {
+                format!("{l};Zeit [s]\n")
+            } else {
+                format!("{l};{:.2}\n", 0.25 * (i - 1) as f64)
+            }
+        })
+        .collect();
+    let r = read(&both, "logger2.csv");
+    let ti = r.channel_index(Role::Time).expect("a time channel");
+    assert_eq!(r.channels[ti].name, "Zeit");
+    assert!(!noted(&r, &["holds clock times"]));
+}
