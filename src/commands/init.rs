@@ -658,7 +658,13 @@ pub fn describe(s: &Survey) -> String {
             titles
                 .iter()
                 .enumerate()
-                .map(|(i, t)| format!("#{} '{t}'", i + 1))
+                .map(|(i, t)| {
+                    if t.is_empty() {
+                        format!("#{}", i + 1)
+                    } else {
+                        format!("#{} '{t}'", i + 1)
+                    }
+                })
                 .collect::<Vec<_>>()
                 .join(", ")
         };
@@ -672,6 +678,11 @@ pub fn describe(s: &Survey) -> String {
                 "{} specimens, a sheet each, a test each: {}",
                 sheets.len(),
                 listed(sheets)
+            ),
+            Some(cablab_ingest::Specimens::Stacked(titles)) => format!(
+                "{} runs of the same columns one after another, a test each: {}",
+                titles.len(),
+                listed(titles)
             ),
             None => format!("specimen '{}'", f.label),
         };

@@ -164,15 +164,19 @@ fn rel(from: &Path, to: &Path) -> String {
 /// Tests whose input file has the same bytes as an earlier test's (campaign order): (id, the
 /// earlier test's id). Two exports of two specimens never agree to the byte (their noise
 /// differs): a file copied into the campaign twice would count one specimen as two, halve its
-/// series' spread and weigh its mean, so the run says so.
+/// series' spread and weigh its mean, so the run says so. The specimens of one file (side by
+/// side, one after another or a sheet each: ids `FILE#k`) share its bytes and are compared as
+/// (bytes, k): the same specimen of a copied file is a duplicate, another specimen of the same
+/// file is not.
 pub fn duplicate_inputs(outcomes: &[TestOutcome]) -> Vec<(String, String)> {
-    let mut first: std::collections::HashMap<&str, &str> = std::collections::HashMap::new();
+    let mut first: std::collections::HashMap<(&str, &str), &str> = std::collections::HashMap::new();
     let mut out = Vec::new();
     for o in outcomes.iter().filter(|o| !o.input_sha256.is_empty()) {
-        match first.get(o.input_sha256.as_str()) {
+        let part = o.id.rsplit_once('#').map_or("", |(_, k)| k);
+        match first.get(&(o.input_sha256.as_str(), part)) {
             Some(earlier) => out.push((o.id.clone(), earlier.to_string())),
             None => {
-                first.insert(&o.input_sha256, &o.id);
+                first.insert((&o.input_sha256, part), &o.id);
             }
         }
     }

@@ -1077,8 +1077,8 @@ fn validate(file: PipelineFile, path: &Path, bytes: Vec<u8>, root: PathBuf) -> R
                     );
                 }
             }
-            // Specimens side by side in one file (Mecmesin, Trapezium) or a sheet each in a
-            // workbook (Bluehill's Excel export): one test each, numbered to the same width so
+            // Specimens side by side in one file (Mecmesin, Trapezium), runs one after another
+            // or a sheet each in a workbook (Bluehill's Excel export): one test each, numbered to the same width so
             // that ids sort in file order, unless the pipeline picks a block or a sheet.
             let numbered = |n: usize| {
                 let w = n.to_string().len();
@@ -1087,7 +1087,10 @@ fn validate(file: PipelineFile, path: &Path, bytes: Vec<u8>, root: PathBuf) -> R
             };
             let blocks: Vec<(String, Option<usize>, Option<String>)> = match (ov.block, &ov.sheet) {
                 (None, None) => match cablab_ingest::specimens_in_file(&p) {
-                    Some(cablab_ingest::Specimens::SideBySide(titles)) => numbered(titles.len())
+                    Some(
+                        cablab_ingest::Specimens::SideBySide(titles)
+                        | cablab_ingest::Specimens::Stacked(titles),
+                    ) => numbered(titles.len())
                         .zip(1..)
                         .map(|(t, k)| (t, Some(k), None))
                         .collect(),

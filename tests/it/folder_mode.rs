@@ -785,6 +785,64 @@ fn a_flag_a_file_contradicts_is_said_to_be_unused() {
     );
 }
 
+/// Three specimens one after another in one file (titles, names rows, the time starting again):
+/// folder mode makes each a test (`FILE#1` … `FILE#3`, each with its own stiffness) and does not
+/// take them for copies of one another; a copy of the file is a copy of each of them.
+#[test]
+fn runs_one_after_another_in_a_file_are_a_test_each() {
+    let tmp = tempfile::tempdir().unwrap();
+    let mut text = String::new();
+    for (k, slope) in [(1, 1000.0), (2, 1100.0), (3, 950.0)] {
+        text += &format!("Specimen {k}\nTime (s),Extension (mm),Load (N)\n");
+        for i in 0..200 {
+            let e = 0.01 * i as f64;
+            let wiggle = ((i * 37 + k * 11) % 11) as f64 - 5.0;
+            text += &format!(
+                "{:.1},{e:.3},{:.3}\n",
+                0.1 * i as f64,
+                slope * e + 0.05 * wiggle
+            );
+        }
+        text += "\n";
+    }
+    std::fs::create_dir_all(tmp.path().join("in")).unwrap();
+    std::fs::write(tmp.path().join("in/stacked_tension.csv"), &text).unwrap();
+    let args = [
+        "run",
+        "in",
+        "-q",
+        "--no-diagnosis",
+        "--length-mm",
+        "50",
+        "--diameter-mm",
+        "2",
+    ];
+    let o = run_in(tmp.path(), &args);
+    assert_eq!(o.code, 0, "{}", o.stderr);
+    assert!(
+        o.stderr
+            .contains("3 runs of the same columns one after another, a test each"),
+        "{}",
+        o.stderr
+    );
+    assert!(!o.stderr.contains("same bytes"), "{}", o.stderr);
+    let k = stiffness_by_file(&tmp.path().join("reports/in/summary.json"));
+    // (EA) = slope [N/mm] × 50 mm.
+    for (id, slope) in [("#1", 1000.0), ("#2", 1100.0), ("#3", 950.0)] {
+        let ea = k[&format!("stacked_tension.csv{id}")];
+        assert!((ea / (slope * 50.0) - 1.0).abs() < 0.01, "{id}: {ea}");
+    }
+    std::fs::write(tmp.path().join("in/copy_tension.csv"), &text).unwrap();
+    let o = run_in(tmp.path(), &args);
+    assert_eq!(o.code, 0, "{}", o.stderr);
+    assert_eq!(
+        o.stderr.matches("has the same bytes as").count(),
+        3,
+        "{}",
+        o.stderr
+    );
+}
+
 /// A tension file that states its cross-section (testXpert's `S0`, 6.3812 mm²) says its section:
 /// folder mode's `--diameter-mm` is not used for it (a 5 mm flag made the steel's modulus
 /// 69.8 GPa, its own section gives 214.9, as `analyze` reads it), and the terminal says so.

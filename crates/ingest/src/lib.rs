@@ -209,6 +209,10 @@ pub enum Specimens {
     /// One per sheet of a workbook with the same columns, by sheet name in workbook order
     /// (`--sheet NAME` reads one).
     Sheets(Vec<String>),
+    /// Runs of the same columns one after another in a text export, none continuing the one
+    /// before ([`record::blocks_are_runs`]), by their titles (empty where a block has none) in
+    /// block order (`--block N` reads the N-th).
+    Stacked(Vec<String>),
 }
 
 /// The specimens `path` holds when there are two or more: side by side in a text export (its
@@ -220,7 +224,35 @@ pub fn specimens_in_file(path: &Path) -> Option<Specimens> {
         let bytes = std::fs::read(path).ok()?;
         return workbook::specimen_sheets(&bytes).map(Specimens::Sheets);
     }
-    side_by_side_in(head).map(Specimens::SideBySide)
+    side_by_side_in(head)
+        .map(Specimens::SideBySide)
+        .or_else(|| stacked_in(path).map(Specimens::Stacked))
+}
+
+/// The runs a text export holds one after another ([`Specimens::Stacked`]), when it holds two
+/// or more. Only a file whose first names row recurs is read in full.
+fn stacked_in(path: &Path) -> Option<Vec<String>> {
+    let bytes = std::fs::read(path).ok()?;
+    let head = &bytes[..bytes.len().min(1 << 16)];
+    let name = path.file_name()?.to_string_lossy();
+    let first = read_bytes(head, &name, &ReadOptions::default()).ok()?;
+    let line = first.blocks.first()?.names_line;
+    let row = bytes.split(|&b| b == b'\n').nth(line.checked_sub(1)?)?;
+    let names_row = row.strip_suffix(b"\r").unwrap_or(row);
+    if names_row.is_empty()
+        || memchr::memmem::find_iter(&bytes, names_row)
+            .nth(1)
+            .is_none()
+    {
+        return None;
+    }
+    let rec = read_bytes(&bytes, &name, &ReadOptions::default()).ok()?;
+    record::blocks_are_runs(&rec.blocks, &rec.joined_blocks).then(|| {
+        rec.blocks
+            .iter()
+            .map(|b| b.title.clone().unwrap_or_default())
+            .collect()
+    })
 }
 
 /// The specimens a text export holds side by side (Mecmesin Emperor's `Sample 1,,,Sample 2`,

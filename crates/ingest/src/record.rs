@@ -87,6 +87,9 @@ pub struct BlockInfo {
     pub names: Vec<String>,
     /// Unit cells as written ("" where none).
     pub units: Vec<String>,
+    /// Whether its time starts again: its first time lies before the last time of the block
+    /// before it (None for the first block, or without a time column).
+    pub time_restarts: Option<bool>,
 }
 
 /// [`TestRecord::kind_reason`] of a kind the caller set (`--kind`, a pipeline's `kind`), as
@@ -340,6 +343,38 @@ fn raw_time_column(b: &RawBlock) -> Option<usize> {
         })
 }
 
+/// Whether block `b`'s time starts before block `a`'s last time (None when either has no time
+/// column or no time value).
+fn time_restarts(a: &RawBlock, b: &RawBlock) -> Option<bool> {
+    let (ta, tb) = (raw_time_column(a)?, raw_time_column(b)?);
+    let last = a.columns.get(ta)?.iter().rev().find(|v| !v.is_nan())?;
+    let first = b.columns.get(tb)?.iter().find(|v| !v.is_nan())?;
+    Some(first < last)
+}
+
+/// Whether a file's blocks are runs of their own (specimens, or tests, one after another: a
+/// names row, its rows, the next names row): two or more blocks, none joined to another, every
+/// one with the same names and units, at least 20 rows and a fifth of the longest's (a short
+/// preload or a results table is no run), and every one after the first starting its time
+/// again (an MTS cyclic acquisition that stores one cycle in a hundred writes blocks whose time
+/// runs on with gaps: one test). `joined`: the blocks read together (one entry when nothing was
+/// joined).
+pub fn blocks_are_runs(blocks: &[BlockInfo], joined: &[usize]) -> bool {
+    let longest = blocks.iter().map(|b| b.rows).max().unwrap_or(0);
+    let same = |x: &[String], y: &[String]| {
+        x.len() == y.len() && x.iter().zip(y).all(|(p, q)| p.trim() == q.trim())
+    };
+    blocks.len() >= 2
+        && joined.len() == 1
+        && blocks.iter().all(|b| {
+            same(&b.names, &blocks[0].names)
+                && same(&b.units, &blocks[0].units)
+                && b.rows >= 20
+                && 5 * b.rows >= longest
+                && (b.index == 1 || b.time_restarts == Some(true))
+        })
+}
+
 /// True when block `b` continues block `a`: the same names and units, and its first time
 /// follows `a`'s last time within ten of `a`'s median steps (MTS 793 writes one acquisition
 /// buffer per block).
@@ -561,6 +596,9 @@ pub(crate) fn build(
         .iter()
         .enumerate()
         .map(|(i, b)| BlockInfo {
+            time_restarts: i
+                .checked_sub(1)
+                .and_then(|p| time_restarts(&raw.blocks[p], b)),
             index: i + 1,
             title: b.title.clone(),
             names_line: b.names_line,
@@ -661,6 +699,26 @@ pub(crate) fn build(
                 } else {
                     ", the longest (ties: the first), only; --block N reads another (a campaign makes each a test of its own)"
                 }
+            ),
+        });
+    } else if blocks.len() > 1 && opts.block.is_none() && blocks_are_runs(&blocks, &joined) {
+        // Runs of the same columns one after another (specimens stacked in one file): the
+        // result is one of them, which must be said next to every number.
+        warnings.push(Diagnostic {
+            file: source.clone(),
+            line: Some(blocks[main_block - 1].names_line),
+            column: None,
+            message: format!(
+                "the file holds {} runs of the same columns one after another, none continuing the one before ({}): this is run {main_block}, the longest (ties: the first), only; --block N reads another (a campaign makes each a test of its own)",
+                blocks.len(),
+                blocks
+                    .iter()
+                    .map(|b| match &b.title {
+                        Some(t) if !t.is_empty() => format!("{}: '{t}', {} rows", b.index, b.rows),
+                        _ => format!("{}: {} rows", b.index, b.rows),
+                    })
+                    .collect::<Vec<_>>()
+                    .join(", "),
             ),
         });
     } else if blocks.len() > 1 {

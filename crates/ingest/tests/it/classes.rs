@@ -462,3 +462,59 @@ fn a_clock_time_column_is_the_time_when_nothing_else_is() {
     assert_eq!(r.channels[ti].name, "Zeit");
     assert!(!noted(&r, &["holds clock times"]));
 }
+
+/// Specimens written one after another in one file (a title, a names row, the rows; the next
+/// title and names row; the time starting again): before, the longest was read with only a
+/// note. Now a warning says which run this is, and `specimens_in_file` lists the runs so that a
+/// campaign makes each a test. Blocks whose time runs on (an MTS cyclic acquisition storing
+/// one cycle in a hundred) are no such runs.
+#[test]
+fn runs_one_after_another_are_said_and_listed() {
+    let mut text = String::new();
+    for (k, slope) in [(1, 1000.0), (2, 1100.0), (3, 950.0)] {
+        text += &format!("Specimen {k}\nTime (s),Extension (mm),Load (N)\n");
+        for i in 0..120 {
+            text += &format!(
+                "{:.1},{:.3},{:.2}\n",
+                0.1 * i as f64,
+                0.01 * i as f64,
+                slope * 0.01 * i as f64
+            );
+        }
+        text += "\n";
+    }
+    let r = read(&text, "stacked.csv");
+    assert_eq!(r.blocks.len(), 3);
+    assert!(warned(
+        &r,
+        &[
+            "3 runs of the same columns one after another",
+            "this is run 1"
+        ]
+    ));
+    let d = tempfile::tempdir().unwrap();
+    let p = d.path().join("stacked.csv");
+    std::fs::write(&p, &text).unwrap();
+    assert_eq!(
+        cablab_ingest::specimens_in_file(&p),
+        Some(cablab_ingest::Specimens::Stacked(vec![
+            String::new(),
+            "Specimen 2".into(),
+            "Specimen 3".into()
+        ]))
+    );
+    // The same blocks with the time running on: one test stored in parts.
+    let mut on = String::new();
+    for k in 0..3 {
+        on += &format!("Stored block {k}\nTime (s),Extension (mm),Load (N)\n");
+        for i in 0..120 {
+            let t = 100.0 * k as f64 + 0.1 * i as f64;
+            on += &format!("{t:.1},{:.3},{:.2}\n", 0.01 * i as f64, 10.0 * i as f64);
+        }
+        on += "\n";
+    }
+    let r = read(&on, "parts.csv");
+    assert!(!warned(&r, &["runs of the same columns"]));
+    std::fs::write(&p, &on).unwrap();
+    assert_eq!(cablab_ingest::specimens_in_file(&p), None);
+}
