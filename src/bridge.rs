@@ -1029,6 +1029,53 @@ pub fn stated_modulus_check(
     })
 }
 
+/// An angle control read modulo a turn (an encoder's 0–360°, or ±180°: 359.3° then 0°) is
+/// unwrapped: where it steps by a full turn give or take 5 of its median steps (a turn over 20
+/// of them) while the response does not move (within 3 × its median step), the turn is taken
+/// off from there on, and the note says where. Before, the twist fell back by a turn at
+/// each wrap: the loops came out negative and the stiffness fit stopped there.
+pub fn unwrap_turns(rec: &TestRecord, curve: &mut Curve) -> Option<String> {
+    let ci = rec.channel_index(Role::Control)?;
+    let ch = &rec.channels[ci];
+    if ch.dimension != Some(cablab_ingest::units::Dimension::Angle) || curve.control.len() < 10 {
+        return None;
+    }
+    let c = curve.control.clone();
+    let r = &curve.response;
+    let (mc, mr) = (median_step(&c), median_step(r));
+    let turn = std::f64::consts::TAU;
+    if turn <= 20.0 * mc {
+        return None;
+    }
+    let mut offset = 0.0;
+    let mut wraps = Vec::new();
+    for i in 1..c.len() {
+        // The step from the unwrapped sample before; a wrap leaves a step of a turn that,
+        // taken off, is an ordinary step (a turning point may fall on the wrap).
+        let jump = c[i] + offset - curve.control[i - 1];
+        let turns = (jump / turn).round();
+        if turns.abs() == 1.0
+            && (jump - turns * turn).abs() <= 5.0 * mc
+            && (r[i] - r[i - 1]).abs() <= 3.0 * mr
+        {
+            offset -= turns * turn;
+            wraps.push(i + 1);
+        }
+        curve.control[i] = c[i] + offset;
+    }
+    (!wraps.is_empty()).then(|| {
+        let factor = ch.factor.max(f64::MIN_POSITIVE);
+        format!(
+            "the control {} is read modulo a turn ({} {}): it wraps at complete row{} {}, where a turn is added from there on (the twist counted on)",
+            show(ch),
+            (turn / factor * 1e6).round() / 1e6,
+            if ch.unit.is_empty() { ch.si_unit.as_str() } else { ch.unit.as_str() },
+            if wraps.len() > 1 { "s" } else { "" },
+            wraps.iter().map(|w| w.to_string()).collect::<Vec<_>>().join(", ")
+        )
+    })
+}
+
 /// A warning when the control jumps between two samples while the response does not move
 /// back to where the record started (a step over 20 × the median step and 5 % of the control's
 /// range, landing within 5 % of the range of the first sample, the response's step within 3 × its
@@ -1527,6 +1574,7 @@ pub fn read_test(
         mm(t.diameter_mm),
     ));
     let mut curve = curve(&rec)?;
+    said.notes.extend(unwrap_turns(&rec, &mut curve));
     said.notes.extend(sectional_control(
         &rec,
         kind,

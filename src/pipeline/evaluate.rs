@@ -512,6 +512,8 @@ fn stages(
         out.needs.push("diameter_mm".into());
     }
     let mut curve = crate::bridge::curve(&rec)?;
+    out.notes
+        .extend(crate::bridge::unwrap_turns(&rec, &mut curve));
     // A strain or curvature control (extensometer strain, torsional shear strain, κ_B) in the
     // kind's variable.
     out.notes.extend(crate::bridge::sectional_control(

@@ -991,3 +991,59 @@ fn a_gauge_length_beside_a_length_under_a_crosshead_is_warned_about() {
         plain["stiffness"]["value"].as_f64().unwrap() / g["stiffness"]["value"].as_f64().unwrap();
     assert!((ratio - 32.0 / 25.0).abs() < 1e-6, "{ratio}");
 }
+
+/// An angle read modulo a turn (an encoder's 0–360°): a torsion test twisted to 720° and back
+/// wraps at 360° and at its 720° peak on the way up, and at the peak and 360° on the way down. Unwrapped, it gives the same stiffness as
+/// the same test written with the twist counted on, a note says where it wrapped, and no
+/// "counted from each phase's start" warning or negative loop is left.
+#[test]
+fn an_angle_read_modulo_a_turn_is_unwrapped() {
+    let d = tempfile::tempdir().unwrap();
+    let write = |name: &str, wrap: bool| {
+        let mut s = String::from("Time (s),Angle (deg),Torque (N.m)\n");
+        for i in 0..1600 {
+            let a = 0.9 * (if i <= 800 { i } else { 1600 - i }) as f64;
+            let tq = 0.002 * a + 0.0005 * (((i * 37) % 11) as f64 - 5.0);
+            let shown = if wrap { a.rem_euclid(360.0) } else { a };
+            s += &format!("{:.1},{shown:.3},{tq:.5}\n", 0.1 * i as f64);
+        }
+        let p = d.path().join(name);
+        std::fs::write(&p, s).unwrap();
+        p
+    };
+    let run = |p: &Path| {
+        let o = cablab()
+            .args([
+                "analyze",
+                p.to_str().unwrap(),
+                "--length-mm",
+                "100",
+                "--diameter-mm",
+                "3",
+                "--json",
+            ])
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        json_of(&o.stdout)
+    };
+    let wrapped = run(&write("wrapped.csv", true));
+    let counted = run(&write("counted.csv", false));
+    let k = |v: &Value| v["stiffness"]["value"].as_f64().unwrap();
+    assert!(
+        (k(&wrapped) / k(&counted) - 1.0).abs() < 1e-9,
+        "{} {}",
+        k(&wrapped),
+        k(&counted)
+    );
+    let notes = wrapped["notes"].to_string();
+    assert!(
+        notes.contains("is read modulo a turn (360 deg): it wraps at complete rows 401, 801, 802, 1202"),
+        "{notes}"
+    );
+    let warnings = wrapped["warnings"].to_string();
+    assert!(
+        !warnings.contains("counted from each phase") && !warnings.contains("negative"),
+        "{warnings}"
+    );
+}
