@@ -444,6 +444,16 @@ pub fn curvature_control(rec: &TestRecord) -> bool {
         == Some(cablab_ingest::units::Dimension::Curvature)
 }
 
+/// Whether the record's control is a surface shear strain (a ratio or an angle named as a
+/// shear strain: a torsional extensometer's `Shear Strain (deg)`).
+pub fn shear_strain_control(rec: &TestRecord) -> bool {
+    use cablab_ingest::units::Dimension as D;
+    rec.channel_index(Role::Control).is_some_and(|i| {
+        matches!(rec.channels[i].dimension, Some(D::Ratio | D::Angle))
+            && shear_named(&rec.channels[i].name)
+    })
+}
+
 /// Whether the record's control is a dimensionless strain (mm/mm, %, µm/m, ...).
 pub fn strain_control(rec: &TestRecord) -> bool {
     rec.channel_index(Role::Control)
@@ -454,7 +464,8 @@ pub fn strain_control(rec: &TestRecord) -> bool {
 /// [`geometry`] with the notes to print next to the results when the file settled something:
 /// - a free length (or gauge length) from the file's metadata;
 /// - for tension with a strain control and no length anywhere: l₀ = 1 m, which only carries the
-///   strain (elongation = ε l₀, and (EA) = dF/dε does not depend on l₀);
+///   strain (elongation = ε l₀, and (EA) = dF/dε does not depend on l₀); likewise for torsion
+///   with a surface shear strain control ((GJ) = T r / γ) and pure bending with a curvature;
 /// - the section, first match wins: a diameter given; a flat b × h given (`flat`); the file's
 ///   diameter; for torsion and bending the file's flat b × h (testXpert `Specimen thickness` and
 ///   `Specimen width`, the sdata Numisheet id `T1.409W17.91`; see [`flat_section_note`]); for
@@ -507,6 +518,13 @@ pub fn geometry_noted(
         (None, None) if kind == TestKind::Tension && strain_control(rec) => {
             notes.push(
                 "no free length given: a strain control needs none, (EA) = dF/dε (l₀ = 1 m only carries the strain)"
+                    .into(),
+            );
+            1.0
+        }
+        (None, None) if kind == TestKind::Torsion && shear_strain_control(rec) => {
+            notes.push(
+                "no free length given: a surface shear strain control needs none, (GJ) = T r / γ (l₀ = 1 m only carries the twist θ = 2 γ l₀ / d)"
                     .into(),
             );
             1.0
@@ -1602,7 +1620,8 @@ pub fn read_test(
 }
 
 /// The kind a kind word in `path`'s file name gives `rec` (read from that file), with its control
-/// channel's dimension to judge it by (`init::kind_from_name`).
+/// channel's dimension to judge it by (`init::kind_from_name`); else the Bluehill method type of
+/// the folder it is in (`init::kind_from_bluehill_folder`).
 pub fn kind_from_file_name(
     rec: &TestRecord,
     path: &std::path::Path,
@@ -1615,6 +1634,7 @@ pub fn kind_from_file_name(
         .map(|n| n.to_string_lossy().to_string())
         .unwrap_or_default();
     crate::commands::init::kind_from_name(&name, control)
+        .or_else(|| crate::commands::init::kind_from_bluehill_folder(path))
 }
 
 /// The kind of a file read without `--kind`, as `cablab run PATH...` and `cablab init` find it:

@@ -4,8 +4,9 @@
 use cablab_measure::Analysis;
 use std::fmt::Write;
 
-/// A short, readable summary of one characterised test.
-pub fn analysis_text(file: &str, an: &Analysis) -> String {
+/// A short, readable summary of one characterised test; `nu`: the Poisson ratio the torsion
+/// modulus was taken with.
+pub fn analysis_text(file: &str, an: &Analysis, nu: f64) -> String {
     let mut s = String::new();
     let _ = writeln!(
         s,
@@ -42,6 +43,17 @@ pub fn analysis_text(file: &str, an: &Analysis) -> String {
         }
     }
     match an.modulus_pa {
+        // Torsion gives the shear modulus G = (GJ)/J; the modulus is the chapter's E_tor, the
+        // Young's modulus it implies for an isotropic section, which is not what a torsion
+        // user reads first: both are shown.
+        Some(e) if an.kind == cablab_core::TestKind::Torsion => {
+            let _ = writeln!(
+                s,
+                "  modulus     {:.1} MPa  (E_tor = 2 (1 + ν) G with ν = {nu}, --nu; the shear modulus G = {:.1} MPa)",
+                e * 1e-6,
+                e * 1e-6 / (2.0 * (1.0 + nu))
+            );
+        }
         Some(e) => {
             let _ = writeln!(s, "  modulus     {:.1} MPa", e * 1e-6);
         }

@@ -138,7 +138,10 @@ pub fn run(a: AnalyzeArgs) -> CmdResult {
         .map(|_| ExitCode::SUCCESS);
     }
     // The warnings and notes are in the text, next to the numbers.
-    print!("{}", crate::text::analysis_text(&rec.provenance.path, &an));
+    print!(
+        "{}",
+        crate::text::analysis_text(&rec.provenance.path, &an, a.nu)
+    );
     Ok(ExitCode::SUCCESS)
 }
 

@@ -160,6 +160,9 @@ fn diagnose_files(a: &DiagnoseArgs) -> CmdResult {
             "held-out gap of the baseline {:.3}% of the largest response",
             100.0 * d.verdict.gap_rel
         );
+        if let Some(e) = &d.baseline.elastic_mismatch {
+            println!("warning: {}", e.warning);
+        }
         if let Some(m) = &d.mesh {
             let refined = m
                 .refined_from

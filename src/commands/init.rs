@@ -18,7 +18,7 @@
 use super::{CliError, CmdResult};
 use crate::cli::{InferArgs, InitArgs};
 use crate::output::write_atomic;
-use cablab_core::{Role, TestKind};
+use cablab_core::TestKind;
 use cablab_ingest::units::Dimension;
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
@@ -240,6 +240,25 @@ fn walk(
 /// The kind a file name states, by its words (split at anything not a letter or digit).
 /// `control` resolves a bare "bending": a driven displacement is three-point, a driven angle or
 /// curvature is pure bending. None when the name states no kind or two different ones.
+/// The kind Instron Bluehill's method type gives a file in the folder it exports a specimen's
+/// raw data to (`W27_carbon.is_tens_RawData/Specimen_RawData_1.csv`: `.is_tens` a tensile
+/// method, `.is_tcyclic` a cyclic tensile one, `.is_flex` a flexure one, taken as three-point
+/// as the metadata's `flexure` is; compression methods give none).
+pub fn kind_from_bluehill_folder(path: &std::path::Path) -> Option<Sourced<TestKind>> {
+    let folder = path.parent()?.file_name()?.to_string_lossy().to_lowercase();
+    let method = folder.rsplit_once(".is_")?.1;
+    let method = method.strip_suffix("_rawdata").unwrap_or(method);
+    let kind = match method {
+        "tens" | "tcyclic" => TestKind::Tension,
+        "flex" => TestKind::ThreePoint,
+        _ => return None,
+    };
+    Some(Sourced {
+        value: kind,
+        from: format!("Bluehill method type '.is_{method}' of its folder"),
+    })
+}
+
 pub fn kind_from_name(name: &str, control: Option<Dimension>) -> Option<Sourced<TestKind>> {
     let lower = name.to_lowercase();
     let words: Vec<&str> = lower
@@ -463,16 +482,11 @@ pub fn survey(paths: &[PathBuf], d: &InferArgs) -> Result<Survey, CliError> {
                 continue;
             }
         };
-        let control = rec
-            .channels
-            .iter()
-            .find(|c| c.role == Role::Control)
-            .and_then(|c| c.dimension);
         let name = path
             .file_name()
             .map(|n| n.to_string_lossy().to_string())
             .unwrap_or_default();
-        let by_name = kind_from_name(&name, control);
+        let by_name = crate::bridge::kind_from_file_name(&rec, &path);
         let mut notes = Vec::new();
         let kind = if rec.kind != TestKind::Unknown {
             if let Some(n) = &by_name {
@@ -578,6 +592,9 @@ pub fn survey(paths: &[PathBuf], d: &InferArgs) -> Result<Survey, CliError> {
             }
             Some(TestKind::PureBending) if crate::bridge::curvature_control(&rec) => {
                 Some("the control is a curvature: (EI) = dM/dκ")
+            }
+            Some(TestKind::Torsion) if crate::bridge::shear_strain_control(&rec) => {
+                Some("the control is a surface shear strain: (GJ) = T r / γ")
             }
             _ => None,
         }
@@ -1201,6 +1218,23 @@ pub fn root_from(out: &Path) -> Option<String> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Bluehill's method type in the folder it exports raw data to gives the kind; other
+    /// folders, and compression methods, give none.
+    #[test]
+    fn the_bluehill_method_folder_gives_the_kind() {
+        let k = |p: &str| kind_from_bluehill_folder(std::path::Path::new(p)).map(|s| s.value);
+        assert_eq!(
+            k("Kelsey/W27_carbon.is_tens_RawData/Specimen_RawData_1.csv"),
+            Some(TestKind::Tension)
+        );
+        assert_eq!(k("a/b.is_tcyclic_RawData/x.csv"), Some(TestKind::Tension));
+        assert_eq!(k("a/b.is_flex_RawData/x.csv"), Some(TestKind::ThreePoint));
+        assert_eq!(k("a/b.is_ccyclic_RawData/x.csv"), None);
+        assert_eq!(k("a/b.is_comp_RawData/x.csv"), None);
+        assert_eq!(k("a/raw_data/x.csv"), None);
+        assert_eq!(k("x.csv"), None);
+    }
 
     fn k(name: &str, control: Option<Dimension>) -> Option<TestKind> {
         kind_from_name(name, control).map(|s| s.value)

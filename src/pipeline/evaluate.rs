@@ -455,7 +455,9 @@ fn stages(
     let length_known = t.free_length_m.is_some() || rec.specimen.free_length_m.is_some();
     // A strain control in tension needs no length either: (EA) = dF/dε (`geometry_noted`
     // carries the strain on l₀ = 1 m and says so).
-    let strain_control = t.kind == TestKind::Tension && crate::bridge::strain_control(&rec);
+    // Nor does a surface shear strain in torsion: (GJ) = T r / γ.
+    let strain_control = (t.kind == TestKind::Tension && crate::bridge::strain_control(&rec))
+        || (t.kind == TestKind::Torsion && crate::bridge::shear_strain_control(&rec));
     let machine_level = !length_known && !curvature_control && !strain_control;
     let (geom, flat) = if length_known || strain_control {
         let (g, f, notes) = crate::bridge::geometry_noted(
@@ -766,6 +768,9 @@ fn model_part(
         };
         let cal = cablab_diagnose::calibrate(ctx, fitted, &model, &copts)
             .context("calibrating the baseline")?;
+        if let Some(m) = cablab_diagnose::diagnose::elastic_mismatch(&cal.params, fitted) {
+            out.warnings.push(format!("calibration: {}", m.warning));
+        }
         // Fitted before a fracture, its parameters replayed over the whole record for the plots
         // (the rod goes on carrying load where the specimen broke); otherwise the fit's own
         // replay, not simulated again.

@@ -1038,7 +1038,9 @@ fn an_angle_read_modulo_a_turn_is_unwrapped() {
     );
     let notes = wrapped["notes"].to_string();
     assert!(
-        notes.contains("is read modulo a turn (360 deg): it wraps at complete rows 401, 801, 802, 1202"),
+        notes.contains(
+            "is read modulo a turn (360 deg): it wraps at complete rows 401, 801, 802, 1202"
+        ),
         "{notes}"
     );
     let warnings = wrapped["warnings"].to_string();
@@ -1046,4 +1048,75 @@ fn an_angle_read_modulo_a_turn_is_unwrapped() {
         !warnings.contains("counted from each phase") && !warnings.contains("negative"),
         "{warnings}"
     );
+}
+
+/// A torsional extensometer's surface shear strain (an Instron Partner export: `Shear Strain
+/// ( deg )` beside the machine's `Angle ( deg )`, torque in in·lb) is the control with a
+/// diameter and no length: (GJ) = T r / γ needs none (before, the run stopped: "the free length
+/// is missing"); the text gives the shear modulus beside E_tor; and `diagnose --json` says when
+/// its baseline's GJ is not the data's (`baseline.elastic_mismatch`: null on this straight
+/// record, whose fit is the data's).
+#[test]
+fn a_surface_shear_strain_needs_no_length_and_the_torsion_modulus_says_g() {
+    let d = tempfile::tempdir().unwrap();
+    // GJ = 171 N m², d = 19.05 mm: T = GJ γ / r.
+    let (gj, r) = (171.0, 0.5 * 19.05e-3);
+    let mut s = String::from(
+        "Partner Data Point File,,,\nStart of Test Wed 27 Sep 2017 16:59:51,,,\nTime ( min ),Shear Strain ( deg ),Angle ( deg ),Torque ( in·lb )\n",
+    );
+    for i in 0..400 {
+        let gamma = 2.5e-3 * (if i <= 200 { i } else { 400 - i }) as f64 / 200.0;
+        let torque_nm = gj * gamma / r + 0.002 * (((i * 37) % 11) as f64 - 5.0);
+        s += &format!(
+            "{:.5},{:.6},{:.4},{:.3}\n",
+            i as f64 / 600.0,
+            gamma.to_degrees(),
+            (gamma * 3.0).to_degrees(),
+            torque_nm / 0.112_984_829
+        );
+    }
+    let p = d.path().join("tube_torsion.csv");
+    std::fs::write(&p, s).unwrap();
+    let f = p.to_str().unwrap();
+    let args = [
+        "analyze",
+        f,
+        "--control",
+        "Shear Strain",
+        "--diameter-mm",
+        "19.05",
+    ];
+    let o = cablab().args(args).arg("--json").output().unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let v = json_of(&o.stdout);
+    let k = v["stiffness"]["value"].as_f64().unwrap();
+    assert!((k / gj - 1.0).abs() < 0.01, "GJ {k}");
+    let o = cablab().args(args).output().unwrap();
+    let text = String::from_utf8_lossy(&o.stdout);
+    let e = v["modulus_pa"].as_f64().unwrap();
+    assert!(
+        text.contains(&format!("the shear modulus G = {:.1} MPa", e * 1e-6 / 3.0)),
+        "{text}"
+    );
+    let o = cablab()
+        .args([
+            "diagnose",
+            f,
+            "--control",
+            "Shear Strain",
+            "--diameter-mm",
+            "19.05",
+            "--json",
+        ])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let dj = json_of(&o.stdout);
+    assert!(
+        dj["baseline"]["elastic_mismatch"].is_null(),
+        "{}",
+        dj["baseline"]
+    );
+    let fitted = dj["baseline"]["params"]["GJ"].as_f64().unwrap();
+    assert!((fitted / gj - 1.0).abs() < 0.05, "GJ fitted {fitted}");
 }

@@ -437,11 +437,9 @@ pub fn data_scales(tests: &[DiagTest]) -> DataScales {
     }
 }
 
-/// Slope response/control of the first loading, fitted over its lower 30 % (where a cable is
-/// still elastic; wider if that holds fewer than 5 samples); `None` if the first loading is too
-/// short.
-pub fn initial_slope(control: &[f64], response: &[f64]) -> Option<f64> {
-    // First loading: until |control| stops growing.
+/// The last sample of the first loading: where |control| stops growing (it falls below 98 % of
+/// the largest |control| so far).
+pub fn first_loading_end(control: &[f64]) -> usize {
     let mut end = 0;
     let mut peak = 0.0f64;
     for (i, c) in control.iter().enumerate() {
@@ -452,6 +450,15 @@ pub fn initial_slope(control: &[f64], response: &[f64]) -> Option<f64> {
             break;
         }
     }
+    end
+}
+
+/// Slope response/control of the first loading, fitted over its lower 30 % (where a cable is
+/// still elastic; wider if that holds fewer than 5 samples); `None` if the first loading is too
+/// short.
+pub fn initial_slope(control: &[f64], response: &[f64]) -> Option<f64> {
+    let end = first_loading_end(control);
+    let peak = control.get(end).map_or(0.0, |c| c.abs());
     // Lower 30 % of the first loading; widened when the logger sampled it too coarsely.
     let idx = [0.3, 0.6, 1.0]
         .iter()

@@ -1433,3 +1433,43 @@ mod one_loading_props {
         }
     }
 }
+
+/// The baseline's elastic parameter checked against the data (`elastic_mismatch`), on the
+/// demo's elastic tension record (EA 80,023 N, never yielding): the law's own parameters pass;
+/// a fit that yields at 1 % of the peak with EA doubled and the hardening holding the slope
+/// (EA H / (EA + H) the record's stiffness, as a real torsion fit did: GJ 344 against 171) is
+/// flagged with that stiffness past the yield; so is an EA 3× the first loading's elastic slope
+/// with a yield at 60 % of the peak (a collapsed fit of a brittle flexure bar: EI 68 against
+/// 2.3).
+#[test]
+fn an_elastic_parameter_the_data_do_not_show_is_flagged() {
+    use crate::calibration::ParamMap;
+    use crate::diagnose::elastic_mismatch;
+    let t = demo_elastic_tension();
+    let peak = t.response_scale();
+    let p = |v: &[(&str, f64)]| ParamMap(v.iter().map(|(k, x)| (k.to_string(), *x)).collect());
+    let ea = 80_023.0;
+    let tests = [t];
+    assert!(elastic_mismatch(&p(&[("EA", ea), ("F_y", 54.6), ("H", 2e4)]), &tests).is_none());
+    assert!(elastic_mismatch(
+        &p(&[("EA", 1.3 * ea), ("F_y", 0.6 * peak), ("H", 2e4)]),
+        &tests
+    )
+    .is_none());
+    let m = elastic_mismatch(
+        &p(&[("EA", 2.0 * ea), ("F_y", 0.01 * peak), ("H", 2.0 * ea)]),
+        &tests,
+    )
+    .expect("an early yield");
+    assert!((m.yield_share - 0.01).abs() < 1e-9, "{m:?}");
+    assert!((m.stiffness_past_yield / ea - 1.0).abs() < 1e-12, "{m:?}");
+    assert!(m.warning.contains("yields at 1.0 %"), "{}", m.warning);
+    let m = elastic_mismatch(
+        &p(&[("EA", 3.0 * ea), ("F_y", 0.6 * peak), ("H", 2e4)]),
+        &tests,
+    )
+    .expect("an EA the data do not show");
+    let s = m.first_loading_slope.unwrap();
+    assert!((s / ea - 1.0).abs() < 0.05, "{m:?}");
+    assert!(m.warning.contains("is 3.0"), "{}", m.warning);
+}

@@ -1319,7 +1319,8 @@ pub fn analyze(
         }
     };
     let found_break = find_break(&cm, &rm, serial.0.sigma, h_cm)
-        .filter(|&(j, _, _)| !relaxed_while_held(&segments, &rm, j));
+        .filter(|&(j, _, _)| !relaxed_while_held(&segments, &rm, j))
+        .filter(|&(j, _, _)| !while_unloading(&segments, j));
     let break_point = found_break.map(|(j, work, _)| BreakPoint {
         sample: j,
         machine_control: control[j],
@@ -2149,6 +2150,17 @@ fn break_after(cm: &[f64], rm: &[f64], sigma: f64, h: f64, k: usize) -> Option<(
         .map(|i| 0.5 * (rm[i] + rm[i + 1]) * (cm[i + 1] - cm[i]))
         .sum();
     Some((j, work))
+}
+
+/// Whether the fall to the break level at sample `j` happened in an unloading the segmentation
+/// found: the control had turned back by more than its reversal threshold before `j` (a test
+/// unloaded after necking: a hot tensile bar's force falls from 5,300 to 400 N over 6 s while
+/// its extensometer comes back 0.06 mm, which the break's own test, from the maximum to `j`
+/// only, did not see). A fracture falls before the control turns back.
+fn while_unloading(segments: &[Segment], j: usize) -> bool {
+    segments
+        .iter()
+        .any(|s| s.branch == Branch::Unloading && s.start <= j && j < s.end)
 }
 
 /// Whether the fall to the break level at sample `j` happened during a hold (a segment where

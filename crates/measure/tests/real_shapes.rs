@@ -364,3 +364,64 @@ fn a_fatigue_block_that_breaks_in_a_late_cycle_has_no_holds_and_a_break() {
     assert_eq!(a.behaviour, Behaviour::Broken);
     assert!(a.cycles.len() >= cycles - 3, "{}", a.cycles.len());
 }
+
+/// An HBM catman hot tensile export (a steel bar at 360 °C): the force peaks at 7,145 N, falls
+/// to 5,300 N while the bar necks and the extensometer runs on to 5.98 mm, then the machine
+/// unloads over 6 s: the force falls to 400 N while the extensometer comes back 0.06 mm (1 % of
+/// its travel). Before, the fall below half the maximum, 0.02 mm into that unloading, was a
+/// break (`broken` would follow from an abrupt one, a work to break was reported) beside an
+/// unloading branch. A fall in an unloading is no break; the same record with the force gone
+/// while the extensometer still runs on is.
+#[test]
+fn a_fall_while_the_machine_unloads_is_no_break() {
+    let mut rng = ChaCha8Rng::seed_from_u64(360);
+    let white = Normal::new(0.0, 1.0).unwrap();
+    let (mut c, mut r) = (Vec::new(), Vec::new());
+    // Loading to the maximum (elastic, then hardening), then necking.
+    for i in 0..900 {
+        let x = 3.3e-3 * i as f64 / 900.0;
+        c.push(x);
+        r.push((7.0e6 * x).min(6000.0 + 3.5e5 * x));
+    }
+    for i in 0..120 {
+        let x = 3.3e-3 + 2.68e-3 * i as f64 / 120.0;
+        c.push(x);
+        r.push(7145.0 - 1845.0 * (i as f64 / 120.0).powi(2));
+    }
+    let top = *c.last().unwrap();
+    let f0 = *r.last().unwrap();
+    let mut unloaded = (c.clone(), r.clone());
+    let mut broken = (c.clone(), r.clone());
+    // The machine unloads: 0.06 mm back over 280 samples, the force with it.
+    for i in 1..=280 {
+        let back = 6.0e-5 * i as f64 / 280.0;
+        unloaded.0.push(top - back);
+        unloaded.1.push(f0 * (1.0 - back / 6.6e-5));
+    }
+    // A fracture instead: the force gone in two samples, the extensometer running on.
+    for i in 1..=60 {
+        broken.0.push(top + 1e-6 * i as f64);
+        broken.1.push(if i < 3 {
+            f0 * (1.0 - 0.45 * i as f64)
+        } else {
+            20.0
+        });
+    }
+    for (name, (c, r), breaks) in [("unloaded", unloaded, false), ("broken", broken, true)] {
+        let c: Vec<f64> = c
+            .iter()
+            .map(|v| v + 2e-8 * white.sample(&mut rng))
+            .collect();
+        let r: Vec<f64> = r
+            .iter()
+            .map(|v| v + 0.14 * white.sample(&mut rng))
+            .collect();
+        let a = run(TestKind::Tension, 0.02, None, &c, &r);
+        assert_eq!(
+            a.break_point.is_some(),
+            breaks,
+            "{name}: {:?}",
+            a.break_point
+        );
+    }
+}
