@@ -8,8 +8,13 @@ use cablab_diagnose::registry::{Registry, Rod};
 use cablab_diagnose::DiagTest;
 use std::process::ExitCode;
 
-/// Read one file into a diagnosis test (segments from the characterisation's segmenter).
-pub fn diag_test(path: &std::path::Path, a: &DiagnoseArgs) -> Result<DiagTest, CliError> {
+/// Read one file into a diagnosis test (segments from the characterisation's segmenter), with
+/// the characterisation's stiffness of the same curve (`cablab analyze`'s, default options;
+/// None where it finds none), which the baseline's elastic parameter is checked against.
+pub fn diag_test(
+    path: &std::path::Path,
+    a: &DiagnoseArgs,
+) -> Result<(DiagTest, Option<f64>), CliError> {
     let mut said = crate::bridge::Remarks::default();
     let read = crate::bridge::read_test(path, &a.test, None, &mut said);
     // The reader's and the kind check's warnings and notes, also when the file is refused.
@@ -25,9 +30,23 @@ pub fn diag_test(path: &std::path::Path, a: &DiagnoseArgs) -> Result<DiagTest, C
         rec,
         kind,
         geom,
+        flat,
         curve,
-        ..
     } = read.map_err(CliError::input)?;
+    let measured = cablab_measure::analyze(
+        kind,
+        &geom,
+        curve.time_s.as_deref(),
+        &curve.control,
+        &curve.response,
+        &cablab_measure::AnalyzeOptions {
+            flat_section: flat,
+            cut_short: curve.cut_short,
+            ..Default::default()
+        },
+    )
+    .ok()
+    .and_then(|an| an.stiffness.map(|s| s.value));
     // Past a necking or a fracture the rod model has nothing to say.
     let curve = match crate::bridge::diagnosable_end(kind, &curve) {
         Some((end, why)) => {
@@ -66,7 +85,7 @@ pub fn diag_test(path: &std::path::Path, a: &DiagnoseArgs) -> Result<DiagTest, C
             path.display()
         ))
     })?;
-    Ok(t)
+    Ok((t, measured))
 }
 
 /// Run `cablab diagnose`. With `--json`, a failure prints `{files, error}` on stdout as
@@ -104,11 +123,13 @@ fn diagnose_files(a: &DiagnoseArgs) -> CmdResult {
                 .collect::<Result<Vec<_>, _>>()?,
         ),
     };
-    let tests = a
+    let (tests, measured): (Vec<DiagTest>, Vec<Option<f64>>) = a
         .files
         .iter()
         .map(|f| diag_test(f, a))
-        .collect::<Result<Vec<_>, _>>()?;
+        .collect::<Result<Vec<_>, _>>()?
+        .into_iter()
+        .unzip();
     // A joint diagnosis is of one kind: files whose kinds were read from them must agree.
     let kind = tests.first().map_or(TestKind::Unknown, |t| t.kind);
     if let Some((f, t)) = a.files.iter().zip(&tests).find(|(_, t)| t.kind != kind) {
@@ -144,7 +165,15 @@ fn diagnose_files(a: &DiagnoseArgs) -> CmdResult {
         contact_radii_given: a.support_radius_mm.is_some() || a.punch_radius_mm.is_some(),
         ..Default::default()
     };
-    let d = cablab_diagnose::diagnose(ctx, &tests, &opts).map_err(CliError::failed)?;
+    let mut d = cablab_diagnose::diagnose(ctx, &tests, &opts).map_err(CliError::failed)?;
+    // The baseline against the characterisation's stiffness (the tests' mean, where every one
+    // has one: a joint law has one stiffness).
+    let measured: Option<Vec<f64>> = measured.into_iter().collect();
+    d.baseline.elastic_mismatch = cablab_diagnose::diagnose::elastic_mismatch(
+        &d.baseline.params,
+        &tests,
+        measured.map(|m| m.iter().sum::<f64>() / m.len() as f64),
+    );
     if a.json {
         print_json(&d)?;
     } else {

@@ -20,6 +20,9 @@ pub fn run(a: InspectArgs) -> CmdResult {
         if let Some(k) = crate::bridge::kind_from_file_name(&rec, &a.file) {
             rec.kind = k.value;
             rec.kind_reason = format!("the {}", k.from);
+        } else if let Some(e) = rec.compression_evidence() {
+            // As `analyze` says it (`bridge::kind_of_file`): no kind of cablab's fits.
+            rec.kind_reason = format!("{e} says compression, which cablab does not evaluate");
         }
     }
     if kind.is_none() && rec.kind != cablab_core::TestKind::Unknown {
@@ -125,7 +128,11 @@ pub fn run(a: InspectArgs) -> CmdResult {
         println!();
         println!("metadata");
         for (k, v) in &rec.metadata {
-            println!("  {k}: {v}");
+            if v.is_empty() {
+                println!("  {k}");
+            } else {
+                println!("  {k}: {v}");
+            }
         }
     }
     Ok(ExitCode::SUCCESS)

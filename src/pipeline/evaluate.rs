@@ -768,7 +768,11 @@ fn model_part(
         };
         let cal = cablab_diagnose::calibrate(ctx, fitted, &model, &copts)
             .context("calibrating the baseline")?;
-        if let Some(m) = cablab_diagnose::diagnose::elastic_mismatch(&cal.params, fitted) {
+        if let Some(m) = cablab_diagnose::diagnose::elastic_mismatch(
+            &cal.params,
+            fitted,
+            an.stiffness.as_ref().map(|s| s.value),
+        ) {
             out.warnings.push(format!("calibration: {}", m.warning));
         }
         // Fitted before a fracture, its parameters replayed over the whole record for the plots
@@ -871,7 +875,17 @@ fn model_part(
         if let Some((_, why)) = &cut {
             out.notes.push(format!("diagnosis: {why}"));
         }
-        let d = cablab_diagnose::diagnose(ctx, fitted, &dopts).context("diagnosing the gap")?;
+        let mut d = cablab_diagnose::diagnose(ctx, fitted, &dopts).context("diagnosing the gap")?;
+        // The diagnosis' baseline against the characterisation's stiffness (the diagnosis
+        // alone only sees an early yield); said once, as the diagnosis' warning.
+        d.baseline.elastic_mismatch = cablab_diagnose::diagnose::elastic_mismatch(
+            &d.baseline.params,
+            fitted,
+            an.stiffness.as_ref().map(|s| s.value),
+        );
+        if let Some(m) = &d.baseline.elastic_mismatch {
+            out.warnings.push(format!("diagnosis: {}", m.warning));
+        }
         if let Some(m) = &d.mesh {
             if let Some(from) = m.refined_from {
                 out.notes.push(format!(

@@ -571,7 +571,8 @@ fn mts_793_buffers_without_time_are_one_record() {
 /// An MTS TestSuite export of a compression and relaxation test (the layout of a real one, no
 /// licence, so a twin: `Test: 20181130_Compression and Relaxation_Alginate`, `Crosshead`,
 /// `Load`, `Time`), read without `--kind`: cablab has no compression kind, and the error now
-/// says that is why, quoting the metadata, instead of "the file does not say which test it is".
+/// says that is why, quoting the metadata, instead of "the file does not say which test it is";
+/// `inspect` says it on its kind line.
 #[test]
 fn a_compression_test_without_a_kind_is_refused_as_compression() {
     let rows: Vec<Vec<f64>> = (0..50)
@@ -595,6 +596,17 @@ fn a_compression_test_without_a_kind_is_refused_as_compression() {
     assert!(
         err.contains("the metadata 'Test: 20181130_Compression and Relaxation_Alginate 738' says compression, which cablab does not evaluate"),
         "{err}"
+    );
+    // `inspect` says the same on its kind line (it said "neither the metadata nor the channels
+    // say which test this is").
+    let o = cablab()
+        .args(["inspect", &p.to_string_lossy()])
+        .output()
+        .unwrap();
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        out.contains("kind      unknown  (the metadata 'Test: 20181130_Compression and Relaxation_Alginate 738' says compression, which cablab does not evaluate)"),
+        "{out}"
     );
 }
 

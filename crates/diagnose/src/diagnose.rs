@@ -96,11 +96,11 @@ pub struct Baseline {
 
 /// A baseline whose elastic parameter (`EA`, `GJ`, `EI`) does not describe the specimen's
 /// stiffness: the fitted yield lies within the first [`EARLY_YIELD_SHARE`] of the largest
-/// measured stress resultant, or the first loading's elastic slope (the automatic window
-/// `cablab analyze` takes, `cablab_measure::auto_elastic_range`) is beyond
-/// [`ELASTIC_MISMATCH_FACTOR`] of it either way. A fit that yields early and hardens describes a straight loading as well as a linear
-/// one (a stiff start or a few samples decide it), and its elastic parameter is then a number
-/// the data do not show.
+/// measured stress resultant, or the characterisation's stiffness (`cablab analyze`'s, where
+/// the caller has it) is beyond [`ELASTIC_MISMATCH_FACTOR`] of it either way while the law's
+/// stiffness past a yield within the data is within that factor of it. A fit that yields
+/// early and hardens describes a straight loading as well as a linear one (a stiff start or a
+/// few samples decide it), and its elastic parameter is then a number the data do not show.
 #[derive(Debug, Clone, Serialize)]
 pub struct ElasticMismatch {
     /// The elastic parameter's name.
@@ -109,9 +109,8 @@ pub struct ElasticMismatch {
     pub elastic_value: f64,
     /// The fitted yield over the largest measured stress resultant.
     pub yield_share: f64,
-    /// The first loading's elastic slope in the elastic parameter's unit (three-point: the
-    /// small-deflection 48 EI / l³), averaged over the tests where it is found.
-    pub first_loading_slope: Option<f64>,
+    /// The characterisation's stiffness in the same unit, when the caller gave it.
+    pub measured_stiffness: Option<f64>,
     /// The law's tangent stiffness past the yield, K (H + C) / (K + H + C) with the isotropic H
     /// and kinematic C hardening moduli.
     pub stiffness_past_yield: f64,
@@ -123,12 +122,18 @@ pub struct ElasticMismatch {
 /// ([`ElasticMismatch`]).
 pub const EARLY_YIELD_SHARE: f64 = 0.05;
 
-/// A fitted elastic parameter beyond this factor of the first loading's elastic slope (either
+/// A fitted elastic parameter beyond this factor of the characterisation's stiffness (either
 /// way) is not the data's stiffness ([`ElasticMismatch`]).
 pub const ELASTIC_MISMATCH_FACTOR: f64 = 2.0;
 
-/// [`ElasticMismatch`] of fitted `params` (a law with a yield) on `tests`, when there is one.
-pub fn elastic_mismatch(params: &ParamMap, tests: &[DiagTest]) -> Option<ElasticMismatch> {
+/// [`ElasticMismatch`] of fitted `params` (a law with a yield) on `tests`, when there is one;
+/// `measured`: the characterisation's stiffness of the tests (their mean), in the elastic
+/// parameter's unit.
+pub fn elastic_mismatch(
+    params: &ParamMap,
+    tests: &[DiagTest],
+    measured: Option<f64>,
+) -> Option<ElasticMismatch> {
     let get = |n: &str| params.0.iter().find(|(k, _)| k == n).map(|(_, v)| *v);
     let (elastic, k) = ["EA", "GJ", "EI"]
         .iter()
@@ -140,40 +145,16 @@ pub fn elastic_mismatch(params: &ParamMap, tests: &[DiagTest]) -> Option<Elastic
         .filter_map(|n| get(n))
         .sum();
     let past = k * h / (k + h);
-    // Each test's first-loading elastic slope, in the law's unit.
-    let slopes: Vec<f64> = tests
-        .iter()
-        .filter_map(|t| {
-            let l = t.free_length_m;
-            let to_stiff = match t.kind {
-                TestKind::ThreePoint => l.powi(3) / 48.0,
-                _ => l,
-            };
-            // The first loading as the segmenter labels it (holds within it left out).
-            use crate::model::Branch;
-            let idx: Vec<usize> = t
-                .labels_or_derived()
-                .iter()
-                .enumerate()
-                .take_while(|(_, l)| {
-                    l.cycle == 1 && matches!(l.branch, Branch::FirstLoading | Branch::Hold)
-                })
-                .filter(|(_, l)| l.branch == Branch::FirstLoading)
-                .map(|(i, _)| i)
-                .collect();
-            let sign = t.control[*idx.last()?].signum();
-            let x: Vec<f64> = idx.iter().map(|&i| sign * t.control[i]).collect();
-            let r: Vec<f64> = idx.iter().map(|&i| sign * t.response[i]).collect();
-            let e = cablab_measure::auto_elastic_range(&x, &r).ok()?;
-            let s = e.fit.slope * to_stiff;
-            (s.is_finite() && s > 0.0).then_some(s)
-        })
-        .collect();
-    let slope = (!slopes.is_empty()).then(|| slopes.iter().sum::<f64>() / slopes.len() as f64);
+    let measured = measured.filter(|m| m.is_finite() && *m > 0.0);
     let early = share < EARLY_YIELD_SHARE;
-    let off = slope.is_some_and(|s| {
-        !(1.0 / ELASTIC_MISMATCH_FACTOR..=ELASTIC_MISMATCH_FACTOR).contains(&(k / s))
-    });
+    let near = |a: f64, b: f64| {
+        (1.0 / ELASTIC_MISMATCH_FACTOR..=ELASTIC_MISMATCH_FACTOR).contains(&(a / b))
+    };
+    // The stiffness moved into the hardening: the elastic parameter is far from the measured
+    // stiffness while the law past a yield within the data carries it. (A law that cannot
+    // follow the curve at all, a linear fit through a piecewise-elastic cable's, misses both:
+    // that is the gap the diagnosis explains, not a mislabelled parameter.)
+    let off = measured.is_some_and(|m| !near(k, m) && share < 1.0 && near(past, m));
     if !(k > 0.0 && share.is_finite() && (early || off)) {
         return None;
     }
@@ -181,14 +162,16 @@ pub fn elastic_mismatch(params: &ParamMap, tests: &[DiagTest]) -> Option<Elastic
         "the baseline yields at {:.1} % of the largest measured stress resultant",
         100.0 * share
     );
-    match slope.filter(|_| off) {
-        Some(s) => {
+    match measured.filter(|_| off) {
+        Some(m) => {
             warning += &format!(
-                ", and its {elastic} ({k:.4e}) is {:.2}× the first loading's elastic slope ({s:.4e}): it is not the specimen's stiffness",
-                k / s
+                ", and its {elastic} ({k:.4e}) is {:.2}× the stiffness the characterisation measures ({m:.4e}): it is not the specimen's stiffness",
+                k / m
             )
         }
-        None => warning += &format!(": its {elastic} ({k:.4e}) describes only the samples below that, not the specimen's stiffness"),
+        None => warning += &format!(
+            ": its {elastic} ({k:.4e}) describes only the samples below that, not the specimen's stiffness"
+        ),
     }
     warning += &format!(
         ", and the law's stiffness past the yield is {past:.4e}; read the stiffness from `cablab analyze`, not from the baseline's {elastic}"
@@ -197,7 +180,7 @@ pub fn elastic_mismatch(params: &ParamMap, tests: &[DiagTest]) -> Option<Elastic
         elastic,
         elastic_value: k,
         yield_share: share,
-        first_loading_slope: slope,
+        measured_stiffness: measured,
         stiffness_past_yield: past,
         warning,
     })
@@ -1356,7 +1339,7 @@ fn diagnose_held_out(
             gap_heldout_rel: gap_before / scale,
             gap_train_rel: train_rms(&base, &train) / scale,
             yield_out_of_reach,
-            elastic_mismatch: elastic_mismatch(&base.cal.params, tests),
+            elastic_mismatch: elastic_mismatch(&base.cal.params, tests, None),
         },
         located,
         effects,

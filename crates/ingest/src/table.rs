@@ -1558,7 +1558,16 @@ fn key_value(cells: &[String], raw: &[u8]) -> Option<(String, String)> {
         [] => None,
         [one] => {
             let one = one.trim_start_matches('\u{feff}');
-            match one.find(':') {
+            // The key ends at the first colon that is not a clock time's (`16:59:51`, a digit
+            // on both sides): `Start of Test Wed 27 Sep 2017 16:59:51` is one key.
+            let b = one.as_bytes();
+            let colon = (0..b.len()).find(|&i| {
+                b[i] == b':'
+                    && !(i > 0
+                        && b[i - 1].is_ascii_digit()
+                        && b.get(i + 1).is_some_and(u8::is_ascii_digit))
+            });
+            match colon {
                 Some(p) if p > 0 => {
                     Some((one[..p].trim().to_string(), one[p + 1..].trim().to_string()))
                 }
@@ -1583,6 +1592,23 @@ mod tests {
 
     fn read(text: &str) -> RawTable {
         read_table(text, Format::Delimited, "t").unwrap()
+    }
+
+    /// A metadata line whose only colons are a clock time's is one key, not split at the hour.
+    #[test]
+    fn a_clock_time_in_a_metadata_line_is_not_its_key_value_colon() {
+        let kv = |line: &str| key_value(&[line.to_string()], line.as_bytes());
+        assert_eq!(
+            kv("Start of Test Wed 27 Sep 2017 16:59:51"),
+            Some((
+                "Start of Test Wed 27 Sep 2017 16:59:51".into(),
+                String::new()
+            ))
+        );
+        assert_eq!(
+            kv("Date: 10/23/2023 6:17:42 PM"),
+            Some(("Date".into(), "10/23/2023 6:17:42 PM".into()))
+        );
     }
 
     #[test]
