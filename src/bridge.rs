@@ -1084,7 +1084,7 @@ pub fn unwrap_turns(rec: &TestRecord, curve: &mut Curve) -> Option<String> {
     (!wraps.is_empty()).then(|| {
         let factor = ch.factor.max(f64::MIN_POSITIVE);
         format!(
-            "the control {} is read modulo a turn ({} {}): it wraps at complete row{} {}, where a turn is added from there on (the twist counted on)",
+            "the control {} is read modulo a turn ({} {}): it wraps at complete row{} {}, and is unwrapped there (a turn added or taken off from that row on: the twist counted on)",
             show(ch),
             (turn / factor * 1e6).round() / 1e6,
             if ch.unit.is_empty() { ch.si_unit.as_str() } else { ch.unit.as_str() },

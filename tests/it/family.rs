@@ -146,7 +146,7 @@ fn tension(
 /// Break detection under white and AR(1) noise (issue 12.5) on 48 generated monotonic tension
 /// tests (`break_case`): every fracture is found at its first fallen row (±1) with the work to
 /// break within 2 % and the class `broken`; tests stopped at their maximum or softening
-/// gradually to 70–95 % of it have no break.
+/// gradually to 70–95 % of it have no break; none has a sudden partial drop.
 #[test]
 fn breaks_are_found_and_not_faked_by_correlated_noise() {
     let (mut found, mut clean) = (0, 0);
@@ -154,6 +154,12 @@ fn breaks_are_found_and_not_faked_by_correlated_noise() {
         let c = break_case(seed);
         let a = tension(c.free_length_m, &c.time_s, &c.control, &c.response)
             .unwrap_or_else(|e| panic!("seed {seed}: {e}"));
+        // A fracture's own fall is no sudden partial drop, nor is anything before it.
+        assert!(
+            a.sudden_drops.is_empty(),
+            "seed {seed}: {:?}",
+            a.sudden_drops
+        );
         match (c.break_sample, a.break_point.as_ref()) {
             (Some(j), Some(b)) => {
                 found += 1;
@@ -634,7 +640,8 @@ fn family_debug_seeds() {
 /// (`bridge::diagnosable_end`); a record that ends unloaded, at a peak or softening gradually
 /// has no break and, unless it softens (necking, which the diagnosis leaves out), is diagnosed
 /// to its end. A sine's rounded reversals are never holds (its last rows, where a record
-/// stops at or breaks near a top, may be). `CYCLIC_SEEDS=600` runs more cases (600 pass).
+/// stops at or breaks near a top, may be), and no record has a sudden partial drop (a fracture's
+/// own fall, a reversal's, a gradual softening are none). `CYCLIC_SEEDS=600` runs more cases (600 pass).
 #[test]
 fn breaks_in_cyclic_records_are_found_where_the_last_loading_fails() {
     use cablab_synth::family::{cyclic_break_case, CyclicEnd};
@@ -647,6 +654,11 @@ fn breaks_in_cyclic_records_are_found_where_the_last_loading_fails() {
         let c = cyclic_break_case(seed);
         let a = tension(c.free_length_m, &c.time_s, &c.control, &c.response)
             .unwrap_or_else(|e| panic!("seed {seed}: {e}"));
+        assert!(
+            a.sudden_drops.is_empty(),
+            "seed {seed}: {:?}",
+            a.sudden_drops
+        );
         let what = format!(
             "seed {seed} ({:?}, sine {}, φ {:.2})",
             c.end, c.sine, c.noise_ar1

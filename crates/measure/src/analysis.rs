@@ -397,6 +397,94 @@ pub struct BreakPoint {
     pub work_to_break: f64,
 }
 
+/// A sudden partial fall of the response on a loading branch while the control runs on: by at
+/// least [`SUDDEN_DROP_SHARE`] of the largest response and 10 σ of its noise within
+/// [`SUDDEN_DROP_SAMPLES`] samples, the response staying down (the median of the next
+/// max(5, 0.5 % of the record) samples below the level halfway down the fall). A wire of a
+/// cable, a composite's ply or a bundle of fibres failing while the rest carries on; a test
+/// machine's software reports the first as its "break" (a CFRP flexure bar: 805.8 → 739.5 N in
+/// two samples, 8 % of the load, its stress at break the file's own).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct SuddenDrop {
+    /// The last sample before the fall (0-based complete row).
+    pub sample: usize,
+    /// Machine control there (original sign).
+    pub machine_control: f64,
+    /// Response before and after the fall (original sign).
+    pub response_before: f64,
+    /// Response at the end of the fall.
+    pub response_after: f64,
+}
+
+/// Smallest fall, as a share of the largest response, that is a [`SuddenDrop`].
+pub const SUDDEN_DROP_SHARE: f64 = 0.05;
+
+/// Most samples a [`SuddenDrop`]'s fall may take.
+pub const SUDDEN_DROP_SAMPLES: usize = 3;
+
+/// The sudden drops of an oriented test (see [`SuddenDrop`]) on its loading branches, before
+/// `end` (where a break's own fall starts, else the record's length), as (last sample before,
+/// first sample after): at most one per fall; the response must stay down while the control
+/// runs on, not unload.
+fn sudden_drops(
+    cm: &[f64],
+    rm: &[f64],
+    sigma: f64,
+    h: f64,
+    segments: &[Segment],
+    end: usize,
+) -> Vec<(usize, usize)> {
+    let n = rm.len().min(end);
+    let top = rm.iter().fold(f64::NEG_INFINITY, |m, &v| m.max(v));
+    let need = (SUDDEN_DROP_SHARE * top).max(10.0 * sigma);
+    if !(top > 0.0 && need.is_finite()) {
+        return Vec::new();
+    }
+    let loading = |i: usize| {
+        segments.iter().any(|s| {
+            s.start <= i
+                && i < s.end
+                && matches!(s.branch, Branch::FirstLoading | Branch::Reloading)
+        })
+    };
+    let stay = (rm.len() / 200).max(5);
+    let mut out = Vec::new();
+    let mut i = 0;
+    while i + 1 < n {
+        let fall = (1..=SUDDEN_DROP_SAMPLES)
+            .take_while(|m| i + m < n)
+            .find(|&m| rm[i] - rm[i + m] >= need && cm[i + m] >= cm[i] - h);
+        match fall {
+            Some(m) if loading(i) && rm[i] > 0.0 => {
+                // It stays down while the control still runs on (a cycle's reversal right
+                // after a dip is an unloading, not a failure).
+                let w = i + m..(i + m + stay).min(rm.len());
+                let after = &rm[w.clone()];
+                let down = after.len() >= 3
+                    && crate::stats::median(after) < rm[i] - 0.5 * (rm[i] - rm[i + m])
+                    && w.clone().all(|k| cm[k] >= cm[i + m] - h)
+                    && !w.clone().any(|k| {
+                        segments
+                            .iter()
+                            .any(|s| s.branch == Branch::Unloading && s.start <= k && k < s.end)
+                    });
+                if down {
+                    // From the fall's own top (the response may still rise a sample into it).
+                    let a = (i..i + m)
+                        .max_by(|&x, &y| rm[x].total_cmp(&rm[y]))
+                        .unwrap_or(i);
+                    out.push((a, i + m));
+                    i += m + stay;
+                    continue;
+                }
+                i += 1;
+            }
+            _ => i += 1,
+        }
+    }
+    out
+}
+
 /// Fraction of the maximum response the response must fall below, and stay below, after the
 /// maximum for a break ([`BreakPoint`]).
 pub const BREAK_DROP: f64 = 0.5;
@@ -534,6 +622,9 @@ pub struct Analysis {
     /// Where the specimen broke, when it did.
     #[serde(rename = "break")]
     pub break_point: Option<BreakPoint>,
+    /// Sudden partial falls of the response while the control runs on, before any break
+    /// ([`SuddenDrop`]): a wire of a cable, a ply or a fibre bundle failing.
+    pub sudden_drops: Vec<SuddenDrop>,
     /// Samples (0-based, complete rows) excluded from the fits as isolated glitches.
     pub excluded_samples: Vec<usize>,
     /// Warnings for the user: statements that a number above may be wrong.
@@ -1327,6 +1418,44 @@ pub fn analyze(
         response_before: response[j - 1],
         work_to_break: work,
     });
+    let falls = sudden_drops(
+        &cm,
+        &rm,
+        serial.0.sigma,
+        h_cm,
+        &segments,
+        // Before the break's own fall: its last sample at 90 % of the peak it fell from.
+        found_break
+            .filter(|_| break_point.is_some())
+            .map_or(rm.len(), |(j, _, k)| {
+                (k..j).rev().find(|&i| rm[i] >= 0.9 * rm[k]).unwrap_or(k) + 1
+            }),
+    );
+    if let Some(&(a, b)) = falls.first() {
+        notes.push(format!(
+            "the response falls suddenly while the control runs on{}: first after sample {a} (control {:.4e}), {:.5e} → {:.5e}, {:.1} % of the largest response in {} sample{} (a wire, a ply or a fibre bundle failing while the rest carries on?)",
+            if falls.len() > 1 {
+                format!(" {} times", falls.len())
+            } else {
+                String::new()
+            },
+            control[a],
+            response[a],
+            response[b],
+            100.0 * (response[a] - response[b]).abs() / max_response.response.abs(),
+            b - a,
+            if b - a > 1 { "s" } else { "" }
+        ));
+    }
+    let drops: Vec<SuddenDrop> = falls
+        .into_iter()
+        .map(|(a, b)| SuddenDrop {
+            sample: a,
+            machine_control: control[a],
+            response_before: response[a],
+            response_after: response[b],
+        })
+        .collect();
     // A specimen that broke: the peak of the cycle it broke in is where its response peaked
     // before the break, not the punch or crosshead running on over the broken pieces (a bone's
     // cycle peak read 1.08 N at the end of the stroke, its maximum 19.65 N).
@@ -1557,6 +1686,7 @@ pub fn analyze(
         rate_effect,
         max_response,
         break_point,
+        sudden_drops: drops,
         excluded_samples: excluded,
         warnings,
         notes,
@@ -2080,7 +2210,7 @@ fn find_break(cm: &[f64], rm: &[f64], sigma: f64, h: f64) -> Option<(usize, f64,
 /// The first sample of the record's last advance (`control` with its first motion positive):
 /// the final stretch in which the control never goes back from the furthest value it reached
 /// by more than `back`. Missing samples are skipped.
-pub fn last_advance(control: &[f64], back: f64) -> usize {
+fn last_advance(control: &[f64], back: f64) -> usize {
     let mut low = f64::INFINITY;
     let mut i = control.len();
     while i > 0 {

@@ -425,3 +425,70 @@ fn a_fall_while_the_machine_unloads_is_no_break() {
         );
     }
 }
+
+/// A stranded cable pulled in tension whose wires fail one at a time: two falls of 8 % of the
+/// load within two samples while the crosshead runs on, the rest carrying on (the force rising
+/// again after each), under white noise: two sudden drops, at the samples before the falls,
+/// and no break. The same cable without the wire breaks, or triangle cycles of a viscous
+/// specimen whose force steps down where each stroke reverses, has none.
+#[test]
+fn wires_failing_one_at_a_time_are_sudden_drops() {
+    let mut rng = ChaCha8Rng::seed_from_u64(8);
+    let white = Normal::new(0.0, 1.0).unwrap();
+    let n = 3000;
+    let (f1, f2) = (1200usize, 2100usize);
+    let force = |i: usize, breaks: bool| {
+        let x = i as f64 / n as f64;
+        let mut f = 1000.0 * x;
+        if breaks {
+            for at in [f1, f2] {
+                if i > at {
+                    f -= 80.0 * (((i - at) as f64) / 2.0).min(1.0);
+                }
+            }
+        }
+        f
+    };
+    for breaks in [true, false] {
+        let c: Vec<f64> = (0..n).map(|i| 1e-6 * i as f64).collect();
+        let r: Vec<f64> = (0..n)
+            .map(|i| force(i, breaks) + 0.5 * white.sample(&mut rng))
+            .collect();
+        let a = run(TestKind::Tension, 0.1, None, &c, &r);
+        assert!(a.break_point.is_none(), "{:?}", a.break_point);
+        let at: Vec<usize> = a.sudden_drops.iter().map(|d| d.sample).collect();
+        if breaks {
+            assert_eq!(at.len(), 2, "{:?}", a.sudden_drops);
+            assert!(at[0].abs_diff(f1) <= 1 && at[1].abs_diff(f2) <= 1, "{at:?}");
+            assert!(
+                a.notes
+                    .iter()
+                    .any(|n| n.contains("falls suddenly") && n.contains("2 times")),
+                "{:?}",
+                a.notes
+            );
+        } else {
+            assert!(at.is_empty(), "{:?}", a.sudden_drops);
+        }
+    }
+    // Triangle cycles of a viscous specimen (a silicone's force steps down by 0.9 N, 11 % of
+    // its peak, in one sample where the stroke reverses), the force read to 0.1 N: a fall at
+    // each reversal, followed by the unloading, is no failure.
+    let mut c = Vec::new();
+    let mut r = Vec::new();
+    for _ in 0..6 {
+        for i in 0..400 {
+            let (x, rate) = if i < 200 {
+                (i as f64 / 200.0, 1.0)
+            } else {
+                ((400 - i) as f64 / 200.0, -1.0)
+            };
+            c.push(0.04 * x);
+            r.push(
+                ((7.35 * x + 0.45 * rate + 0.02 * white.sample(&mut rng)) * 10.0).round() / 10.0,
+            );
+        }
+    }
+    let a = run(TestKind::Tension, 0.1, None, &c, &r);
+    assert!(a.sudden_drops.is_empty(), "{:?}", a.sudden_drops);
+}
