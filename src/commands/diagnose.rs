@@ -169,8 +169,7 @@ fn diagnose_files(a: &DiagnoseArgs) -> CmdResult {
     // The baseline against the characterisation's stiffness (the tests' mean, where every one
     // has one: a joint law has one stiffness).
     let measured: Option<Vec<f64>> = measured.into_iter().collect();
-    d.baseline.elastic_mismatch = cablab_diagnose::diagnose::elastic_mismatch(
-        &d.baseline.params,
+    d.check_elastic(
         &tests,
         measured.map(|m| m.iter().sum::<f64>() / m.len() as f64),
     );

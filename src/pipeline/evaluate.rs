@@ -878,11 +878,7 @@ fn model_part(
         let mut d = cablab_diagnose::diagnose(ctx, fitted, &dopts).context("diagnosing the gap")?;
         // The diagnosis' baseline against the characterisation's stiffness (the diagnosis
         // alone only sees an early yield); said once, as the diagnosis' warning.
-        d.baseline.elastic_mismatch = cablab_diagnose::diagnose::elastic_mismatch(
-            &d.baseline.params,
-            fitted,
-            an.stiffness.as_ref().map(|s| s.value),
-        );
+        d.check_elastic(fitted, an.stiffness.as_ref().map(|s| s.value));
         if let Some(m) = &d.baseline.elastic_mismatch {
             out.warnings.push(format!("diagnosis: {}", m.warning));
         }

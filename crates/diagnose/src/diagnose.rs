@@ -186,6 +186,15 @@ pub fn elastic_mismatch(
     })
 }
 
+impl Diagnosis {
+    /// Checks the baseline's elastic parameter again with the characterisation's stiffness of
+    /// the tests (`measured`, their mean): [`Baseline::elastic_mismatch`] then also sees a
+    /// stiffness carried by the hardening, where the diagnosis alone sees an early yield only.
+    pub fn check_elastic(&mut self, tests: &[DiagTest], measured: Option<f64>) {
+        self.baseline.elastic_mismatch = elastic_mismatch(&self.baseline.params, tests, measured);
+    }
+}
+
 /// One candidate effect as scored on held-out data.
 #[derive(Debug, Clone, Serialize)]
 pub struct EffectScore {
