@@ -559,13 +559,23 @@ fn section(out_dir: &Path, o: &TestOutcome) -> TestSection {
         };
         facts.push((what.into(), format!("{} mm", fmt_num(l * 1e3, 4))));
     }
-    facts.push((
-        "diameter".into(),
-        o.diameter_m
-            .map_or("not stated (the moduli need it)".into(), |d| {
+    // A flat section is the section the moduli use: the diameter row gives it instead.
+    facts.push(match (&o.flat_section, o.diameter_m) {
+        (Some(f), None) => (
+            "section".into(),
+            format!(
+                "{} × {} mm (width × thickness)",
+                fmt_num(f.width_m * 1e3, 4),
+                fmt_num(f.thickness_m * 1e3, 4)
+            ),
+        ),
+        (_, d) => (
+            "diameter".into(),
+            d.map_or("not stated (the moduli need it)".into(), |d| {
                 format!("{} mm", fmt_num(d * 1e3, 3))
             }),
-    ));
+        ),
+    });
     if let Some(k) = &o.machine_stiffness {
         facts.push((
             "machine stiffness".into(),

@@ -135,7 +135,7 @@ fn a_flat_strip_in_torsion_uses_saint_venants_torsion_constant() {
 }
 
 /// The `[[specimen]]` keys `width_mm`/`thickness_mm` through a whole campaign: the summary's
-/// modulus is the analytical E of the beam, and result.json states the section.
+/// modulus is the analytical E of the beam, and result.json and the report state the section.
 #[test]
 fn a_pipeline_with_a_flat_specimen_type_reports_the_beams_modulus() {
     let d = tempfile::tempdir().unwrap();
@@ -187,6 +187,15 @@ enabled = false
     let f = &r["geometry"]["flat_section"];
     assert!(within(f["width_m"].as_f64().unwrap(), B, 1e-12), "{f}");
     assert!(within(f["thickness_m"].as_f64().unwrap(), H, 1e-12), "{f}");
+    // The report's test page gives the section the moduli use, not "diameter: not stated (the
+    // moduli need it)" beside a modulus.
+    let html = std::fs::read_to_string(d.path().join("reports/flat/index.html")).unwrap();
+    assert!(
+        html.contains("section</dt><dd>11.86 × 2.937 mm (width × thickness)"),
+        "{}",
+        &html[html.find("<dl").unwrap_or(0)..][..2000.min(html.len())]
+    );
+    assert!(!html.contains("the moduli need it"));
 }
 
 /// A torsional extensometer's surface shear strain on a thin strip (50 × 1 mm): Saint-Venant's
