@@ -112,12 +112,18 @@ pub fn run(a: InspectArgs) -> CmdResult {
         "{:<28} {:<10} {:<6} {:<9} {:>13} {:>13}",
         "channel", "unit", "SI", "role", "min (SI)", "max (SI)"
     );
+    // Padded by display width: a CJK character takes two columns (a GBK Bluehill export's
+    // `压缩应变 (位移)` shifted its row by six).
+    let pad = |s: &str, w: usize| {
+        let shown = unicode_width::UnicodeWidthStr::width(s);
+        format!("{s}{}", " ".repeat(w.saturating_sub(shown)))
+    };
     for c in &report.channels {
         let f = |v: Option<f64>| v.map_or("-".to_string(), |x| format!("{x:.6e}"));
         println!(
-            "{:<28} {:<10} {:<6} {:<9} {:>13} {:>13}",
-            c.name,
-            c.unit,
+            "{} {} {:<6} {:<9} {:>13} {:>13}",
+            pad(&c.name, 28),
+            pad(&c.unit, 10),
             c.si_unit,
             c.role.as_str(),
             f(c.min),

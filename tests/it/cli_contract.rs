@@ -1572,3 +1572,33 @@ fn synth_recipe_regenerates_raw_data_bit_for_bit() {
         );
     }
 }
+
+/// `inspect`'s channel table stays aligned with names of double-width characters (a GBK
+/// Bluehill export's `压缩应变 (位移)`): every row's role starts at the header's `role` column,
+/// counted in display columns.
+#[test]
+fn the_channel_table_is_aligned_by_display_width() {
+    use unicode_width::UnicodeWidthStr;
+    let o = cablab()
+        .args([
+            "inspect",
+            "tests/data/cablab__bluehill_gbk_cyclic_compression.csv",
+        ])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let out = String::from_utf8_lossy(&o.stdout);
+    let mut lines = out.lines().skip_while(|l| !l.starts_with("channel"));
+    let header = lines.next().expect("the channel table");
+    let col = |l: &str, word: &str| l.find(word).map(|i| l[..i].width());
+    let at = col(header, "role").unwrap();
+    let rows: Vec<&str> = lines.take_while(|l| !l.is_empty()).collect();
+    assert!(rows.iter().any(|r| r.contains("压缩应变")), "{out}");
+    for r in rows {
+        let role = ["time", "control", "response", "other", "label"]
+            .iter()
+            .find_map(|w| col(r, &format!(" {w} ")).map(|c| c + 1))
+            .unwrap_or_else(|| panic!("{r}"));
+        assert_eq!(role, at, "{r}\n{header}");
+    }
+}
