@@ -1504,9 +1504,8 @@ pub fn diagnosable_end(kind: TestKind, curve: &Curve) -> Option<(usize, String)>
                 return None;
             }
             let low = fall_after(p, dir)?;
-            let gone = (p..n).find(|&i| r[i] * sign < 0.5 * peak)?;
-            let last_high = (p..gone).rev().find(|&i| r[i] * sign >= 0.9 * peak)?;
-            (low < 0.5 * peak && broke(p, low) && gone - last_high <= (n / 50).max(5))
+            let gone = (p..n).find(|&i| signed[i] < 0.5 * peak)?;
+            (low < 0.5 * peak && broke(p, low) && cablab_measure::break_is_abrupt(&signed, p, gone))
                 .then_some((p, low))
         });
     let (p, low) = end?;

@@ -439,7 +439,7 @@ pub fn data_scales(tests: &[DiagTest]) -> DataScales {
 
 /// The last sample of the first loading: where |control| stops growing (it falls below 98 % of
 /// the largest |control| so far).
-pub fn first_loading_end(control: &[f64]) -> usize {
+fn first_loading_end(control: &[f64]) -> usize {
     let mut end = 0;
     let mut peak = 0.0f64;
     for (i, c) in control.iter().enumerate() {

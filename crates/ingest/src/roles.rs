@@ -649,8 +649,6 @@ fn names_standard(text: &str, code: &str) -> bool {
     })
 }
 
-/// Test kind from the channel dimensions, where they leave no doubt: torque against angle with no
-/// force channel is torsion; moment against curvature is pure bending.
 /// Test kind from the channel names, where they name exactly one kind: a stress or strain
 /// channel named for its test (`Tensile stress`, Bluehill's `Tensile strain (Extension)`,
 /// German `Zugspannung` and `Zugdehnung`, `Flexure stress` for three-point flexure). Only such
@@ -685,6 +683,8 @@ pub(crate) fn kind_from_channel_names(names: &[String]) -> Option<(TestKind, Str
     }
 }
 
+/// Test kind from the channel dimensions, where they leave no doubt: torque against angle with no
+/// force channel is torsion; moment against curvature is pure bending.
 pub(crate) fn kind_from_channels(
     dims: &[Option<Dimension>],
     control: Option<usize>,

@@ -463,11 +463,7 @@ fn sudden_drops(
                 let down = after.len() >= 3
                     && crate::stats::median(after) < rm[i] - 0.5 * (rm[i] - rm[i + m])
                     && w.clone().all(|k| cm[k] >= cm[i + m] - h)
-                    && !w.clone().any(|k| {
-                        segments
-                            .iter()
-                            .any(|s| s.branch == Branch::Unloading && s.start <= k && k < s.end)
-                    });
+                    && !w.clone().any(|k| while_unloading(segments, k));
                 if down {
                     // From the fall's own top (the response may still rise a sample into it).
                     let a = (i..i + m)
@@ -2312,8 +2308,9 @@ fn relaxed_while_held(segments: &[Segment], rm: &[f64], j: usize) -> bool {
 
 /// Whether the response fell from 90 % of the peak at `k` (the maximum, or the last cycle's
 /// peak the break came from) to the break level at `j` within max(5, 2 % of the record)
-/// samples: a fracture, not a gradual loss of load.
-fn break_is_abrupt(rm: &[f64], k: usize, j: usize) -> bool {
+/// samples: a fracture, not a gradual loss of load (`rm` oriented: the peak positive). The
+/// diagnosis' cut at a fracture (`bridge::diagnosable_end`) judges with the same rule.
+pub fn break_is_abrupt(rm: &[f64], k: usize, j: usize) -> bool {
     let last_high = (k..j).rev().find(|&i| rm[i] >= 0.9 * rm[k]).unwrap_or(k);
     j - last_high <= (rm.len() / 50).max(5)
 }

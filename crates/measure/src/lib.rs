@@ -30,9 +30,9 @@ pub mod table;
 pub mod tone;
 
 pub use analysis::{
-    analyze, default_yield_offset, last_loading_peak, Analysis, AnalyzeOptions, Behaviour,
-    BreakPoint, FitWindowUnit, HoldRelaxation, LargeDeflection, MaxResponse, Noise, Piecewise,
-    Stiffness, SuddenDrop, Toe, UnloadingCheck, YieldMethod, YieldPoint, BREAK_DROP,
+    analyze, break_is_abrupt, default_yield_offset, last_loading_peak, Analysis, AnalyzeOptions,
+    Behaviour, BreakPoint, FitWindowUnit, HoldRelaxation, LargeDeflection, MaxResponse, Noise,
+    Piecewise, Stiffness, SuddenDrop, Toe, UnloadingCheck, YieldMethod, YieldPoint, BREAK_DROP,
     DEFAULT_OFFSET_STRAIN, THREE_POINT_GEOMETRY_LIMIT,
 };
 pub use condition::{
