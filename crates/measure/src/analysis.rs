@@ -1021,7 +1021,15 @@ pub fn analyze(
             Some(e)
         }
         None => match auto_elastic_range_searched(&fx, &fy, serial.0.phi, Some(&breaks)) {
-            Ok(e) => Some(e),
+            Ok(e) => Some(off_the_elastic_line(
+                e,
+                (&fx, &fy),
+                serial.0.phi,
+                &breaks,
+                |v| sign * from_fit_x(v),
+                factor,
+                &mut notes,
+            )),
             Err(e) => {
                 why.insert(
                     "stiffness".into(),
@@ -1807,6 +1815,97 @@ fn refuse_stiffness(s: &Stiffness, first_rise: f64, sigma_r: f64) -> Option<Stri
     None
 }
 
+/// Share of the first loading's rise within which its response counts as carrying no load
+/// ([`unloaded_start`]).
+const UNLOADED_SHARE: f64 = 0.05;
+
+/// The automatic window `e` of the first loading (`x`, `y`), or a better one when it is not on
+/// the specimen's elastic line, with a note saying why:
+/// - the window lies before the load is taken up ([`unloaded_start`]): the window is searched
+///   beyond it;
+/// - then, the record's noise reads as so serially correlated (φ ≥ 0.99: a force control's
+///   wobble, a furnace's drift) that no bend stands out under it, and the window lies on a part
+///   at most a third as steep as a straight piece of the white segmentation that carries at
+///   least a fifth of the rise (its plastic part): the white-noise window is taken.
+fn off_the_elastic_line(
+    e: ElasticRange,
+    (x, y): (&[f64], &[f64]),
+    phi: f64,
+    breaks: &crate::elastic::BreakSearch,
+    control_at: impl Fn(f64) -> f64,
+    factor: f64,
+    notes: &mut Vec<String>,
+) -> ElasticRange {
+    let mut e = e;
+    if let Some(s) = unloaded_start(x, y, &e) {
+        if let Ok(mut later) = auto_elastic_range_ar1(&x[s..], &y[s..], phi) {
+            if later.fit.slope > 0.0 {
+                notes.push(format!(
+                    "the first loading takes up no load until the control reaches {:.4e} (its response stays within {:.0} % of its rise while the control advances: a thermal or settling phase, slack, or seating), and the automatic window found before it had slope {:.4e}: the window is searched beyond it",
+                    control_at(x[s]),
+                    100.0 * UNLOADED_SHARE,
+                    e.fit.slope * factor,
+                ));
+                later.window_idx = (later.window_idx.0 + s, later.window_idx.1 + s);
+                e = later;
+            }
+        }
+    }
+    if phi >= 0.99 {
+        let seg = breaks.segment(3, 0.0);
+        let rise = y.iter().fold(f64::NEG_INFINITY, |m, &v| m.max(v)) - y[0];
+        let mut bounds = vec![0];
+        bounds.extend(seg.breaks.iter().copied());
+        bounds.push(x.len());
+        let steep = seg
+            .slopes
+            .iter()
+            .zip(bounds.windows(2))
+            .filter(|(&k, w)| w[1] - w[0] >= 10 && k * (x[w[1] - 1] - x[w[0]]) >= 0.2 * rise)
+            .map(|(&k, _)| k)
+            .fold(0.0f64, f64::max);
+        if rise > 0.0 && e.fit.slope < steep / 3.0 {
+            if let Ok(white) = auto_elastic_range_searched(x, y, 0.0, Some(breaks)) {
+                if white.fit.slope >= steep / 3.0 {
+                    notes.push(format!(
+                        "the record's noise reads as strongly serially correlated (lag-1 φ = {phi:.3}: a wobble of the control loop or a drift rather than noise), under which the first loading's bend does not stand out; the window it gave, {:.4e} .. {:.4e}, has slope {:.4e}, under a third of the first loading's steepest straight piece ({:.4e}): the window is the white-noise one",
+                        control_at(e.window[0]),
+                        control_at(e.window[1]),
+                        e.fit.slope * factor,
+                        steep * factor,
+                    ));
+                    e = white;
+                }
+            }
+        }
+    }
+    e
+}
+
+/// Where the first loading (`x`, `y`) starts to take up load, when the automatic window `e`
+/// lies before it: the window's line rises by less than [`UNLOADED_SHARE`] of the loading's
+/// rise to its peak, or falls, and the response is still within that share of its start at a
+/// later sample before the peak. Returns that last sample. A hot tensile bar held at a small
+/// force while it heats (its extensometer running on with the thermal strain) makes such a
+/// start: seen on an HBM catman export, whose window fell on the heating (slope −1.2e4 N
+/// against the bar's 2.3e6 N).
+fn unloaded_start(x: &[f64], y: &[f64], e: &ElasticRange) -> Option<usize> {
+    let kp = (0..y.len()).max_by(|&i, &j| y[i].total_cmp(&y[j]).then(j.cmp(&i)))?;
+    let rise = y[kp] - y[0];
+    let (a, b) = e.window_idx;
+    if !(rise > 0.0) || b == 0 || b > kp {
+        return None;
+    }
+    let window_rise = e.fit.slope * (x[b - 1] - x[a]);
+    if window_rise >= UNLOADED_SHARE * rise {
+        return None;
+    }
+    let s = (b..kp)
+        .rev()
+        .find(|&i| y[i] <= y[0] + UNLOADED_SHARE * rise)?;
+    (kp - s >= 10).then_some(s)
+}
+
 /// Largest share of the first loading's peak response at which an automatic window may end
 /// before [`stiff_start`] looks past it.
 pub const STIFF_START_SHARE: f64 = 0.1;
@@ -2391,5 +2490,33 @@ mod stiff_start_tests {
         let (x, y) = seated(0.3);
         let e = auto_elastic_range_ar1(&x, &y, 0.0).unwrap();
         assert_eq!(stiff_start(&x, &y, &e, 0.0), None);
+    }
+
+    /// A window on a first loading's unloaded start (the force wandering about a preload while
+    /// the control runs on 0.5 %, then an elastic rise of slope 2e8 to 4000 over 200 samples,
+    /// then hardening) is moved past the last sample within 5 % of the rise (15 samples into
+    /// it), with a note; a window on the elastic rise is left alone.
+    #[test]
+    fn a_window_before_the_load_is_taken_up_is_moved_past_it() {
+        let mut x: Vec<f64> = (0..400).map(|i| 5e-3 * i as f64 / 400.0).collect();
+        let mut y: Vec<f64> = (0..400)
+            .map(|i| 120.0 - 100.0 * (i as f64 / 400.0) + 3.0 * ((i * 7) % 5) as f64)
+            .collect();
+        for i in 1..=300 {
+            let v = 5e-3 + 1e-7 * i as f64;
+            let f = (2e8 * (v - 5e-3)).min(4000.0 + 2e7 * (v - 5e-3 - 2e-5));
+            x.push(v);
+            y.push(20.0 + f + 3.0 * ((i * 7) % 5) as f64);
+        }
+        let search = crate::elastic::BreakSearch::new(&x, &y);
+        let on_heating = user_elastic_range(&x, &y, 1e-3, 4e-3).unwrap();
+        let s = unloaded_start(&x, &y, &on_heating).expect("an unloaded start");
+        assert!((410..=418).contains(&s), "{s}");
+        let mut notes = Vec::new();
+        let e = off_the_elastic_line(on_heating, (&x, &y), 0.0, &search, |v| v, 1.0, &mut notes);
+        assert!((e.fit.slope / 2e8 - 1.0).abs() < 0.02, "{:?}", e.fit);
+        assert!(notes[0].contains("takes up no load"), "{notes:?}");
+        let on_rise = user_elastic_range(&x, &y, 5.0e-3, 5.2e-3).unwrap();
+        assert_eq!(unloaded_start(&x, &y, &on_rise), None);
     }
 }
