@@ -260,12 +260,19 @@ pub struct InspectArgs {
 pub struct ConvertArgs {
     /// The raw export to convert.
     pub file: PathBuf,
-    /// Output file: .parquet or .csv (written atomically).
+    /// Output file: .parquet or .csv (written atomically; an existing file is kept unless
+    /// --force).
     #[arg(long, short = 'o', value_name = "OUT")]
     pub output: PathBuf,
+    /// Replace an existing output file.
+    #[arg(long)]
+    pub force: bool,
     /// Set the test kind when the file does not say.
     #[arg(long, value_name = "KIND")]
     pub kind: Option<KindArg>,
+    /// Take the file as --kind even where its own evidence says otherwise (kept as a warning).
+    #[arg(long, requires = "kind")]
+    pub force_kind: bool,
     #[command(flatten)]
     pub reader: ReaderArgs,
 }
@@ -399,9 +406,13 @@ pub struct SimulateArgs {
     /// Print JSON with `control` and `response` arrays.
     #[arg(long)]
     pub json: bool,
-    /// Write the simulated curve to a .csv, .parquet or .json file.
+    /// Write the simulated curve to a .csv, .parquet or .json file (an existing file is kept
+    /// unless --force).
     #[arg(long, short = 'o', value_name = "OUT")]
     pub output: Option<PathBuf>,
+    /// Replace an existing output file.
+    #[arg(long)]
+    pub force: bool,
 }
 
 /// `cablab diagnose`.
@@ -455,7 +466,7 @@ pub struct SynthArgs {
 /// `cablab verify`.
 #[derive(Debug, Args)]
 pub struct VerifyArgs {
-    /// The manifest.json of a campaign report folder.
+    /// The manifest.json of a campaign report folder (or the folder).
     pub manifest: PathBuf,
     /// Worker threads for the rerun.
     #[arg(long, short = 'j', value_name = "N")]

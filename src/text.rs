@@ -10,9 +10,14 @@ pub fn analysis_text(file: &str, an: &Analysis, nu: f64) -> String {
     let mut s = String::new();
     let _ = writeln!(
         s,
-        "{file}: {} test, behaviour {}",
+        "{file}: {} test, behaviour {}{}",
         an.kind,
-        an.behaviour.as_str()
+        an.behaviour_class,
+        match an.behaviour.as_str() {
+            d if d == an.behaviour_class => String::new(),
+            "broken" => " (broken)".to_string(),
+            d => format!(" ({})", d.replace('_', " ")),
+        }
     );
     match &an.stiffness {
         Some(st) => {

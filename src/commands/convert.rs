@@ -19,11 +19,18 @@ pub fn run(a: ConvertArgs) -> CmdResult {
         )));
     }
     super::refuse_overwrite(&a.output, &[&a.file])?;
+    super::refuse_existing(&a.output, a.force)?;
     let kind = a.kind.map(cablab_core::TestKind::from);
     let opts = crate::bridge::read_options(&a.reader, kind).map_err(CliError::input)?;
     let rec = cablab_ingest::read_path(&a.file, &opts).map_err(CliError::input)?;
-    for w in &rec.warnings {
-        eprintln!("cablab: warning: {}", w.located());
+    // A --kind the file contradicts is refused as `analyze` refuses it: the record would carry
+    // it into the Parquet's metadata.
+    let forced = match kind {
+        Some(k) => crate::bridge::check_kind(&rec, k, a.force_kind).map_err(CliError::input)?,
+        None => None,
+    };
+    for w in rec.warnings.iter().map(|w| w.located()).chain(forced) {
+        eprintln!("cablab: warning: {w}");
     }
     for n in &rec.notes {
         eprintln!("cablab: note: {}", n.located());

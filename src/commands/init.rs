@@ -50,8 +50,12 @@ pub struct Found {
     pub section: Option<Sourced<String>>,
     /// Specimen label (metadata specimen name, else the file stem).
     pub label: String,
-    /// Specimen type: folder name and diameter.
+    /// Specimen type: folder name and diameter (and the label's family where one folder holds
+    /// specimens of two labelled kinds; [`settle_types`]).
     pub specimen_type: Option<String>,
+    /// The type pools specimens whose files state slightly different diameters (each measured):
+    /// the pipeline gives none, so that each test takes its file's own.
+    pub own_diameter: bool,
     /// Detected layout.
     pub format: String,
     /// Remarks (e.g. the file name contradicts the metadata).
@@ -610,11 +614,124 @@ pub fn survey(paths: &[PathBuf], d: &InferArgs) -> Result<Survey, CliError> {
             section,
             label,
             specimen_type,
+            own_diameter: false,
             format: rec.provenance.format.as_str().to_string(),
             notes,
         });
     }
+    settle_types(&mut s.found);
     Ok(s)
+}
+
+/// A specimen label without its replicate number (`Cu-wire-1.0-3` → `Cu-wire-1.0`,
+/// `steel1045_tension_2` → `steel1045_tension`, `A1` → `A`).
+fn label_family(label: &str) -> String {
+    let t = label.trim();
+    let cut = t.trim_end_matches(|c: char| c.is_ascii_digit());
+    let cut = if cut.len() < t.len() {
+        cut.trim_end_matches(['-', '_', ' ', '#', '.', '/'])
+    } else {
+        cut
+    };
+    if cut.is_empty() {
+        t.to_string()
+    } else {
+        cut.to_string()
+    }
+}
+
+/// What tells two label families apart as specimens rather than as protocol levels: the family
+/// without digits, separators or case (`cable2.8-T100` and `cable2.8-T40` are one specimen at two
+/// levels, which the series split already shows; `Cu-wire-1.0` and `Steel-wire-1.0` are two).
+fn family_key(family: &str) -> String {
+    family
+        .chars()
+        .filter(|c| c.is_alphabetic())
+        .flat_map(char::to_lowercase)
+        .collect()
+}
+
+/// Specimen types across files, once every file is surveyed:
+/// - files of one folder, diameter and kind whose labels fall into two or more families
+///   ([`family_key`]), each of at least two files, are a type per family (copper and steel wires
+///   of one diameter were one group, CoV 27 %);
+/// - files of one folder, label family and kind whose metadata state diameters within 5 % of each
+///   other (each specimen measured: 7.08, 7.13, 7.23 mm) are one type, with no diameter in the
+///   pipeline so that each test takes its file's own (they were a group of one each, with no
+///   mean or spread).
+pub fn settle_types(found: &mut [Found]) {
+    let kind_of = |f: &Found| f.kind.as_ref().map(|k| k.value);
+    let dir_of = |f: &Found| folder_name(&f.path);
+    // Split one type by label family.
+    let mut by_type: BTreeMap<(String, Option<TestKind>), Vec<usize>> = BTreeMap::new();
+    for (i, f) in found.iter().enumerate() {
+        if let Some(t) = &f.specimen_type {
+            by_type.entry((t.clone(), kind_of(f))).or_default().push(i);
+        }
+    }
+    let mut split = vec![false; found.len()];
+    for ((_, _), idx) in by_type {
+        let mut fam: BTreeMap<String, Vec<usize>> = BTreeMap::new();
+        for &i in &idx {
+            fam.entry(family_key(&label_family(&found[i].label)))
+                .or_default()
+                .push(i);
+        }
+        if fam.len() >= 2 && fam.values().all(|v| v.len() >= 2) {
+            for members in fam.values() {
+                let family = label_family(&found[members[0]].label);
+                for &i in members {
+                    split[i] = true;
+                    let f = &mut found[i];
+                    let (dir, rest) = (dir_of(f), f.specimen_type.clone().unwrap_or_default());
+                    let size = rest.strip_prefix(&dir).unwrap_or(&rest).trim().to_string();
+                    f.specimen_type = Some(format!("{dir} {family} {size}"));
+                    f.notes.push(format!(
+                        "specimen type '{family}' of its own: the folder's files of this diameter and kind have labels of {} kinds, each with replicates",
+                        fam.len()
+                    ));
+                }
+            }
+        }
+    }
+    // Pool measured diameters.
+    let mut by_family: BTreeMap<(String, String, Option<TestKind>), Vec<usize>> = BTreeMap::new();
+    for (i, f) in found.iter().enumerate() {
+        let stated = f
+            .diameter_mm
+            .as_ref()
+            .is_some_and(|d| d.from.starts_with("metadata") || d.from.contains("column"));
+        if stated && f.specimen_type.is_some() {
+            let key = (dir_of(f), family_key(&label_family(&f.label)), kind_of(f));
+            by_family.entry(key).or_default().push(i);
+        }
+    }
+    for ((dir, _, _), idx) in by_family {
+        let ds: Vec<f64> = idx
+            .iter()
+            .filter_map(|&i| found[i].diameter_mm.as_ref().map(|d| d.value))
+            .collect();
+        let (lo, hi) = ds
+            .iter()
+            .fold((f64::INFINITY, 0.0f64), |(a, b), &d| (a.min(d), b.max(d)));
+        let distinct = ds.iter().any(|&d| d != ds[0]);
+        if idx.len() >= 2 && distinct && lo > 0.0 && hi / lo <= 1.05 {
+            let family = label_family(&found[idx[0]].label);
+            for &i in &idx {
+                let f = &mut found[i];
+                f.specimen_type = Some(if split[i] {
+                    format!("{dir} {family} {lo}–{hi} mm")
+                } else {
+                    format!("{dir} {lo}–{hi} mm")
+                });
+                f.own_diameter = true;
+                f.notes.push(format!(
+                    "pooled with {} other specimen(s) of '{family}' whose measured diameters lie within 5 % ({lo}–{hi} mm): each test's moduli use its file's own diameter",
+                    idx.len() - 1
+                ));
+            }
+        }
+    }
 }
 
 /// A non-round section the file's metadata states and a `kind` test's modulus can use (see
@@ -820,12 +937,32 @@ pub fn unlock_note(s: &Survey, paths: &[PathBuf]) -> Option<String> {
     ))
 }
 
-/// The campaign name: `--name`, else the first path's folder name, as a folder-safe word.
+/// The campaign name: `--name`; else, for one folder, its name; for one file, its folder's name
+/// and its stem; for a pattern, its folder's name and the pattern (`cable_tension_`); for several
+/// paths, the first one's name and how many more (`cable_and_2_more`): so that a run over part of
+/// a folder does not replace the whole folder's report. As a folder-safe word.
 pub fn campaign_name(paths: &[PathBuf], d: &InferArgs) -> String {
     let raw = d.name.clone().unwrap_or_else(|| {
         let p = paths.first().cloned().unwrap_or_else(|| PathBuf::from("."));
-        let p = if p.is_dir() { p.join("x") } else { p };
-        folder_name(&p)
+        let own = |p: &Path| {
+            let file = p
+                .file_name()
+                .map(|n| n.to_string_lossy().to_string())
+                .unwrap_or_default();
+            if p.is_dir() {
+                folder_name(&p.join("x"))
+            } else {
+                let stem = Path::new(&file)
+                    .file_stem()
+                    .map(|n| n.to_string_lossy().to_string())
+                    .unwrap_or(file);
+                format!("{}_{stem}", folder_name(p))
+            }
+        };
+        match paths.len() {
+            0 | 1 => own(&p),
+            n => format!("{}_and_{}_more", own(&p), n - 1),
+        }
     });
     let n: String = raw
         .chars()
@@ -913,18 +1050,28 @@ pub fn render(s: &Survey, name: &str, root: Option<&str>, command: &str, gaps: G
         );
     }
     // Specimen types.
-    let mut types: BTreeMap<String, (f64, String)> = BTreeMap::new();
+    let mut types: BTreeMap<String, (f64, String, bool)> = BTreeMap::new();
     for f in &s.found {
         if let (Some(ty), Some(d)) = (&f.specimen_type, &f.diameter_mm) {
-            types.entry(ty.clone()).or_insert((d.value, d.from.clone()));
+            types
+                .entry(ty.clone())
+                .or_insert((d.value, d.from.clone(), f.own_diameter));
         }
     }
-    for (ty, (d, from)) in &types {
-        let _ = writeln!(
-            t,
-            "\n[[specimen]]\nlabel = {}\ndiameter_mm = {d}  # {from}",
-            q(ty)
-        );
+    for (ty, (d, from, own)) in &types {
+        let _ = if *own {
+            writeln!(
+                t,
+                "\n[[specimen]]\nlabel = {}\n# diameter_mm: each file states its own (measured per specimen); the moduli use it",
+                q(ty)
+            )
+        } else {
+            writeln!(
+                t,
+                "\n[[specimen]]\nlabel = {}\ndiameter_mm = {d}  # {from}",
+                q(ty)
+            )
+        };
     }
     // A file with a non-round section of its own: the moduli use the file's section.
     let mut flat_types: BTreeMap<String, &Sourced<String>> = BTreeMap::new();
@@ -1369,5 +1516,21 @@ mod tests {
             common_prefix(&["tension_40N_1".into(), "tension_100N_2".into()]),
             "tension_"
         );
+    }
+
+    #[test]
+    fn label_families_drop_the_replicate_number_and_keys_the_levels() {
+        for (label, family) in [
+            ("Cu-wire-1.0-3", "Cu-wire-1.0"),
+            ("steel1045_tension_2", "steel1045_tension"),
+            ("A1", "A"),
+            ("Probe #12", "Probe"),
+            ("42", "42"),
+            ("cable", "cable"),
+        ] {
+            assert_eq!(label_family(label), family, "{label}");
+        }
+        assert_eq!(family_key("cable2.8-T100"), family_key("cable2.8-T40"));
+        assert_ne!(family_key("Cu-wire-1.0"), family_key("Steel-wire-1.0"));
     }
 }

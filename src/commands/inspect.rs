@@ -38,8 +38,18 @@ pub fn run(a: InspectArgs) -> CmdResult {
         let k = rec.kind;
         notes.extend(crate::bridge::prefer_extensometer_strain(&mut rec, k));
     }
+    // A --kind the file contradicts is shown as given, with the contradiction `analyze` would
+    // refuse it for.
+    let contradicted = kind.and_then(|k| {
+        crate::bridge::check_kind(&rec, k, false)
+            .err()
+            .map(|e| format!("{e:#}"))
+    });
     for w in &rec.warnings {
         eprintln!("cablab: warning: {}", w.located());
+    }
+    if let Some(c) = &contradicted {
+        eprintln!("cablab: warning: {c}");
     }
     for n in &rec.notes {
         eprintln!("cablab: note: {}", n.located());

@@ -126,6 +126,18 @@ pub fn refuse_overwrite(output: &Path, inputs: &[&Path]) -> Result<(), CliError>
     Ok(())
 }
 
+/// Refuses to replace an existing `output` unless `force`: a `-o` that names another raw export
+/// by mistake must not destroy it (raw data is never modified).
+pub fn refuse_existing(output: &Path, force: bool) -> Result<(), CliError> {
+    if !force && output.exists() {
+        return Err(CliError::input(anyhow::anyhow!(
+            "-o {}: the file exists; pass --force to replace it (check it is not a raw export: raw data is never modified)",
+            output.display()
+        )));
+    }
+    Ok(())
+}
+
 /// The absolute, symlink-free form of a path; for a path that does not exist yet, its existing
 /// parent's canonical form joined with the rest.
 pub fn canonical_or_absolute(p: &Path) -> PathBuf {

@@ -49,9 +49,9 @@ pub fn run(a: RunArgs) -> CmdResult {
     };
     let quiet = a.quiet || std::env::var_os("CI").is_some();
     eprintln!(
-        "cablab: campaign '{}': {} tests from {source}",
+        "cablab: campaign '{}': {} from {source}",
         campaign.file.campaign.name,
-        campaign.tests.len(),
+        tests_word(campaign.tests.len()),
     );
     for (id, why) in &campaign.skipped {
         eprintln!("cablab: skipped {id}: {why}");
@@ -105,6 +105,11 @@ pub(crate) fn load_campaign(
     Ok((path, campaign))
 }
 
+/// "1 test", "2 tests".
+pub(crate) fn tests_word(n: usize) -> String {
+    format!("{n} test{}", if n == 1 { "" } else { "s" })
+}
+
 /// Print a finished run's failures, its counts and what to do next; exit 1 when a test failed.
 /// A test whose model part (calibration, simulation, diagnosis) failed is counted and named with
 /// its reason, but its measurement stands: it does not change the exit code. Tests evaluated at
@@ -146,9 +151,27 @@ pub(crate) fn print_run(r: &runner::RunReport, next: &str) -> ExitCode {
         0 => String::new(),
         n => format!(" ({n} at the machine level: no length, stiffness in N/m or N m/rad)"),
     };
+    // Warnings live in each test's result and page; the terminal counts them, so that a
+    // number to check is not found only by opening the report.
+    let warned: Vec<&str> = r
+        .outcomes
+        .iter()
+        .filter(|o| o.error.is_none() && !o.warnings.is_empty())
+        .map(|o| o.id.as_str())
+        .collect();
+    if !warned.is_empty() {
+        let shown = warned.len().min(3);
+        eprintln!(
+            "cablab: warning: {} of {} carry warnings (a number may need checking; each test's page and result.json say which): {}{}",
+            warned.len(),
+            tests_word(r.outcomes.len()),
+            warned[..shown].join(", "),
+            if warned.len() > shown { ", …" } else { "" }
+        );
+    }
     eprintln!(
-        "cablab: {} tests, {} ok{model_note}{machine_note}, {} failed, {} from cache, {:.1} s → {}",
-        r.outcomes.len(),
+        "cablab: {}, {} ok{model_note}{machine_note}, {} failed, {} from cache, {:.1} s → {}",
+        tests_word(r.outcomes.len()),
         r.outcomes.len() - failed,
         failed,
         r.cached,
@@ -213,7 +236,11 @@ fn folder_campaign(a: &RunArgs) -> Result<config::Campaign, CliError> {
 }
 
 /// Run `cablab verify`.
-pub fn verify(a: VerifyArgs) -> CmdResult {
+pub fn verify(mut a: VerifyArgs) -> CmdResult {
+    // A report folder stands for its manifest.
+    if a.manifest.is_dir() {
+        a.manifest = a.manifest.join("manifest.json");
+    }
     let rep = ver::verify(&a.manifest, super::capped_jobs(a.jobs)).map_err(CliError::input)?;
     if rep.differences.is_empty() {
         println!(

@@ -44,6 +44,13 @@ pub fn run(a: SimulateArgs) -> CmdResult {
             "--path needs at least one value"
         )));
     }
+    if let Some((i, v)) = a.path.iter().enumerate().find(|(_, v)| !v.is_finite()) {
+        return Err(CliError::input(anyhow::anyhow!(
+            "--path value {} is {v}: every path value must be a finite number (SI: {})",
+            i + 1,
+            kind.control_unit()
+        )));
+    }
     if !(a.machine_compliance.is_finite() && a.machine_compliance >= 0.0) {
         return Err(CliError::input(anyhow::anyhow!(
             "--machine-compliance must be a finite number ≥ 0 (SI control per response unit), got {}",
@@ -58,8 +65,26 @@ pub fn run(a: SimulateArgs) -> CmdResult {
     setup.support_radius_m = a.support_radius_mm * 1e-3;
     setup.support_friction = a.support_friction;
     setup.machine_compliance = a.machine_compliance;
-    let curve = cablab_rod::simulate_path(&setup, law.as_ref(), &a.path, a.max_increment)
-        .map_err(CliError::failed)?;
+    let curve =
+        cablab_rod::simulate_path(&setup, law.as_ref(), &a.path, a.max_increment).map_err(|e| {
+            // A perfectly plastic section (no hardening given: 0) under a uniform moment or
+            // torque yields everywhere at once, and the rod has no tangent left: say so.
+            let hard = if kind == TestKind::Tension { "H" } else { "HI" };
+            let plastic = a.law.contains("plastic")
+                && params.get(hard).is_none_or(|&h| h == 0.0)
+                && e.to_string().contains("singular");
+            if plastic {
+                CliError::input(anyhow::anyhow!(
+                    "{e:#}\n  the law is perfectly plastic ({hard} = 0{}): once the section yields \
+                     along the whole rod it has no stiffness left to solve with; give a hardening \
+                     --param {hard}=… > 0 (a small one, e.g. 1e-3 × the elastic stiffness, \
+                     approximates a plateau)",
+                    if params.contains_key(hard) { "" } else { ", the default" }
+                ))
+            } else {
+                CliError::failed(e)
+            }
+        })?;
     #[derive(serde::Serialize)]
     struct Out<'a> {
         kind: TestKind,
@@ -80,6 +105,7 @@ pub fn run(a: SimulateArgs) -> CmdResult {
         response: &curve.response,
     };
     if let Some(path) = &a.output {
+        super::refuse_existing(path, a.force)?;
         let ext = path
             .extension()
             .and_then(|e| e.to_str())

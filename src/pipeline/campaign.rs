@@ -56,6 +56,8 @@ struct SummaryTest<'a> {
     stiffness_unit: &'a str,
     modulus_pa: Option<f64>,
     behaviour: Option<&'a str>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    behaviour_detail: Option<&'a str>,
     #[serde(rename = "yield")]
     yield_point: Option<serde_json::Value>,
     cycles: usize,
@@ -83,6 +85,10 @@ struct SummaryTest<'a> {
     #[serde(rename = "break")]
     break_at: Option<serde_json::Value>,
     last_loop_area_j: Option<f64>,
+    /// Whether that loop is resolved (a loop that is not is zero within the noise, whatever
+    /// its sign); absent when there is no loop.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    last_loop_area_resolved: Option<bool>,
 }
 
 /// The series (protocol level) of each test: its file name's level where its specimen type and
@@ -264,6 +270,7 @@ pub fn write_campaign_outputs(
             stiffness_unit: &o.stiffness_unit,
             modulus_pa: o.modulus_pa,
             behaviour: o.behaviour.as_deref(),
+            behaviour_detail: o.behaviour_detail.as_deref(),
             yield_point: o
                 .yield_point
                 .map(|[c, r]| serde_json::json!({"control": c, "response": r})),
@@ -286,6 +293,7 @@ pub fn write_campaign_outputs(
                 .break_at
                 .map(|[c, r]| serde_json::json!({"control": c, "response": r})),
             last_loop_area_j: o.last_loop_area_j,
+            last_loop_area_resolved: o.last_loop_area_j.and(o.last_loop_area_resolved),
         })
         .collect();
     let summary = serde_json::json!({

@@ -407,6 +407,11 @@ pub struct PlannedTest {
     /// manifest's input. Not in the cache key (the id is).
     #[serde(skip)]
     pub file_id: String,
+    /// The test's folder under the report's `tests/`: [`crate::pipeline::evaluate::slug`] of the
+    /// id, with a digest of the id appended where two ids of the campaign would share a folder
+    /// ([`assign_slugs`]). Not in the cache key (the id is).
+    #[serde(skip)]
+    pub slug: String,
     /// Absolute or root-relative path to the raw file.
     pub path: PathBuf,
     /// Specimen type label.
@@ -1104,6 +1109,7 @@ fn validate(file: PipelineFile, path: &Path, bytes: Vec<u8>, root: PathBuf) -> R
             };
             for (test_id, block, sheet) in blocks {
                 tests.push(PlannedTest {
+                    slug: String::new(),
                     id: test_id,
                     file_id: id.clone(),
                     path: p.clone(),
@@ -1128,6 +1134,7 @@ fn validate(file: PipelineFile, path: &Path, bytes: Vec<u8>, root: PathBuf) -> R
         bail!("{ctx}: every matched file is skipped; nothing to evaluate");
     }
     tests.sort_by(|a, b| a.id.cmp(&b.id));
+    assign_slugs(&mut tests);
     Ok(Campaign {
         file,
         pipeline_path: path.to_path_buf(),
@@ -1138,6 +1145,29 @@ fn validate(file: PipelineFile, path: &Path, bytes: Vec<u8>, root: PathBuf) -> R
         candidates,
         diagnose_kinds,
     })
+}
+
+/// Gives each test its report folder: the slug of its id, or, where two ids of the campaign
+/// share a slug up to letter case (`tension 1.TXT`, `tension_1.TXT` and `tension-1.TXT`'s
+/// `tension_1.TXT`; case-insensitive file systems), the slug and the first 8 hex digits of the
+/// id's SHA-256, so that no test writes over another's results. Depends only on the campaign's
+/// whole test list, so every shard names a test's folder alike.
+pub fn assign_slugs(tests: &mut [PlannedTest]) {
+    let base: Vec<String> = tests
+        .iter()
+        .map(|t| crate::pipeline::evaluate::slug(&t.id))
+        .collect();
+    let mut count: BTreeMap<String, usize> = BTreeMap::new();
+    for b in &base {
+        *count.entry(b.to_lowercase()).or_default() += 1;
+    }
+    for (t, b) in tests.iter_mut().zip(base) {
+        t.slug = if count[&b.to_lowercase()] > 1 {
+            format!("{b}-{}", &crate::output::sha256_hex(t.id.as_bytes())[..8])
+        } else {
+            b
+        };
+    }
 }
 
 /// The characterisation settings of `specimen`'s tests of `kind`: the campaign's `[kinds.<kind>]`

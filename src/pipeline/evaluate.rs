@@ -57,8 +57,11 @@ pub struct TestOutcome {
     pub stiffness_unit: String,
     /// Young's modulus, Pa.
     pub modulus_pa: Option<f64>,
-    /// Behaviour class.
+    /// Behaviour class (the contract's four).
     pub behaviour: Option<String>,
+    /// cablab's own class where it says more (`broken`, `rate_dependent`); absent otherwise.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub behaviour_detail: Option<String>,
     /// Yield (control, response) SI.
     pub yield_point: Option<[f64; 2]>,
     /// Piecewise threshold (sectional control) and the two stiffnesses, when found.
@@ -281,7 +284,7 @@ impl TestOutcome {
     pub fn new(t: &PlannedTest, cache_key: &str, input_sha256: &str) -> Self {
         TestOutcome {
             id: t.id.clone(),
-            slug: slug(&t.id),
+            slug: t.slug.clone(),
             specimen: t.specimen.clone(),
             diameter_m: t.diameter_m,
             flat_section: t.flat_section,
@@ -297,6 +300,7 @@ impl TestOutcome {
             stiffness_unit: t.kind.stiffness_unit().to_string(),
             modulus_pa: None,
             behaviour: None,
+            behaviour_detail: None,
             yield_point: None,
             piecewise: None,
             cycles: 0,
@@ -954,7 +958,9 @@ fn fill_analysis(out: &mut TestOutcome, an: &Analysis) {
         out.stiffness_ci95 = Some(s.ci95);
     }
     out.modulus_pa = an.modulus_pa;
-    out.behaviour = Some(an.behaviour.as_str().to_string());
+    out.behaviour = Some(an.behaviour_class.to_string());
+    out.behaviour_detail =
+        (an.behaviour.as_str() != an.behaviour_class).then(|| an.behaviour.as_str().to_string());
     out.yield_point = an.yield_point.as_ref().map(|y| [y.control, y.response]);
     out.yield_method = an
         .yield_point

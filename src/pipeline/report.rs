@@ -631,7 +631,7 @@ fn section(out_dir: &Path, o: &TestOutcome) -> TestSection {
             o.modulus_pa
                 .map_or("–".into(), |e| format!("{} MPa", fmt_mpa(e))),
         ));
-        facts.push(("behaviour".into(), o.behaviour.clone().unwrap_or_default()));
+        facts.push(("behaviour".into(), behaviour_words(o)));
         if let Some([c, r]) = o.yield_point {
             let x = match (o.kind, o.free_length_m) {
                 (TestKind::Tension | TestKind::Torsion, Some(l)) => c * l,
@@ -704,7 +704,7 @@ fn section(out_dir: &Path, o: &TestOutcome) -> TestSection {
         if let Some(e) = &o.model_error {
             facts.push(("model".into(), format!("failed: {e}")));
         }
-        headline = format!("{st}, {}", o.behaviour.clone().unwrap_or_default());
+        headline = format!("{st}, {}", behaviour_words(o));
     }
     for w in &o.warnings {
         facts.push(("warning".into(), w.clone()));
@@ -748,6 +748,16 @@ fn section(out_dir: &Path, o: &TestOutcome) -> TestSection {
         facts,
         svgs,
         diagnosis_text: o.diagnosis_words.clone().unwrap_or_default(),
+    }
+}
+
+/// A test's behaviour class as the page shows it: the class, and cablab's own where it says more
+/// (`elastoplastic (broken)`, `other (rate dependent)`).
+fn behaviour_words(o: &TestOutcome) -> String {
+    let class = o.behaviour.clone().unwrap_or_default();
+    match o.behaviour_detail.as_deref() {
+        Some(d) => format!("{class} ({})", d.replace('_', " ")),
+        None => class,
     }
 }
 

@@ -339,8 +339,8 @@ fn one_test(
     cache_roots: &[PathBuf],
     obs: &Bars,
 ) -> (TestOutcome, bool) {
-    let slug = super::evaluate::slug(&t.id);
-    let test_dir = out_dir.join("tests").join(&slug);
+    let slug = &t.slug;
+    let test_dir = out_dir.join("tests").join(slug);
     let bytes = match std::fs::read(&t.path) {
         Ok(b) => b,
         Err(e) => {
@@ -359,7 +359,7 @@ fn one_test(
         Err(e) => return (failed_outcome(t, format!("cache key: {e}")), false),
     };
     for root in cache_roots {
-        let from = root.join("tests").join(&slug);
+        let from = root.join("tests").join(slug);
         if let Some(o) = cached(&from, &key) {
             if copy_test_files(&from, &test_dir, &o).is_ok() {
                 for s in 0..STAGES.len() {

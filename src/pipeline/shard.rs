@@ -367,6 +367,7 @@ mod tests {
     fn planned(ids: &[&str]) -> Vec<PlannedTest> {
         ids.iter()
             .map(|id| PlannedTest {
+                slug: crate::pipeline::evaluate::slug(id),
                 id: id.to_string(),
                 file_id: id.to_string(),
                 path: PathBuf::from(id),

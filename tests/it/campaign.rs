@@ -392,7 +392,7 @@ tables = ["csv"]
         "{err}"
     );
     assert!(
-        err.contains("1 tests, 1 ok (1 of them without the model")
+        err.contains("1 test, 1 ok (1 of them without the model")
             && err.contains("exit code stays 0"),
         "{err}"
     );

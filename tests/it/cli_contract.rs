@@ -689,7 +689,6 @@ fn analyze_json_contract_and_truth() {
             "linear_elastic",
             "piecewise_linear_elastic",
             "elastoplastic",
-            "broken",
             "other"
         ]
         .contains(&b),
@@ -703,6 +702,18 @@ fn analyze_json_contract_and_truth() {
 fn analyze_elastic_demo_test_is_linear_elastic() {
     let a = run_json(&["analyze", DEMO_TENSION, "--kind", "tension", "--json"]);
     assert_eq!(a["behaviour"], "linear_elastic");
+}
+
+/// `behaviour` keeps to the contract's four classes: a test that broke (a Deben nanocellulose
+/// film pulled to fracture) is the class judged before the break, `elastoplastic`, and
+/// `behaviour_detail` says `broken` (it was `"behaviour": "broken"`, outside the contract).
+#[test]
+fn a_broken_test_keeps_its_contract_class_and_says_broken_beside_it() {
+    let f = crate::common::root().join("tests/data/tda__deben_microtest_tension_nanocellulose.MTR");
+    let a = run_json(&["analyze", f.to_str().unwrap(), "--json"]);
+    assert_eq!(a["behaviour"], "elastoplastic");
+    assert_eq!(a["behaviour_detail"], "broken");
+    assert!(!a["break"].is_null());
 }
 
 /// Geometry from the metadata (testXpert 'Versuchslänge 32 mm'), `three-point` spelling, and a

@@ -196,7 +196,7 @@ fn gaps_are_listed_once_and_init_marks_them() {
     assert_eq!(r.stderr.matches("note:").count(), 1, "{}", r.stderr);
     assert!(
         r.stderr
-            .contains("1 tests, 1 ok (1 at the machine level: no length"),
+            .contains("1 test, 1 ok (1 at the machine level: no length"),
         "{}",
         r.stderr
     );
@@ -932,4 +932,103 @@ fn kind_given_does_not_turn_a_compression_file_into_a_test() {
         .as_str()
         .unwrap()
         .ends_with("Ausdruck_01.csv"));
+}
+
+/// Three files whose names differ only in a space, an underscore and a hyphen
+/// (`tension 1.TXT`, `tension_1.TXT`, `tension-1.TXT`) share no report folder: each test's
+/// `result.json` is its own (they were one folder, one result and a manifest listing it twice),
+/// and `verify` finds the campaign as written.
+#[test]
+fn tests_whose_names_differ_only_in_punctuation_keep_their_own_results() {
+    let tmp = tempfile::tempdir().unwrap();
+    let src = root().join("raw_data/cable");
+    let picks = [
+        "tension_100N_1.csv",
+        "tension_40N_2.csv",
+        "tension_40N_1.TXT",
+    ];
+    let names = ["tension 1.csv", "tension_1.csv", "tension-1.csv"];
+    for (p, n) in picks.iter().zip(names) {
+        copy(&src.join(p), &tmp.path().join("lab").join(n));
+    }
+    let o = run_in(tmp.path(), &["run", "lab", "-q", "--no-diagnosis"]);
+    assert_eq!(o.code, 0, "{}", o.stderr);
+    let dir = tmp.path().join("reports/lab");
+    let v: Value =
+        serde_json::from_slice(&std::fs::read(dir.join("summary.json")).unwrap()).unwrap();
+    let tests = v["tests"].as_array().unwrap();
+    assert_eq!(tests.len(), 3);
+    let mut folders = std::collections::BTreeSet::new();
+    for t in tests {
+        let report = t["report"].as_str().unwrap();
+        assert!(folders.insert(report.to_string()), "{report} twice");
+        let r: Value = serde_json::from_slice(&std::fs::read(dir.join(report)).unwrap()).unwrap();
+        assert_eq!(r["id"], t["id"], "{report}");
+    }
+    let o = run_in(tmp.path(), &["verify", "reports/lab"]);
+    assert_eq!(o.code, 0, "{}{}", o.stdout, o.stderr);
+}
+
+/// Folder mode's specimen types, from the labels and diameters the files state: two materials
+/// of one diameter in one folder (labels `Cu-1`, `Cu-2`, `Steel-1`, `Steel-2`) are two types,
+/// not one group with the spread of both; specimens measured one by one (2.80, 2.82, 2.85 mm,
+/// labels `cable-1` … `cable-3`) are one type whose tests each take their own diameter, not
+/// three groups of one. The demo's levels (`cable2.8-T40-1`, `cable2.8-T100-1`) stay one
+/// specimen type, split by series as before.
+#[test]
+fn folder_mode_types_follow_the_labels_and_pool_measured_diameters() {
+    let tmp = tempfile::tempdir().unwrap();
+    let src = std::fs::read_to_string(root().join("raw_data/cable/tension_100N_1.csv")).unwrap();
+    let write = |dir: &str, name: &str, label: &str, d: &str| {
+        let text = src
+            .replace("\"cable2.8-T100-1\"", &format!("\"{label}\""))
+            .replace("\"Diameter\",\"2.8\"", &format!("\"Diameter\",\"{d}\""));
+        let p = tmp.path().join(dir).join(name);
+        std::fs::create_dir_all(p.parent().unwrap()).unwrap();
+        std::fs::write(p, text).unwrap();
+    };
+    for (i, label) in ["Cu-1", "Cu-2", "Steel-1", "Steel-2"].iter().enumerate() {
+        write("mixed", &format!("wire_{i}.csv"), label, "2.8");
+    }
+    for (i, d) in ["2.80", "2.82", "2.85"].iter().enumerate() {
+        write(
+            "measured",
+            &format!("cable_{i}.csv"),
+            &format!("cable-{}", i + 1),
+            d,
+        );
+    }
+    let groups = |dir: &str| -> Vec<Value> {
+        let o = run_in(tmp.path(), &["run", dir, "-q", "--no-diagnosis"]);
+        assert_eq!(o.code, 0, "{}", o.stderr);
+        let p = tmp.path().join("reports").join(dir).join("summary.json");
+        let v: Value = serde_json::from_slice(&std::fs::read(p).unwrap()).unwrap();
+        v["groups"].as_array().unwrap().clone()
+    };
+    let g = groups("mixed");
+    let labels: Vec<&str> = g.iter().map(|g| g["specimen"].as_str().unwrap()).collect();
+    assert_eq!(labels.len(), 2, "{labels:?}");
+    assert!(labels.iter().any(|l| l.contains("Cu")) && labels.iter().any(|l| l.contains("Steel")));
+    assert!(g.iter().all(|g| g["n"] == 2), "{g:?}");
+    let g = groups("measured");
+    assert_eq!(g.len(), 1, "{g:?}");
+    assert_eq!(g[0]["n"], 3);
+    assert!(g[0]["diameter_m"].is_null(), "{g:?}");
+    assert!(g[0]["stiffness_sd"].as_f64().is_some());
+    // Each test's modulus uses its own diameter: E × d² is the same stiffness.
+    let v: Value = serde_json::from_slice(
+        &std::fs::read(tmp.path().join("reports/measured/summary.json")).unwrap(),
+    )
+    .unwrap();
+    for (t, d) in v["tests"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .zip([2.80e-3, 2.82e-3, 2.85e-3])
+    {
+        let ea = t["stiffness"].as_f64().unwrap();
+        let e = t["modulus_pa"].as_f64().unwrap();
+        let area = std::f64::consts::PI * d * d / 4.0;
+        assert!((e * area / ea - 1.0).abs() < 1e-6, "{t}");
+    }
 }

@@ -737,7 +737,7 @@ fn stress_relaxation_in_a_hold_is_no_break() {
         }
     }
     let v = analyze_written("Specimen_RawData_1.csv", &s, &["--kind", "tension"]);
-    assert_ne!(v["behaviour"], "broken", "{}", v["notes"]);
+    assert_ne!(v["behaviour_detail"], "broken", "{}", v["notes"]);
     assert!(v["break"].is_null(), "{}", v["break"]);
     assert!(!v["notes"].to_string().contains("broke"), "{}", v["notes"]);
 }

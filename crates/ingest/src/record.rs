@@ -1218,7 +1218,7 @@ pub(crate) fn build(
         Some(k) => (k, KIND_SET_BY_FLAG.to_string()),
         None => kind_from_text(&texts)
             .or_else(|| crate::roles::kind_from_channel_names(&names))
-            .or_else(|| kind_from_channels(&dims, c, r))
+            .or_else(|| kind_from_channels(&dims, &names, c, r))
             .unwrap_or((
                 TestKind::Unknown,
                 "neither the metadata nor the channels say which test this is".into(),

@@ -683,21 +683,77 @@ pub(crate) fn kind_from_channel_names(names: &[String]) -> Option<(TestKind, Str
     }
 }
 
-/// Test kind from the channel dimensions, where they leave no doubt: torque against angle with no
-/// force channel is torsion; moment against curvature is pure bending.
+/// Words in a moment channel's name (or its angle's) that say bending.
+const BENDING_MOMENT_WORDS: &[&str] = &[
+    "biege",
+    "bending",
+    "flexion",
+    "flexural",
+    "flector",
+    "flettente",
+    "zginaj",
+];
+
+/// Words in a moment channel's name, or its angle's, that say torsion.
+const TORSION_WORDS: &[&str] = &[
+    "torque",
+    "drehmoment",
+    "torsion",
+    "twist",
+    "verdreh",
+    "torsie",
+    "couple",
+    "torsor",
+    "skręc",
+    "torção",
+];
+
+/// Test kind from the channel dimensions, where they leave no doubt: moment against curvature is
+/// pure bending; a moment against an angle with no force channel is torsion when the channels are
+/// named for it (`Torque`, `Drehmoment`, `Twist`) and pure bending when named for bending
+/// (`Biegemoment`, `Bending moment`). A bare `Moment` against `Rotation` says neither (both
+/// machines write it): no kind, so that the user is asked rather than told torsion.
 pub(crate) fn kind_from_channels(
     dims: &[Option<Dimension>],
+    names: &[String],
     control: Option<usize>,
     response: Option<usize>,
 ) -> Option<(TestKind, String)> {
     let rd = response.and_then(|r| dims[r]);
     let cd = control.and_then(|c| dims[c]);
     let any_force = dims.contains(&Some(Dimension::Force));
+    let named = |i: Option<usize>, words: &[&str]| {
+        i.and_then(|i| names.get(i)).is_some_and(|n| {
+            let l = n.to_lowercase();
+            words.iter().any(|w| l.contains(w))
+        })
+    };
     match (cd, rd) {
-        (Some(Dimension::Angle), Some(Dimension::Torque)) if !any_force => Some((
-            TestKind::Torsion,
-            "torque against twist angle, no force channel".into(),
-        )),
+        (Some(Dimension::Angle), Some(Dimension::Torque)) if !any_force => {
+            let bending =
+                named(response, BENDING_MOMENT_WORDS) || named(control, BENDING_MOMENT_WORDS);
+            let torsion = named(response, TORSION_WORDS) || named(control, TORSION_WORDS);
+            let n = |i: Option<usize>| i.and_then(|i| names.get(i)).cloned().unwrap_or_default();
+            match (bending, torsion) {
+                (true, false) => Some((
+                    TestKind::PureBending,
+                    format!(
+                        "bending moment '{}' against angle '{}'",
+                        n(response),
+                        n(control)
+                    ),
+                )),
+                (false, true) => Some((
+                    TestKind::Torsion,
+                    format!(
+                        "torque '{}' against twist angle '{}', no force channel",
+                        n(response),
+                        n(control)
+                    ),
+                )),
+                _ => None,
+            }
+        }
         (Some(Dimension::Curvature), Some(Dimension::Torque)) => {
             Some((TestKind::PureBending, "moment against curvature".into()))
         }
@@ -1462,6 +1518,10 @@ mod tests {
             .collect()
     }
 
+    fn names_of(f: &[ChannelFacts]) -> Vec<String> {
+        f.iter().map(|c| c.name.clone()).collect()
+    }
+
     #[test]
     fn german_names() {
         let f = facts(&[
@@ -1588,7 +1648,7 @@ mod tests {
         );
         let dims: Vec<_> = f.iter().map(|c| c.dimension).collect();
         assert!(
-            kind_from_channels(&dims, Some(3), Some(4)).is_none(),
+            kind_from_channels(&dims, &names_of(&f), Some(3), Some(4)).is_none(),
             "axial-torsional is not plain torsion"
         );
         let f = facts(&[("curvature", "1/m"), ("bending_moment", "N.m")]);
@@ -1596,9 +1656,27 @@ mod tests {
         assert_eq!((t, c, r), (None, Some(0), Some(1)));
         let dims: Vec<_> = f.iter().map(|c| c.dimension).collect();
         assert_eq!(
-            kind_from_channels(&dims, c, r).unwrap().0,
+            kind_from_channels(&dims, &names_of(&f), c, r).unwrap().0,
             TestKind::PureBending
         );
+        // A moment against an angle: torsion when named for it, pure bending when named for
+        // bending (an MTS export's `Ch 2 Biegemoment` against `Ch 2 Drehwinkel` was taken for
+        // torsion, its modulus 1.5x), neither for a bare `Moment` against `Rotation`.
+        for (names, want) in [
+            (["Angle", "Torque"], Some(TestKind::Torsion)),
+            (["Drehwinkel", "Drehmoment"], Some(TestKind::Torsion)),
+            (
+                ["Ch 2 Drehwinkel", "Ch 2 Biegemoment"],
+                Some(TestKind::PureBending),
+            ),
+            (["Rotation", "Bending moment"], Some(TestKind::PureBending)),
+            (["Rotation", "Moment"], None),
+        ] {
+            let f = facts(&[(names[0], "deg"), (names[1], "N.m")]);
+            let dims: Vec<_> = f.iter().map(|c| c.dimension).collect();
+            let got = kind_from_channels(&dims, &names_of(&f), Some(0), Some(1)).map(|k| k.0);
+            assert_eq!(got, want, "{names:?}");
+        }
     }
 
     #[test]

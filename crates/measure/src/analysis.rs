@@ -303,6 +303,15 @@ impl Behaviour {
             Behaviour::Broken => "broken",
         }
     }
+
+    /// The contract's four classes: a rate-dependent (or broken, when nothing was judged before
+    /// the break) test is `other`.
+    pub fn class(self) -> &'static str {
+        match self {
+            Behaviour::RateDependent | Behaviour::Broken => "other",
+            b => b.as_str(),
+        }
+    }
 }
 
 /// The elastic stiffness of the test.
@@ -594,7 +603,14 @@ pub struct Analysis {
     pub yield_point: Option<YieldPoint>,
     /// Per-cycle hysteresis.
     pub cycles: Vec<CycleResult>,
-    /// Behaviour class.
+    /// The contract's behaviour class (`linear_elastic`, `piecewise_linear_elastic`,
+    /// `elastoplastic`, `other`): a broken test's class before the break, a rate-dependent
+    /// test's `other`.
+    #[serde(rename = "behaviour")]
+    pub behaviour_class: &'static str,
+    /// The behaviour class with cablab's own two beyond the contract's (`broken`,
+    /// `rate_dependent`), as `behaviour_detail`.
+    #[serde(rename = "behaviour_detail")]
     pub behaviour: Behaviour,
     /// Reversible bilinear threshold and stiffnesses, when the class is piecewise linear elastic.
     pub piecewise: Option<Piecewise>,
@@ -1276,17 +1292,37 @@ pub fn analyze(
         }
         other => other,
     };
-    let judged: Vec<&CycleResult> = cyc.iter().filter(|c| c.coincide.is_some()).collect();
+    // Only an unloading from beyond the bend says whether the bend is reversible: an elastic
+    // loop before it (ISO 6892-1 Annex, ASTM E111 modulus loops) closes whatever follows.
+    let judged: Vec<&CycleResult> = cyc
+        .iter()
+        .filter(|c| c.coincide.is_some())
+        .filter(|c| bend.is_none_or(|b| c.peak_sectional > b.knee_x))
+        .collect();
     let reversible = !judged.is_empty()
         && judged
             .iter()
             .all(|c| c.coincide == Some(true) && c.residual_significant != Some(true));
-    let permanent = cyc.iter().any(|c| c.residual_significant == Some(true));
+    let set = bend.and_then(|b| set_below_bend(&segments, &first_idx, (&xs, &rm), b));
+    if let Some((cycle, level, by)) = set {
+        notes.push(format!(
+            "cycle {cycle} unloads from beyond the bend without reaching zero (between two loads: no residual to judge), but at {level:.4e} below the bend its control lies {by:.4e} past the first loading's: a permanent set, so the bend is a yield, not a reversible threshold"
+        ));
+    }
+    let reversible = reversible && set.is_none();
+    let permanent = set.is_some() || cyc.iter().any(|c| c.residual_significant == Some(true));
     // A slope that is not positive is no elastic behaviour (a response against its control that
     // no sign convention explains, warned above): `other`, not `linear_elastic`.
     let positive = stiffness.as_ref().is_some_and(|s| s.value > 0.0);
     let behaviour = if judged.is_empty() {
-        notes.push("no unloading to judge reversibility by".into());
+        notes.push(
+            if cyc.iter().any(|c| c.coincide.is_some()) {
+                "no unloading from beyond the bend to judge its reversibility by (the loops before it close, as elastic loops do)"
+            } else {
+                "no unloading to judge reversibility by"
+            }
+            .into(),
+        );
         monotonic_class(bend.is_some(), positive, &mut warnings)
     } else if reversible && positive {
         if bend.is_some() {
@@ -1422,6 +1458,42 @@ pub fn analyze(
         response_before: response[j - 1],
         work_to_break: work,
     });
+    // Cycles after the cycle a specimen broke in are its pieces and the actuator ringing after
+    // the fracture (an MTS three-point export: three "cycles" of ±0.5 mm at zero force, one of
+    // them a negative loop with a hint that the columns were exchanged): not reported.
+    if let Some((j, _, _)) = found_break {
+        let broke_in = segments
+            .iter()
+            .find(|s| s.start <= j && j < s.end)
+            .map(|s| s.cycle);
+        if let Some(cb) = broke_in {
+            let before = cyc.len();
+            cyc.retain(|c| c.index <= cb);
+            // The cycle it broke in has no closed loop and no residual of the specimen: its
+            // "unloading" is the fracture's fall.
+            for c in cyc.iter_mut().filter(|c| c.index == cb) {
+                let why = "the specimen broke in this cycle: its unloading is the fracture's fall";
+                for (key, v) in [
+                    ("loop_area", &mut c.loop_area),
+                    ("residual", &mut c.residual),
+                    ("unloading_stiffness", &mut c.unloading_stiffness),
+                ] {
+                    if v.take().is_some() || c.why_by_key.contains_key(key) {
+                        c.why_by_key.insert(key.into(), why.into());
+                    }
+                }
+                c.loop_area_resolved = None;
+                c.residual_significant = None;
+                c.why = join_why(&c.why_by_key);
+            }
+            if cyc.len() < before {
+                notes.push(format!(
+                    "{} cycle(s) after the break (in cycle {cb}) are not reported: the specimen is broken there",
+                    before - cyc.len()
+                ));
+            }
+        }
+    }
     let falls = sudden_drops(
         &cm,
         &rm,
@@ -1542,6 +1614,7 @@ pub fn analyze(
     // An abrupt break overrides the class (the yield and the threshold above were judged
     // without it). A gradual fall (a wire sliding through three-point supports, necking) keeps
     // its class and the break warning.
+    let before_break = behaviour;
     let behaviour = if found_break.is_some_and(|(j, _, k)| break_is_abrupt(&rm, k, j)) {
         Behaviour::Broken
     } else {
@@ -1582,13 +1655,26 @@ pub fn analyze(
         }
         _ => None,
     };
-    let holds = hold_relaxation(
+    let mut holds = hold_relaxation(
         &segments,
         (&c, &r),
         (3.0 * cn.noise).max(control_resolution),
         serial.0.phi,
         (serial.1, serial.2),
     );
+    // A hold after the specimen broke holds its pieces: what the load cell reads there is no
+    // material's relaxation (a testXpert Invar export, stopped after its fracture, was
+    // "rate dependent" from it).
+    if let Some((j, _, _)) = found_break {
+        let after = holds.iter().filter(|h| h.start >= j).count();
+        if after > 0 {
+            holds.retain(|h| h.start < j);
+            notes.push(format!(
+                "{after} hold(s) after the break at sample {} are not judged for relaxation (the specimen is broken there)",
+                j + 1
+            ));
+        }
+    }
     // Rate dependence: every hold that trends relaxes, and two do (or the only one): a viscous
     // specimen relaxes after loading and recovers after unloading; a drift trends one way at
     // every hold, whatever the control did before it; one hold's fluke among several is not a
@@ -1673,7 +1759,12 @@ pub fn analyze(
         })
         .collect();
 
+    let behaviour_class = match behaviour {
+        Behaviour::Broken => before_break.class(),
+        other => other.class(),
+    };
     Ok(Analysis {
+        behaviour_class,
         kind,
         stiffness,
         modulus_pa,
@@ -1813,6 +1904,49 @@ fn refuse_stiffness(s: &Stiffness, first_rise: f64, sigma_r: f64) -> Option<Stri
         ));
     }
     None
+}
+
+/// The first unloading from beyond the first loading's bend `b` (sectional control `x`, oriented
+/// response `y`) that passes below the bend's response without nearing zero (load-controlled
+/// cycles between two loads, which leave no residual at zero load to judge), when its control
+/// at the response halfway between its lowest and the bend's lies past the first loading's at
+/// that response by more than a quarter of the latter: (cycle, that response, the set). A
+/// reversible threshold's unloading retraces the first loading below its bend; a yielded
+/// specimen's runs parallel to it, shifted by its plastic deformation.
+fn set_below_bend(
+    segments: &[Segment],
+    first_idx: &[usize],
+    (x, y): (&[f64], &[f64]),
+    b: Hinge,
+) -> Option<(usize, f64, f64)> {
+    let yb = b.knee_y;
+    if !(yb > 0.0) {
+        return None;
+    }
+    segments
+        .iter()
+        .filter(|s| s.branch == Branch::Unloading && s.end > s.start + 2)
+        .filter(|s| x[s.start] > b.knee_x)
+        .find_map(|s| {
+            let low = y[s.start..s.end]
+                .iter()
+                .fold(f64::INFINITY, |m, &v| m.min(v));
+            if low <= 0.1 * yb || low >= 0.9 * yb {
+                return None;
+            }
+            let level = 0.5 * (low + yb);
+            let ku = (s.start..s.end).find(|&k| y[k] <= level)?;
+            let xu = x[ku];
+            let xl = x[*first_idx.iter().find(|&&i| y[i] >= level)?];
+            let by = xu - xl;
+            // A plastic set unloads elastically, parallel to the first loading's elastic line:
+            // its secant from the peak to the level at least 0.7 as steep as that line's
+            // secant to the bend (a silicone's Mullins-softened unloading: 0.49). A softened elastomer's unloading (Mullins, viscous lag) is
+            // flatter: it may still return to zero, so it says nothing here.
+            let elastic = b.knee_y / (b.knee_x - x[first_idx[0]]);
+            let unloading = (y[s.start] - y[ku]) / (x[s.start] - xu);
+            (by > 0.25 * xl.abs() && unloading >= 0.7 * elastic).then_some((s.cycle, level, by))
+        })
 }
 
 /// Share of the first loading's rise within which its response counts as carrying no load

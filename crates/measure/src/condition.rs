@@ -960,6 +960,13 @@ fn holds_still_with(
             if (m4 - m2).abs() > tol || (m3 - 0.5 * (m2 + m4)).abs() > tol {
                 return false;
             }
+        } else if (control[j - 1] - control[i]).abs() > 0.5 * threshold {
+            // Too short for fifths (3–4 samples): a ramp that crosses the band in that many
+            // samples moves by most of it from the first to the last, a still control by its
+            // noise. A load-controlled first loading moves its control slowly while the
+            // specimen is elastic and fast once it yields: the run's mean rate made every
+            // three samples of the elastic part a "hold".
+            return false;
         }
         let k = ((e - i) / 10).max(1);
         mean(p, e - k, e).abs() - mean(p, i, i + k).abs() <= hr

@@ -54,6 +54,9 @@ pub struct GroupStats {
     /// The protocol series of this group; absent for the group pooled over all series.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub series: Option<String>,
+    /// Why a value above is null (CONTRACT.md: a null carries a "why"); absent when none is.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub why: Option<String>,
 }
 
 /// The keys of a pooled `groups` entry in `summary.json` (CONTRACT.md), in order; a series
@@ -122,6 +125,19 @@ fn stats(specimen: &str, kind: TestKind, series: Option<String>, rs: &[&TableRow
         .filter_map(|r| r.modulus_pa)
         .filter(|m| m.is_finite())
         .collect();
+    let modulus_mean_pa =
+        (!moduli.is_empty()).then(|| moduli.iter().sum::<f64>() / moduli.len() as f64);
+    let mut why = Vec::new();
+    if sd.is_none() {
+        why.push("stiffness_sd, stiffness_cov: one test, no spread");
+    } else if mean == 0.0 {
+        why.push("stiffness_cov: the mean is zero");
+    }
+    if modulus_mean_pa.is_none() {
+        why.push(
+            "modulus_mean_pa: no test of the group has a section (diameter or width × thickness)",
+        );
+    }
     GroupStats {
         specimen: specimen.to_string(),
         // The group's diameter when its tests share one; none when they differ (specimens a
@@ -137,9 +153,9 @@ fn stats(specimen: &str, kind: TestKind, series: Option<String>, rs: &[&TableRow
         stiffness_sd: sd,
         stiffness_cov: sd.and_then(|sd| (mean != 0.0).then(|| sd / mean.abs())),
         stiffness_unit: kind.stiffness_unit().to_string(),
-        modulus_mean_pa: (!moduli.is_empty())
-            .then(|| moduli.iter().sum::<f64>() / moduli.len() as f64),
+        modulus_mean_pa,
         series,
+        why: (!why.is_empty()).then(|| why.join("; ")),
     }
 }
 
@@ -290,5 +306,9 @@ mod tests {
         assert_eq!(keys, GROUP_KEYS);
         assert_eq!(first["kind"], "tension");
         assert!(json[2]["stiffness_sd"].is_null());
+        assert_eq!(
+            json[2]["why"],
+            "stiffness_sd, stiffness_cov: one test, no spread"
+        );
     }
 }
