@@ -1338,6 +1338,19 @@ pub fn strain_follows_crosshead(rec: &TestRecord, curve: &mut Curve) -> Option<S
         let dx = sx * (x[b] - x[a]);
         (dx > 0.0).then(|| ((c[b] - c[a]) / dx, (r[b] - r[a]) / dx))
     };
+    // The control's rate against the crosshead that a continuation from the crosshead gives: 1
+    // (the curve's control is a travel, a strain already times the length,
+    // [`sectional_control`]), when that length is the file's own (else the strain was
+    // multiplied by a stand-in and the rate is not judged).
+    let follow = match rec.channels[ci].dimension {
+        Some(cablab_ingest::units::Dimension::Ratio) => rec
+            .extensometer_gauge_length()
+            .map(|(g, _, _)| g)
+            .or(rec.specimen.free_length_m)
+            .map(|_| 1.0),
+        Some(cablab_ingest::units::Dimension::Length) => Some(1.0),
+        _ => None,
+    };
     // The window pair with the largest rise of the control's rate, the force's kept.
     let mut best: Option<(f64, usize, f64, f64)> = None;
     for i in w..=peak - w {
@@ -1349,7 +1362,18 @@ pub fn strain_follows_crosshead(rec: &TestRecord, curve: &mut Curve) -> Option<S
         }
         let rise = b / a;
         let kept = fb / fa;
-        if rise >= 5.0 && (0.5..=2.0).contains(&kept) && best.is_none_or(|bb| rise > bb.0) {
+        // The software continues the strain as crosshead over the specimen's length (a travel
+        // as the crosshead itself): where the file states that length, the new rate must be
+        // it. A yield point's Lüders band running through the gauge length makes the strain
+        // race ahead too, at many times that rate, and the hardening after it brings the force
+        // rate back to half the elastic one (a real steel 1045 export, 30× the crosshead's
+        // strain rate: its whole plastic range was cut off as an "extensometer taken off").
+        let continues = follow.is_none_or(|f| (0.7..=1.4).contains(&(b / f)));
+        if rise >= 5.0
+            && (0.5..=2.0).contains(&kept)
+            && continues
+            && best.is_none_or(|bb| rise > bb.0)
+        {
             best = Some((rise, i, a, b));
         }
     }
@@ -1584,12 +1608,17 @@ pub fn read_test(
         .extend(unitless_control_warning(&rec, kind, &geom));
     said.warnings
         .extend(gauge_length_warning(&rec, kind, &geom));
-    said.warnings.extend(given_geometry_warning(
-        &rec,
-        kind,
-        mm(t.length_mm),
-        mm(t.diameter_mm),
-    ));
+    // A flag that contradicts the file's own geometry is an error unless forced
+    // (CONTRACT.md), as a contradicting --kind is.
+    let contradicted = given_geometry_warning(&rec, kind, mm(t.length_mm), mm(t.diameter_mm));
+    if !contradicted.is_empty() && !t.force_geometry {
+        bail!(
+            "{}: {}. If the file is right, leave the flag out; if the flag is right, pass --force-geometry",
+            rec.provenance.path,
+            contradicted.join("; ")
+        );
+    }
+    said.warnings.extend(contradicted);
     let mut curve = curve(&rec)?;
     said.notes.extend(unwrap_turns(&rec, &mut curve));
     said.notes.extend(sectional_control(
@@ -2004,7 +2033,8 @@ pub fn check_kind(rec: &TestRecord, kind: TestKind, force: bool) -> Result<Optio
         )
     }
     bail!(
-        "{file}: declared kind {} contradicts the file: {evidence}. If the file is right, give its kind; if the kind is right, pass --force-kind (pipelines: force_kind = true)",
+        "{file}: declared kind {} contradicts the file: {evidence}. If the file is right, give its kind; if the kind is right, pass --force-kind (in a pipeline: force_kind = true under [kinds.{}])",
+        kind.as_str(),
         kind.as_str()
     )
 }
@@ -2022,6 +2052,46 @@ fn show(c: &cablab_ingest::Channel) -> String {
     )
 }
 
+/// A length channel named as the specimen's (testXpert's `Standard travel` beside a crosshead
+/// channel) that moves one for one with a machine travel channel of the file: least-squares
+/// slope within 3 % of 1 and r ≥ 0.999 over the rows where both are numbers. An extensometer
+/// over a gauge length moves less than the crosshead (the rest of the specimen and the load
+/// train stretch too: 0.56 of it on a testXpert 316L export); one that moves as much is the
+/// crosshead by another name (a testXpert Invar export: `Standard travel` equal to `Crosshead
+/// absolute` within 0.01 mm, r = 0.99998; its modulus 81 GPa for Invar's 140). Returns the
+/// evidence.
+fn moves_with_crosshead(rec: &TestRecord, i: usize) -> Option<String> {
+    use cablab_ingest::units::Dimension;
+    if rec.channels[i].dimension != Some(Dimension::Length) {
+        return None;
+    }
+    let xi = rec.values(i)?;
+    (0..rec.channels.len())
+        .filter(|&k| k != i)
+        .filter(|&k| rec.channels[k].dimension == Some(Dimension::Length))
+        .filter(|&k| rec.mount(k) == cablab_ingest::Mount::Machine)
+        .find_map(|k| {
+            let xk = rec.values(k)?;
+            let (a, b): (Vec<f64>, Vec<f64>) = xi
+                .iter()
+                .zip(&xk)
+                .filter(|(u, v)| u.is_finite() && v.is_finite())
+                .map(|(u, v)| (*v, *u))
+                .unzip();
+            if a.len() < 20 {
+                return None;
+            }
+            let fit = cablab_measure::stats::linear_fit(&a, &b).ok()?;
+            let r = fit.r2.max(0.0).sqrt();
+            ((fit.slope - 1.0).abs() <= 0.03 && r >= 0.999).then(|| {
+                format!(
+                    "it moves one for one with the machine travel '{}' (slope {:.3}, r = {:.5}): an extensometer over a gauge length moves less than the crosshead, so this is the crosshead's travel by another name",
+                    rec.channels[k].name, fit.slope, r
+                )
+            })
+        })
+}
+
 /// Words of a file name that say its displacement is the machine's (the `mechanical_testing`
 /// pair `…_machine.csv` / `…_extensometer.csv`, `…_crosshead…`).
 const MACHINE_FILE_WORDS: &[&str] = &["machine", "crosshead", "traverse", "actuator", "stroke"];
@@ -2031,6 +2101,11 @@ const MACHINE_FILE_WORDS: &[&str] = &["machine", "crosshead", "traverse", "actua
 pub fn control_mount(rec: &TestRecord, i: usize) -> (cablab_ingest::Mount, Option<String>) {
     use cablab_ingest::Mount;
     let m = rec.mount(i);
+    if m == Mount::Specimen {
+        if let Some(words) = moves_with_crosshead(rec, i) {
+            return (Mount::Machine, Some(words));
+        }
+    }
     if m != Mount::Unknown {
         return (m, None);
     }

@@ -159,8 +159,9 @@ pub struct ReaderArgs {
 /// What folder mode (`run PATH...`, `init PATH...`) may not infer from the files themselves.
 #[derive(Debug, Clone, Args, Default)]
 pub struct InferArgs {
-    /// Campaign name (report folder reports/<NAME>/; default: the first folder's name).
-    #[arg(long, value_name = "NAME")]
+    /// Campaign name (report folder reports/<NAME>/; default: the folder's name, a file's folder
+    /// and stem, or the first path's and how many more).
+    #[arg(long, value_name = "NAME", value_parser = campaign_name_arg)]
     pub name: Option<String>,
     /// Test kind of every file whose metadata, channels and name do not say it.
     #[arg(long, value_name = "KIND")]
@@ -320,6 +321,10 @@ pub struct TestArgs {
     /// as a warning.
     #[arg(long)]
     pub force_kind: bool,
+    /// Take --length-mm / --diameter-mm even where the file states another value (its metadata's
+    /// length, span, diameter or cross-section); the contradiction is then kept as a warning.
+    #[arg(long)]
+    pub force_geometry: bool,
     #[command(flatten)]
     pub reader: ReaderArgs,
 }
@@ -538,4 +543,16 @@ pub enum BenchWhat {
         #[arg(long, value_name = "DIR")]
         logs: Option<PathBuf>,
     },
+}
+
+/// `--name`: a name with at least one letter or digit (it names the report folder; `.`, `..`
+/// and an empty name would all have become `campaign` without a word).
+fn campaign_name_arg(s: &str) -> Result<String, String> {
+    if s.chars().any(char::is_alphanumeric) {
+        Ok(s.to_string())
+    } else {
+        Err(format!(
+            "{s:?} names no report folder: give a name with letters or digits"
+        ))
+    }
 }

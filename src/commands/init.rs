@@ -964,10 +964,11 @@ pub fn campaign_name(paths: &[PathBuf], d: &InferArgs) -> String {
             n => format!("{}_and_{}_more", own(&p), n - 1),
         }
     });
+    // Letters of any script are kept (`Prüfung Mai 2024` → `Prüfung_Mai_2024`).
     let n: String = raw
         .chars()
         .map(|c| {
-            if c.is_ascii_alphanumeric() || c == '-' || c == '_' {
+            if c.is_alphanumeric() || c == '-' || c == '_' {
                 c
             } else {
                 '_'

@@ -806,7 +806,7 @@ fn validate(file: PipelineFile, path: &Path, bytes: Vec<u8>, root: PathBuf) -> R
             .campaign
             .name
             .chars()
-            .any(|c| !(c.is_ascii_alphanumeric() || c == '-' || c == '_'))
+            .any(|c| !(c.is_alphanumeric() || c == '-' || c == '_'))
     {
         bail!(
             "{}: must be a non-empty folder name of letters, digits, '-' or '_', got {:?}",

@@ -1007,6 +1007,20 @@ fn to_machine_level(
     if let Some(s) = &an.stiffness {
         let f = cablab_measure::sectional::stiffness_factor(kind, geom);
         let unit = machine_stiffness_unit(kind);
+        // The analysis' doubts about the stiffness name it in the sectional unit; with the
+        // 1 m stand-in length its number is the machine stiffness (factor 1), in the
+        // machine's unit (a torsion test's "not positive (-0.447 N m^2)" was N m/rad).
+        if f == 1.0 {
+            let from = format!(" {})", s.unit);
+            let to = format!(" {unit})");
+            for w in out
+                .warnings
+                .iter_mut()
+                .filter(|w| w.starts_with("stiffness:"))
+            {
+                *w = w.replace(&from, &to);
+            }
+        }
         out.machine_stiffness = Some(MachineStiffness {
             value: s.value / f,
             ci95: [s.ci95[0] / f, s.ci95[1] / f],

@@ -273,6 +273,26 @@ pub fn load_shards(c: &Campaign, output: Option<&Path>) -> Result<Shards> {
                     + held.iter().filter(|id| !planned.contains(id)).count()
             ));
         }
+        // An input changed since the shard ran: its results are not the file's any more.
+        for t in s.select(&c.tests) {
+            let Some(o) = r.outcomes.iter().find(|o| o.id == t.id) else {
+                continue;
+            };
+            if o.input_sha256.is_empty() {
+                continue;
+            }
+            match std::fs::read(&t.path) {
+                Ok(b) if sha256_hex(&b) == o.input_sha256 => {}
+                Ok(_) => problems.push(format!(
+                    "input {} changed since shard {name} ran: rerun it",
+                    t.id
+                )),
+                Err(e) => problems.push(format!(
+                    "input {} cannot be read ({e}), shard {name} ran on it: rerun it",
+                    t.id
+                )),
+            }
+        }
         for o in &r.outcomes {
             let from = path.join("tests").join(&o.slug);
             for (file, sha) in &o.files {

@@ -498,13 +498,27 @@ fn convert_writes_si_csv_and_parquet_and_nothing_on_error() {
     let out = run(&["convert", src, "-o", csv.to_str().unwrap()]);
     assert_eq!(out.code, 0, "{}", out.stderr);
     let (header, data) = read_csv(&csv);
-    let names: Vec<&str> = r["channels"]
+    // Each header carries the channel's SI unit, so that the CSV reads back with its units.
+    let names: Vec<String> = r["channels"]
         .as_array()
         .unwrap()
         .iter()
-        .map(|c| c["name"].as_str().unwrap())
+        .map(|c| {
+            let (name, unit) = (c["name"].as_str().unwrap(), c["si_unit"].as_str().unwrap());
+            match unit {
+                "" => name.to_string(),
+                "1" => format!("{name} (m/m)"),
+                u => format!("{name} ({u})"),
+            }
+        })
         .collect();
     assert_eq!(header, names);
+    let back = run_json(&["inspect", csv.to_str().unwrap(), "--json"]);
+    assert!(
+        !back.to_string().contains("has no unit"),
+        "{}",
+        back["warnings"]
+    );
     assert_eq!(data.len(), rows);
     // Every row of this file is complete: first/last are rows 1 and N.
     for (j, c) in r["channels"].as_array().unwrap().iter().enumerate() {
@@ -528,7 +542,7 @@ fn convert_writes_si_csv_and_parquet_and_nothing_on_error() {
         assert!(close(max, num(c, "max"), 1e-12), "{}: CSV max", c["name"]);
     }
     // The MANIFEST's last force, 16.3491 kN, is in N in the CSV.
-    let jf = header.iter().position(|h| h == "Force").unwrap();
+    let jf = header.iter().position(|h| h == "Force (N)").unwrap();
     assert!(close(data[rows - 1][jf].unwrap(), 16349.1, 1e-9));
 
     let pq = dir.path().join("x.parquet");
@@ -545,7 +559,14 @@ fn convert_writes_si_csv_and_parquet_and_nothing_on_error() {
             .iter()
             .map(|s| s.to_string())
             .collect();
-        assert_eq!(cols, header);
+        // The Parquet keeps the plain names (its units are in its key-value metadata).
+        let plain: Vec<String> = r["channels"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|c| c["name"].as_str().unwrap().to_string())
+            .collect();
+        assert_eq!(cols, plain);
         let force = df.column("Force").unwrap().f64().unwrap();
         assert_eq!(force.get(0), data[0][jf]);
         assert_eq!(force.get(rows - 1), data[rows - 1][jf]);

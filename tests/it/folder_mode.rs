@@ -874,9 +874,23 @@ fn a_stated_cross_section_is_not_overridden_by_the_diameter_flag() {
     let ea = v["tests"][0]["stiffness"].as_f64().unwrap();
     assert!((e / (ea / 6.3812e-6) - 1.0).abs() < 1e-6, "E {e}, EA {ea}");
     assert!((e / 214.9e9 - 1.0).abs() < 0.01, "E {e}");
-    // `analyze` takes the flag over the file, and warns with the factor.
+    // `analyze` refuses the flag against the file's own section, naming both (CONTRACT.md: a
+    // flag that contradicts the file is an error unless forced); forced, it takes the flag
+    // over the file and warns with the factor.
     let path = format!("in/{name}");
     let o = run_in(tmp.path(), &["analyze", &path, "--diameter-mm", "5"]);
+    assert_eq!(o.code, 2, "{}", o.stderr);
+    assert!(
+        o.stderr
+            .contains("not the file's own cross-section 6.3812 mm²")
+            && o.stderr.contains("--force-geometry"),
+        "{}",
+        o.stderr
+    );
+    let o = run_in(
+        tmp.path(),
+        &["analyze", &path, "--diameter-mm", "5", "--force-geometry"],
+    );
     assert_eq!(o.code, 0, "{}", o.stderr);
     assert!(
         o.stdout.contains(

@@ -892,3 +892,99 @@ fn a_wintest_scan_clock_gives_way_to_the_elapsed_time_and_the_toe_is_left_out() 
         v["notes"]
     );
 }
+
+/// testXpert's `Standard travel` beside `Crosshead absolute` is read as the extensometer's
+/// (Zwick's convention), unless it moves one for one with the crosshead: then it is the
+/// crosshead by another name (a testXpert Invar export, equal to 0.01 mm; its modulus 81 GPa
+/// for Invar's 140, with a note calling it specimen-mounted). An extensometer that moves 0.56 of
+/// the crosshead stays the specimen's.
+#[test]
+fn a_standard_travel_that_moves_with_the_crosshead_is_machine_travel() {
+    let text = |ratio: f64| {
+        let mut s = String::from(
+            "\"Specimen thickness\",1.5,\"mm\"\n\"Specimen width\",4.89,\"mm\"\n\"Cross-section\",7.335,\"mm²\"\n\"Gage length, standard travel\",30,\"mm\"\n\"Time\",\"Crosshead absolute\",\"Standard travel\",\"Standard force\"\n\"s\",\"mm\",\"mm\",\"N\"\n",
+        );
+        for i in 0..400 {
+            let x = 0.0025 * i as f64;
+            let f = 20_000.0 * x.min(0.4) + 500.0 * (x - 0.4).max(0.0);
+            let wiggle = ((i * 37) % 11) as f64 - 5.0;
+            s += &format!(
+                "{:.3},{:.5},{:.6},{:.3}\n",
+                0.1 * i as f64,
+                1190.55 + x,
+                ratio * x + 1e-6 * wiggle,
+                f + 0.5 * wiggle
+            );
+        }
+        s
+    };
+    let v = analyze_written("invar.TRA", &text(1.0), &["--kind", "tension"]);
+    let said = v["warnings"].to_string();
+    assert!(
+        said.contains("one for one") && said.contains("machine travel"),
+        "{said}"
+    );
+    let v = analyze_written("invar.TRA", &text(0.56), &["--kind", "tension"]);
+    assert!(
+        !v["warnings"].to_string().contains("one for one"),
+        "{}",
+        v["warnings"]
+    );
+    assert!(
+        v["notes"]
+            .to_string()
+            .contains("specimen-mounted 'Standard travel'"),
+        "{}",
+        v["notes"]
+    );
+}
+
+/// A steel with a yield point (Lüders band): the force stays at 17.5 kN while the extensometer's
+/// strain runs from 0.25 % to 0.9 %, then the steel hardens. Against the crosshead, the strain
+/// races ahead at many times its elastic rate — as it does when Bluehill continues a removed
+/// extensometer's strain from the crosshead, for which it was taken (a real steel 1045 export
+/// analysed on its first 54 of 321 rows, "no yield"). A continuation runs at the crosshead's
+/// own strain rate (1 / the length), the band at 30× that: the yield is found at the plateau.
+/// The crosshead moves 30× the gauge length's elongation (the load train's compliance), as there.
+#[test]
+fn a_luders_plateau_is_no_extensometer_taken_off() {
+    let (ea, l0, fy, c_m) = (7.9e6_f64, 25.4e-3_f64, 17_500.0_f64, 9.6e-8_f64);
+    let mut s = String::from(
+        "Time (s),Extension (mm),Load (kN),Strain (mm/mm),Original Length (mm),Original Diameter (mm)\n",
+    );
+    let mut t = 0.0;
+    let mut row = |eps: f64, f: f64, first: bool| {
+        let ext = eps * l0 + c_m * f;
+        let tail = if first { ",25.4,7.08" } else { ",," };
+        s += &format!("{t:.1},{:.4},{:.4},{:.6}{tail}\n", ext * 1e3, f * 1e-3, eps);
+        t += 0.5;
+    };
+    let ey = fy / ea;
+    for i in 0..=60 {
+        let e = ey * i as f64 / 60.0;
+        row(e, ea * e + 30.0 * ((i * 7 % 5) as f64 - 2.0), i == 0);
+    }
+    for i in 1..=20 {
+        row(
+            ey + (0.009 - ey) * i as f64 / 20.0,
+            fy + 40.0 * ((i * 3 % 5) as f64 - 2.0),
+            false,
+        );
+    }
+    for i in 1..=120 {
+        let e = 0.009 + 0.15 * i as f64 / 120.0;
+        row(
+            e,
+            fy + 12_000.0 * (1.0 - (-(e - 0.009) / 0.02).exp()),
+            false,
+        );
+    }
+    let v = analyze_written("steel1045_tension_2.csv", &s, &["--kind", "tension"]);
+    assert!(
+        !v["warnings"].to_string().contains("follows the crosshead"),
+        "{}",
+        v["warnings"]
+    );
+    let y = v["yield"]["response"].as_f64().expect("a yield");
+    assert!((y / fy - 1.0).abs() < 0.05, "yield {y} for {fy}");
+}

@@ -227,6 +227,20 @@ fn merge_refuses_missing_mixed_and_stale_shards_and_changes_nothing() {
         "{e}"
     );
     ok(&run(&["--shard", "2/3", "--no-cache"]));
+    // An input changed after its shard ran (one digit of a raw file): the shard's results are
+    // not that file's any more (the merge took them, and the manifest its old hash).
+    let raw = d.path().join("raw/torsion_360deg_1.dat");
+    let original = std::fs::read(&raw).unwrap();
+    let mut edited = original.clone();
+    let at = edited.len() - 5;
+    edited[at] = if edited[at] == b'1' { b'2' } else { b'1' };
+    std::fs::write(&raw, &edited).unwrap();
+    let e = refused(merge());
+    assert!(
+        e.contains("input raw/torsion_360deg_1.dat changed since shard"),
+        "{e}"
+    );
+    std::fs::write(&raw, &original).unwrap();
     // Nothing was merged and the refused shards are untouched.
     assert!(!report(d.path()).join("index.html").exists());
     let after = tree(&shards);

@@ -292,8 +292,21 @@ fn specimens_a_sheet_each_are_a_test_each() {
         "{}",
         v["notes"]
     );
-    // A length given against the sheet's own is used, and said to be not the file's.
-    let (_, v, _) = analyze_json(&x, &["--sheet", "Specimen 1", "--length-mm", "110"]);
+    // A length given against the sheet's own is refused unless forced; forced, it is used,
+    // and said to be not the file's.
+    let (code, _, err) = analyze_json(&x, &["--sheet", "Specimen 1", "--length-mm", "110"]);
+    assert_eq!(code, Some(2), "{err}");
+    assert!(err.contains("--force-geometry"), "{err}");
+    let (_, v, _) = analyze_json(
+        &x,
+        &[
+            "--sheet",
+            "Specimen 1",
+            "--length-mm",
+            "110",
+            "--force-geometry",
+        ],
+    );
     let ea = v["stiffness"]["value"].as_f64().unwrap();
     assert!((ea / 1.1e4 - 1.0).abs() < 0.005, "{ea}");
     assert!(

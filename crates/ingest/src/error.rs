@@ -128,7 +128,7 @@ pub enum IngestError {
         available: String,
     },
     /// `--block` is out of range.
-    #[error("{file}: block {requested} requested but the file has {available} data block(s)")]
+    #[error("{file}: block {requested} requested but the file has {available} data block(s), counted from 1")]
     BlockOutOfRange {
         /// File path or label.
         file: String,

@@ -1601,6 +1601,18 @@ impl TestRecord {
     pub fn write_csv(&self, path: &Path) -> Result<(), IngestError> {
         use polars_io::prelude::SerWriter;
         let mut df = self.data.clone();
+        // Each channel's header carries its SI unit (`Time (s)`, `Force (N)`, a strain's
+        // `(m/m)`), so that the file reads back with its units, as any export does; a channel
+        // without a unit keeps its name.
+        for c in &self.channels {
+            let unit = match c.si_unit.as_str() {
+                "" => continue,
+                // A ratio (a strain) as a unit the reader knows, not a bare "(1)".
+                "1" => "m/m",
+                u => u,
+            };
+            let _ = df.rename(&c.name, format!("{} ({unit})", c.name).into());
+        }
         atomic_write(path, |f| {
             let mut w = std::io::BufWriter::new(f);
             polars_io::prelude::CsvWriter::new(&mut w)

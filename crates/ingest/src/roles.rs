@@ -257,6 +257,13 @@ pub const CROSSHEAD_WORDS: &[&str] = &[
     "kolben",
     "standardwegaufnehmer",
     "extension",
+    // testXpert's nominal strain is the grip-to-grip separation's change (in mm or %).
+    "nominal strain",
+    "nominelle dehnung",
+    "déformation nominale",
+    "allongement nominal",
+    "grip to grip",
+    "grip separation",
 ];
 
 /// Zwick testXpert's "standard travel" in German, English and French.

@@ -1568,9 +1568,10 @@ fn key_value(cells: &[String], raw: &[u8]) -> Option<(String, String)> {
                         && b.get(i + 1).is_some_and(u8::is_ascii_digit))
             });
             match colon {
-                Some(p) if p > 0 => {
-                    Some((one[..p].trim().to_string(), one[p + 1..].trim().to_string()))
-                }
+                Some(p) if p > 0 => Some((
+                    uncommented(&one[..p]).to_string(),
+                    one[p + 1..].trim().to_string(),
+                )),
                 _ => Some((one.trim().to_string(), String::new())),
             }
         }
@@ -1579,10 +1580,23 @@ fn key_value(cells: &[String], raw: &[u8]) -> Option<(String, String)> {
                 .trim_start_matches('\u{feff}')
                 .trim()
                 .trim_end_matches(':')
-                .trim()
-                .to_string();
-            Some((key, rest.join(" ")))
+                .trim();
+            Some((uncommented(key).to_string(), rest.join(" ")))
         }
+    }
+}
+
+/// A metadata key without the comment marker a logger or script put before it (`# Länge [mm]`,
+/// `% Diameter`, `// Span`): the key the geometry and kind lookups know. A key that is nothing
+/// but markers stays as it is.
+fn uncommented(key: &str) -> &str {
+    let k = key
+        .trim()
+        .trim_start_matches(|c: char| matches!(c, '#' | '%' | '!' | '/') || c.is_whitespace());
+    if k.is_empty() {
+        key.trim()
+    } else {
+        k
     }
 }
 
@@ -1608,6 +1622,18 @@ mod tests {
         assert_eq!(
             kv("Date: 10/23/2023 6:17:42 PM"),
             Some(("Date".into(), "10/23/2023 6:17:42 PM".into()))
+        );
+        // A comment marker before the key is not part of it.
+        assert_eq!(
+            kv("# Länge [mm]: 80"),
+            Some(("Länge [mm]".into(), "80".into()))
+        );
+        assert_eq!(
+            key_value(
+                &["% Durchmesser".into(), "1,6".into()],
+                b"% Durchmesser;1,6"
+            ),
+            Some(("Durchmesser".into(), "1,6".into()))
         );
     }
 

@@ -1564,3 +1564,27 @@ fn after_a_fracture_the_pieces_make_no_cycles_and_no_relaxation() {
         a.warnings
     );
 }
+
+/// A machine compliance given beyond the whole compliance the record measures (a cable of
+/// EA = 8e4 N over 32 mm: 4e-7 m/N) leaves the specimen nothing, and the stiffness comes out
+/// negative: a warning says why; a compliance below it says nothing.
+#[test]
+fn a_compliance_beyond_the_whole_record_is_warned() {
+    let (ea, l0) = (8.0e4, 0.032);
+    let geom = Geometry {
+        free_length_m: l0,
+        diameter_m: Some(2.8e-3),
+    };
+    let mut law = Law1D::elastic(ea);
+    let (c, r) = drive(&[0.0, 1.2e-3 * l0, 0.0], 400, 0, 1.0 / l0, &mut law);
+    let (c, r) = noisy(&c, &r, 0.002, 4500);
+    for (k, said) in [(1e-5, true), (1e-8, false)] {
+        let opts = AnalyzeOptions {
+            compliance_m_per_n: Some(k),
+            ..AnalyzeOptions::default()
+        };
+        let a = analyze(TestKind::Tension, &geom, None, &c, &r, &opts).unwrap();
+        let warned = a.warnings.iter().any(|w| w.contains("compliance given"));
+        assert_eq!(warned, said, "{k}: {:?}", a.warnings);
+    }
+}

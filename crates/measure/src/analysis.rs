@@ -782,6 +782,20 @@ pub fn analyze(
         Some(k) => return Err(MeasureError::BadCompliance(k)),
         None => control.to_vec(),
     };
+    // A compliance at least the whole of what the record measures, from its start to its
+    // largest response, leaves the specimen nothing: its control runs backwards under load.
+    if let Some(k) = opts.compliance_m_per_n.filter(|k| *k > 0.0) {
+        let kp = (0..response.len())
+            .max_by(|&a, &b| response[a].abs().total_cmp(&response[b].abs()))
+            .unwrap_or(0);
+        let (dc, dr) = (control[kp] - control[0], response[kp] - response[0]);
+        let measured = dc / dr;
+        if dr != 0.0 && measured > 0.0 && k >= measured {
+            warnings.push(format!(
+                "the machine compliance given, {k:.4e}, is at least the whole compliance the record measures from its start to its largest response ({measured:.4e}, control per response): taken off, it leaves the specimen no deformation, and the control runs backwards under load"
+            ));
+        }
+    }
     let mut r = response.to_vec();
     // Each channel's noise scales are computed once per state of its samples (as read, after
     // glitches are replaced, after the offsets are taken off) and handed to every step.
@@ -1403,7 +1417,7 @@ pub fn analyze(
         (Some(Ok((v, rule))), Some(e)) => {
             why.remove("yield");
             match offset_yield(&fx, &fy, &e.fit, v, e.window_idx.0) {
-                Some((x, y, xr)) => {
+                Some((x, y, xr, yr)) => {
                     let (xs_, xr_) = (from_fit_x(x), [from_fit_x(xr[0]), from_fit_x(xr[1])]);
                     let (cycle, branch) = label_at(&segments, &env_idx, &fw, xs_);
                     let ci = if sign > 0.0 { xr_ } else { [-xr_[1], -xr_[0]] };
@@ -1411,7 +1425,18 @@ pub fn analyze(
                         control: sign * xs_,
                         response: sign * y,
                         control_ci95: ci,
-                        response_ci95: [sign * y, sign * y],
+                        // The elastic line's slope interval moves the crossing along the
+                        // curve; the response's own noise widens it (a 0-wide interval
+                        // excluded every truth).
+                        response_ci95: {
+                            let z = 1.96 * noise.response;
+                            let (lo, hi) = (yr[0] - z, yr[1] + z);
+                            if sign > 0.0 {
+                                [lo, hi]
+                            } else {
+                                [-hi, -lo]
+                            }
+                        },
                         machine_control: sign * machine_of(xs_),
                         peak_curvature: three.then(|| sign * three_point_peak_curvature(xs_, l0)),
                         peak_moment: three.then(|| sign * three_point_peak_moment(y, l0)),
@@ -2370,14 +2395,14 @@ fn label_at(segments: &[Segment], env_idx: &[usize], fw: &[f64], x: f64) -> (usi
 /// Offset yield on the envelope (x, y) from the elastic `fit`: the first crossing, after the
 /// window start `from`, of y below the line y = a + k (x − offset), interpolated; with the
 /// crossings of the lines whose slopes are the ends of the slope's 95 % interval (through the
-/// same zero crossing) as the range of x.
+/// same zero crossing) as the ranges of x and y.
 fn offset_yield(
     x: &[f64],
     y: &[f64],
     fit: &crate::stats::Fit,
     offset: f64,
     from: usize,
-) -> Option<(f64, f64, [f64; 2])> {
+) -> Option<(f64, f64, [f64; 2], [f64; 2])> {
     let x0 = fit.x_intercept()?;
     let cross = |k: f64| -> Option<(f64, f64)> {
         let g = |i: usize| y[i] - k * (x[i] - x0 - offset);
@@ -2390,9 +2415,14 @@ fn offset_yield(
         ))
     };
     let (xc, yc) = cross(fit.slope)?;
-    let a = cross(fit.slope_ci95[0]).map_or(xc, |p| p.0);
-    let b = cross(fit.slope_ci95[1]).map_or(xc, |p| p.0);
-    Some((xc, yc, [a.min(b).min(xc), a.max(b).max(xc)]))
+    let a = cross(fit.slope_ci95[0]).unwrap_or((xc, yc));
+    let b = cross(fit.slope_ci95[1]).unwrap_or((xc, yc));
+    Some((
+        xc,
+        yc,
+        [a.0.min(b.0).min(xc), a.0.max(b.0).max(xc)],
+        [a.1.min(b.1).min(yc), a.1.max(b.1).max(yc)],
+    ))
 }
 
 /// The break of an oriented test (`cm`, `rm`: control and response with the first motion
