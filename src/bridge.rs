@@ -943,7 +943,16 @@ pub fn given_geometry_warning(
 ) -> Vec<String> {
     let off = |given: f64, own: f64| (given / own - 1.0).abs() > 0.01;
     let mut out = Vec::new();
-    if let (Some(l), Some(own)) = (length_m, rec.specimen.free_length_m) {
+    // A control that is already the sectional variable (a strain in tension, a curvature in
+    // pure bending, a surface shear strain in torsion) takes no length: a given one changes
+    // nothing the file's would give.
+    let length_free = match kind {
+        TestKind::Tension => strain_control(rec),
+        TestKind::PureBending => curvature_control(rec),
+        TestKind::Torsion => shear_strain_control(rec),
+        _ => false,
+    };
+    if let (Some(l), Some(own), false) = (length_m, rec.specimen.free_length_m, length_free) {
         let gauge = rec.extensometer_gauge_length().map(|(g, _, _)| g);
         if off(l, own) && gauge.is_none_or(|g| off(l, g)) {
             let what = if kind == TestKind::ThreePoint {

@@ -987,4 +987,16 @@ fn a_luders_plateau_is_no_extensometer_taken_off() {
     );
     let y = v["yield"]["response"].as_f64().expect("a yield");
     assert!((y / fy - 1.0).abs() < 0.05, "yield {y} for {fy}");
+    // Its control is a strain: a length given against the file's 25.4 mm changes nothing and
+    // is not refused as a contradiction (it was, with a ratio the stiffness does not have).
+    let w = analyze_written(
+        "steel1045_tension_2.csv",
+        &s,
+        &["--kind", "tension", "--length-mm", "30"],
+    );
+    let (a, b) = (
+        w["stiffness"]["value"].as_f64().unwrap(),
+        v["stiffness"]["value"].as_f64().unwrap(),
+    );
+    assert!((a / b - 1.0).abs() < 1e-12, "{a} against {b}");
 }

@@ -1469,6 +1469,30 @@ fn a_load_controlled_first_ramp_through_yield_keeps_its_elastic_part() {
         );
         let y = a.yield_point.as_ref().expect("a yield").response;
         assert!(rel_err(y, fy) < 0.03, "{fs} Hz: yield {y} for {fy}");
+        // The first unloading is fitted from its turning point, not from the loading's last
+        // step before it (a yielding wire's, which made it negative and "disagree").
+        let fu = a
+            .stiffness
+            .as_ref()
+            .unwrap()
+            .first_unloading
+            .as_ref()
+            .unwrap();
+        assert!(rel_err(fu.value, k) < 0.02, "{fs} Hz: {fu:?}");
+        assert!(
+            !a.warnings.iter().any(|w| w.contains("disagree")),
+            "{:?}",
+            a.warnings
+        );
+        let unloadings: Vec<f64> = a
+            .cycles
+            .iter()
+            .filter_map(|c| c.unloading_stiffness)
+            .collect();
+        assert!(unloadings.len() >= 10, "{fs} Hz: {unloadings:?}");
+        for u in unloadings {
+            assert!(rel_err(u, k) < 0.1, "{fs} Hz: unloading {u}");
+        }
     }
 }
 

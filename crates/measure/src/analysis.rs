@@ -1830,7 +1830,8 @@ fn first_unloading_fit(
     let s = segments
         .iter()
         .find(|s| s.cycle == 1 && s.branch == Branch::Unloading)?;
-    let (a, b) = (s.start.saturating_sub(1), s.end);
+    let b = s.end;
+    let a = crate::hysteresis::turn_of(x, s.start.saturating_sub(1), b);
     if !(x[a] <= top) {
         return None;
     }

@@ -125,6 +125,16 @@ fn first_run(segs: &[Segment], cycle: usize, branch: Branch) -> Option<(usize, u
         .map(|s| (s.start.saturating_sub(1), s.end))
 }
 
+/// The turning point a branch run `a..b` starts from: `a` (the sample before its segment) or
+/// the segment's own first sample, whichever lies further from zero.
+pub(crate) fn turn_of(x: &[f64], a: usize, b: usize) -> usize {
+    if a + 1 < b && x[a + 1].abs() > x[a].abs() {
+        a + 1
+    } else {
+        a
+    }
+}
+
 /// ∫ y dx of the linear interpolant of (x, y) (sorted by x here) from lo to hi.
 fn integrate(points: &mut [(f64, f64)], lo: f64, hi: f64) -> f64 {
     points.sort_by(|a, b| a.0.total_cmp(&b.0));
@@ -204,6 +214,10 @@ pub fn cycles(inp: &CycleInputs) -> Vec<CycleResult> {
             why_by_key: BTreeMap::new(),
         };
         if let Some((ua, ub)) = unload_run {
+            // From the turning point: the run starts a sample before its segment (for the
+            // loop), which under load control is still far up the loading (a yielding wire's
+            // last step before the reversal: the unloading "stiffness" came out negative).
+            let ua = turn_of(inp.sectional, ua, ub);
             let ux = &inp.sectional[ua..ub];
             let uy = &inp.response[ua..ub];
             // Unloading stiffness: initial straight part, while the response is still positive.
