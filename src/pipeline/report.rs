@@ -450,15 +450,16 @@ pub fn html(
     }
     let failed = outcomes.iter().filter(|o| o.error.is_some()).count();
     let model_failed = outcomes.iter().filter(|o| o.model_error.is_some()).count();
+    let types = {
+        let mut s: Vec<&str> = outcomes.iter().map(|o| o.specimen.as_str()).collect();
+        s.sort();
+        s.dedup();
+        s.len()
+    };
     let mut summary = vec![format!(
-        "{} tests of {} specimen types; {} evaluated, {} failed{}.",
-        outcomes.len(),
-        {
-            let mut s: Vec<&str> = outcomes.iter().map(|o| o.specimen.as_str()).collect();
-            s.sort();
-            s.dedup();
-            s.len()
-        },
+        "{} of {types} specimen type{}; {} evaluated, {} failed{}.",
+        crate::commands::run::tests_word(outcomes.len()),
+        if types == 1 { "" } else { "s" },
         outcomes.len() - failed,
         failed,
         if model_failed > 0 {

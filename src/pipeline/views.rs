@@ -75,7 +75,16 @@ pub fn curve_svg(
     let x = plot_x(kind, geom, &curve.control);
     let y = &curve.response;
     let stride = n.div_ceil(MAX_PLOT_POINTS).max(1);
-    let labels = cablab_measure::labels(&an.segments, n);
+    let mut labels = cablab_measure::labels(&an.segments, n);
+    // After a break the samples belong to the cycle it broke in (the analysis reports no
+    // cycles of the pieces): the legend does not list them as cycles of their own.
+    if let Some(b) = &an.break_point {
+        if let Some(cb) = labels.get(b.sample).map(|l| l.cycle) {
+            for l in labels.iter_mut().skip(b.sample) {
+                l.cycle = l.cycle.min(cb);
+            }
+        }
+    }
     let mut cycles: Vec<CycleSeries> = Vec::new();
     let mut loops = Vec::new();
     let mut i = 0;
