@@ -1046,3 +1046,67 @@ fn folder_mode_types_follow_the_labels_and_pool_measured_diameters() {
         assert!((e * area / ea - 1.0).abs() < 1e-6, "{t}");
     }
 }
+
+/// Outputs a user names by mistake are kept, and contradictions are said: `convert -o` onto
+/// another raw export is refused without `--force` (it was overwritten, exit 0); `convert
+/// --kind` against the file's own kind is refused without `--force-kind` (the Parquet's metadata
+/// got the wrong kind), `inspect --kind` shows it with a warning; a run over one file of a folder
+/// gets a report folder of its own (it replaced the folder's); `--name ..` is refused.
+#[test]
+fn a_mistyped_output_or_kind_destroys_nothing() {
+    let tmp = tempfile::tempdir().unwrap();
+    let src = root().join("raw_data/cable");
+    for f in ["tension_100N_1.csv", "tension_40N_2.csv"] {
+        copy(&src.join(f), &tmp.path().join("cable").join(f));
+    }
+    let other = tmp.path().join("cable/tension_40N_2.csv");
+    let before = std::fs::read(&other).unwrap();
+    let r = run_in(
+        tmp.path(),
+        &[
+            "convert",
+            "cable/tension_100N_1.csv",
+            "-o",
+            "cable/tension_40N_2.csv",
+        ],
+    );
+    assert_eq!(r.code, 2, "{}", r.stderr);
+    assert!(r.stderr.contains("--force"), "{}", r.stderr);
+    assert_eq!(std::fs::read(&other).unwrap(), before);
+    let r = run_in(
+        tmp.path(),
+        &[
+            "convert",
+            "cable/tension_100N_1.csv",
+            "--kind",
+            "torsion",
+            "-o",
+            "k.parquet",
+        ],
+    );
+    assert_eq!(r.code, 2, "{}", r.stderr);
+    assert!(r.stderr.contains("contradicts the file"), "{}", r.stderr);
+    assert!(!tmp.path().join("k.parquet").exists());
+    let r = run_in(
+        tmp.path(),
+        &["inspect", "cable/tension_100N_1.csv", "--kind", "torsion"],
+    );
+    assert_eq!(r.code, 0, "{}", r.stderr);
+    assert!(r.stderr.contains("contradicts the file"), "{}", r.stderr);
+    let r = run_in(tmp.path(), &["run", "cable", "-q", "--no-diagnosis"]);
+    assert_eq!(r.code, 0, "{}", r.stderr);
+    let r = run_in(
+        tmp.path(),
+        &["run", "cable/tension_100N_1.csv", "-q", "--no-diagnosis"],
+    );
+    assert_eq!(r.code, 0, "{}", r.stderr);
+    let n = |name: &str| -> u64 {
+        let p = tmp.path().join("reports").join(name).join("summary.json");
+        let v: Value = serde_json::from_slice(&std::fs::read(p).unwrap()).unwrap();
+        v["n_tests"].as_u64().unwrap()
+    };
+    assert_eq!(n("cable"), 2);
+    assert_eq!(n("cable_tension_100N_1"), 1);
+    let r = run_in(tmp.path(), &["run", "cable", "--name", ".."]);
+    assert_eq!(r.code, 2, "{}", r.stderr);
+}
