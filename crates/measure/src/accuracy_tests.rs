@@ -392,6 +392,19 @@ fn bowden_piecewise_threshold() {
                 "{:?}",
                 a.warnings
             );
+            // Asked for an offset yield, the reversible bend gives none either: the offset
+            // line crosses the second slope, which is no plastic strain.
+            let offset = AnalyzeOptions {
+                yield_method: crate::analysis::YieldMethod::OffsetDefault,
+                ..AnalyzeOptions::default()
+            };
+            let o = analyze(TestKind::PureBending, &geom, None, &c, &r, &offset).unwrap();
+            assert!(o.yield_point.is_none(), "{:?}", o.yield_point);
+            assert!(
+                o.why_by_key["yield"].contains("reversible"),
+                "{:?}",
+                o.why_by_key
+            );
         }
     }
 }

@@ -1414,6 +1414,15 @@ pub fn analyze(
             why.insert("yield".into(), format!("offset yield: {reason}"));
             None
         }
+        // A reversible bend is a threshold, not a yield: an offset line crosses the curve above
+        // it all the same (a Bowden cable's second slope), which is no plastic strain.
+        (Some(Ok(_)), Some(_)) if behaviour == Behaviour::PiecewiseLinearElastic => {
+            why.insert(
+                "yield".into(),
+                "offset yield: the bend is reversible (piecewise linear elastic: the unloading retraces the loading), so the offset line's crossing is no plastic strain; the threshold is reported under piecewise".into(),
+            );
+            None
+        }
         (Some(Ok((v, rule))), Some(e)) => {
             why.remove("yield");
             match offset_yield(&fx, &fy, &e.fit, v, e.window_idx.0) {
