@@ -1050,6 +1050,14 @@ pub fn render(s: &Survey, name: &str, root: Option<&str>, command: &str, gaps: G
             q(r)
         );
     }
+    // The files left out, as data too: the summary lists them beside the tests.
+    if !s.skipped.is_empty() {
+        let _ = writeln!(t, "left_out = [");
+        for (p, why) in &s.skipped {
+            let _ = writeln!(t, "  {{ path = {}, why = {} }},", q(&rel(p)), q(why));
+        }
+        let _ = writeln!(t, "]");
+    }
     // Specimen types.
     let mut types: BTreeMap<String, (f64, String, bool)> = BTreeMap::new();
     for f in &s.found {

@@ -53,7 +53,13 @@ pub fn run(a: RunArgs) -> CmdResult {
         campaign.file.campaign.name,
         tests_word(campaign.tests.len()),
     );
-    for (id, why) in &campaign.skipped {
+    // Folder mode said already which files it left out (`[campaign] left_out`).
+    let said = if folder_mode {
+        campaign.file.campaign.left_out.len()
+    } else {
+        0
+    };
+    for (id, why) in campaign.skipped.iter().skip(said) {
         eprintln!("cablab: skipped {id}: {why}");
     }
     if folder_mode && a.shard.is_some() {

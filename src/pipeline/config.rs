@@ -57,6 +57,21 @@ pub struct CampaignSection {
     /// Poisson ratio for moduli from stiffnesses (the chapter: 0.5).
     #[serde(default = "default_nu")]
     pub nu: f64,
+    /// Files folder mode found but left out (no kind stated, not a test export), with why:
+    /// listed in the summary's `skipped` beside the ones the inputs skip, so that a script sees
+    /// every file that was not evaluated, and kept in the pipeline so that `verify` does too.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub left_out: Vec<LeftOut>,
+}
+
+/// `[campaign] left_out`: a file left out and why.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct LeftOut {
+    /// The file, as folder mode reached it.
+    pub path: String,
+    /// Why it was left out.
+    pub why: String,
 }
 
 fn default_nu() -> f64 {
@@ -959,7 +974,12 @@ fn validate(file: PipelineFile, path: &Path, bytes: Vec<u8>, root: PathBuf) -> R
     };
     let out_abs = crate::commands::canonical_or_absolute(&out_dir);
     let mut tests = Vec::new();
-    let mut skipped = Vec::new();
+    let mut skipped: Vec<(String, String)> = file
+        .campaign
+        .left_out
+        .iter()
+        .map(|l| (l.path.clone(), l.why.clone()))
+        .collect();
     let mut seen = std::collections::BTreeSet::new();
     for (gi, g) in file.inputs.iter().enumerate() {
         let gctx = format!("{ctx}: input #{} (glob {:?})", gi + 1, g.glob);

@@ -1110,3 +1110,49 @@ fn a_mistyped_output_or_kind_destroys_nothing() {
     let r = run_in(tmp.path(), &["run", "cable", "--name", ".."]);
     assert_eq!(r.code, 2, "{}", r.stderr);
 }
+
+/// Every file a folder run leaves out is in the summary's `skipped`, with why: a README and an
+/// export that states no kind were only on the terminal and in the kept pipeline's comments
+/// (`skipped: []` beside them). They are kept in the pipeline as `[campaign] left_out`, so that
+/// `verify` reruns to the same summary.
+#[test]
+fn files_a_folder_run_leaves_out_are_in_the_summary() {
+    let tmp = tempfile::tempdir().unwrap();
+    let src = root().join("raw_data/cable");
+    copy(
+        &src.join("tension_100N_1.csv"),
+        &tmp.path().join("lab/tension_100N_1.csv"),
+    );
+    copy(
+        &root().join("raw_data/README.md"),
+        &tmp.path().join("lab/README.md"),
+    );
+    let text = std::fs::read_to_string(src.join("tension_40N_2.csv"))
+        .unwrap()
+        .lines()
+        .filter(|l| !l.starts_with("\"Test type\"") && !l.starts_with("\"Note\""))
+        .collect::<Vec<_>>()
+        .join("\n");
+    std::fs::write(tmp.path().join("lab/sample_7.csv"), text).unwrap();
+    let o = run_in(tmp.path(), &["run", "lab", "-q", "--no-diagnosis"]);
+    assert_eq!(o.code, 0, "{}", o.stderr);
+    let v: Value = serde_json::from_slice(
+        &std::fs::read(tmp.path().join("reports/lab/summary.json")).unwrap(),
+    )
+    .unwrap();
+    let skipped: Vec<&str> = v["skipped"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|s| s["id"].as_str().unwrap())
+        .collect();
+    assert_eq!(
+        skipped,
+        ["lab/README.md", "lab/sample_7.csv"],
+        "{}",
+        v["skipped"]
+    );
+    assert_eq!(v["n_tests"], 1);
+    let o = run_in(tmp.path(), &["verify", "reports/lab"]);
+    assert_eq!(o.code, 0, "{}{}", o.stdout, o.stderr);
+}
