@@ -395,12 +395,7 @@ fn align_sign_of(
         })
         .filter(|&k| {
             let v = rec.values(k).unwrap_or_default();
-            let (x, y): (Vec<f64>, Vec<f64>) = v
-                .iter()
-                .zip(&force)
-                .filter(|(a, b)| a.is_finite() && b.is_finite())
-                .map(|(a, b)| (*a, *b))
-                .unzip();
+            let (x, y) = finite_pairs(&v, &force);
             x.len() >= 3 && rho(&x, &y) > -OPPOSITE_SIGNS_CORRELATION
         })
         .map(|k| format!("'{}'", rec.channels[k].name))
@@ -1351,14 +1346,12 @@ pub fn strain_follows_crosshead(rec: &TestRecord, curve: &mut Curve) -> Option<S
     // (the curve's control is a travel, a strain already times the length,
     // [`sectional_control`]), when that length is the file's own (else the strain was
     // multiplied by a stand-in and the rate is not judged).
-    let follow = match rec.channels[ci].dimension {
-        Some(cablab_ingest::units::Dimension::Ratio) => rec
-            .extensometer_gauge_length()
-            .map(|(g, _, _)| g)
-            .or(rec.specimen.free_length_m)
-            .map(|_| 1.0),
-        Some(cablab_ingest::units::Dimension::Length) => Some(1.0),
-        _ => None,
+    let judged = match rec.channels[ci].dimension {
+        Some(cablab_ingest::units::Dimension::Ratio) => {
+            rec.extensometer_gauge_length().is_some() || rec.specimen.free_length_m.is_some()
+        }
+        Some(cablab_ingest::units::Dimension::Length) => true,
+        _ => false,
     };
     // The window pair with the largest rise of the control's rate, the force's kept.
     let mut best: Option<(f64, usize, f64, f64)> = None;
@@ -1377,7 +1370,7 @@ pub fn strain_follows_crosshead(rec: &TestRecord, curve: &mut Curve) -> Option<S
         // race ahead too, at many times that rate, and the hardening after it brings the force
         // rate back to half the elastic one (a real steel 1045 export, 30× the crosshead's
         // strain rate: its whole plastic range was cut off as an "extensometer taken off").
-        let continues = follow.is_none_or(|f| (0.7..=1.4).contains(&(b / f)));
+        let continues = !judged || (0.7..=1.4).contains(&b);
         if rise >= 5.0
             && (0.5..=2.0).contains(&kept)
             && continues
@@ -2081,12 +2074,7 @@ fn moves_with_crosshead(rec: &TestRecord, i: usize) -> Option<String> {
         .filter(|&k| rec.mount(k) == cablab_ingest::Mount::Machine)
         .find_map(|k| {
             let xk = rec.values(k)?;
-            let (a, b): (Vec<f64>, Vec<f64>) = xi
-                .iter()
-                .zip(&xk)
-                .filter(|(u, v)| u.is_finite() && v.is_finite())
-                .map(|(u, v)| (*v, *u))
-                .unzip();
+            let (a, b) = finite_pairs(&xk, &xi);
             if a.len() < 20 {
                 return None;
             }
@@ -2099,6 +2087,15 @@ fn moves_with_crosshead(rec: &TestRecord, i: usize) -> Option<String> {
                 )
             })
         })
+}
+
+/// The samples where both `x` and `y` are numbers, as two columns.
+fn finite_pairs(x: &[f64], y: &[f64]) -> (Vec<f64>, Vec<f64>) {
+    x.iter()
+        .zip(y)
+        .filter(|(a, b)| a.is_finite() && b.is_finite())
+        .map(|(a, b)| (*a, *b))
+        .unzip()
 }
 
 /// Words of a file name that say its displacement is the machine's (the `mechanical_testing`
@@ -2193,12 +2190,8 @@ pub fn check_roles(
     // A control that is the clock.
     if let (Some(i), Some(t)) = (ci, rec.channel_index(Role::Time)) {
         if let (Some(cv), Some(tv)) = (rec.values(i), rec.values(t)) {
-            let pairs: Vec<(f64, f64)> = cv
-                .iter()
-                .zip(&tv)
-                .filter(|(a, b)| a.is_finite() && b.is_finite())
-                .map(|(a, b)| (*a, *b))
-                .collect();
+            let (cf, tf) = finite_pairs(&cv, &tv);
+            let pairs: Vec<(f64, f64)> = cf.into_iter().zip(tf).collect();
             let range = pairs
                 .iter()
                 .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), p| {
