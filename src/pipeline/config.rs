@@ -188,6 +188,7 @@ impl FileOverride {
             compliance: self.compliance,
             yield_method: self.yield_method.clone(),
             force_kind: None,
+            force_geometry: None,
         }
     }
 }
@@ -212,6 +213,12 @@ pub struct KindSettings {
     /// file name, channel units) contradicts it; the contradiction stays as a warning.
     #[serde(default)]
     pub force_kind: Option<bool>,
+    /// Analyse the files of this kind even where the length or diameter the pipeline gives
+    /// contradicts the file's own (a span, a diameter in its metadata); the contradiction stays
+    /// as a warning. Without it such a test fails, as `analyze --length-mm` does without
+    /// `--force-geometry`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub force_geometry: Option<bool>,
 }
 
 impl KindSettings {
@@ -226,6 +233,7 @@ impl KindSettings {
                 .clone()
                 .or_else(|| self.yield_method.clone()),
             force_kind: over.force_kind.or(self.force_kind),
+            force_geometry: over.force_geometry.or(self.force_geometry),
         }
     }
 

@@ -476,12 +476,20 @@ fn stages(
             .extend(crate::bridge::unitless_control_warning(&rec, t.kind, &g));
         out.warnings
             .extend(crate::bridge::gauge_length_warning(&rec, t.kind, &g));
-        out.warnings.extend(crate::bridge::given_geometry_warning(
-            &rec,
-            t.kind,
-            t.free_length_m,
-            t.diameter_m,
-        ));
+        // A length or diameter that contradicts the file's own is an error unless forced, as
+        // on the command line (a span of 5600 mm for a file's 56 mm went into Table 1 as an
+        // EI 10⁶ times too large, with the run's exit 0).
+        let contradicted =
+            crate::bridge::given_geometry_warning(&rec, t.kind, t.free_length_m, t.diameter_m);
+        if !contradicted.is_empty() && !t.settings.force_geometry.unwrap_or(false) {
+            anyhow::bail!(
+                "{}: {}. If the file is right, leave the length or diameter out of the pipeline (the file's own is used); if the pipeline is right, set force_geometry = true under [kinds.{}]",
+                rec.provenance.path,
+                contradicted.join("; "),
+                t.kind.as_str()
+            );
+        }
+        out.warnings.extend(contradicted);
         (g, f)
     } else {
         let g = cablab_measure::Geometry {

@@ -1156,3 +1156,62 @@ fn files_a_folder_run_leaves_out_are_in_the_summary() {
     let o = run_in(tmp.path(), &["verify", "reports/lab"]);
     assert_eq!(o.code, 0, "{}{}", o.stdout, o.stderr);
 }
+
+/// A pipeline's length that contradicts the file's own span is an error unless forced, as
+/// `analyze --length-mm` is (CONTRACT.md): a new user's mm/cm slip (5600 for the file's 56 mm)
+/// went into Table 1 as an EI 10⁶ times too large, with the run's exit 0 and only a warning on
+/// the test's own page. Forced under `[kinds.three_point]`, the test runs with the warning.
+#[test]
+fn a_pipeline_length_the_file_contradicts_fails_the_test_unless_forced() {
+    let tmp = tempfile::tempdir().unwrap();
+    copy(
+        &root().join("raw_data/cable/three_point_2mm_2.csv"),
+        &tmp.path().join("raw/three_point_2mm_2.csv"),
+    );
+    let toml = |force: &str| {
+        format!(
+            "[campaign]\nname = \"slip\"\n\n[[specimen]]\nlabel = \"cable\"\ndiameter_mm = 2.8\n\n\
+             [[input]]\nglob = \"raw/three_point_2mm_2.csv\"\nspecimen = \"cable\"\n\
+             kind = \"three_point\"\nlength_mm = 5600\n{force}"
+        )
+    };
+    std::fs::create_dir_all(tmp.path().join("pipelines")).unwrap();
+    std::fs::write(tmp.path().join("pipelines/slip.toml"), toml("")).unwrap();
+    let o = run_in(
+        tmp.path(),
+        &["run", "pipelines/slip.toml", "-q", "--no-diagnosis"],
+    );
+    assert_ne!(o.code, 0, "{}", o.stderr);
+    assert!(
+        o.stderr
+            .contains("5600.0000 mm, is not the file's own 56.0000 mm")
+            && o.stderr
+                .contains("force_geometry = true under [kinds.three_point]"),
+        "{}",
+        o.stderr
+    );
+    std::fs::write(
+        tmp.path().join("pipelines/slip.toml"),
+        toml("\n[kinds.three_point]\nforce_geometry = true\n"),
+    )
+    .unwrap();
+    let o = run_in(
+        tmp.path(),
+        &["run", "pipelines/slip.toml", "-q", "--no-diagnosis"],
+    );
+    assert_eq!(o.code, 0, "{}", o.stderr);
+    let v: Value = serde_json::from_slice(
+        &std::fs::read(tmp.path().join("reports/slip/summary.json")).unwrap(),
+    )
+    .unwrap();
+    let page = v["tests"][0]["report"].as_str().unwrap().to_string();
+    let t: Value =
+        serde_json::from_slice(&std::fs::read(tmp.path().join("reports/slip").join(page)).unwrap())
+            .unwrap();
+    assert!(
+        t["warnings"].as_array().is_some_and(|w| w.iter().any(|w| w
+            .as_str()
+            .is_some_and(|s| s.contains("is not the file's own 56.0000 mm")))),
+        "{t}"
+    );
+}

@@ -1221,6 +1221,11 @@ const LENGTH_KEY_GROUPS: [&[&str]; 3] = [
         "free length",
         "freie länge",
         "clamp length",
+        "clamping length",
+        "clamped length",
+        "length between grips",
+        "grip separation",
+        "grip distance",
         "einspannlänge",
         "versuchslänge",
         "test length",
@@ -1245,6 +1250,8 @@ const LENGTH_KEY_GROUPS: [&[&str]; 3] = [
     GAUGE_LENGTH_KEYS,
     &[
         "length",
+        "specimen length",
+        "probenlänge",
         "länge",
         "longitud",
         "lunghezza",
@@ -1419,10 +1426,17 @@ pub(crate) fn specimen_from_metadata(
         .iter()
         .any(|w| nk.contains(w))
     };
+    // A value that is itself a label's key names a field left empty, not a specimen (Bluehill:
+    // `Specimen properties : Specimen label,""` read as the specimen "Specimen label").
+    let names_a_field = |v: &str| {
+        let nv = norm_key(v);
+        label_keys.iter().any(|k| nv == *k)
+    };
     let label = label_keys.iter().find_map(|k| {
         meta.iter().find(|(key, v)| {
             let nk = norm_key(key);
             !v.trim().is_empty()
+                && !names_a_field(v)
                 && !dimension_key(key)
                 && (nk == *k || nk.starts_with(&format!("{k} ")))
         })
@@ -1960,5 +1974,20 @@ mod tests {
         let (s, notes) = specimen_from_metadata(&meta);
         assert!((s.diameter_m.unwrap() - 0.0985).abs() < 1e-12);
         assert_eq!(notes.len(), 1);
+        // testXpert's `Specimen length` and a `Clamping length` (an independent generator's
+        // .TRA: "the free length is missing"); the clamping length is the free length.
+        // An empty label's field name is no label.
+        let (s, _) =
+            specimen_from_metadata(&[("Specimen properties".into(), "Specimen label".into())]);
+        assert_eq!(s.label, None);
+        let (s, _) = specimen_from_metadata(&[("Specimen".into(), "Specimen 3".into())]);
+        assert_eq!(s.label.as_deref(), Some("Specimen 3"));
+        let (s, _) = specimen_from_metadata(&[("Specimen length".into(), "150 mm".into())]);
+        assert!((s.free_length_m.unwrap() - 0.15).abs() < 1e-12);
+        let (s, _) = specimen_from_metadata(&[
+            ("Specimen length".into(), "300 mm".into()),
+            ("Clamping length".into(), "250 mm".into()),
+        ]);
+        assert!((s.free_length_m.unwrap() - 0.25).abs() < 1e-12);
     }
 }

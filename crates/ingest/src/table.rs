@@ -1164,6 +1164,46 @@ impl<'a> Engine<'a> {
                 });
             }
         }
+        // Loggers and exports write a no-data code where a channel has no value (-9999 is the
+        // commonest; LAS's -999.25): a run of them in a force column made a 20 mJ loop out of
+        // a 2 µJ one and a stiffness 10⁴× off, where the same cells written `nan` are read as
+        // missing. A code counts as missing only where it lies beyond twice every other value
+        // of its column (a channel whose data reach it keeps it as a value).
+        let mut coded = 0usize;
+        let mut first: Option<(usize, usize, f64)> = None;
+        for (ci, col) in block.columns.iter_mut().enumerate() {
+            for &code in NO_DATA_CODES {
+                if !col.contains(&code) {
+                    continue;
+                }
+                let others = col
+                    .iter()
+                    .filter(|v| v.is_finite() && **v != code)
+                    .fold(0.0f64, |m, v| m.max(v.abs()));
+                if others >= 0.5 * code.abs() {
+                    continue;
+                }
+                for (row, v) in col.iter_mut().enumerate() {
+                    if *v == code {
+                        *v = f64::NAN;
+                        coded += 1;
+                        if first.is_none_or(|(r, _, _)| row < r) {
+                            first = Some((row, ci, code));
+                        }
+                    }
+                }
+            }
+        }
+        if let Some((row, ci, code)) = first {
+            self.out.warnings.push(Diagnostic {
+                file: src.clone(),
+                line: Some(block.line_of_row(row)),
+                column: Some(ci + 1),
+                message: format!(
+                    "block {idx}: {coded} cell(s) hold the no-data code {code} (beyond twice every other value of their column); read as missing"
+                ),
+            });
+        }
         if let Some((l, what)) = &st.first_switched {
             self.out.warnings.push(Diagnostic {
                 file: src.clone(),
@@ -1484,6 +1524,11 @@ fn align_header(head: &[u8], data: &[u8], n: usize) -> Option<Vec<String>> {
 /// catman's placeholder for a sample a channel does not have.
 const CATMAN_SENTINEL: f64 = -1_000_000.0;
 
+/// No-data codes loggers and exports write in place of a value (see `close_block`).
+const NO_DATA_CODES: &[f64] = &[
+    -9999.0, -99999.0, -999999.0, -999.0, -999.25, 9999.0, 99999.0, 999999.0,
+];
+
 /// A catman time channel's name: a time word, a number, a dash and the sample rate's name
 /// (`Time  1 - default sample rate`, `Zeit  1 - Standardmessrate`).
 pub(crate) fn is_catman_time_name(cell: &str) -> bool {
@@ -1635,6 +1680,38 @@ mod tests {
             ),
             Some(("Durchmesser".into(), "1,6".into()))
         );
+    }
+
+    /// A run of -9999 in a force column (a logger's no-data code; a new user's edit of a
+    /// testXpert export made a 20 mJ loop of a 2 µJ one with it) is read as missing with a
+    /// warning naming the line; a column whose own data reach 9999 keeps it as a value.
+    #[test]
+    fn no_data_codes_beyond_a_column_are_missing() {
+        let mut text = String::from("Time\tForce\tCounts\ns\tN\t1\n");
+        for i in 0..30 {
+            let f = if (10..15).contains(&i) {
+                "-9999".to_string()
+            } else {
+                format!("{}", 3.0 * i as f64)
+            };
+            let counts = if i == 20 { 9999.0 } else { 500.0 * i as f64 };
+            text.push_str(&format!("{}\t{f}\t{counts}\n", 0.1 * i as f64));
+        }
+        let t = read(&text);
+        let b = &t.blocks[0];
+        assert_eq!(b.columns[1].iter().filter(|v| v.is_nan()).count(), 5);
+        assert_eq!(b.columns[1][9], 27.0);
+        assert_eq!(
+            b.columns[2][20], 9999.0,
+            "counts reach 14500: 9999 is a value"
+        );
+        let w: Vec<&Diagnostic> = t
+            .warnings
+            .iter()
+            .filter(|d| d.message.contains("no-data code -9999"))
+            .collect();
+        assert_eq!(w.len(), 1, "{:?}", t.warnings);
+        assert_eq!((w[0].line, w[0].column), (Some(13), Some(2)));
     }
 
     #[test]

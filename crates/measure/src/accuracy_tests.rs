@@ -1418,7 +1418,11 @@ fn a_heating_phase_before_the_loading_is_not_the_elastic_window() {
 /// elastic and runs once it yields, so the first ramp's elastic part moved the control slowly
 /// against the run's mean rate: every three samples of it were a "hold", the stiffness was the
 /// hardening tangent (−95 %), and with no residual at zero load the bend was "reversible". Now:
-/// the stiffness within 1 %, yield within 3 %, elastoplastic, for 20 and 50 samples per second.
+/// the stiffness within 2 % (its interval holding the truth), yield within 3 %, elastoplastic,
+/// for 20 and 50 samples per second. At 10 samples per second (10 per leg) the cycles were one monotonic loading (the jitter read
+/// at lags 1–4 was the legs' own corners: see `condition::short_legs`), and the yield was the
+/// chord between the two samples either side of the bend, 4 % low with an interval 0.4 N wide
+/// (see `corner_above_chord`): now every cycle is found and the yield's interval holds 314 N.
 #[test]
 fn a_load_controlled_first_ramp_through_yield_keeps_its_elastic_part() {
     let (k, fy, h, l0) = (345_575.0, 314.16, 17_300.0, 0.3);
@@ -1436,7 +1440,7 @@ fn a_load_controlled_first_ramp_through_yield_keeps_its_elastic_part() {
             fy / k + (f - fy) / et
         }
     };
-    for (s, fs) in [20.0, 50.0].iter().enumerate() {
+    for (s, fs) in [10.0, 20.0, 50.0].iter().enumerate() {
         let dt = 1.0 / fs;
         let (mut t, mut c, mut r) = (Vec::new(), Vec::new(), Vec::new());
         let mut push = |f: f64, x: f64| {
@@ -1472,16 +1476,28 @@ fn a_load_controlled_first_ramp_through_yield_keeps_its_elastic_part() {
             &AnalyzeOptions::default(),
         )
         .unwrap();
-        let got = a.stiffness.as_ref().unwrap().value;
-        assert!(rel_err(got, k) < 0.01, "{fs} Hz: EA {got:.4e} for {k:.4e}");
+        // The elastic part of the first ramp holds 10–40 samples: within 2 % (its slope's
+        // standard error at 10 samples is 1.4 %), and the interval holds the truth.
+        let st = a.stiffness.as_ref().unwrap();
+        let got = st.value;
+        assert!(rel_err(got, k) < 0.02, "{fs} Hz: EA {got:.4e} for {k:.4e}");
+        assert!(st.ci95[0] <= k && k <= st.ci95[1], "{fs} Hz: {st:?}");
         assert_eq!(
             a.behaviour,
             Behaviour::Elastoplastic,
             "{fs} Hz: {:?}",
             a.notes
         );
-        let y = a.yield_point.as_ref().expect("a yield").response;
-        assert!(rel_err(y, fy) < 0.03, "{fs} Hz: yield {y} for {fy}");
+        let yp = a.yield_point.as_ref().expect("a yield");
+        let y = yp.response;
+        // At 10 Hz the bend falls between a sample at 300 N and one at 320 N: within 5 %.
+        let tol = if *fs < 15.0 { 0.05 } else { 0.03 };
+        assert!(rel_err(y, fy) < tol, "{fs} Hz: yield {y} for {fy}");
+        assert!(
+            yp.response_ci95[0] <= fy && fy <= yp.response_ci95[1],
+            "{fs} Hz: {yp:?}"
+        );
+        assert_eq!(a.cycles.len(), 11, "{fs} Hz: {:?}", a.segments);
         // The first unloading is fitted from its turning point, not from the loading's last
         // step before it (a yielding wire's, which made it negative and "disagree").
         let fu = a

@@ -613,7 +613,9 @@ pub const JITTER_MAX_LAG: usize = 4;
 /// negligible for P ≥ 60.
 ///
 /// Does not look at lags beyond [`JITTER_MAX_LAG`]: curvature grows as k², and a densely
-/// cycled test would read as jitter.
+/// cycled test would read as jitter; nor at lag 4 where the signal's legs (between the turning
+/// points the shorter lags' jitter lets through) last fewer than [`LEG_LAGS`] × 4 samples, and
+/// there the jitter at lags 1 and 2 is read away from those turning points (see [`short_legs`]).
 ///
 pub fn jitter_level(signal: &[f64]) -> f64 {
     ChannelNoise::of(signal).jitter
@@ -648,6 +650,12 @@ impl ChannelNoise {
         let mut k = 1;
         let mut keys = Vec::with_capacity(signal.len());
         while k <= JITTER_MAX_LAG && signal.len() >= 20 * k {
+            if k > 2 {
+                if let Some(corners) = short_legs(signal, sigma, k) {
+                    sigma = corner_free_jitter(signal, &corners, &mut keys).unwrap_or(sigma);
+                    break;
+                }
+            }
             let mad = mad_sigma_at_lag(signal, k, &mut keys);
             if k == 1 {
                 noise = mad;
@@ -668,6 +676,76 @@ impl ChannelNoise {
         }
     }
 }
+
+/// The turning points of `signal` (those its jitter `sigma` over the shorter lags lets through,
+/// see [`reversal_threshold_with`]) when its legs between them last fewer than [`LEG_LAGS`] times
+/// lag `k` (their median); `None` when they last longer. A lag-k second difference of a piecewise
+/// straight signal is not zero within k samples of a corner, so on legs of a few times k most of
+/// them are corners, not jitter: a load-controlled test logged at 10 samples per leg (40 cycles
+/// between 200 and 400 N) read at lag 4 a jitter that put the reversal threshold above the
+/// cycles' own amplitude, and the 40 cycles were one monotonic loading; at lags 1 and 2 its
+/// corners still made the jitter half a leg's step, and the hold before the first ramp swallowed
+/// that ramp's first third (see [`corner_free_jitter`]).
+fn short_legs(signal: &[f64], sigma: f64, k: usize) -> Option<Vec<TurningPoint>> {
+    let mut tps = turning_points(signal, reversal_threshold_with(signal, sigma));
+    if tps.len() < 3 {
+        return None;
+    }
+    let mut legs: Vec<usize> = tps.windows(2).map(|w| w[1].index - w[0].index).collect();
+    let mid = legs.len() / 2;
+    let (_, &mut median, _) = legs.select_nth_unstable(mid);
+    if median >= LEG_LAGS * k {
+        return None;
+    }
+    tps.shrink_to_fit();
+    Some(tps)
+}
+
+/// The jitter of `signal` at lags 1 and 2 as [`jitter_level`] reads it (MAD and trimmed RMS),
+/// from the second differences whose samples lie more than one sample from every turning point
+/// in `corners` (see [`short_legs`]); `None` when fewer than 20 are left at a lag.
+fn corner_free_jitter(
+    signal: &[f64],
+    corners: &[TurningPoint],
+    keys: &mut Vec<u64>,
+) -> Option<f64> {
+    let n = signal.len();
+    // near[i]: sample i within one sample of a turning point; `touched` counts them as a prefix.
+    let mut touched = vec![0usize; n + 1];
+    let mut near = vec![false; n];
+    for c in corners {
+        let end = (c.index + 2).min(n);
+        near[c.index.saturating_sub(1).min(end)..end].fill(true);
+    }
+    for i in 0..n {
+        touched[i + 1] = touched[i] + usize::from(near[i]);
+    }
+    let mut sigma = f64::NAN;
+    for k in [1usize, 2] {
+        if n <= 2 * k {
+            return None;
+        }
+        let d2: Vec<f64> = (0..n - 2 * k)
+            .filter(|&i| touched[i + 2 * k + 1] == touched[i])
+            .map(|i| signal[i + 2 * k] - 2.0 * signal[i + k] + signal[i])
+            .filter(|d| d.is_finite())
+            .collect();
+        if d2.len() < 20 {
+            return None;
+        }
+        keys.clear();
+        keys.extend(d2.iter().map(|&d| total_key(d)));
+        sigma = sigma
+            .max(mad_sigma_of_keys(keys))
+            .max(trimmed_rms(&d2, JITTER_TRIM) / 6f64.sqrt());
+    }
+    Some(sigma)
+}
+
+/// How many lags a signal's median leg must hold for [`jitter_level`] to look at that lag (see
+/// [`short_legs`]): at 6, at most a third of a triangle's lag-k second differences touch a
+/// corner and their median is the jitter's.
+const LEG_LAGS: usize = 6;
 
 /// Share of the largest second differences [`jitter_level`]'s RMS leaves out (turning points,
 /// glitches).
@@ -1395,6 +1473,12 @@ pub fn zero_offsets_with(
             .find(|&i| (control[i] - control[0]).abs() >= 0.9 * far)
             .unwrap_or(m0);
         let m = m0.min(corner.max(5));
+        // Nor past a bend of the response inside that stretch: a first loading that yields
+        // within the first 1 % (a torsion log whose bend comes at sample 119 of a 228-sample
+        // stretch) bends the line, whose intercept then sits above the curve's own start
+        // (1.7σ there, the yield 4 % low). Halve the stretch while its first half's slope
+        // differs from the whole's by more than 4 standard errors of the half's.
+        let m = straight_start(response, m);
         let idx: Vec<f64> = (0..m).map(|i| i as f64).collect();
         let at0 = |v: &[f64], m: usize| {
             crate::stats::line_fit(&idx[..m], &v[..m]).map_or(v[0], |f| f.intercept)
@@ -1447,6 +1531,27 @@ pub fn zero_offsets_with(
         preload,
         absolute_control,
     }
+}
+
+/// The longest of `m`, `m/2`, `m/4`, … samples (at least 10) over which `v` runs straight against
+/// sample index: a stretch is halved while the slope over its first half differs from its own by
+/// more than 4 standard errors of the half's slope (see [`zero_offsets`]).
+fn straight_start(v: &[f64], m: usize) -> usize {
+    let slope = |k: usize| {
+        let idx: Vec<f64> = (0..k).map(|i| i as f64).collect();
+        crate::stats::line_fit(&idx, &v[..k]).ok()
+    };
+    let mut m = m.min(v.len());
+    while m >= 20 {
+        let (Some(whole), Some(half)) = (slope(m), slope(m / 2)) else {
+            break;
+        };
+        if (whole.slope - half.slope).abs() <= (4.0 * half.slope_se).max(1e-9 * half.slope.abs()) {
+            break;
+        }
+        m /= 2;
+    }
+    m
 }
 
 /// Whether a record that starts at preload `p` records its control from the same origin as its
@@ -2412,5 +2517,49 @@ mod tests {
             "{o:?}"
         );
         assert!((c[40] - 1.0).abs() < 1e-9, "ramp top {}", c[40]);
+    }
+
+    /// A torsion log without a rest whose first loading yields inside the first 1 % (a
+    /// WaveMatrix-style generated export: 22 800 samples, the bend at sample 119, the response's
+    /// noise 3.4 % of the yield). The line the zero is read from ran on past the bend, and its
+    /// intercept sat 1.7σ above the curve's start (the yield 4 % low); now within 0.6σ of it,
+    /// on five noise draws.
+    #[test]
+    fn the_zero_line_stops_at_a_bend_inside_the_first_percent() {
+        let n = 22_800usize;
+        let (k, ry, sigma) = (1e-4, 0.012, 4e-4);
+        let cy = ry / k; // sample index of the bend
+        for seed in 0..5u64 {
+            let ctrl: Vec<f64> = (0..n)
+                .map(|i| {
+                    let i = i as f64;
+                    if i <= n as f64 / 2.0 {
+                        i
+                    } else {
+                        n as f64 - i
+                    }
+                })
+                .collect();
+            let resp: Vec<f64> = ctrl
+                .iter()
+                .enumerate()
+                .map(|(i, &c)| {
+                    if i <= n / 2 {
+                        if c <= cy {
+                            k * c
+                        } else {
+                            ry + 0.09 * k * (c - cy)
+                        }
+                    } else {
+                        ry + 0.09 * k * (n as f64 / 2.0 - cy) - k * (n as f64 / 2.0 - c)
+                    }
+                })
+                .collect();
+            let mut r = noisy(&resp, sigma, 9100 + seed);
+            let mut c = ctrl.clone();
+            let o = zero_offsets(&mut c, &mut r);
+            assert_eq!(o.samples_at_rest, 0);
+            assert!(o.response.abs() < 0.6 * sigma, "seed {seed}: {o:?}");
+        }
     }
 }

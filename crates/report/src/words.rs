@@ -92,6 +92,18 @@ fn fmt_noise(fraction: f64) -> String {
     fmt_percent(fraction, decimals)
 }
 
+/// A fraction as a percentage to two significant digits (at least one decimal): 0.0015096 is
+/// "0.15 %", 0.0112 "1.1 %".
+fn fmt_two_digits(fraction: f64) -> String {
+    let p = (fraction * 100.0).abs();
+    let decimals = if p > 0.0 && p.is_finite() {
+        (1 - p.log10().floor() as i32).clamp(1, 6) as usize
+    } else {
+        1
+    };
+    fmt_percent(fraction, decimals)
+}
+
 /// What an effect of the vocabulary means, in words (unknown names are returned as given).
 pub fn effect_words(effect: &str) -> String {
     match effect {
@@ -187,12 +199,23 @@ pub fn diagnosis_words(s: &DiagnosisSummary) -> String {
             let whole = s
                 .gap_all_rel
                 .filter(|&g| g >= WHOLE_RECORD_ABOVE * s.noise_rel);
+            // Both to two significant digits, and their ratio where it is above 1: a gap of
+            // 1.35 times the floor read "0.2 % against 0.1 %" beside "fits to the noise floor".
+            let ratio = s.gap_before_rel / s.noise_rel;
             paras.push(format!(
                 "Which: none. The {baseline} already fits to the noise floor: its held-out gap is \
-                 {} of the largest measured response, against a noise level of {}. No unmodelled \
-                 effect is needed to explain {}.",
-                fmt_percent(s.gap_before_rel, 1),
-                fmt_noise(s.noise_rel),
+                 {} of the largest measured response, against a noise level of {}{}. No \
+                 unmodelled effect is needed to explain {}.",
+                fmt_two_digits(s.gap_before_rel),
+                fmt_two_digits(s.noise_rel),
+                if ratio > 1.0 {
+                    format!(
+                        " ({ratio:.2} times it; a gap within {NEAR_NOISE} times the noise level is \
+                         at the floor)"
+                    )
+                } else {
+                    String::new()
+                },
                 if whole.is_some() {
                     "the held-out cycle"
                 } else {
@@ -541,8 +564,20 @@ mod tests {
         assert_eq!(
             w,
             "Which: none. The elastoplastic baseline already fits to the noise floor: its \
-             held-out gap is 0.9\u{a0}% of the largest measured response, against a noise level \
-             of 0.8\u{a0}%. No unmodelled effect is needed to explain these tests."
+             held-out gap is 0.90\u{a0}% of the largest measured response, against a noise level \
+             of 0.80\u{a0}% (1.12 times it; a gap within 1.5 times the noise level is at the \
+             floor). No unmodelled effect is needed to explain these tests."
+        );
+        // The demo's tension_100N_1: 1.35 times the floor read "0.2 % against 0.1 %".
+        let s = DiagnosisSummary {
+            gap_before_rel: 0.0015096,
+            noise_rel: 0.0011189,
+            ..s
+        };
+        assert!(
+            diagnosis_words(&s).contains("gap is 0.15\u{a0}% of the largest measured response, against a noise level of 0.11\u{a0}% (1.35 times it"),
+            "{}",
+            diagnosis_words(&s)
         );
     }
 
