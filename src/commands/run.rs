@@ -90,7 +90,9 @@ pub fn run(a: RunArgs) -> CmdResult {
         })?;
     }
     let next = match a.shard {
-        Some(s) => format!("shard {s} done; `cablab merge` builds the report once all are"),
+        Some(s) => {
+            format!("shard {s} done; `cablab merge` builds the report once every shard is done")
+        }
         None => format!("open {}", r.out_dir.join("index.html").display()),
     };
     Ok(print_run(&r, &next))

@@ -286,12 +286,18 @@ pub fn write_campaign_outputs(
             series: s.as_deref(),
             header: &o.header,
             yield_method: o.yield_method.as_deref(),
-            max_response: o
-                .max_response
-                .map(|[c, r]| serde_json::json!({"control": c, "response": r})),
-            break_at: o
-                .break_at
-                .map(|[c, r]| serde_json::json!({"control": c, "response": r})),
+            // The file's own maximum where the analysis was cut before it, and no control
+            // where the control is a strain for want of a length (the key documents a machine
+            // control, m or rad).
+            max_response: match o.record_max_beyond_cut {
+                Some(r) => Some(serde_json::json!({"control": null, "response": r})),
+                None => o.max_response.map(|[c, r]| {
+                    serde_json::json!({"control": (!o.control_is_strain).then_some(c), "response": r})
+                }),
+            },
+            break_at: o.break_at.map(|[c, r]| {
+                serde_json::json!({"control": (!o.control_is_strain).then_some(c), "response": r})
+            }),
             last_loop_area_j: o.last_loop_area_j,
             last_loop_area_resolved: o.last_loop_area_j.and(o.last_loop_area_resolved),
         })

@@ -111,6 +111,16 @@ pub struct TestOutcome {
     /// Largest |response| and the machine control there, SI (`[control, response]`).
     #[serde(default)]
     pub max_response: Option<[f64; 2]>,
+    /// The largest |response| of the whole record, signed, where the analysis was cut before it
+    /// (an extensometer that slipped or was taken off: the curve ends there, the test went
+    /// on): the file's own maximum, whose control the cut channel does not give. Null otherwise.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub record_max_beyond_cut: Option<f64>,
+    /// The control is a strain (or a surface shear strain) carried on l₀ = 1 m because no length
+    /// is known: `yield`, `max_response` and `break_at` hold strains where a machine control
+    /// (m) is documented, and tables leave their Δl cells empty.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub control_is_strain: bool,
     /// Where the specimen broke (the characterisation's break): machine control and response
     /// just before the drop, SI; null when the response never fell below half its maximum to
     /// stay there while the control advanced.
@@ -319,6 +329,8 @@ impl TestOutcome {
             level: level_from_name(&t.id),
             yield_method: None,
             max_response: None,
+            record_max_beyond_cut: None,
+            control_is_strain: false,
             break_at: None,
             last_loop_area_j: None,
             last_loop_area_resolved: None,
@@ -537,6 +549,14 @@ fn stages(
         flat.as_ref(),
         &mut curve,
     )?);
+    // The record's own largest response, before a cut can take it away.
+    let uncut_peak = curve
+        .response
+        .iter()
+        .copied()
+        .filter(|r| r.is_finite())
+        .fold(0.0f64, |m, r| if r.abs() > m.abs() { r } else { m });
+    let uncut_first = curve.response.iter().copied().find(|r| *r != 0.0);
     out.warnings
         .extend(crate::bridge::extensometer_removed(&rec, &mut curve));
     out.warnings
@@ -595,6 +615,18 @@ fn stages(
         to_machine_level(out, t.kind, &geom, &an);
     }
     out.max_response = max_response(&curve.control, &curve.response);
+    out.control_is_strain = strain_control && !length_known;
+    // A cut before the record's maximum (a real Bluehill export: the extensometer slipped at
+    // 5.2 kN, the bar went on to 8.2 kN): the file's maximum is kept beside the analysed one,
+    // signed as the curve is (its sign may have been turned with the control's).
+    if curve.cut_short {
+        let turned = uncut_first
+            .zip(curve.response.iter().copied().find(|r| *r != 0.0))
+            .is_some_and(|(a, b)| a == -b);
+        let whole = if turned { -uncut_peak } else { uncut_peak };
+        let analysed = out.max_response.map_or(0.0, |m| m[1].abs());
+        out.record_max_beyond_cut = (whole.abs() > analysed).then_some(whole);
+    }
     out.break_at = break_at(&curve.control, &curve.response, &an);
     out.overlay = super::views::overlay_points(t.kind, &geom, &curve);
     done(1);
@@ -1130,6 +1162,7 @@ pub fn words(d: &cablab_diagnose::Diagnosis) -> String {
         },
         holdout_fallback: d.verdict.holdout_fallback.clone(),
         single_loading: d.verdict.single_loading.clone(),
+        unseen: d.verdict.unseen.clone(),
         narrowed: d.verdict.narrowed.as_ref().map(|n| {
             (
                 n.effects.iter().map(|e| e.as_str().to_string()).collect(),

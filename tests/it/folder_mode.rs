@@ -1215,3 +1215,51 @@ fn a_pipeline_length_the_file_contradicts_fails_the_test_unless_forced() {
         "{t}"
     );
 }
+
+/// An extensometer that slips before the maximum, on a tension test whose length is not known
+/// (a real Bluehill export: the strain jumps back at 5.2 kN, the bar goes on to 8.2 kN). The
+/// campaign table gave F_max 5237 N (the analysed part's) and "Δl at F_max" 9.04 mm, which was
+/// the strain 0.904 % on the placeholder l₀ = 1 m. Now F_max is the file's own, without a
+/// control, and no strain is shown as a Δl.
+#[test]
+fn a_cut_record_keeps_its_own_maximum_and_no_strain_reads_as_a_length() {
+    let tmp = tempfile::tempdir().unwrap();
+    let mut text = String::from("Time (s),Extension (mm),Load (N),Strain (%)\n");
+    for i in 0..=1500usize {
+        let x = 0.004 * i as f64; // crosshead, mm
+        let eps = x / 60.0; // the bar's strain
+        let f = if eps < 0.004 {
+            2.0e6 * eps
+        } else {
+            8000.0 + 1.0e4 * (eps - 0.004)
+        }
+        .min(8000.0 + 1.0e4 * (0.1 - 0.004));
+        // The extensometer slips at row 700 (strain 4.7 %) and reads half from there on.
+        let shown = if i < 700 {
+            eps
+        } else {
+            eps - 0.5 * 700.0 * 0.004 / 60.0
+        };
+        text.push_str(&format!(
+            "{:.2},{x:.4},{f:.3},{:.5}\n",
+            0.1 * i as f64,
+            100.0 * shown
+        ));
+    }
+    std::fs::create_dir_all(tmp.path().join("in")).unwrap();
+    std::fs::write(tmp.path().join("in/tension_slip.csv"), text).unwrap();
+    let o = run_in(tmp.path(), &["run", "in", "-q", "--no-diagnosis"]);
+    assert_eq!(o.code, 0, "{}", o.stderr);
+    let v: Value =
+        serde_json::from_slice(&std::fs::read(tmp.path().join("reports/in/summary.json")).unwrap())
+            .unwrap();
+    let t = &v["tests"][0];
+    let fmax = t["max_response"]["response"].as_f64().unwrap();
+    assert!(fmax > 8900.0, "{t}");
+    assert!(t["max_response"]["control"].is_null(), "{t}");
+    let csv = std::fs::read_to_string(tmp.path().join("reports/in/specimens_tension.csv")).unwrap();
+    let row: Vec<&str> = csv.lines().nth(1).unwrap().split(',').collect();
+    // F_max [N], Δl at F_max [mm]: the file's maximum, no length.
+    assert!(row[6].parse::<f64>().unwrap() > 8900.0, "{csv}");
+    assert_eq!(row[7], "", "{csv}");
+}

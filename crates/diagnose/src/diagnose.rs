@@ -353,6 +353,14 @@ pub struct Verdict {
     /// separate them. Absent otherwise.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub single_loading: Option<String>,
+    /// When the verdict names an effect whose own signature the record does not show
+    /// ([`unseen_words`]: viscoelasticity where no test holds its control and every leg runs at
+    /// one rate; machine compliance where every test has one length): in plain words, that it
+    /// is named from the curve's shape alone (an effect outside the vocabulary, or another
+    /// combination, can take that shape) and which experiment would confirm it. Absent
+    /// otherwise.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub unseen: Option<String>,
     /// For `unexplained` when an effect or a set narrowed the held-out gap without closing it
     /// (its model leaves [`NOT_CLOSED_GAP`] times the noise floor or more): what it was, the gap
     /// it leaves and its steps from the baseline. Absent otherwise.
@@ -513,6 +521,84 @@ fn single_loading_words(
         }
     );
     Some((named[0], alike, words))
+}
+
+/// Legs whose control rates differ by less than this factor run at one rate ([`one_rate`]).
+const ONE_RATE_SPREAD: f64 = 1.5;
+
+/// Whether every leg of `t` (a loading, unloading or reloading branch of at least 5 samples that
+/// takes time) moves its control at one rate: the fastest leg's mean rate within
+/// [`ONE_RATE_SPREAD`] of the slowest's. `None` where the record has fewer than two such legs
+/// or no time.
+fn one_rate(t: &DiagTest) -> Option<bool> {
+    let labels = t.labels_or_derived();
+    let n = labels.len().min(t.control.len()).min(t.time_s.len());
+    let mut rates: Vec<f64> = Vec::new();
+    let mut a = 0;
+    while a < n {
+        let mut b = a + 1;
+        while b < n && labels[b] == labels[a] {
+            b += 1;
+        }
+        let dt = t.time_s[b - 1] - t.time_s[a];
+        if labels[a].branch != crate::model::Branch::Hold && b - a >= 5 && dt > 0.0 {
+            let r = (t.control[b - 1] - t.control[a]).abs() / dt;
+            if r.is_finite() && r > 0.0 {
+                rates.push(r);
+            }
+        }
+        a = b;
+    }
+    if rates.len() < 2 {
+        return None;
+    }
+    let (lo, hi) = rates
+        .iter()
+        .fold((f64::INFINITY, 0.0f64), |(l, h), &r| (l.min(r), h.max(r)));
+    Some(hi <= ONE_RATE_SPREAD * lo)
+}
+
+/// The words of `verdict.unseen` for a verdict's `set` on `tests` (not for one loading, which
+/// `single_loading` covers): viscoelasticity named where no test holds its control and every
+/// test's legs run at one rate ([`one_rate`]) is named from its loops' shape alone, as machine
+/// compliance is where every test has the same free length. An independent check of withheld
+/// logs (a saturating kinematic hardening, outside the vocabulary, on cycles at one rate) got
+/// viscoelasticity + friction + machine compliance with no equivalent and nothing to separate
+/// them.
+pub(crate) fn unseen_words(tests: &[DiagTest], set: &[Effect]) -> Option<String> {
+    if tests.is_empty() || tests.iter().all(one_loading) {
+        return None;
+    }
+    let holds = tests.iter().any(|t| {
+        t.labels_or_derived()
+            .iter()
+            .any(|l| l.branch == crate::model::Branch::Hold)
+    });
+    let rates: Vec<Option<bool>> = tests.iter().map(one_rate).collect();
+    let one_rate_all = rates.iter().all(|r| *r == Some(true));
+    let mut said: Vec<String> = Vec::new();
+    if set.contains(&Effect::Viscoelasticity) && !holds && one_rate_all {
+        said.push(
+            "Viscoelasticity is named from the loops' shape alone: no test holds its control and \
+             every leg runs at one rate, so the rate dependence that defines it is not in this \
+             record, and a rate-independent loop of another origin can take the same shape. A \
+             hold at constant control or the same cycles at a second rate would confirm it."
+                .to_string(),
+        );
+    }
+    let l0 = tests[0].free_length_m;
+    let one_length = tests
+        .iter()
+        .all(|t| (t.free_length_m / l0 - 1.0).abs() <= 0.05);
+    if set.contains(&Effect::MachineCompliance) && one_length {
+        said.push(
+            "Machine compliance is named from one specimen length: a series compliance is told \
+             from the specimen's own behaviour here only by the shape of the curves. The same \
+             protocol on a second specimen length would confirm it."
+                .to_string(),
+        );
+    }
+    (!said.is_empty()).then(|| said.join(" "))
 }
 
 /// Whether the control of `t` runs at a steady rate: a straight line in time (r² ≥ 0.99).
@@ -1332,6 +1418,11 @@ fn diagnose_held_out(
             words
         })
     };
+    let unseen = if single_loading.is_some() {
+        None
+    } else {
+        unseen_words(tests, &set)
+    };
     let ladder = if opts.ladder {
         Some(ladder(ctx, tests, &train, &held, &noise, opts, scale)?)
     } else {
@@ -1379,6 +1470,7 @@ fn diagnose_held_out(
             extrapolation: extrapolation.or(set_closed).map(|x| x.words),
             holdout_fallback: None,
             single_loading,
+            unseen,
             narrowed,
             named_on_training,
             noise_rel: noise_rms / scale,

@@ -1476,3 +1476,69 @@ fn an_elastic_parameter_the_data_do_not_show_is_flagged() {
         m.warning
     );
 }
+
+/// `verdict.unseen`: viscoelasticity named on cycles at one rate with no hold is named from the
+/// loops' shape alone, and machine compliance on one length from the curves' shape alone (an
+/// independent check's saturating kinematic hardening came back as viscoelasticity + friction +
+/// machine compliance with nothing to separate them). A hold, a second rate or a second length
+/// lifts the caveat for the effect it would confirm; one loading is `single_loading`'s.
+#[test]
+fn an_effect_named_without_its_own_signature_says_so() {
+    use crate::diagnose::unseen_words;
+    let u = 1e-3;
+    let cycles = |rates: [f64; 2], hold: bool| {
+        let mut steps = Vec::new();
+        for (i, r) in [rates[0], rates[1], rates[0]].iter().enumerate() {
+            steps.push(Step::Ramp {
+                to: 4.0 * u,
+                rate: *r,
+            });
+            if hold && i == 1 {
+                steps.push(Step::Hold { duration_s: 5.0 });
+            }
+            steps.push(Step::Ramp {
+                to: 0.5 * u,
+                rate: *r,
+            });
+        }
+        tension_with("elastoplastic", &TRUTH, None, clean(), steps, 50.0)
+    };
+    let plain = cycles([u, u], false);
+    let w = unseen_words(std::slice::from_ref(&plain), &[Effect::Viscoelasticity]).unwrap();
+    assert!(
+        w.starts_with("Viscoelasticity is named from the loops' shape alone"),
+        "{w}"
+    );
+    assert!(!w.contains("Machine compliance"), "{w}");
+    let w = unseen_words(
+        std::slice::from_ref(&plain),
+        &[Effect::FrictionHysteresis, Effect::MachineCompliance],
+    )
+    .unwrap();
+    assert!(
+        w.starts_with("Machine compliance is named from one specimen length"),
+        "{w}"
+    );
+    // Nothing to say for effects a cyclic record at one rate shows in full.
+    assert_eq!(
+        unseen_words(
+            std::slice::from_ref(&plain),
+            &[Effect::FrictionHysteresis, Effect::KinematicHardening]
+        ),
+        None
+    );
+    // A hold, or a second rate (4×), shows the rate dependence.
+    for t in [cycles([u, u], true), cycles([u, 4.0 * u], false)] {
+        assert_eq!(
+            unseen_words(std::slice::from_ref(&t), &[Effect::Viscoelasticity]),
+            None
+        );
+    }
+    // A second length shows the compliance.
+    let mut longer = plain.clone();
+    longer.free_length_m *= 2.5;
+    assert_eq!(
+        unseen_words(&[plain, longer], &[Effect::MachineCompliance]),
+        None
+    );
+}

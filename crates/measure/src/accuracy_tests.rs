@@ -1618,6 +1618,75 @@ fn after_a_fracture_the_pieces_make_no_cycles_and_no_relaxation() {
     );
 }
 
+/// A fatigue coupon (MTS 793, force-controlled cycles logged as force and absolute actuator
+/// position, as a real export): a ramp from 10 to 14 mm, 40 cycles between 12 and 14 mm, and
+/// in the 41st it breaks at its peak; the actuator then runs on over the pieces to 30 mm at a
+/// small residual force. The break was not found (the last cycle's 2 mm rise was under a tenth
+/// of the whole record's 20 mm range, most of it run after the break), and the 41st cycle's
+/// peak was taken after the failure (34 N at 20 mm). Now the break is at the 41st cycle's peak
+/// and no cycle runs past it.
+#[test]
+fn a_fatigue_break_with_the_actuator_running_on_is_a_break() {
+    let l0 = 0.025;
+    let geom = Geometry {
+        free_length_m: l0,
+        diameter_m: Some(6e-3),
+    };
+    let (mut c, mut r) = (Vec::new(), Vec::new());
+    let mut push = |x: f64, f: f64| {
+        c.push(x * 1e-3);
+        r.push(f);
+    };
+    // The actuator's absolute position: the ramp from 10 to 14 mm, then 40 cycles between 12
+    // and 14 mm (R ≈ 0.2, as the real log's 12.2–14.2 mm).
+    let peak = 1120.0;
+    let cyc = |x: f64| peak - 450.0 * (14.0 - x);
+    for i in 0..=80 {
+        let x = 10.0 + 0.05 * i as f64;
+        push(x, 280.0 * (x - 10.0));
+    }
+    for _ in 0..40 {
+        for i in 1..=20 {
+            push(14.0 - 0.1 * i as f64, cyc(14.0 - 0.1 * i as f64));
+        }
+        for i in 1..=20 {
+            push(12.0 + 0.1 * i as f64, cyc(12.0 + 0.1 * i as f64));
+        }
+    }
+    for i in 1..=20 {
+        push(14.0 - 0.1 * i as f64, cyc(14.0 - 0.1 * i as f64));
+    }
+    for i in 1..=19 {
+        push(12.0 + 0.1 * i as f64, cyc(12.0 + 0.1 * i as f64));
+    }
+    // The break: the force falls to the cell's offset in three samples, the actuator runs on.
+    for (i, f) in [0.6, 0.2, 0.03].iter().enumerate() {
+        push(13.96 + 0.02 * i as f64, f * peak);
+    }
+    for i in 1..=800 {
+        push(14.0 + 0.02 * i as f64, 0.03 * peak);
+    }
+    let (c, r) = noisy(&c, &r, 0.002, 4600);
+    let t: Vec<f64> = (0..c.len()).map(|i| 0.02 * i as f64).collect();
+    let a = analyze(
+        TestKind::Tension,
+        &geom,
+        Some(&t),
+        &c,
+        &r,
+        &AnalyzeOptions::default(),
+    )
+    .unwrap();
+    // The break's sample is the first below half the peak (the fall's second sample here).
+    let b = a.break_point.as_ref().expect("a break");
+    assert!(b.response_before >= 0.5 * peak, "{b:?} {:?}", a.notes);
+    assert!((b.machine_control - 13.98e-3).abs() < 0.05e-3, "{b:?}");
+    // The ramp and 41 unloadings, then the reloading it broke in: 42 cycles, none after it.
+    assert_eq!(a.cycles.len(), 42, "{:?}", a.segments.len());
+    let last = a.cycles.last().unwrap();
+    assert!((last.peak_response / peak - 1.0).abs() < 0.05, "{last:?}");
+}
+
 /// A machine compliance given beyond the whole compliance the record measures (a cable of
 /// EA = 8e4 N over 32 mm: 4e-7 m/N) leaves the specimen nothing, and the stiffness comes out
 /// negative: a warning says why; a compliance below it says nothing.

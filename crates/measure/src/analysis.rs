@@ -2539,7 +2539,9 @@ fn last_advance(control: &[f64], back: f64) -> usize {
 
 /// The largest response of the record's last loading (`control`, `response` with the first
 /// motion positive): the peak within its [`last_advance`] (allowing back-offs of `back`),
-/// when the control rose into that peak by a tenth of its range or more. None when the record
+/// when the control rose into that peak by a tenth of its range up to the peak or more (not of
+/// the whole record's: a fatigue coupon's actuator ran on over the broken pieces from 14 to
+/// 30 mm, and the last cycle's 1 mm rise was too small against that). None when the record
 /// ends in an unloading (whose last stretch within `back` is no advance).
 pub fn last_loading_peak(control: &[f64], response: &[f64], back: f64) -> Option<usize> {
     let n = control.len().min(response.len());
@@ -2547,7 +2549,7 @@ pub fn last_loading_peak(control: &[f64], response: &[f64], back: f64) -> Option
     let k = (s..n)
         .filter(|&i| response[i].is_finite())
         .max_by(|&a, &b| response[a].total_cmp(&response[b]))?;
-    let (lo, hi) = control[..n]
+    let (lo, hi) = control[..=k]
         .iter()
         .filter(|v| v.is_finite())
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {

@@ -406,8 +406,11 @@ pub fn results_table(kind: TestKind, rows: &[SpecimenResult]) -> Grid {
                 Cell::opt(r.yield_point.map(|p| p.0 * cf)),
                 Cell::opt(r.max_response.map(|p| p.1)),
                 Cell::opt(r.max_response.map(|p| p.0 * cf)),
-                r.break_at
-                    .map_or(Cell::Text("none".into()), |p| Cell::Num(p.0 * cf)),
+                match r.break_at {
+                    None => Cell::Text("none".into()),
+                    Some(p) if p.0.is_finite() => Cell::Num(p.0 * cf),
+                    Some(_) => Cell::Text("broke".into()),
+                },
                 Cell::opt(r.loop_area_j.map(|a| a * 1e3)),
                 Cell::Int(r.warnings as i64),
                 Cell::Int(r.notes as i64),
@@ -421,7 +424,10 @@ pub fn results_table(kind: TestKind, rows: &[SpecimenResult]) -> Grid {
         format!("; yield: {}", methods.join(", "))
     };
     Grid {
-        caption: format!("{}: results per specimen{method}", kind_title(kind)),
+        caption: format!(
+            "{}: results per specimen{method}; a last-cycle loop within resolution (its branches coincide within the noise) reads 0",
+            kind_title(kind)
+        ),
         header,
         rows: body,
         sig: 4,

@@ -67,6 +67,10 @@ pub struct DiagnosisSummary {
     /// shapes a loading curve (`verdict.single_loading`): those words.
     #[serde(default)]
     pub single_loading: Option<String>,
+    /// When the verdict names an effect whose own signature the record does not show
+    /// (`verdict.unseen`): those words.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub unseen: Option<String>,
     /// For `unexplained`: the effects that narrowed the gap without closing it and the held-out
     /// relative gap their model leaves (`verdict.narrowed`).
     #[serde(default)]
@@ -366,6 +370,9 @@ pub fn diagnosis_words(s: &DiagnosisSummary) -> String {
     if let Some(w) = &s.single_loading {
         paras.push(w.clone());
     }
+    if let Some(w) = &s.unseen {
+        paras.push(w.clone());
+    }
     let equivalent: Vec<&str> = s
         .equivalent
         .iter()
@@ -660,6 +667,7 @@ mod tests {
             set_steps: vec![],
             holdout_fallback: None,
             single_loading: None,
+            unseen: None,
             narrowed: None,
         };
         let w = diagnosis_words(&s);
@@ -797,6 +805,7 @@ mod tests {
         let without = diagnosis_words(&DiagnosisSummary {
             holdout_fallback: None,
             single_loading: None,
+            unseen: None,
             narrowed: None,
             ..s
         });

@@ -198,6 +198,7 @@ pub fn kinematic_hardening_verdict() -> DiagnosisSummary {
         set_steps: vec![],
         holdout_fallback: None,
         single_loading: None,
+        unseen: None,
         narrowed: None,
     }
 }
