@@ -1710,3 +1710,61 @@ fn a_compliance_beyond_the_whole_record_is_warned() {
         assert_eq!(warned, said, "{k}: {:?}", a.warnings);
     }
 }
+
+/// A monotonic pull whose slope doubles along it (a textile's crimp, a rope's strands bedding
+/// in; no bend, no unloading) is `linear_elastic` for want of a yield, and now says it is not
+/// straight; a straight pull says nothing. A strain no solid reaches (a locale-mangled export
+/// read 5·10⁵) is warned next to it.
+#[test]
+fn a_curved_or_impossible_first_loading_is_said() {
+    let l0 = 0.1;
+    let geom = Geometry {
+        free_length_m: l0,
+        diameter_m: Some(2e-3),
+    };
+    let run = |c: &[f64], r: &[f64]| {
+        let t: Vec<f64> = (0..c.len()).map(|i| 0.1 * i as f64).collect();
+        analyze(
+            TestKind::Tension,
+            &geom,
+            Some(&t),
+            c,
+            r,
+            &AnalyzeOptions::default(),
+        )
+        .unwrap()
+    };
+    let n = 600;
+    let strain: Vec<f64> = (0..=n).map(|i| 0.3 * i as f64 / n as f64).collect();
+    let c: Vec<f64> = strain.iter().map(|e| e * l0).collect();
+    // Stiffening: dF/dε runs 100 → 300 N over the pull.
+    let curved: Vec<f64> = strain.iter().map(|e| 100.0 * e + 333.3 * e * e).collect();
+    let straight: Vec<f64> = strain.iter().map(|e| 100.0 * e).collect();
+    let said = |a: &crate::Analysis| a.warnings.iter().any(|w| w.contains("not straight"));
+    let (cc, rc) = noisy(&c, &curved, 0.002, 4700);
+    let a = run(&cc, &rc);
+    assert_eq!(a.behaviour, Behaviour::LinearElastic, "{:?}", a.warnings);
+    assert!(said(&a), "{:?}", a.warnings);
+    let (cs, rs) = noisy(&c, &straight, 0.002, 4701);
+    let a = run(&cs, &rs);
+    assert!(!said(&a), "{:?}", a.warnings);
+    assert!(
+        !a.warnings.iter().any(|w| w.contains("beyond what")),
+        "{:?}",
+        a.warnings
+    );
+    // The same pull with its second half's control read 10⁵ times too large.
+    let mangled: Vec<f64> = cs
+        .iter()
+        .enumerate()
+        .map(|(i, v)| if i > cs.len() / 2 { v * 1e5 } else { *v })
+        .collect();
+    let a = run(&mangled, &rs);
+    assert!(
+        a.warnings
+            .iter()
+            .any(|w| w.contains("the strain reaches") && w.contains("beyond what")),
+        "{:?}",
+        a.warnings
+    );
+}

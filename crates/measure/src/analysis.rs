@@ -1171,6 +1171,33 @@ pub fn analyze(
         )),
         (None, None) => None,
     };
+    // A sectional control no solid reaches: a strain beyond 20 (2000 %, where elastomers break
+    // below 10), a surface strain of that size in torsion or bending, a deflection beyond the
+    // span. A locale-mangled export whose numbers lost their decimal mark part-way read as a
+    // strain of 5·10⁵ and an elongation of 30 km, after the reader's warnings only.
+    let reach = xs
+        .iter()
+        .filter(|v| v.is_finite())
+        .fold(0.0f64, |m, v| m.max(v.abs()));
+    let surface = match kind {
+        TestKind::Tension => Some((reach, "strain")),
+        TestKind::Torsion | TestKind::PureBending => {
+            geom.diameter_m.map(|d| (reach * 0.5 * d, "surface strain"))
+        }
+        TestKind::ThreePoint => Some((reach / l0, "deflection per span")),
+        TestKind::Unknown => None,
+    };
+    if let Some((v, what)) = surface.filter(|(v, w)| {
+        *v > if *w == "deflection per span" {
+            1.0
+        } else {
+            PLAUSIBLE_STRAIN
+        }
+    }) {
+        warnings.push(format!(
+            "the {what} reaches {v:.3e}, beyond what any specimen can (a strain of {PLAUSIBLE_STRAIN:.0} is 2000 %; a deflection beyond the span): check the control's unit, the length, and the reader's warnings (a locale switch part-way, a column in another unit); every value from this control is suspect"
+        ));
+    }
     let modulus_pa = match (&stiffness, section) {
         (Some(_), Some((m, what))) => {
             if let Some(e) =
@@ -1349,6 +1376,13 @@ pub fn analyze(
     } else {
         Behaviour::Other
     };
+    if behaviour == Behaviour::LinearElastic {
+        let from = elastic
+            .as_ref()
+            .and_then(|e| e.toe.as_ref())
+            .map_or(f64::NEG_INFINITY, |t| t.knee_x);
+        warnings.extend(curved_first_loading(&fw, &fy, from));
+    }
 
     let machine_of = |x: f64| if three { x } else { x * l0 };
     let yield_point = match (bend, behaviour) {
@@ -1937,6 +1971,10 @@ fn hold_relaxation(
 /// diamond (~1.2 TPa). A modulus outside is reported with a warning, not refused.
 pub const PLAUSIBLE_MODULUS_PA: (f64, f64) = (1e5, 1.2e12);
 
+/// The largest strain (dimensionless) a specimen can show: 20, i.e. 2000 % (elastomers break
+/// below 10). A control beyond it is warned as misread.
+pub const PLAUSIBLE_STRAIN: f64 = 20.0;
+
 /// Fewest samples a stiffness is computed from.
 pub const MIN_STIFFNESS_SAMPLES: usize = 5;
 
@@ -2319,6 +2357,70 @@ fn small_deflection_window(
         }
     }
 }
+
+/// A warning when a `linear_elastic` test's first loading (the envelope `x`, `y`, rising, from
+/// `from` on: past a toe) is not straight: the slopes over the thirds of its control range
+/// differ by more than a factor [`CURVED_RATIO`] and by more than 3 standard errors. A textile strip's pull
+/// (a real Bluehill export) runs 1.44, 0.80, 1.3, 1.68 N/mm along it; its window at 273–320 %
+/// strain and the label `linear_elastic` came with no word.
+fn curved_first_loading(x: &[f64], y: &[f64], from: f64) -> Option<String> {
+    let keep: Vec<usize> = (0..x.len().min(y.len()))
+        .filter(|&i| x[i].is_finite() && y[i].is_finite() && x[i] >= from)
+        .collect();
+    let (lo, hi) = keep
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &i| {
+            (a.min(x[i]), b.max(x[i]))
+        });
+    if keep.len() < 30 || !(hi > lo) {
+        return None;
+    }
+    let third = |k: usize| -> Option<crate::stats::Line> {
+        let (a, b) = (
+            lo + (hi - lo) * k as f64 / 3.0,
+            lo + (hi - lo) * (k + 1) as f64 / 3.0,
+        );
+        let (xs, ys): (Vec<f64>, Vec<f64>) = keep
+            .iter()
+            .filter(|&&i| x[i] >= a && x[i] <= b)
+            .map(|&i| (x[i], y[i]))
+            .unzip();
+        (xs.len() >= 10)
+            .then(|| crate::stats::line_fit(&xs, &ys).ok())
+            .flatten()
+    };
+    let fits: Vec<crate::stats::Line> = (0..3).filter_map(third).collect();
+    if fits.len() < 3 || fits.iter().any(|f| !(f.slope > 0.0)) {
+        return None;
+    }
+    let (i_lo, f_lo) = fits
+        .iter()
+        .enumerate()
+        .min_by(|a, b| a.1.slope.total_cmp(&b.1.slope))?;
+    let (i_hi, f_hi) = fits
+        .iter()
+        .enumerate()
+        .max_by(|a, b| a.1.slope.total_cmp(&b.1.slope))?;
+    let ratio = f_hi.slope / f_lo.slope;
+    let apart =
+        f_hi.slope - f_lo.slope > 3.0 * (f_hi.slope_se.powi(2) + f_lo.slope_se.powi(2)).sqrt();
+    let word = |i: usize| ["first", "second", "last"][i];
+    (ratio > CURVED_RATIO && apart).then(|| {
+        format!(
+            "behaviour: the first loading is not straight: its slope is {:.3e} over the {} third of its control range and {:.3e} over the {} ({:.2} times); `linear_elastic` says only that it was not seen to yield, and the stiffness holds for its window only",
+            f_lo.slope,
+            word(i_lo),
+            f_hi.slope,
+            word(i_hi),
+            ratio
+        )
+    })
+}
+
+/// Slopes over a first loading's thirds that differ by more than this factor make it "not
+/// straight" ([`curved_first_loading`]): past a toe, a stiffening that the toe did not take up
+/// shows as about 1.45 between the first and last thirds of a pull whose slope triples.
+const CURVED_RATIO: f64 = 1.3;
 
 /// Class of a test without any unloading (a monotonic test, to break or not): straight →
 /// `linear_elastic`; a material bend (see [`bend_is_material`]) after an elastic range →
