@@ -1545,6 +1545,22 @@ pub fn analyze(
         response_before: response[j - 1],
         work_to_break: work,
     });
+    // Glitches only on the broken pieces' signal (a fatigue coupon's four, all after it broke)
+    // touch no result: a note, not a warning.
+    if let Some(b) = &break_point {
+        if !excluded.is_empty() && excluded.iter().all(|&i| i >= b.sample) {
+            if let Some(k) = warnings
+                .iter()
+                .position(|w| w.contains("isolated glitch sample(s) excluded"))
+            {
+                let w = warnings.remove(k);
+                notes.push(format!(
+                    "{w}, all after the break at sample {}: the broken pieces' signal, which no result uses",
+                    b.sample
+                ));
+            }
+        }
+    }
     // Cycles after the cycle a specimen broke in are its pieces and the actuator ringing after
     // the fracture (an MTS three-point export: three "cycles" of ±0.5 mm at zero force, one of
     // them a negative loop with a hint that the columns were exchanged): not reported.
