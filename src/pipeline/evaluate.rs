@@ -718,7 +718,15 @@ fn stages(
     if c.file.reports.svg || c.file.reports.html {
         files.push((
             "curve.svg".into(),
-            super::views::curve_svg(t, &geom, &curve, &an, simulated.as_deref())?.into_bytes(),
+            super::views::curve_svg(
+                t,
+                &geom,
+                &curve,
+                &an,
+                simulated.as_deref(),
+                out.control_is_strain,
+            )?
+            .into_bytes(),
         ));
         if let Some(d) = &diagnosis {
             for (name, svg) in super::views::gap_svgs(

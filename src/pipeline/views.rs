@@ -63,12 +63,16 @@ fn window_to_x(kind: TestKind, geom: &cablab_measure::Geometry) -> f64 {
 
 /// The measured curve coloured by cycle with branch markers, the elastic fit line and window,
 /// the yield point, shaded loops and, when calibrated, the simulated curve with residuals.
+/// `strain_control`: the control is a strain carried on l₀ = 1 m for want of a length
+/// ([`super::evaluate::TestOutcome::control_is_strain`]): a tension plot's x axis is then the
+/// strain, not an elongation.
 pub fn curve_svg(
     t: &PlannedTest,
     geom: &cablab_measure::Geometry,
     curve: &Curve,
     an: &Analysis,
     simulated: Option<&[f64]>,
+    strain_control: bool,
 ) -> Result<String> {
     let kind = t.kind;
     let n = curve.control.len();
@@ -153,6 +157,13 @@ pub fn curve_svg(
         (xx, yp.response)
     });
     let (xl, yl) = cablab_report::axis_labels(kind);
+    // The same numbers (strain × 1 m) read as a strain: a real Bluehill export's 0.9 % strain
+    // was drawn as "elongation Δl [mm]" up to 9.
+    let xl = if strain_control && kind == TestKind::Tension {
+        "strain \u{3b5} [1]"
+    } else {
+        xl
+    };
     let view = CurveView {
         title: format!("{} — {}", t.id, kind),
         x_label: xl.to_string(),

@@ -1262,4 +1262,15 @@ fn a_cut_record_keeps_its_own_maximum_and_no_strain_reads_as_a_length() {
     // F_max [N], Δl at F_max [mm]: the file's maximum, no length.
     assert!(row[6].parse::<f64>().unwrap() > 8900.0, "{csv}");
     assert_eq!(row[7], "", "{csv}");
+    // The plot's x axis is the strain, not an elongation on l₀ = 1 m.
+    let page = t["report"]
+        .as_str()
+        .unwrap()
+        .replace("result.json", "curve.svg");
+    let svg = std::fs::read_to_string(tmp.path().join("reports/in").join(page)).unwrap();
+    assert!(
+        svg.contains("strain \u{3b5}") && !svg.contains("elongation"),
+        "{}",
+        &svg[..svg.len().min(400)]
+    );
 }
