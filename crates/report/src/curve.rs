@@ -392,6 +392,16 @@ fn draw_main(
     Ok(())
 }
 
+/// The smallest of 1, 2, 2.5, 5 × 10ᵏ at or above `v` (> 0).
+fn round_up(v: f64) -> f64 {
+    let e = 10f64.powf(v.log10().floor());
+    [1.0, 2.0, 2.5, 5.0, 10.0]
+        .iter()
+        .map(|m| m * e)
+        .find(|&r| r >= v * (1.0 - 1e-12))
+        .unwrap_or(10.0 * e)
+}
+
 /// The lower panel: residual measured − simulated over the control, per cycle.
 fn draw_residual(
     area: &DrawingArea<SVGBackend<'_>, Shift>,
@@ -404,7 +414,10 @@ fn draw_residual(
         .iter()
         .flatten()
         .fold(0.0f64, |m, p| m.max(p.1.abs()));
-    let max = if max > 0.0 { max * 1.1 } else { 1.0 };
+    // A round symmetric range (1, 2, 2.5 or 5 × 10ᵏ) so that the ticks fall inside it: at
+    // ±1.1 × the largest residual the only "nice" tick inside was often 0, and the panel's
+    // size could not be read (a demo tension test showed one tick, "0.0").
+    let max = if max > 0.0 { round_up(max * 1.1) } else { 1.0 };
     let unit = unit_of(&view.y_label).unwrap_or("");
     let desc = if unit.is_empty() {
         "residual meas. \u{2212} sim.".to_string()
@@ -420,7 +433,7 @@ fn draw_residual(
         .y_label_area_size(72)
         .build_cartesian_2d(xa.lo..xa.hi, -max..max)
         .map_err(draw_err)?;
-    draw_mesh(&mut chart, Some(xa), &ra, 4)?;
+    draw_mesh(&mut chart, Some(xa), &ra, 5)?;
     chart
         .draw_series(std::iter::once(PathElement::new(
             vec![(xa.lo, 0.0), (xa.hi, 0.0)],
@@ -444,6 +457,25 @@ fn draw_residual(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn residual_ranges_are_round() {
+        for (v, r) in [
+            (0.33, 0.5),
+            (0.45, 0.5),
+            (1.0, 1.0),
+            (1.2, 2.0),
+            (2.2, 2.5),
+            (7.0, 10.0),
+            (3e-4, 5e-4),
+        ] {
+            assert!(
+                (round_up(v) / r - 1.0).abs() < 1e-12,
+                "{v}: {}",
+                round_up(v)
+            );
+        }
+    }
 
     #[test]
     fn axis_labels_carry_si_units_of_the_kind() {

@@ -315,10 +315,12 @@ pub fn gap_which_with_failures_svg(
                     outline: false,
                 },
             ],
+            // Two significant digits: at one decimal, candidates that differ all read
+            // "0.2 % → 0.2 %".
             value_text: format!(
                 "{} \u{2192} {}",
-                fmt_percent(c.before, 1),
-                fmt_percent(c.after, 1)
+                crate::text::fmt_percent_2sig(c.before),
+                crate::text::fmt_percent_2sig(c.after)
             ),
             text_at: c.before.max(c.after) * 100.0,
         })

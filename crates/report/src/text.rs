@@ -162,6 +162,19 @@ pub fn fmt_mpa(pa: f64) -> String {
     }
 }
 
+/// A fraction as a percentage to two significant digits (at least one decimal): 0.0015096 is
+/// "0.15 %", 0.0112 "1.1 %". Two numbers that differ read differently where one decimal made a
+/// gap of 0.15 % and a floor of 0.11 % "0.2 %" and "0.1 %".
+pub fn fmt_percent_2sig(fraction: f64) -> String {
+    let p = (fraction * 100.0).abs();
+    let decimals = if p > 0.0 && p.is_finite() {
+        (1 - p.log10().floor() as i32).clamp(1, 6) as usize
+    } else {
+        1
+    };
+    fmt_percent(fraction, decimals)
+}
+
 /// Formats a fraction as a percentage with `decimals` decimals (`0.1234` → `12.3 %`).
 pub fn fmt_percent(fraction: f64, decimals: usize) -> String {
     if !fraction.is_finite() {

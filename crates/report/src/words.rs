@@ -96,18 +96,6 @@ fn fmt_noise(fraction: f64) -> String {
     fmt_percent(fraction, decimals)
 }
 
-/// A fraction as a percentage to two significant digits (at least one decimal): 0.0015096 is
-/// "0.15 %", 0.0112 "1.1 %".
-fn fmt_two_digits(fraction: f64) -> String {
-    let p = (fraction * 100.0).abs();
-    let decimals = if p > 0.0 && p.is_finite() {
-        (1 - p.log10().floor() as i32).clamp(1, 6) as usize
-    } else {
-        1
-    };
-    fmt_percent(fraction, decimals)
-}
-
 /// What an effect of the vocabulary means, in words (unknown names are returned as given).
 pub fn effect_words(effect: &str) -> String {
     match effect {
@@ -210,8 +198,8 @@ pub fn diagnosis_words(s: &DiagnosisSummary) -> String {
                 "Which: none. The {baseline} already fits to the noise floor: its held-out gap is \
                  {} of the largest measured response, against a noise level of {}{}. No \
                  unmodelled effect is needed to explain {}.",
-                fmt_two_digits(s.gap_before_rel),
-                fmt_two_digits(s.noise_rel),
+                crate::text::fmt_percent_2sig(s.gap_before_rel),
+                crate::text::fmt_percent_2sig(s.noise_rel),
                 if ratio > 1.0 {
                     format!(
                         " ({ratio:.2} times it; a gap within {NEAR_NOISE} times the noise level is \

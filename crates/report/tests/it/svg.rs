@@ -164,11 +164,9 @@ fn simulated_curve_adds_a_residual_panel() {
     assert!(t.iter().any(|s| s == "residual [N]"), "{t:?}");
     assert!(t.iter().any(|s| s == "simulated"));
     // The residual (measured − (0.97 measured + 0.5)) spans −0.5 N to 0.03·100 − 0.5 = 2.5 N:
-    // the residual axis is symmetric at ±1.1 × 2.5 N, so its ticks include ±2.0.
-    assert!(
-        t.iter().any(|s| s == "2.0") && t.iter().any(|s| s == "-2.0"),
-        "{t:?}"
-    );
+    // the residual axis is symmetric and round, ±5 N (1.1 × 2.5 rounded up), with five ticks.
+    let at = t.iter().position(|s| s == "residual [N]").unwrap();
+    assert_eq!(t[at + 2..at + 7], ["-4", "-2", "0", "2", "4"], "{t:?}");
 }
 
 #[test]
@@ -334,6 +332,19 @@ fn gap_which_has_before_and_after_bars() {
         "{t:?}"
     );
     assert!(t.iter().any(|s| s == "viscoelasticity"));
+    // Gaps near the floor keep two significant digits: at one decimal both read "0.2 % → 0.2 %".
+    let svg = gap_which_svg(&[
+        c("kinematic_hardening", 0.0021, 0.0015),
+        c("viscoelasticity", 0.0021, 0.0019),
+    ])
+    .unwrap();
+    let t = texts(&parse(&svg));
+    for want in [
+        "0.21\u{a0}% \u{2192} 0.15\u{a0}%",
+        "0.21\u{a0}% \u{2192} 0.19\u{a0}%",
+    ] {
+        assert!(t.iter().any(|s| s == want), "{want}: {t:?}");
+    }
 }
 
 #[test]
