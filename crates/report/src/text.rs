@@ -125,7 +125,7 @@ pub fn fmt_mean_sd(mean: f64, sd: f64, sig: usize) -> String {
         return format!("{} \u{b1} {}", fmt_num(mean, sig), fmt_num(sd, 2));
     }
     let sig = sig.clamp(1, 15);
-    let (mant, exp) = mant_exp(mean, sig);
+    let (_, exp) = mant_exp(mean, sig);
     let fixed = |x: f64, d: usize| {
         let s = format!("{:.*}", d, x);
         if s.starts_with('-') && s.trim_start_matches(['-', '0', '.']).is_empty() {
@@ -134,15 +134,25 @@ pub fn fmt_mean_sd(mean: f64, sd: f64, sig: usize) -> String {
             s
         }
     };
+    // A nonzero sd that the mean's decimals would round to 0 gets the decimals of its first
+    // significant digit, the mean with it (Table 1 read "(1.37 ± 0.00)·10⁻³" for a CoV of 0.1 %).
+    let at_least = |d: usize, sd: f64| {
+        if sd > 0.0 && sd.is_finite() {
+            d.max((-sd.log10().floor()).clamp(0.0, 9.0) as usize)
+        } else {
+            d
+        }
+    };
     if (-2..4).contains(&exp) {
-        let d = (sig as i32 - 1 - exp).max(0) as usize;
+        let d = at_least((sig as i32 - 1 - exp).max(0) as usize, sd.abs());
         format!("{} \u{b1} {}", fixed(mean, d), fixed(sd.abs(), d))
     } else {
         let scale = 10f64.powi(-exp);
+        let d = at_least(sig - 1, sd.abs() * scale);
         format!(
             "({} \u{b1} {})\u{b7}10{}",
-            fixed(mant, sig - 1),
-            fixed(sd.abs() * scale, sig - 1),
+            fixed(mean * scale, d),
+            fixed(sd.abs() * scale, d),
             superscript(&exp.to_string())
         )
     }
@@ -346,6 +356,12 @@ mod tests {
     #[test]
     fn fmt_mean_sd_shares_decimals_and_exponent() {
         assert_eq!(fmt_mean_sd(1.4, 0.07, 3), "1.40 \u{b1} 0.07");
+        // An sd below the mean's last decimal shows its first digit (a CoV of 0.1 %).
+        assert_eq!(
+            fmt_mean_sd(1.3703e-3, 1.4e-6, 3),
+            "(1.370 \u{b1} 0.001)\u{b7}10\u{207b}\u{b3}"
+        );
+        assert_eq!(fmt_mean_sd(12.5, 0.004, 3), "12.500 \u{b1} 0.004");
         assert_eq!(
             fmt_mean_sd(7.96e4, 1.2e3, 3),
             "(7.96 \u{b1} 0.12)\u{b7}10\u{2074}"
