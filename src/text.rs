@@ -70,11 +70,26 @@ pub fn analysis_text(file: &str, an: &Analysis, nu: f64) -> String {
             );
         }
     }
+    // Units beside every number: the sectional control's (strain, 1/m, or m for a three-point
+    // deflection), the response's and the stiffness'.
+    let cu = match an.kind {
+        cablab_core::TestKind::Tension => " (strain)",
+        cablab_core::TestKind::ThreePoint => " m",
+        cablab_core::TestKind::Torsion | cablab_core::TestKind::PureBending => " 1/m",
+        cablab_core::TestKind::Unknown => "",
+    };
+    let ru = an.kind.response_unit();
+    let su = an
+        .stiffness
+        .as_ref()
+        .map_or(an.kind.stiffness_unit().to_string(), |st| {
+            st.unit.to_string()
+        });
     match &an.yield_point {
         Some(y) => {
             let _ = writeln!(
                 s,
-                "  yield       control {:.5e}, response {:.5e}",
+                "  yield       control {:.5e}{cu}, response {:.5e} {ru}",
                 y.control, y.response
             );
         }
@@ -89,7 +104,7 @@ pub fn analysis_text(file: &str, an: &Analysis, nu: f64) -> String {
     if let Some(p) = &an.piecewise {
         let _ = writeln!(
             s,
-            "  threshold   control {:.5e}, response {:.5e}",
+            "  threshold   control {:.5e}{cu}, response {:.5e} {ru}",
             p.threshold_control, p.threshold_response
         );
     }
@@ -103,11 +118,17 @@ pub fn analysis_text(file: &str, an: &Analysis, nu: f64) -> String {
         };
         let _ = writeln!(
             s,
-            "  cycle {:>2}    loop area {} J{sign_note}, residual {}, unloading stiffness {}",
+            "  cycle {:>2}    loop area {} J{sign_note}, residual {}{}, unloading stiffness {}{}",
             c.index,
             f(c.loop_area),
             f(c.residual),
-            f(c.unloading_stiffness)
+            if c.residual.is_some() { cu } else { "" },
+            f(c.unloading_stiffness),
+            if c.unloading_stiffness.is_some() {
+                format!(" {su}")
+            } else {
+                String::new()
+            }
         );
     }
     for w in &an.warnings {
