@@ -122,7 +122,11 @@ pub fn analysis_text(file: &str, an: &Analysis, nu: f64) -> String {
             c.index,
             f(c.loop_area),
             f(c.residual),
-            if c.residual.is_some() { cu } else { "" },
+            match (c.residual.is_some(), c.residual_extrapolated) {
+                (true, true) => format!("{cu} (extrapolated to zero load along the unloading)"),
+                (true, false) => cu.to_string(),
+                _ => String::new(),
+            },
             f(c.unloading_stiffness),
             if c.unloading_stiffness.is_some() {
                 format!(" {su}")
