@@ -122,7 +122,28 @@ fn no_control(rec: &TestRecord) -> anyhow::Error {
         })
         .map(|c| format!("'{}'", c.name))
         .collect();
-    if strains.is_empty() {
+    // The other columns with what their units make of them: a unit stated by mistake (a
+    // pipeline's `units = { Deflection = "mm2" }`) turns the deflection into an area, and the
+    // error said only that no control was found.
+    let others: Vec<String> = rec
+        .channels
+        .iter()
+        .filter(|c| {
+            c.role == Role::Other && c.dimension != Some(cablab_ingest::units::Dimension::Ratio)
+        })
+        .take(6)
+        .map(|c| match c.dimension {
+            Some(d) if !c.unit.is_empty() => format!("'{}' in {} ({d:?})", c.name, c.unit),
+            _ if !c.unit.is_empty() => format!("'{}' in {}", c.name, c.unit),
+            _ => format!("'{}' (no unit)", c.name),
+        })
+        .collect();
+    if strains.is_empty() && !others.is_empty() {
+        anyhow!(
+            "{file}: no control channel (displacement, angle or rotation) was found among its columns {}: a column whose unit is not a length or an angle is not taken (check a unit given with --unit or a pipeline's `units`); name the control with --control",
+            others.join(", ")
+        )
+    } else if strains.is_empty() {
         anyhow!("{file}: no control channel (displacement, angle or rotation) was found; name one with --control")
     } else {
         anyhow!(

@@ -1274,3 +1274,30 @@ fn a_cut_record_keeps_its_own_maximum_and_no_strain_reads_as_a_length() {
         &svg[..svg.len().min(400)]
     );
 }
+
+/// A unit stated by mistake that makes the deflection an area (`--unit Deflection=mm2`, as a
+/// pipeline's `units`): the error said only that no control was found; it names the column
+/// and what its unit made of it.
+#[test]
+fn a_control_unit_given_wrong_is_named_in_the_error() {
+    let tmp = tempfile::tempdir().unwrap();
+    copy(
+        &root().join("raw_data/cable/three_point_2mm_2.csv"),
+        &tmp.path().join("in/three_point_2mm_2.csv"),
+    );
+    let o = run_in(
+        tmp.path(),
+        &[
+            "analyze",
+            "in/three_point_2mm_2.csv",
+            "--unit",
+            "Deflection=mm2",
+        ],
+    );
+    assert_eq!(o.code, 2, "{}", o.stderr);
+    assert!(
+        o.stderr.contains("'Deflection' in mm2 (Area)") && o.stderr.contains("--control"),
+        "{}",
+        o.stderr
+    );
+}
