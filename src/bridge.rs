@@ -153,15 +153,46 @@ fn no_control(rec: &TestRecord) -> anyhow::Error {
     }
 }
 
+/// The error for a record without a response channel, naming a force or moment column that
+/// holds no number at all (every cell empty, `nan` or a no-data code): the reader keeps such a
+/// column but gives it no role, and "no response channel was found" sent a user looking for a
+/// naming problem.
+fn no_response(rec: &TestRecord) -> anyhow::Error {
+    use cablab_ingest::units::Dimension;
+    let file = &rec.provenance.path;
+    let empty: Vec<String> = (0..rec.channels.len())
+        .filter(|&k| {
+            matches!(
+                rec.channels[k].dimension,
+                Some(Dimension::Force | Dimension::Torque)
+            ) && rec.channels[k].role == Role::Other
+        })
+        .filter(|&k| {
+            rec.values(k)
+                .is_some_and(|v| !v.iter().any(|x| x.is_finite()))
+        })
+        .map(|k| format!("'{}'", rec.channels[k].name))
+        .collect();
+    if empty.is_empty() {
+        anyhow!("{file}: no response channel (force, torque or moment) was found; name one with --response")
+    } else {
+        anyhow!(
+            "{file}: no response channel (force, torque or moment) with any number in it: {} {} none (every cell empty, nan or a no-data code); the export may have lost the channel",
+            empty.join(", "),
+            if empty.len() == 1 { "holds" } else { "hold" }
+        )
+    }
+}
+
 /// Extract the complete rows of a record. Errors name the file and the missing role.
 pub fn curve(rec: &TestRecord) -> Result<Curve> {
     let file = &rec.provenance.path;
     let control = rec
         .role_values(Role::Control)
         .ok_or_else(|| no_control(rec))?;
-    let response = rec.role_values(Role::Response).ok_or_else(|| {
-        anyhow!("{file}: no response channel (force, torque or moment) was found; name one with --response")
-    })?;
+    let response = rec
+        .role_values(Role::Response)
+        .ok_or_else(|| no_response(rec))?;
     let time = rec.role_values(Role::Time);
     let mut c = Curve::default();
     let mut t_out = time.as_ref().map(|_| Vec::new());

@@ -1301,3 +1301,25 @@ fn a_control_unit_given_wrong_is_named_in_the_error() {
         o.stderr
     );
 }
+
+/// A force column that holds no number (every cell `nan`, an export that lost the channel)
+/// was "no response channel was found": the error names the column and says it is empty.
+#[test]
+fn an_empty_force_column_is_named() {
+    let tmp = tempfile::tempdir().unwrap();
+    let rows: String = (0..50)
+        .map(|i| format!("{},{},nan\n", 0.1 * i as f64, 0.01 * i as f64))
+        .collect();
+    std::fs::create_dir_all(tmp.path().join("in")).unwrap();
+    std::fs::write(
+        tmp.path().join("in/tension_empty.csv"),
+        format!("Time (s),Extension (mm),Load (N)\n{rows}"),
+    )
+    .unwrap();
+    let o = run_in(
+        tmp.path(),
+        &["analyze", "in/tension_empty.csv", "--length-mm", "50"],
+    );
+    assert_eq!(o.code, 2, "{}", o.stderr);
+    assert!(o.stderr.contains("'Load' holds none"), "{}", o.stderr);
+}
