@@ -658,7 +658,8 @@ fn family_key(family: &str) -> String {
 /// - files of one folder, label family and kind whose metadata state diameters within 5 % of each
 ///   other (each specimen measured: 7.08, 7.13, 7.23 mm) are one type, with no diameter in the
 ///   pipeline so that each test takes its file's own (they were a group of one each, with no
-///   mean or spread).
+///   mean or spread); stated flat sections (b × h) or cross-sections within 5 % in every
+///   dimension likewise ([`section_numbers`]), each test keeping its file's own section.
 pub fn settle_types(found: &mut [Found]) {
     let kind_of = |f: &Found| f.kind.as_ref().map(|k| k.value);
     let dir_of = |f: &Found| folder_name(&f.path);
@@ -732,6 +733,81 @@ pub fn settle_types(found: &mut [Found]) {
             }
         }
     }
+    // Pool measured flat sections (or cross-sections) the same way: each test already takes its
+    // file's own section, so only the type is shared (two CFRP bars of one batch, 12.8 × 4.2 and
+    // 12.86 × 4.11 mm, were two groups of one, with no mean or spread).
+    let mut by_section: BTreeMap<(String, String, Option<TestKind>, usize), Vec<usize>> =
+        BTreeMap::new();
+    for (i, f) in found.iter().enumerate() {
+        if f.diameter_mm.is_some() || f.specimen_type.is_none() {
+            continue;
+        }
+        if let Some(v) = f.section.as_ref().and_then(|s| section_numbers(&s.value)) {
+            let key = (
+                dir_of(f),
+                family_key(&label_family(&f.label)),
+                kind_of(f),
+                v.len(),
+            );
+            by_section.entry(key).or_default().push(i);
+        }
+    }
+    for ((dir, _, _, _), idx) in by_section {
+        let nums: Vec<Vec<f64>> = idx
+            .iter()
+            .filter_map(|&i| found[i].section.as_ref())
+            .filter_map(|s| section_numbers(&s.value))
+            .collect();
+        let dims = nums[0].len();
+        let span = |k: usize| {
+            nums.iter().fold((f64::INFINITY, 0.0f64), |(a, b), v| {
+                (a.min(v[k]), b.max(v[k]))
+            })
+        };
+        let spans: Vec<(f64, f64)> = (0..dims).map(span).collect();
+        let distinct = nums.iter().any(|v| *v != nums[0]);
+        let close = spans.iter().all(|&(lo, hi)| lo > 0.0 && hi / lo <= 1.05);
+        if idx.len() >= 2 && distinct && close {
+            let range = |(lo, hi): (f64, f64)| {
+                if lo == hi {
+                    format!("{lo}")
+                } else {
+                    format!("{lo}–{hi}")
+                }
+            };
+            let words = if dims == 2 {
+                format!("{} × {} mm", range(spans[0]), range(spans[1]))
+            } else {
+                format!("cross-section {} mm²", range(spans[0]))
+            };
+            let family = label_family(&found[idx[0]].label);
+            for &i in &idx {
+                let f = &mut found[i];
+                f.specimen_type = Some(if split[i] {
+                    format!("{dir} {family} {words}")
+                } else {
+                    format!("{dir} {words}")
+                });
+                f.notes.push(format!(
+                    "pooled with {} other specimen(s) of '{family}' whose stated sections lie within 5 % ({words}): each test's moduli use its file's own section",
+                    idx.len() - 1
+                ));
+            }
+        }
+    }
+}
+
+/// The numbers of a stated section as [`stated_section`] writes it: `[b, h]` of a flat `b × h mm`,
+/// `[A]` of a `cross-section A mm²`.
+fn section_numbers(value: &str) -> Option<Vec<f64>> {
+    if let Some(a) = value
+        .strip_prefix("cross-section ")
+        .and_then(|r| r.strip_suffix(" mm²"))
+    {
+        return a.trim().parse().ok().map(|a| vec![a]);
+    }
+    let (b, h) = value.strip_suffix(" mm")?.split_once(" × ")?;
+    Some(vec![b.trim().parse().ok()?, h.trim().parse().ok()?])
 }
 
 /// A non-round section the file's metadata states and a `kind` test's modulus can use (see

@@ -1323,3 +1323,51 @@ fn an_empty_force_column_is_named() {
     assert_eq!(o.code, 2, "{}", o.stderr);
     assert!(o.stderr.contains("'Load' holds none"), "{}", o.stderr);
 }
+
+/// Flat specimens of one batch measured one by one (a real Bluehill flexure pair: 12.8 × 4.2 and
+/// 12.86 × 4.11 mm) were two groups of one, with no mean or spread; sections within 5 % now
+/// make one type whose tests each take their own section. A section 20 % off stays apart.
+#[test]
+fn folder_mode_pools_measured_flat_sections() {
+    let tmp = tempfile::tempdir().unwrap();
+    let src =
+        std::fs::read_to_string(root().join("tests/data/cablab__bluehill_flexure_three_point.csv"))
+            .unwrap();
+    let write = |dir: &str, name: &str, label: &str, w: &str, h: &str| {
+        let text = src
+            .replace("\"F-07\"", &format!("\"{label}\""))
+            .replace("Thickness,\"4.00000\"", &format!("Thickness,\"{h}\""))
+            .replace("Width,\"12.00000\"", &format!("Width,\"{w}\""));
+        let p = tmp.path().join(dir).join(name);
+        std::fs::create_dir_all(p.parent().unwrap()).unwrap();
+        std::fs::write(p, text).unwrap();
+    };
+    write("batch", "flexure_1.csv", "F-1", "12.00000", "4.00000");
+    write("batch", "flexure_2.csv", "F-2", "12.06000", "3.92000");
+    write("batch", "flexure_3.csv", "F-3", "11.95000", "4.05000");
+    write("apart", "flexure_1.csv", "F-1", "12.00000", "4.00000");
+    write("apart", "flexure_2.csv", "F-2", "12.00000", "4.80000");
+    let summary = |dir: &str| -> Value {
+        let o = run_in(tmp.path(), &["run", dir, "-q", "--no-diagnosis"]);
+        assert_eq!(o.code, 0, "{}", o.stderr);
+        let p = tmp.path().join("reports").join(dir).join("summary.json");
+        serde_json::from_slice(&std::fs::read(p).unwrap()).unwrap()
+    };
+    let v = summary("batch");
+    let g = v["groups"].as_array().unwrap();
+    assert_eq!(g.len(), 1, "{g:?}");
+    assert_eq!(g[0]["n"], 3);
+    assert!(g[0]["stiffness_sd"].as_f64().is_some(), "{g:?}");
+    // The same curve in every file: the same EI, and each modulus from its own I = b h³ / 12.
+    for (t, (b, h)) in v["tests"].as_array().unwrap().iter().zip([
+        (12.0e-3, 4.0e-3),
+        (12.06e-3, 3.92e-3),
+        (11.95e-3, 4.05e-3),
+    ]) {
+        let ei = t["stiffness"].as_f64().unwrap();
+        let e = t["modulus_pa"].as_f64().unwrap();
+        let i = b * f64::powi(h, 3) / 12.0;
+        assert!((e * i / ei - 1.0).abs() < 1e-6, "{t}");
+    }
+    assert_eq!(summary("apart")["groups"].as_array().unwrap().len(), 2);
+}
