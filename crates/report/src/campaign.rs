@@ -165,12 +165,19 @@ pub fn campaign_stiffness_svg(view: &StiffnessView) -> Result<String, ReportErro
                     plotters::style::text_anchor::VPos::Top,
                 ));
             let (px, py) = (px - ox, py - oy);
+            // Kept inside its panel: centred under the plot, a long type name ran past the
+            // figure's right edge and was cut ("CFRP rod 3 m").
+            let label = strip_xml_forbidden(&group.label);
+            let half =
+                (label.chars().count() as f64 * style::LABEL_SIZE * 0.56 / 2.0).ceil() as i32;
+            let width = panel.dim_in_pixel().0 as i32;
+            let lx = if 2 * half + 4 < width {
+                px.clamp(half + 2, width - half - 2)
+            } else {
+                px
+            };
             panel
-                .draw(&Text::new(
-                    strip_xml_forbidden(&group.label),
-                    (px, py + 8),
-                    centred.clone(),
-                ))
+                .draw(&Text::new(label, (lx, py + 8), centred.clone()))
                 .map_err(draw_err)?;
             panel
                 .draw(&Text::new(format!("n = {m}"), (px, py + 26), centred))
