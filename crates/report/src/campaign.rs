@@ -165,19 +165,28 @@ pub fn campaign_stiffness_svg(view: &StiffnessView) -> Result<String, ReportErro
                     plotters::style::text_anchor::VPos::Top,
                 ));
             let (px, py) = (px - ox, py - oy);
-            // Kept inside its panel: centred under the plot, a long type name ran past the
-            // figure's right edge and was cut ("CFRP rod 3 m").
+            // Kept inside the figure: centred under the plot in its panel, a long type name ran
+            // past the figure's right edge and was cut ("CFRP rod 3 m"). Drawn on the whole
+            // figure (a panel clips what leaves it), moved in from its edges.
             let label = strip_xml_forbidden(&group.label);
             let half =
                 (label.chars().count() as f64 * style::LABEL_SIZE * 0.56 / 2.0).ceil() as i32;
-            let width = panel.dim_in_pixel().0 as i32;
-            let lx = if 2 * half + 4 < width {
-                px.clamp(half + 2, width - half - 2)
+            let (rx, ry) = root.get_base_pixel();
+            let fig = root.dim_in_pixel().0 as i32;
+            let ax = ox - rx + px;
+            let ax = if 2 * half + 4 < fig {
+                ax.clamp(half + 2, fig - half - 2)
             } else {
-                px
+                ax
             };
-            panel
-                .draw(&Text::new(label, (lx, py + 8), centred.clone()))
+            let on_root = (FONT, style::LABEL_SIZE)
+                .into_font()
+                .into_text_style(&root)
+                .pos(plotters::style::text_anchor::Pos::new(
+                    plotters::style::text_anchor::HPos::Center,
+                    plotters::style::text_anchor::VPos::Top,
+                ));
+            root.draw(&Text::new(label, (ax, oy - ry + py + 8), on_root))
                 .map_err(draw_err)?;
             panel
                 .draw(&Text::new(format!("n = {m}"), (px, py + 26), centred))

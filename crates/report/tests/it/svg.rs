@@ -460,6 +460,45 @@ fn campaign_stiffness_shows_every_specimen_and_the_means() {
     ));
 }
 
+/// A type's long name under the last of four panels stays inside the figure (the demo's
+/// "CFRP rod 3 mm" was cut at its right edge): centred text, its half width estimated at
+/// 0.56 em a character, ends before the figure's width.
+#[test]
+fn campaign_stiffness_labels_stay_inside_the_figure() {
+    let group = |label: &str| StiffnessGroup {
+        label: label.into(),
+        values: vec![("a".into(), 1.0), ("b".into(), 1.1)],
+    };
+    let view = StiffnessView {
+        title: "(EI)_B".into(),
+        y_label: "(EI)_B [N m²]".into(),
+        groups: vec![
+            group("Bowden cable 7.8 mm"),
+            group("cable 2.8 mm @ 2mm"),
+            group("cable 2.8 mm @ 6mm"),
+            group("a much longer specimen type name"),
+        ],
+    };
+    let svg = campaign_stiffness_svg(&view).unwrap();
+    let doc = parse(&svg);
+    let width: f64 = doc
+        .root_element()
+        .attribute("width")
+        .unwrap()
+        .parse()
+        .unwrap();
+    let last = doc
+        .descendants()
+        .find(|n| {
+            n.has_tag_name("text")
+                && n.text().map(str::trim) == Some("a much longer specimen type name")
+        })
+        .expect("the label is drawn");
+    let x: f64 = last.attribute("x").unwrap().parse().unwrap();
+    let half = 32.0 * style::LABEL_SIZE * 0.56 / 2.0;
+    assert!(x + half <= width, "x {x}, half {half}, width {width}");
+}
+
 #[test]
 fn the_fixture_reproduces_the_chapter_tension_numbers() {
     // Guard for the fixture itself: elastic slope (EA)_T / l₀ and yield at 54 N.
