@@ -663,7 +663,7 @@ fn section(out_dir: &Path, o: &TestOutcome) -> TestSection {
         let unit = o.stiffness_unit.replace("^2", "²");
         let st = o
             .stiffness
-            .map_or("–".to_string(), |s| format!("{} {unit}", fmt_num(s, 3)));
+            .map_or("–".to_string(), |s| format!("{} {unit}", fmt_num(s, 4)));
         facts.push(("stiffness".into(), st.clone()));
         if let Some([lo, hi]) = o.stiffness_ci95 {
             facts.push((
