@@ -645,13 +645,12 @@ fn section(out_dir: &Path, o: &TestOutcome) -> TestSection {
     let (xl, yl) = cablab_report::axis_labels(o.kind);
     let xs: Vec<f64> = o.overlay.iter().map(|p| p[0] * 1.04).collect();
     let ys: Vec<f64> = o.overlay.iter().map(|p| p[1] * 1.06).chain([0.0]).collect();
-    // A strain carried on l₀ = 1 m (no length known) is a strain, not a Δl.
-    let on_x = |v: f64| {
-        if o.control_is_strain {
-            format!("{} % strain", fmt_num(v * 100.0, 3))
-        } else {
-            fmt_on_axis(v, xs.iter().copied(), xl, 3)
-        }
+    // A strain carried on l₀ = 1 m (no length known) is a strain, not a Δl; a torsional
+    // extensometer's shear strain is carried as the twist per length.
+    let on_x = |v: f64| match (o.control_is_strain, o.kind) {
+        (true, TestKind::Tension) => format!("{} % strain", fmt_num(v * 100.0, 3)),
+        (true, _) => format!("{} 1/m (per length)", fmt_num(v, 3)),
+        _ => fmt_on_axis(v, xs.iter().copied(), xl, 3),
     };
     let on_y = |v: f64| fmt_on_axis(v, ys.iter().copied(), yl, 4);
     let (rs, _, cs, _, _) = cablab_report::campaign::kind_quantities(o.kind);
