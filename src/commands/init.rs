@@ -708,15 +708,11 @@ pub fn settle_types(found: &mut [Found]) {
         }
     }
     for ((dir, _, _), idx) in by_family {
-        let ds: Vec<f64> = idx
+        let ds: Vec<Vec<f64>> = idx
             .iter()
-            .filter_map(|&i| found[i].diameter_mm.as_ref().map(|d| d.value))
+            .filter_map(|&i| found[i].diameter_mm.as_ref().map(|d| vec![d.value]))
             .collect();
-        let (lo, hi) = ds
-            .iter()
-            .fold((f64::INFINITY, 0.0f64), |(a, b), &d| (a.min(d), b.max(d)));
-        let distinct = ds.iter().any(|&d| d != ds[0]);
-        if idx.len() >= 2 && distinct && lo > 0.0 && hi / lo <= 1.05 {
+        if let Some(&[(lo, hi)]) = pooled_spans(&ds).as_deref() {
             let family = label_family(&found[idx[0]].label);
             for &i in &idx {
                 let f = &mut found[i];
@@ -758,16 +754,7 @@ pub fn settle_types(found: &mut [Found]) {
             .filter_map(|&i| found[i].section.as_ref())
             .filter_map(|s| section_numbers(&s.value))
             .collect();
-        let dims = nums[0].len();
-        let span = |k: usize| {
-            nums.iter().fold((f64::INFINITY, 0.0f64), |(a, b), v| {
-                (a.min(v[k]), b.max(v[k]))
-            })
-        };
-        let spans: Vec<(f64, f64)> = (0..dims).map(span).collect();
-        let distinct = nums.iter().any(|v| *v != nums[0]);
-        let close = spans.iter().all(|&(lo, hi)| lo > 0.0 && hi / lo <= 1.05);
-        if idx.len() >= 2 && distinct && close {
+        if let Some(spans) = pooled_spans(&nums) {
             let range = |(lo, hi): (f64, f64)| {
                 if lo == hi {
                     format!("{lo}")
@@ -775,7 +762,7 @@ pub fn settle_types(found: &mut [Found]) {
                     format!("{lo}–{hi}")
                 }
             };
-            let words = if dims == 2 {
+            let words = if spans.len() == 2 {
                 format!("{} × {} mm", range(spans[0]), range(spans[1]))
             } else {
                 format!("cross-section {} mm²", range(spans[0]))
@@ -795,6 +782,28 @@ pub fn settle_types(found: &mut [Found]) {
             }
         }
     }
+}
+
+/// Per dimension, the smallest and largest of measured sizes (`sizes`: one vector per specimen,
+/// each of the same dimensions) when they are of two or more specimens, not all the same, and
+/// within 5 % of each other in every dimension: one specimen type measured one by one
+/// ([`settle_types`]). `None` otherwise.
+fn pooled_spans(sizes: &[Vec<f64>]) -> Option<Vec<(f64, f64)>> {
+    let first = sizes.first()?;
+    if sizes.len() < 2 || sizes.iter().all(|v| v == first) {
+        return None;
+    }
+    let spans: Vec<(f64, f64)> = (0..first.len())
+        .map(|k| {
+            sizes.iter().fold((f64::INFINITY, 0.0f64), |(a, b), v| {
+                (a.min(v[k]), b.max(v[k]))
+            })
+        })
+        .collect();
+    spans
+        .iter()
+        .all(|&(lo, hi)| lo > 0.0 && hi / lo <= 1.05)
+        .then_some(spans)
 }
 
 /// The numbers of a stated section as [`stated_section`] writes it: `[b, h]` of a flat `b × h mm`,

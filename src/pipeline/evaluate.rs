@@ -550,12 +550,7 @@ fn stages(
         &mut curve,
     )?);
     // The record's own largest response, before a cut can take it away.
-    let uncut_peak = curve
-        .response
-        .iter()
-        .copied()
-        .filter(|r| r.is_finite())
-        .fold(0.0f64, |m, r| if r.abs() > m.abs() { r } else { m });
+    let uncut_peak = max_response(&curve.control, &curve.response).map_or(0.0, |m| m[1]);
     let uncut_first = curve.response.iter().copied().find(|r| *r != 0.0);
     out.warnings
         .extend(crate::bridge::extensometer_removed(&rec, &mut curve));

@@ -526,12 +526,11 @@ fn single_loading_words(
 /// Legs whose control rates differ by less than this factor run at one rate ([`one_rate`]).
 const ONE_RATE_SPREAD: f64 = 1.5;
 
-/// Whether every leg of `t` (a loading, unloading or reloading branch of at least 5 samples that
-/// takes time) moves its control at one rate: the fastest leg's mean rate within
+/// Whether every leg of `t` (labelled `labels`: a loading, unloading or reloading branch of at
+/// least 5 samples that takes time) moves its control at one rate: the fastest leg's mean rate within
 /// [`ONE_RATE_SPREAD`] of the slowest's. `None` where the record has fewer than two such legs
 /// or no time.
-fn one_rate(t: &DiagTest) -> Option<bool> {
-    let labels = t.labels_or_derived();
+fn one_rate(t: &DiagTest, labels: &[crate::model::SegLabel]) -> Option<bool> {
     let n = labels.len().min(t.control.len()).min(t.time_s.len());
     let mut rates: Vec<f64> = Vec::new();
     let mut a = 0;
@@ -569,13 +568,16 @@ pub(crate) fn unseen_words(tests: &[DiagTest], set: &[Effect]) -> Option<String>
     if tests.is_empty() || tests.iter().all(one_loading) {
         return None;
     }
-    let holds = tests.iter().any(|t| {
-        t.labels_or_derived()
-            .iter()
-            .any(|l| l.branch == crate::model::Branch::Hold)
-    });
-    let rates: Vec<Option<bool>> = tests.iter().map(one_rate).collect();
-    let one_rate_all = rates.iter().all(|r| *r == Some(true));
+    // Each test's labels once: derived ones segment the record.
+    let labels: Vec<Vec<crate::model::SegLabel>> =
+        tests.iter().map(DiagTest::labels_or_derived).collect();
+    let holds = labels
+        .iter()
+        .any(|l| l.iter().any(|l| l.branch == crate::model::Branch::Hold));
+    let one_rate_all = tests
+        .iter()
+        .zip(&labels)
+        .all(|(t, l)| one_rate(t, l) == Some(true));
     let mut said: Vec<String> = Vec::new();
     if set.contains(&Effect::Viscoelasticity) && !holds && one_rate_all {
         said.push(

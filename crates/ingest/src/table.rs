@@ -1137,23 +1137,11 @@ impl<'a> Engine<'a> {
         };
         let idx = self.out.blocks.len() + 1;
         let src = self.source.to_string();
+        // catman writes -1000000 for samples a channel does not have (unused channels, slower
+        // sample rates): missing, not data, wherever it stands.
         if self.format == Format::CatmanAscii {
-            // catman writes -1000000 for samples a channel does not have (unused channels,
-            // slower sample rates): missing, not data.
-            let mut n = 0usize;
-            let mut first: Option<(usize, usize)> = None;
-            for (ci, col) in block.columns.iter_mut().enumerate() {
-                for (row, v) in col.iter_mut().enumerate() {
-                    if *v == CATMAN_SENTINEL {
-                        *v = f64::NAN;
-                        n += 1;
-                        if first.is_none_or(|(r, _)| row < r) {
-                            first = Some((row, ci));
-                        }
-                    }
-                }
-            }
-            if let Some((row, ci)) = first {
+            let (n, first) = codes_to_missing(&mut block.columns, &[CATMAN_SENTINEL], false);
+            if let Some((row, ci, _)) = first {
                 self.out.warnings.push(Diagnostic {
                     file: src.clone(),
                     line: Some(block.line_of_row(row)),
@@ -1169,31 +1157,7 @@ impl<'a> Engine<'a> {
         // a 2 µJ one and a stiffness 10⁴× off, where the same cells written `nan` are read as
         // missing. A code counts as missing only where it lies beyond twice every other value
         // of its column (a channel whose data reach it keeps it as a value).
-        let mut coded = 0usize;
-        let mut first: Option<(usize, usize, f64)> = None;
-        for (ci, col) in block.columns.iter_mut().enumerate() {
-            for &code in NO_DATA_CODES {
-                if !col.contains(&code) {
-                    continue;
-                }
-                let others = col
-                    .iter()
-                    .filter(|v| v.is_finite() && **v != code)
-                    .fold(0.0f64, |m, v| m.max(v.abs()));
-                if others >= 0.5 * code.abs() {
-                    continue;
-                }
-                for (row, v) in col.iter_mut().enumerate() {
-                    if *v == code {
-                        *v = f64::NAN;
-                        coded += 1;
-                        if first.is_none_or(|(r, _, _)| row < r) {
-                            first = Some((row, ci, code));
-                        }
-                    }
-                }
-            }
-        }
+        let (coded, first) = codes_to_missing(&mut block.columns, NO_DATA_CODES, true);
         if let Some((row, ci, code)) = first {
             self.out.warnings.push(Diagnostic {
                 file: src.clone(),
@@ -1523,6 +1487,44 @@ fn align_header(head: &[u8], data: &[u8], n: usize) -> Option<Vec<String>> {
 
 /// catman's placeholder for a sample a channel does not have.
 const CATMAN_SENTINEL: f64 = -1_000_000.0;
+
+/// Replaces the cells of `columns` that hold one of `codes` by NaN (missing) — with `beyond`, only
+/// in a column whose other values all stay within half the code's magnitude (a channel whose
+/// data reach the code keeps it as a value). Returns how many and the first (row, column, code).
+fn codes_to_missing(
+    columns: &mut [Vec<f64>],
+    codes: &[f64],
+    beyond: bool,
+) -> (usize, Option<(usize, usize, f64)>) {
+    let mut n = 0usize;
+    let mut first: Option<(usize, usize, f64)> = None;
+    for (ci, col) in columns.iter_mut().enumerate() {
+        for &code in codes {
+            if !col.contains(&code) {
+                continue;
+            }
+            if beyond {
+                let others = col
+                    .iter()
+                    .filter(|v| v.is_finite() && **v != code)
+                    .fold(0.0f64, |m, v| m.max(v.abs()));
+                if others >= 0.5 * code.abs() {
+                    continue;
+                }
+            }
+            for (row, v) in col.iter_mut().enumerate() {
+                if *v == code {
+                    *v = f64::NAN;
+                    n += 1;
+                    if first.is_none_or(|(r, _, _)| row < r) {
+                        first = Some((row, ci, code));
+                    }
+                }
+            }
+        }
+    }
+    (n, first)
+}
 
 /// No-data codes loggers and exports write in place of a value (see `close_block`).
 const NO_DATA_CODES: &[f64] = &[

@@ -2519,8 +2519,7 @@ fn material_bend(first: Hinge, x: &[f64], y: &[f64]) -> Option<Hinge> {
 /// gave a "yield" 2.8 % above the test's maximum force. A local straight line through several
 /// samples would cut a sharp corner, and on a sparse (digitised) curve span half of it.
 fn response_on_envelope(x: &[f64], y: &[f64], at: f64) -> f64 {
-    let bracket = (1..x.len()).find(|&j| (x[j - 1] - at) * (x[j] - at) <= 0.0);
-    match bracket {
+    match bracket(x, at) {
         Some(j) if x[j] != x[j - 1] => {
             y[j - 1] + (y[j] - y[j - 1]) * (at - x[j - 1]) / (x[j] - x[j - 1])
         }
@@ -2529,6 +2528,12 @@ fn response_on_envelope(x: &[f64], y: &[f64], at: f64) -> f64 {
             .min_by(|&a, &b| (x[a] - at).abs().total_cmp(&(x[b] - at).abs()))
             .map_or(f64::NAN, |k| y[k]),
     }
+}
+
+/// The first pair of consecutive samples of `x` (in sample order) that brackets `at`: the index
+/// of the second.
+fn bracket(x: &[f64], at: f64) -> Option<usize> {
+    (1..x.len()).find(|&j| (x[j - 1] - at) * (x[j] - at) <= 0.0)
 }
 
 /// The highest the envelope (x = control, y = response, rising) can run at control `at` between
@@ -2540,7 +2545,7 @@ fn corner_above_chord(x: &[f64], y: &[f64], at: f64, before: f64, after: f64) ->
     if !(after < before) {
         return None;
     }
-    let j = (1..x.len()).find(|&j| (x[j - 1] - at) * (x[j] - at) <= 0.0)?;
+    let j = bracket(x, at)?;
     let (x0, y0, x1, y1) = (x[j - 1], y[j - 1], x[j], y[j]);
     if !(x1 > x0) {
         return None;

@@ -687,18 +687,14 @@ impl ChannelNoise {
 /// corners still made the jitter half a leg's step, and the hold before the first ramp swallowed
 /// that ramp's first third (see [`corner_free_jitter`]).
 fn short_legs(signal: &[f64], sigma: f64, k: usize) -> Option<Vec<TurningPoint>> {
-    let mut tps = turning_points(signal, reversal_threshold_with(signal, sigma));
+    let tps = turning_points(signal, reversal_threshold_with(signal, sigma));
     if tps.len() < 3 {
         return None;
     }
     let mut legs: Vec<usize> = tps.windows(2).map(|w| w[1].index - w[0].index).collect();
     let mid = legs.len() / 2;
     let (_, &mut median, _) = legs.select_nth_unstable(mid);
-    if median >= LEG_LAGS * k {
-        return None;
-    }
-    tps.shrink_to_fit();
-    Some(tps)
+    (median < LEG_LAGS * k).then_some(tps)
 }
 
 /// The jitter of `signal` at lags 1 and 2 as [`jitter_level`] reads it (MAD and trimmed RMS),
